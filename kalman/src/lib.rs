@@ -1,0 +1,2 @@
+//! The `kalman` crate (being built).
+#![deny(missing_docs)]

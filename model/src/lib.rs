@@ -1,0 +1,2 @@
+//! The `model` crate (being built).
+#![deny(missing_docs)]

@@ -1,0 +1,2 @@
+//! The `sensors` crate (being built).
+#![deny(missing_docs)]

@@ -1,0 +1,2 @@
+//! The `wls` crate (being built).
+#![deny(missing_docs)]
