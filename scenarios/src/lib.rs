@@ -19,6 +19,7 @@ pub mod error;
 pub mod fueling;
 pub mod montecarlo;
 pub mod output;
+pub mod plot;
 pub mod uav;
 pub mod userdata;
 

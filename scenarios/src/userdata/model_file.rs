@@ -1,0 +1,496 @@
+//! Model files of `filter`, `discretize` and `steady-state`: discrete and continuous linear
+//! models in JSON or TOML (chosen by the extension), matrices as row-major nested arrays.
+//!
+//! Parsing checks everything that is structural — syntax (with the parser's line and
+//! column), unknown keys, ragged rows, the shapes implied by `F`/`A` and `H`/`C`, and finite
+//! entries — and names the matrix and the rule in the message. Symmetry and positive
+//! semi-definiteness of the covariances are checked by the engines (`kalman`, `model`) when
+//! the model is handed to them, so there is one rule and one tolerance for each.
+#![allow(non_snake_case)]
+
+use std::path::Path;
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// Row-major nested arrays, as written in a model file.
+pub type Rows = Vec<Vec<f64>>;
+
+/// A validated discrete model file
+///
+/// ```text
+/// x_{k+1} = F x_k + B u_k + w_k,   z_k = H x_k + D u_k + v_k,
+/// cov(w) = Q,  cov(v) = R,  E[w_k v_kᵀ] = S,  x_0 ~ (x0, P0)
+/// ```
+///
+/// with n states, m measurements and p control inputs (p = 0 without `B`). Shapes and
+/// finiteness are checked; symmetry and PSD are the filter engine's to check.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiscreteModel {
+    /// Sampling interval Δt in seconds (finite, > 0).
+    pub dt: f64,
+    /// Transition matrix (n×n).
+    pub F: DMatrix<f64>,
+    /// Control input matrix (n×p; n×0 when the file has no `B`).
+    pub B: DMatrix<f64>,
+    /// Measurement matrix (m×n).
+    pub H: DMatrix<f64>,
+    /// Control feed-through (m×p; zero when the file has no `D`).
+    pub D: DMatrix<f64>,
+    /// Process-noise covariance (n×n).
+    pub Q: DMatrix<f64>,
+    /// Measurement-noise covariance (m×m).
+    pub R: DMatrix<f64>,
+    /// Cross-covariance `E[w_k v_kᵀ]` (n×m), if given.
+    pub S: Option<DMatrix<f64>>,
+    /// Initial state mean (n; zero when the file has no `x0`).
+    pub x0: DVector<f64>,
+    /// Initial state covariance (n×n), if given (`filter` requires it).
+    pub P0: Option<DMatrix<f64>>,
+}
+
+impl DiscreteModel {
+    /// Number of states n.
+    pub fn n(&self) -> usize {
+        self.F.nrows()
+    }
+    /// Number of measurements m.
+    pub fn m(&self) -> usize {
+        self.H.nrows()
+    }
+    /// Number of control inputs p.
+    pub fn p(&self) -> usize {
+        self.B.ncols()
+    }
+}
+
+/// A validated continuous model file
+///
+/// ```text
+/// ẋ = A x + B u + G w,   y = C x + D u,   E[w(t) w(s)ᵀ] = Qc δ(t − s)
+/// ```
+///
+/// with n states, m outputs, p control inputs and q noise inputs. `R`, if given, is the
+/// covariance of the measurement noise of one sample and is copied to the discrete model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContinuousModel {
+    /// State matrix (n×n).
+    pub A: DMatrix<f64>,
+    /// Control input matrix (n×p; n×0 without `B`).
+    pub B: DMatrix<f64>,
+    /// Noise input matrix (n×q; the identity without `G`).
+    pub G: DMatrix<f64>,
+    /// Noise intensity (q×q; zero without `Qc`).
+    pub Qc: DMatrix<f64>,
+    /// Output matrix (m×n).
+    pub C: DMatrix<f64>,
+    /// Feed-through (m×p; zero without `D`).
+    pub D: DMatrix<f64>,
+    /// Covariance of one sample's measurement noise (m×m), if given.
+    pub R: Option<DMatrix<f64>>,
+}
+
+/// The serialised form of a discrete model (what `discretize` writes and `filter` reads).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiscreteFile {
+    /// Δt.
+    pub dt: f64,
+    /// `F`.
+    pub F: Rows,
+    /// `B`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub B: Option<Rows>,
+    /// `H`.
+    pub H: Rows,
+    /// `D`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub D: Option<Rows>,
+    /// `Q`.
+    pub Q: Rows,
+    /// `R`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub R: Option<Rows>,
+    /// `S`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub S: Option<Rows>,
+    /// `x0`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x0: Option<Vec<f64>>,
+    /// `P0`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub P0: Option<Rows>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ContinuousFile {
+    A: Rows,
+    #[serde(default)]
+    B: Option<Rows>,
+    #[serde(default)]
+    G: Option<Rows>,
+    #[serde(default)]
+    Qc: Option<Rows>,
+    C: Rows,
+    #[serde(default)]
+    D: Option<Rows>,
+    #[serde(default)]
+    R: Option<Rows>,
+}
+
+/// Row-major nested arrays of a matrix.
+pub fn to_rows(m: &DMatrix<f64>) -> Rows {
+    m.row_iter()
+        .map(|r| r.iter().copied().collect())
+        .collect()
+}
+
+/// The file formats a model can be written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Format {
+    Json,
+    Toml,
+}
+
+fn format_of(path: &Path) -> Result<Format> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("json") => Ok(Format::Json),
+        Some("toml") => Ok(Format::Toml),
+        _ => Err(Error::invalid(
+            path,
+            "unknown model format: the file name must end in .json or .toml",
+        )),
+    }
+}
+
+/// Deserialises `text` as JSON or TOML (by `path`'s extension), naming line and column.
+fn deserialize<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
+    match format_of(path)? {
+        Format::Json => serde_json::from_str(text).map_err(|e| {
+            // serde_json's Display already ends in "at line L column C".
+            Error::invalid(path, format!("invalid JSON model: {e}"))
+        }),
+        Format::Toml => toml::from_str(text).map_err(|e| {
+            let at = e
+                .span()
+                .map(|span| {
+                    let start = span.start.min(text.len());
+                    let before = text.get(..start).unwrap_or("");
+                    let line = before.matches('\n').count() + 1;
+                    let column = before
+                        .rsplit('\n')
+                        .next()
+                        .map_or(0, |l| l.chars().count())
+                        + 1;
+                    format!(" at line {line} column {column}")
+                })
+                .unwrap_or_default();
+            Error::invalid(
+                path,
+                format!("invalid TOML model{at}: {}", e.message().trim_end()),
+            )
+        }),
+    }
+}
+
+/// A matrix from nested rows with `rows`×`cols` required where given (`None`: taken from
+/// the data). `why` says where the required dimension comes from.
+fn matrix(
+    path: &Path,
+    name: &str,
+    data: &Rows,
+    rows: Option<usize>,
+    cols: Option<usize>,
+    why: &str,
+) -> Result<DMatrix<f64>> {
+    let r = data.len();
+    let c = data.first().map_or(0, Vec::len);
+    for (i, row) in data.iter().enumerate() {
+        if row.len() != c {
+            return Err(Error::invalid(
+                path,
+                format!(
+                    "matrix {name}: row {} has {} entries but row 1 has {c} (shape: rows must have equal length)",
+                    i + 1,
+                    row.len()
+                ),
+            ));
+        }
+    }
+    let er = rows.unwrap_or(r);
+    let ec = cols.unwrap_or(c);
+    // An empty matrix written `[]` has no rows to count columns from: accept it as r×0 or
+    // 0×c when that is the shape required.
+    let empty_ok = r == 0 && (er == 0 || ec == 0);
+    if (r != er || c != ec) && !empty_ok {
+        return Err(Error::invalid(
+            path,
+            format!("matrix {name} is {r}×{c}, expected {er}×{ec} (shape: {why})"),
+        ));
+    }
+    let m = DMatrix::from_fn(er, ec, |i, j| data[i][j]);
+    finite(path, name, &m)?;
+    Ok(m)
+}
+
+fn finite(path: &Path, name: &str, m: &DMatrix<f64>) -> Result<()> {
+    for i in 0..m.nrows() {
+        for j in 0..m.ncols() {
+            let v = m[(i, j)];
+            if !v.is_finite() {
+                return Err(Error::invalid(
+                    path,
+                    format!(
+                        "matrix {name} has {v} at row {}, column {} (NaN: entries must be finite)",
+                        i + 1,
+                        j + 1
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn square(path: &Path, name: &str, data: &Rows, what: &str) -> Result<DMatrix<f64>> {
+    let n = data.len();
+    if n == 0 {
+        return Err(Error::invalid(
+            path,
+            format!("matrix {name} is empty (shape: the model needs at least one {what})"),
+        ));
+    }
+    matrix(path, name, data, Some(n), Some(n), "it must be square")
+}
+
+/// Parses and checks a discrete model file (`path` gives the format by its extension and
+/// names the file in errors; `text` is its contents).
+///
+/// # Errors
+/// [`Error::Invalid`] naming the file and, for syntax, the line and column, or the matrix
+/// and the rule broken (shape, NaN, `dt`).
+pub fn parse_discrete(path: &Path, text: &str) -> Result<DiscreteModel> {
+    let file: DiscreteFile = deserialize(path, text)?;
+    discrete_from_file(path, &file)
+}
+
+/// Checks a deserialised discrete model (see [`parse_discrete`]).
+///
+/// # Errors
+/// As [`parse_discrete`].
+pub fn discrete_from_file(path: &Path, file: &DiscreteFile) -> Result<DiscreteModel> {
+    if !(file.dt.is_finite() && file.dt > 0.0) {
+        return Err(Error::invalid(
+            path,
+            format!("dt = {} is invalid: it must be finite and > 0", file.dt),
+        ));
+    }
+    let F = square(path, "F", &file.F, "state")?;
+    let n = F.nrows();
+    if file.H.is_empty() {
+        return Err(Error::invalid(
+            path,
+            "matrix H is empty (shape: the model needs at least one measurement)",
+        ));
+    }
+    let H = matrix(path, "H", &file.H, None, Some(n), "H must be m×n, n from F")?;
+    let m = H.nrows();
+    let Q = matrix(path, "Q", &file.Q, Some(n), Some(n), "Q must be n×n, n from F")?;
+    let R = match &file.R {
+        Some(r) => matrix(path, "R", r, Some(m), Some(m), "R must be m×m, m from H")?,
+        None => {
+            return Err(Error::invalid(
+                path,
+                "matrix R is missing (shape: a discrete model needs R, m×m)",
+            ));
+        }
+    };
+    let B = match &file.B {
+        Some(b) => {
+            let p = b.first().map_or(0, Vec::len);
+            matrix(path, "B", b, Some(n), Some(p), "B must be n×p, n from F")?
+        }
+        None => DMatrix::zeros(n, 0),
+    };
+    let p = B.ncols();
+    let D = match &file.D {
+        Some(d) => matrix(path, "D", d, Some(m), Some(p), "D must be m×p, m from H, p from B")?,
+        None => DMatrix::zeros(m, p),
+    };
+    let S = file
+        .S
+        .as_ref()
+        .map(|s| matrix(path, "S", s, Some(n), Some(m), "S must be n×m, n from F, m from H"))
+        .transpose()?;
+    let x0 = match &file.x0 {
+        Some(x) => {
+            if x.len() != n {
+                return Err(Error::invalid(
+                    path,
+                    format!(
+                        "vector x0 has {} entries, expected {n} (shape: x0 must have n entries, n from F)",
+                        x.len()
+                    ),
+                ));
+            }
+            let v = DVector::from_column_slice(x);
+            finite(path, "x0", &DMatrix::from_column_slice(n, 1, x))?;
+            v
+        }
+        None => DVector::zeros(n),
+    };
+    let P0 = file
+        .P0
+        .as_ref()
+        .map(|p0| matrix(path, "P0", p0, Some(n), Some(n), "P0 must be n×n, n from F"))
+        .transpose()?;
+    Ok(DiscreteModel {
+        dt: file.dt,
+        F,
+        B,
+        H,
+        D,
+        Q,
+        R,
+        S,
+        x0,
+        P0,
+    })
+}
+
+/// Parses and checks a continuous model file (see [`parse_discrete`] for `path` and `text`).
+///
+/// # Errors
+/// [`Error::Invalid`] naming the file and the line and column, or the matrix and the rule.
+pub fn parse_continuous(path: &Path, text: &str) -> Result<ContinuousModel> {
+    let file: ContinuousFile = deserialize(path, text)?;
+    let A = square(path, "A", &file.A, "state")?;
+    let n = A.nrows();
+    if file.C.is_empty() {
+        return Err(Error::invalid(
+            path,
+            "matrix C is empty (shape: the model needs at least one output)",
+        ));
+    }
+    let C = matrix(path, "C", &file.C, None, Some(n), "C must be m×n, n from A")?;
+    let m = C.nrows();
+    let B = match &file.B {
+        Some(b) => {
+            let p = b.first().map_or(0, Vec::len);
+            matrix(path, "B", b, Some(n), Some(p), "B must be n×p, n from A")?
+        }
+        None => DMatrix::zeros(n, 0),
+    };
+    let p = B.ncols();
+    let D = match &file.D {
+        Some(d) => matrix(path, "D", d, Some(m), Some(p), "D must be m×p, m from C, p from B")?,
+        None => DMatrix::zeros(m, p),
+    };
+    let G = match &file.G {
+        Some(g) => {
+            let q = g.first().map_or(0, Vec::len);
+            matrix(path, "G", g, Some(n), Some(q), "G must be n×q, n from A")?
+        }
+        None => DMatrix::identity(n, n),
+    };
+    let q = G.ncols();
+    let Qc = match &file.Qc {
+        Some(w) => matrix(path, "Qc", w, Some(q), Some(q), "Qc must be q×q, q from G")?,
+        None => DMatrix::zeros(q, q),
+    };
+    let R = file
+        .R
+        .as_ref()
+        .map(|r| matrix(path, "R", r, Some(m), Some(m), "R must be m×m, m from C"))
+        .transpose()?;
+    Ok(ContinuousModel {
+        A,
+        B,
+        G,
+        Qc,
+        C,
+        D,
+        R,
+    })
+}
+
+/// Reads and parses a discrete model file.
+///
+/// # Errors
+/// [`Error::Read`] if the file cannot be read, otherwise as [`parse_discrete`].
+pub fn load_discrete(path: &Path) -> Result<DiscreteModel> {
+    parse_discrete(path, &crate::config::read_text(path)?)
+}
+
+/// Reads and parses a continuous model file.
+///
+/// # Errors
+/// [`Error::Read`] if the file cannot be read, otherwise as [`parse_continuous`].
+pub fn load_continuous(path: &Path) -> Result<ContinuousModel> {
+    parse_continuous(path, &crate::config::read_text(path)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"{"dt": 0.1, "F": [[1, 0.1], [0, 1]], "H": [[1, 0]],
+        "Q": [[0.01, 0], [0, 0.01]], "R": [[0.25]], "x0": [0, 1], "P0": [[1, 0], [0, 1]]}"#;
+
+    fn err(path: &str, text: &str) -> String {
+        parse_discrete(Path::new(path), text)
+            .expect_err("must be rejected")
+            .to_string()
+    }
+
+    #[test]
+    fn good_json_and_toml_agree() {
+        let j = parse_discrete(Path::new("m.json"), GOOD).expect("valid JSON");
+        let t = parse_discrete(
+            Path::new("m.TOML"),
+            "dt = 0.1\nF = [[1, 0.1], [0, 1]]\nH = [[1, 0]]\nQ = [[0.01, 0], [0, 0.01]]\n\
+             R = [[0.25]]\nx0 = [0, 1]\nP0 = [[1, 0], [0, 1]]\n",
+        )
+        .expect("valid TOML");
+        assert_eq!(j, t);
+        assert_eq!((j.n(), j.m(), j.p()), (2, 1, 0));
+        assert_eq!(j.D.shape(), (1, 0));
+        assert!(j.S.is_none());
+    }
+
+    #[test]
+    fn errors_name_matrix_rule_and_position() {
+        let e = err("m.json", &GOOD.replace("[[0.25]]", "[[0.25, 0]]"));
+        assert!(e.contains("m.json") && e.contains("matrix R is 1×2, expected 1×1"), "{e}");
+        let e = err("m.json", &GOOD.replace("[0, 1]]", "[0]]"));
+        assert!(e.contains("matrix F: row 2 has 1 entries"), "{e}");
+        let e = err("m.json", "{\"dt\": 0.1,\n \"F\": [[1,]]}");
+        assert!(e.contains("line 2 column"), "{e}");
+        let e = err("m.toml", "dt = 0.1\nF = [[nan]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\n");
+        assert!(e.contains("matrix F has NaN at row 1, column 1"), "{e}");
+        let e = err("m.toml", "dt = 0.1\nF = [[1]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\nX = 1\n");
+        assert!(e.contains("line 6") && e.contains("unknown field `X`"), "{e}");
+        let e = err("m.yaml", GOOD);
+        assert!(e.contains(".json or .toml"), "{e}");
+        let e = err("m.json", &GOOD.replace("\"dt\": 0.1", "\"dt\": -1"));
+        assert!(e.contains("dt = -1"), "{e}");
+    }
+
+    #[test]
+    fn continuous_defaults() {
+        let c = parse_continuous(Path::new("c.json"), r#"{"A": [[0, 1], [0, 0]], "C": [[1, 0]]}"#)
+            .expect("valid");
+        assert_eq!(c.G, DMatrix::identity(2, 2));
+        assert_eq!(c.Qc, DMatrix::zeros(2, 2));
+        assert_eq!(c.B.shape(), (2, 0));
+        assert!(c.R.is_none());
+    }
+}
