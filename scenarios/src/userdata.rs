@@ -1,33 +1,431 @@
-//! Users' own models and recorded data through the engine (being built).
+//! Users' own models and recorded data through the engine: `filter`, `discretize` and
+//! `steady-state`.
+//!
+//! Formats (see [`model_file`] and [`data`] for every rule):
+//!
+//! - **Discrete model** (`.json` or `.toml`): `dt`, `F` (n×n), `H` (m×n), `Q` (n×n), `R`
+//!   (m×m), optional `B` (n×p), `D` (m×p), `S` (n×m, `E[w_k v_kᵀ]`), `x0` (n, default 0),
+//!   `P0` (n×n, required by `filter`). Matrices are row-major nested arrays.
+//! - **Continuous model**: `A` (n×n), `C` (m×n), optional `B` (n×p), `D` (m×p), `G` (n×q,
+//!   default I), `Qc` (q×q noise intensity, default 0), `R` (m×m, covariance of one
+//!   sample's measurement noise, copied to the discrete model).
+//! - **Data CSV**: header `t,z1,…,zm[,u1,…,up]`; an empty or `NaN` z cell is missing.
+//!   `u` on row k drives the transition from row k to row k + 1 (and `D u_k` enters z_k).
+//! - **Estimates CSV**: `t,x1,…,xn,P1_1,…,Pn_n,nis` (every `Pi_j` with
+//!   `--full-covariance`); row k is the posterior after the update with data row k; `nis` is
+//!   `NaN` on a row without measurements.
+//!
+//! Errors are [`Error::Invalid`] (exit code 2) naming the file and, for the CSV, the line
+//! and column, or for a model the matrix and the rule broken. Every output is written to a
+//! temporary name and renamed only on success ([`crate::output`]).
+//!
+//! The filtering, smoothing, Riccati and discretisation mathematics are the `kalman` and
+//! `model` crates'; this module only parses, validates, streams and writes.
+#![allow(non_snake_case)]
+
+pub mod data;
+pub mod model_file;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use faer::Mat;
+use nalgebra::DMatrix;
 
 use crate::error::{Error, Result};
+use data::{DataReader, Row};
+use model_file::{DiscreteFile, DiscreteModel, to_rows};
+
+/// Covariance-update form of `filter --form`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Form {
+    /// `P⁺ = (I − KH) P (I − KH)ᵀ + K R Kᵀ` (the default).
+    Joseph,
+    /// `P⁺ = P − K Σ Kᵀ`, symmetrised.
+    Standard,
+    /// A square-root factor propagated by orthogonal triangularisation.
+    Sqrt,
+}
 
 /// Options of `scenarios filter`.
-#[derive(Debug, clap::Args)]
-pub struct FilterArgs {}
+#[derive(Debug, Clone, clap::Args)]
+pub struct FilterArgs {
+    /// Discrete model (.json or .toml) with dt, F, H, Q, R, P0 and optional B, D, S, x0.
+    #[arg(long, value_name = "MODEL")]
+    pub model: PathBuf,
+    /// Data CSV: header t,z1,…,zm[,u1,…,up]; an empty or NaN z cell is a missing value.
+    #[arg(long, value_name = "Z.csv")]
+    pub data: PathBuf,
+    /// Estimates CSV to write: t,x1,…,xn,P1_1,…,Pn_n,nis.
+    #[arg(long, value_name = "EST.csv")]
+    pub out: PathBuf,
+    /// Covariance-update form.
+    #[arg(long, value_enum, default_value_t = Form::Joseph)]
+    pub form: Form,
+    /// Write RTS-smoothed estimates (this keeps the whole filter pass in memory: about
+    /// 2n(n+1) numbers per row) instead of streaming the filtered ones.
+    #[arg(long)]
+    pub smooth: bool,
+    /// Write every covariance entry Pi_j instead of the diagonal.
+    #[arg(long)]
+    pub full_covariance: bool,
+}
+
+/// Discretisation method of `discretize --method`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MethodArg {
+    /// Zero-order hold.
+    Zoh,
+    /// Tustin (bilinear).
+    Tustin,
+    /// Tustin pre-warped at ω rad/s.
+    TustinPrewarp(f64),
+    /// Forward Euler.
+    Euler,
+    /// Backward Euler.
+    BackwardEuler,
+}
+
+impl std::str::FromStr for MethodArg {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "zoh" => Ok(MethodArg::Zoh),
+            "tustin" => Ok(MethodArg::Tustin),
+            "euler" => Ok(MethodArg::Euler),
+            "backward-euler" => Ok(MethodArg::BackwardEuler),
+            _ => match s.strip_prefix("tustin-prewarp:") {
+                Some(w) => match w.parse::<f64>() {
+                    Ok(w) if w.is_finite() && w > 0.0 => Ok(MethodArg::TustinPrewarp(w)),
+                    _ => Err(format!(
+                        "tustin-prewarp:W needs a pre-warp frequency W > 0 in rad/s, not `{w}`"
+                    )),
+                },
+                None => Err(format!(
+                    "unknown method `{s}`: expected zoh, tustin, tustin-prewarp:W, euler or backward-euler"
+                )),
+            },
+        }
+    }
+}
+
+/// Process-noise convention of `discretize --noise`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum NoiseArg {
+    /// Exact covariance of the integrated noise (Van Loan).
+    VanLoan,
+    /// The noise held over the step with variance Qc/Δt, entering through the method's
+    /// input map (the papers' convention).
+    IntensityOverDt,
+}
 
 /// Options of `scenarios discretize`.
-#[derive(Debug, clap::Args)]
-pub struct DiscretizeArgs {}
+#[derive(Debug, Clone, clap::Args)]
+pub struct DiscretizeArgs {
+    /// Continuous model (.json or .toml) with A, C and optional B, D, G, Qc, R.
+    #[arg(long, value_name = "CONT")]
+    pub model: PathBuf,
+    /// Sampling interval in seconds.
+    #[arg(long)]
+    pub dt: f64,
+    /// zoh, tustin, tustin-prewarp:W (W in rad/s), euler (forward) or backward-euler.
+    #[arg(long, value_parser = parse_method)]
+    pub method: MethodArg,
+    /// How the noise intensity Qc becomes the discrete Q.
+    #[arg(long, value_enum, default_value_t = NoiseArg::VanLoan)]
+    pub noise: NoiseArg,
+    /// Discrete model to write (.json, or .toml).
+    #[arg(long, value_name = "DISC.json")]
+    pub out: PathBuf,
+}
+
+fn parse_method(s: &str) -> std::result::Result<MethodArg, String> {
+    s.parse()
+}
 
 /// Options of `scenarios steady-state`.
-#[derive(Debug, clap::Args)]
-pub struct SteadyStateArgs {}
+#[derive(Debug, Clone, clap::Args)]
+pub struct SteadyStateArgs {
+    /// Discrete model (.json or .toml): F, H, Q, R and optional S are used.
+    #[arg(long, value_name = "MODEL")]
+    pub model: PathBuf,
+    /// JSON file to write: {"P", "P_post", "K", "residual"}.
+    #[arg(long, value_name = "SS.json")]
+    pub out: PathBuf,
+}
 
-/// `scenarios filter`.
+/// A faer matrix from a nalgebra one.
+fn to_faer(m: &DMatrix<f64>) -> Mat<f64> {
+    Mat::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
+}
+
+/// A library error about the model in `path`, surfaced as an input error (exit code 2).
+fn model_error(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::invalid(path, format!("model: {e}"))
+}
+
+/// The engine's model built from a parsed file: symmetry, PSD of `Q`, `R`, `[[R, Sᵀ], [S,
+/// Q]]` are checked here by `kalman`.
+fn engine_model(path: &Path, m: &DiscreteModel) -> Result<kalman::Model<kalman::Dyn>> {
+    let dims = kalman::Dyn::new(m.n(), m.m(), m.p()).map_err(|e| model_error(path, e))?;
+    let mut model = kalman::Model::new(
+        dims,
+        &to_faer(&m.F),
+        &to_faer(&m.H),
+        &to_faer(&m.Q),
+        &to_faer(&m.R),
+    )
+    .map_err(|e| model_error(path, e))?;
+    if m.p() > 0 {
+        model = model
+            .with_control(&to_faer(&m.B))
+            .map_err(|e| model_error(path, e))?;
+    }
+    if let Some(S) = &m.S {
+        model = model
+            .with_cross_covariance(&to_faer(S))
+            .map_err(|e| model_error(path, e))?;
+    }
+    Ok(model)
+}
+
+/// Checks the data header against the model's m and p.
+fn check_columns<R: std::io::Read>(
+    model_path: &Path,
+    m: &DiscreteModel,
+    reader: &DataReader<R>,
+) -> Result<()> {
+    if reader.m() != m.m() {
+        return Err(Error::invalid(
+            reader.path(),
+            format!(
+                "line 1: the header has {} measurement columns (z1…z{}) but {} has m = {} (rows of H)",
+                reader.m(),
+                reader.m(),
+                model_path.display(),
+                m.m()
+            ),
+        ));
+    }
+    if reader.p() != m.p() {
+        return Err(Error::invalid(
+            reader.path(),
+            format!(
+                "line 1: the header has {} control columns (u…) but {} has p = {} (columns of B)",
+                reader.p(),
+                model_path.display(),
+                m.p()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Subtracts the feed-through `D u` from `z` (missing entries stay missing).
+fn remove_feedthrough(D: &DMatrix<f64>, row: &mut Row) {
+    if D.ncols() == 0 {
+        return;
+    }
+    for (i, z) in row.z.iter_mut().enumerate() {
+        let du: f64 = (0..D.ncols()).map(|j| D[(i, j)] * row.u[j]).sum();
+        *z -= du;
+    }
+}
+
+/// The filter engine built from a parsed model, with its prior.
+fn engine_filter(
+    path: &Path,
+    m: &DiscreteModel,
+    form: Form,
+) -> Result<kalman::Filter<kalman::Dyn>> {
+    let P0 = m.P0.as_ref().ok_or_else(|| {
+        Error::invalid(
+            path,
+            "matrix P0 is missing (shape: filter needs the initial covariance P0, n×n)",
+        )
+    })?;
+    let form = match form {
+        Form::Joseph => kalman::CovarianceForm::Joseph,
+        Form::Standard => kalman::CovarianceForm::Standard,
+        Form::Sqrt => kalman::CovarianceForm::SquareRoot,
+    };
+    kalman::Filter::new(engine_model(path, m)?, m.x0.as_slice(), &to_faer(P0), form)
+        .map_err(|e| model_error(path, e))
+}
+
+/// `scenarios filter`: streams the data CSV through the filter and the estimates to `--out`
+/// (memory independent of the CSV's length), or with `--smooth` keeps the pass and writes
+/// the RTS-smoothed estimates.
+///
+/// # Errors
+/// [`Error::Invalid`] for a bad model or data file (nothing is written), [`Error::Read`] /
+/// [`Error::Write`] for I/O.
 pub fn filter(args: &FilterArgs) -> Result<()> {
-    let _ = args;
-    Err(Error::Compute("filter is not built yet".into()))
+    let model = model_file::load_discrete(&args.model)?;
+    let mut kf = engine_filter(&args.model, &model, args.form)?;
+    let file = std::fs::File::open(&args.data).map_err(|source| Error::Read {
+        path: args.data.clone(),
+        source,
+    })?;
+    let mut reader = DataReader::new(&args.data, std::io::BufReader::with_capacity(1 << 16, file))?;
+    check_columns(&args.model, &model, &reader)?;
+    if args.smooth {
+        return smooth(args, &model, &mut kf, &mut reader);
+    }
+    let n = model.n();
+    let out = args.out.as_path();
+    crate::output::write_with(out, |w| {
+        writeln!(w, "{}", data::estimates_header(n, args.full_covariance)).map_err(|source| {
+            Error::Write {
+                path: out.to_path_buf(),
+                source,
+            }
+        })?;
+        let mut row = Row::default();
+        let mut P = vec![0.0; n * n];
+        while reader.read_row(&mut row)? {
+            remove_feedthrough(&model.D, &mut row);
+            let info = step(&mut kf, &reader, &row)?;
+            copy_col_major(kf.covariance(), &mut P);
+            let nis = if info.observed > 0 {
+                info.nis
+            } else {
+                f64::NAN
+            };
+            data::write_estimate(w, out, row.t, kf.state(), &P, args.full_covariance, nis)?;
+        }
+        Ok(())
+    })
 }
 
-/// `scenarios discretize`.
+/// One filter step with data row `row` (update with z_k, then predict with u_k).
+fn step<R: std::io::Read>(
+    kf: &mut kalman::Filter<kalman::Dyn>,
+    reader: &DataReader<R>,
+    row: &Row,
+) -> Result<kalman::StepInfo> {
+    let u = (!row.u.is_empty()).then_some(row.u.as_slice());
+    kf.step(&row.z, u).map_err(|e| {
+        Error::invalid(
+            reader.path(),
+            format!("line {}: the filter rejected the row: {e}", reader.line()),
+        )
+    })
+}
+
+fn copy_col_major(m: faer::MatRef<'_, f64>, out: &mut [f64]) {
+    let r = m.nrows();
+    for j in 0..m.ncols() {
+        for i in 0..r {
+            out[i + j * r] = m[(i, j)];
+        }
+    }
+}
+
+/// `filter --smooth`: runs the whole pass (stored), then the RTS smoother, then writes.
+fn smooth<R: std::io::Read>(
+    args: &FilterArgs,
+    model: &DiscreteModel,
+    kf: &mut kalman::Filter<kalman::Dyn>,
+    reader: &mut DataReader<R>,
+) -> Result<()> {
+    let _ = (model, kf, reader);
+    Err(Error::Compute(format!(
+        "{}: --smooth needs the RTS smoother of the kalman crate, which is not available yet",
+        args.model.display()
+    )))
+}
+
+/// `scenarios discretize`: discretises a continuous model with `model::discretize` and
+/// writes the discrete model file.
+///
+/// # Errors
+/// [`Error::Usage`] for a bad `--dt`; [`Error::Invalid`] for a bad model (shape, NaN, `Qc`
+/// not symmetric or not PSD, a singular `I − Aτ`); [`Error::Write`].
 pub fn discretize(args: &DiscretizeArgs) -> Result<()> {
-    let _ = args;
-    Err(Error::Compute("discretize is not built yet".into()))
+    if !(args.dt.is_finite() && args.dt > 0.0) {
+        return Err(Error::Usage(format!(
+            "--dt {} is invalid: it must be finite and > 0",
+            args.dt
+        )));
+    }
+    let path = args.model.as_path();
+    let c = model_file::load_continuous(path)?;
+    // The model crate calls the noise intensity W; the file calls it Qc.
+    let err = |e: model::Error| model_error(path, e.to_string().replace("matrix W", "matrix Qc"));
+    let sys = model::ContinuousSs::new(c.A.clone(), c.B.clone(), c.C.clone(), c.D.clone())
+        .and_then(|s| s.with_noise(c.G.clone(), c.Qc.clone()))
+        .map_err(err)?;
+    let method = match args.method {
+        MethodArg::Zoh => model::Method::Zoh,
+        MethodArg::Tustin => model::Method::Tustin,
+        MethodArg::TustinPrewarp(omega) => model::Method::TustinPrewarp { omega },
+        MethodArg::Euler => model::Method::ForwardEuler,
+        MethodArg::BackwardEuler => model::Method::BackwardEuler,
+    };
+    let noise = match args.noise {
+        NoiseArg::VanLoan => model::NoiseConvention::VanLoan,
+        NoiseArg::IntensityOverDt => model::NoiseConvention::IntensityOverDt,
+    };
+    let d = model::discretize(&sys, args.dt, method, noise).map_err(|e| match e {
+        model::Error::InvalidParameter { .. } => Error::Usage(e.to_string()),
+        e => err(e),
+    })?;
+    let file = discrete_file(&d, c.R.as_ref());
+    write_model(&args.out, &file)
 }
 
-/// `scenarios steady-state`.
+/// The discrete model file of a discretised system: `Q = G Q Gᵀ`, `S = G Q Jᵀ` (written
+/// only when non-zero) and `R = R_c + J Q Jᵀ` (written when `R_c` is given or `J ≠ 0`).
+fn discrete_file(d: &model::DiscreteSs, R: Option<&DMatrix<f64>>) -> DiscreteFile {
+    let nonzero = |m: &DMatrix<f64>| m.iter().any(|v| v.abs() > 0.0);
+    let S = d.cross_covariance();
+    let JQJ = d.output_noise_covariance();
+    let R = match R {
+        Some(r) => Some(r + &JQJ),
+        None if nonzero(&JQJ) => Some(JQJ),
+        None => None,
+    };
+    let p = d.n_inputs();
+    DiscreteFile {
+        dt: d.dt(),
+        F: to_rows(d.f()),
+        B: (p > 0).then(|| to_rows(d.b())),
+        H: to_rows(d.h()),
+        D: (p > 0).then(|| to_rows(d.d())),
+        Q: to_rows(&d.process_covariance()),
+        R: R.as_ref().map(to_rows),
+        S: nonzero(&S).then(|| to_rows(&S)),
+        x0: None,
+        P0: None,
+    }
+}
+
+/// Writes a discrete model as JSON, or TOML when `path` ends in `.toml`.
+fn write_model(path: &Path, file: &DiscreteFile) -> Result<()> {
+    let is_toml = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if is_toml {
+        let text = toml::to_string(file)
+            .map_err(|e| Error::Compute(format!("{}: cannot serialise: {e}", path.display())))?;
+        crate::output::write_atomic(path, text.as_bytes())
+    } else {
+        crate::output::write_json(path, file)
+    }
+}
+
+/// `scenarios steady-state`: the DARE solution of a discrete model.
+///
+/// # Errors
+/// [`Error::Invalid`] for a bad model, or one that has no steady state (not detectable, not
+/// stabilisable); [`Error::Write`].
 pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
-    let _ = args;
-    Err(Error::Compute("steady-state is not built yet".into()))
+    let model = model_file::load_discrete(&args.model)?;
+    let _engine = engine_model(&args.model, &model)?;
+    Err(Error::Compute(format!(
+        "{}: steady-state needs the DARE solver of the kalman crate, which is not available yet",
+        args.model.display()
+    )))
 }

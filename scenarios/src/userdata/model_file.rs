@@ -143,9 +143,7 @@ struct ContinuousFile {
 
 /// Row-major nested arrays of a matrix.
 pub fn to_rows(m: &DMatrix<f64>) -> Rows {
-    m.row_iter()
-        .map(|r| r.iter().copied().collect())
-        .collect()
+    m.row_iter().map(|r| r.iter().copied().collect()).collect()
 }
 
 /// The file formats a model can be written in.
@@ -185,11 +183,7 @@ fn deserialize<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Resul
                     let start = span.start.min(text.len());
                     let before = text.get(..start).unwrap_or("");
                     let line = before.matches('\n').count() + 1;
-                    let column = before
-                        .rsplit('\n')
-                        .next()
-                        .map_or(0, |l| l.chars().count())
-                        + 1;
+                    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
                     format!(" at line {line} column {column}")
                 })
                 .unwrap_or_default();
@@ -303,7 +297,14 @@ pub fn discrete_from_file(path: &Path, file: &DiscreteFile) -> Result<DiscreteMo
     }
     let H = matrix(path, "H", &file.H, None, Some(n), "H must be m×n, n from F")?;
     let m = H.nrows();
-    let Q = matrix(path, "Q", &file.Q, Some(n), Some(n), "Q must be n×n, n from F")?;
+    let Q = matrix(
+        path,
+        "Q",
+        &file.Q,
+        Some(n),
+        Some(n),
+        "Q must be n×n, n from F",
+    )?;
     let R = match &file.R {
         Some(r) => matrix(path, "R", r, Some(m), Some(m), "R must be m×m, m from H")?,
         None => {
@@ -322,13 +323,29 @@ pub fn discrete_from_file(path: &Path, file: &DiscreteFile) -> Result<DiscreteMo
     };
     let p = B.ncols();
     let D = match &file.D {
-        Some(d) => matrix(path, "D", d, Some(m), Some(p), "D must be m×p, m from H, p from B")?,
+        Some(d) => matrix(
+            path,
+            "D",
+            d,
+            Some(m),
+            Some(p),
+            "D must be m×p, m from H, p from B",
+        )?,
         None => DMatrix::zeros(m, p),
     };
     let S = file
         .S
         .as_ref()
-        .map(|s| matrix(path, "S", s, Some(n), Some(m), "S must be n×m, n from F, m from H"))
+        .map(|s| {
+            matrix(
+                path,
+                "S",
+                s,
+                Some(n),
+                Some(m),
+                "S must be n×m, n from F, m from H",
+            )
+        })
         .transpose()?;
     let x0 = match &file.x0 {
         Some(x) => {
@@ -391,7 +408,14 @@ pub fn parse_continuous(path: &Path, text: &str) -> Result<ContinuousModel> {
     };
     let p = B.ncols();
     let D = match &file.D {
-        Some(d) => matrix(path, "D", d, Some(m), Some(p), "D must be m×p, m from C, p from B")?,
+        Some(d) => matrix(
+            path,
+            "D",
+            d,
+            Some(m),
+            Some(p),
+            "D must be m×p, m from C, p from B",
+        )?,
         None => DMatrix::zeros(m, p),
     };
     let G = match &file.G {
@@ -469,15 +493,27 @@ mod tests {
     #[test]
     fn errors_name_matrix_rule_and_position() {
         let e = err("m.json", &GOOD.replace("[[0.25]]", "[[0.25, 0]]"));
-        assert!(e.contains("m.json") && e.contains("matrix R is 1×2, expected 1×1"), "{e}");
+        assert!(
+            e.contains("m.json") && e.contains("matrix R is 1×2, expected 1×1"),
+            "{e}"
+        );
         let e = err("m.json", &GOOD.replace("[0, 1]]", "[0]]"));
         assert!(e.contains("matrix F: row 2 has 1 entries"), "{e}");
         let e = err("m.json", "{\"dt\": 0.1,\n \"F\": [[1,]]}");
         assert!(e.contains("line 2 column"), "{e}");
-        let e = err("m.toml", "dt = 0.1\nF = [[nan]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\n");
+        let e = err(
+            "m.toml",
+            "dt = 0.1\nF = [[nan]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\n",
+        );
         assert!(e.contains("matrix F has NaN at row 1, column 1"), "{e}");
-        let e = err("m.toml", "dt = 0.1\nF = [[1]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\nX = 1\n");
-        assert!(e.contains("line 6") && e.contains("unknown field `X`"), "{e}");
+        let e = err(
+            "m.toml",
+            "dt = 0.1\nF = [[1]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\nX = 1\n",
+        );
+        assert!(
+            e.contains("line 6") && e.contains("unknown field `X`"),
+            "{e}"
+        );
         let e = err("m.yaml", GOOD);
         assert!(e.contains(".json or .toml"), "{e}");
         let e = err("m.json", &GOOD.replace("\"dt\": 0.1", "\"dt\": -1"));
@@ -486,8 +522,11 @@ mod tests {
 
     #[test]
     fn continuous_defaults() {
-        let c = parse_continuous(Path::new("c.json"), r#"{"A": [[0, 1], [0, 0]], "C": [[1, 0]]}"#)
-            .expect("valid");
+        let c = parse_continuous(
+            Path::new("c.json"),
+            r#"{"A": [[0, 1], [0, 0]], "C": [[1, 0]]}"#,
+        )
+        .expect("valid");
         assert_eq!(c.G, DMatrix::identity(2, 2));
         assert_eq!(c.Qc, DMatrix::zeros(2, 2));
         assert_eq!(c.B.shape(), (2, 0));
