@@ -1,2 +1,96 @@
-//! The `model` crate (being built).
+//! State-space models, shaping filters for random processes, discretisation and the paper's
+//! 7-state fuel-level model, for stochastic estimation in launch and flight-test measurement.
+//!
+//! # Notation
+//!
+//! | symbol | meaning |
+//! |---|---|
+//! | n | number of states |
+//! | m | number of outputs (measurements) |
+//! | l | number of control (deterministic) inputs |
+//! | p | number of white-noise inputs |
+//! | `A`, `B`, `C`, `D` | continuous model `ẋ = Ax + Bu + Gw`, `y = Cx + Du` ([`ContinuousSs`]) |
+//! | `G`, `W` | noise input matrix and white-noise intensity (spectral density) `E[w(t)w(s)ᵀ] = Wδ(t−s)` |
+//! | `F`, `B`, `H`, `D` | discrete model `x_{k+1} = Fx_k + Bu_k + Gw_k`, `y_k = Hx_k + Du_k + Jw_k` ([`DiscreteSs`]) |
+//! | `J`, `Q` | discrete noise feed-through and covariance `cov(w_k) = Q`; cross-covariance `GQJᵀ` |
+//! | Δt (`dt`) | sampling interval in seconds |
+//! | `N` | white-noise intensity of a scalar shaping filter; `D` its output variance |
+//!
+//! Transfer functions list coefficients in **ascending** powers: of s for [`ContinuousTf`]
+//! (`1/(b s² + a s + 1)` is `num = [1]`, `den = [1, a, b]`), of z⁻¹ for [`DiscreteTf`].
+//! All quantities are SI (seconds, metres, radians). The fuel model follows SPEC F of the
+//! project and keeps the paper's names (its `A`, `B`, `C`, `D`, `G`, `Q` are [`FuelModel`]'s).
+//!
+//! # Discretisation methods
+//!
+//! [`discretize`] maps a [`ContinuousSs`] with a [`Method`] and a [`NoiseConvention`]:
+//!
+//! | method | map | use it when |
+//! |---|---|---|
+//! | [`Method::Zoh`] | `F = e^{AΔt}`, `B_d = ∫e^{Aτ}dτ·B` | inputs are held between samples (actuators, DAC), or you want the exact transition matrix of the continuous model; the default for simulation and Kalman filtering |
+//! | [`Method::Tustin`] | `s = (2/Δt)(1−z⁻¹)/(1+z⁻¹)` | you need the frequency response preserved in shape and stability guaranteed (stable ↦ stable, DC gain kept), e.g. digital filters, or to match the paper (SPEC F) |
+//! | [`Method::TustinPrewarp`] | Tustin with Δt → `2tan(ωΔt/2)/ω` | as Tustin, but one frequency ω (a resonance, a notch, a crossover) must be exact |
+//! | [`Method::ForwardEuler`] | `s = (z−1)/Δt` | Δt is far below every time constant and you want the simplest explicit update; can turn a stable model unstable |
+//! | [`Method::BackwardEuler`] | `s = (z−1)/(zΔt)` | stiff models where robustness matters more than accuracy; always stable for stable models, but damps too much |
+//! | paper variant ([`ContinuousTf::paper_tustin`], [`ShapingFilter::discretize_paper`]) | Tustin with one `(1+z⁻¹)` numerator factor replaced by `2z⁻¹` or `2` | reproducing the paper's fuel model ([`Realisation::Paper`]) |
+//!
+//! and the white noise either by [`NoiseConvention::VanLoan`] (the exact covariance of the
+//! integrated noise: use it with ZOH for a faithful sampled model) or by
+//! [`NoiseConvention::IntensityOverDt`] (the paper's "intensity N ↦ variance N/Δt", noise held
+//! over the step, entering through the method's input map).
+//!
+//! # Example: the fuel-level model
+//!
+//! ```
+//! use model::{Channels, FuelParams, Realisation};
+//!
+//! let params = FuelParams::default(); // SPEC F's assumed defaults
+//! let fuel = params.build(Channels::LevelAndTilt, Realisation::Paper)?;
+//! println!("A = {}", fuel.a);
+//! assert_eq!(fuel.a.shape(), (7, 7));
+//! assert_eq!(fuel.c.shape(), (2, 7));
+//! // The level state integrates the velocity: A[(1, 1)] = 1.
+//! assert!((fuel.a[(1, 1)] - 1.0).abs() < 1e-15);
+//! // R = D Q Dᵀ is singular (noise-free tilt channel) as in the paper.
+//! assert!(fuel.r[(0, 0)].abs() < 1e-30);
+//! # Ok::<(), model::Error>(())
+//! ```
+//!
+//! # Modules
+//!
+//! - [`ss`]: the model types; [`tf`]: transfer functions and realisations;
+//! - [`discretize`](mod@discretize): methods and noise conventions; [`compose`]: series, parallel, feedback,
+//!   `connect`; [`analysis`]: rank, stability, gains, responses, Lyapunov;
+//! - [`shaping`]: shaping filters; [`fuel`]: the paper's model;
+//! - `strategies` (feature `proptest`): proptest strategies for users' property tests.
 #![deny(missing_docs)]
+#![deny(clippy::float_cmp)]
+
+pub mod analysis;
+pub mod compose;
+pub mod discretize;
+pub mod error;
+pub mod fuel;
+pub mod shaping;
+pub mod ss;
+#[cfg(feature = "proptest")]
+pub mod strategies;
+pub mod tf;
+mod validate;
+
+pub use analysis::{
+    discrete_lyapunov, eigenvalues, is_controllable, is_observable, markov_parameters, psd_factor,
+    rank, spectral_abscissa, spectral_radius,
+};
+pub use compose::{
+    append, connect, connect_continuous, feedback, parallel, select_outputs, series, stack,
+};
+pub use discretize::{Method, NoiseConvention, discretize, expm, van_loan, zoh};
+pub use error::{Error, Result};
+pub use fuel::{Channels, FuelModel, FuelParams, OUTPUT_NAMES, PaperCoefficients, Realisation};
+pub use shaping::{DampedCosine, Exponential, IrregularRolling, ShapingFilter, noise_driven};
+pub use ss::{ContinuousSs, DiscreteSs};
+pub use tf::{ContinuousTf, DiscreteTf, PaperVariant};
+
+/// Re-export of the linear-algebra crate whose types appear in this API.
+pub use nalgebra;

@@ -1,0 +1,364 @@
+//! Block composition of discrete (and continuous) systems: series, parallel, append, stack,
+//! output selection, feedback, and the general `connect` they are all built on.
+//!
+//! Only control inputs are wired; noise inputs of the blocks stay external, stacked in block
+//! order (their covariances / intensities block-diagonally), and reach the outputs through
+//! the interconnection like any other signal.
+
+use nalgebra::DMatrix;
+
+use crate::error::{Error, Result};
+use crate::ss::{ContinuousSs, DiscreteSs};
+use crate::validate;
+
+/// Relative tolerance on equal sampling intervals of composed systems.
+const DT_TOL: f64 = 1e-12;
+
+fn block_diag(ms: &[&DMatrix<f64>]) -> DMatrix<f64> {
+    let rows = ms.iter().map(|m| m.nrows()).sum();
+    let cols = ms.iter().map(|m| m.ncols()).sum();
+    let mut out = DMatrix::zeros(rows, cols);
+    let (mut r, mut c) = (0, 0);
+    for m in ms {
+        out.view_mut((r, c), (m.nrows(), m.ncols())).copy_from(m);
+        r += m.nrows();
+        c += m.ncols();
+    }
+    out
+}
+
+/// The matrices of one system, continuous or discrete (J = 0 for continuous).
+struct Parts {
+    f: DMatrix<f64>,
+    b: DMatrix<f64>,
+    h: DMatrix<f64>,
+    d: DMatrix<f64>,
+    g: DMatrix<f64>,
+    j: DMatrix<f64>,
+    q: DMatrix<f64>,
+}
+
+/// The interconnection kernel. Appended blocks: `x⁺ = Fa x + Ba v + Ga w`,
+/// `y = Ha x + Da v + Ja w`; wiring `v = K y + E u`, external outputs `z = P y + Qd u`.
+/// Solving `(I − Da K) y = Ha x + Da E u + Ja w` removes the algebraic part.
+fn connect_parts(
+    blocks: &[Parts],
+    k: &DMatrix<f64>,
+    e: &DMatrix<f64>,
+    p: &DMatrix<f64>,
+    qd: &DMatrix<f64>,
+) -> Result<Parts> {
+    let fa = block_diag(&blocks.iter().map(|b| &b.f).collect::<Vec<_>>());
+    let ba = block_diag(&blocks.iter().map(|b| &b.b).collect::<Vec<_>>());
+    let ha = block_diag(&blocks.iter().map(|b| &b.h).collect::<Vec<_>>());
+    let da = block_diag(&blocks.iter().map(|b| &b.d).collect::<Vec<_>>());
+    let ga = block_diag(&blocks.iter().map(|b| &b.g).collect::<Vec<_>>());
+    let ja = block_diag(&blocks.iter().map(|b| &b.j).collect::<Vec<_>>());
+    let qa = block_diag(&blocks.iter().map(|b| &b.q).collect::<Vec<_>>());
+    let (nv, ny) = (ba.ncols(), ha.nrows());
+    validate::shape("K", k, nv, ny, "K must be (block inputs)×(block outputs)")?;
+    validate::shape("E", e, nv, e.ncols(), "E must have one row per block input")?;
+    validate::shape(
+        "P",
+        p,
+        p.nrows(),
+        ny,
+        "P must have one column per block output",
+    )?;
+    validate::shape(
+        "Qd",
+        qd,
+        p.nrows(),
+        e.ncols(),
+        "Qd must be (rows of P)×(columns of E)",
+    )?;
+    let l = DMatrix::<f64>::identity(ny, ny) - &da * k;
+    let lu = l.lu();
+    let singular = Error::Singular {
+        name: "I − D·K",
+        context: "the interconnection has an ill-posed algebraic loop",
+    };
+    let hy = lu.solve(&ha).ok_or(singular.clone())?;
+    let dy = lu.solve(&(&da * e)).ok_or(singular.clone())?;
+    let jy = lu.solve(&ja).ok_or(singular)?;
+    let f = &fa + &ba * k * &hy;
+    let b = &ba * (k * &dy + e);
+    let g = &ga + &ba * k * &jy;
+    let h = p * &hy;
+    let d = p * &dy + qd;
+    let j = p * &jy;
+    for (name, m) in [
+        ("F", &f),
+        ("B", &b),
+        ("G", &g),
+        ("H", &h),
+        ("D", &d),
+        ("J", &j),
+    ] {
+        validate::finite(name, m)?;
+    }
+    Ok(Parts {
+        f,
+        b,
+        h,
+        d,
+        g,
+        j,
+        q: qa,
+    })
+}
+
+fn parts_d(s: &DiscreteSs) -> Parts {
+    Parts {
+        f: s.f().clone(),
+        b: s.b().clone(),
+        h: s.h().clone(),
+        d: s.d().clone(),
+        g: s.g().clone(),
+        j: s.j().clone(),
+        q: s.q().clone(),
+    }
+}
+
+fn common_dt(blocks: &[&DiscreteSs]) -> Result<f64> {
+    let first = blocks.first().map_or(1.0, |b| b.dt());
+    for b in blocks {
+        if (b.dt() - first).abs() > DT_TOL * first {
+            return Err(Error::SampleTimeMismatch {
+                first,
+                second: b.dt(),
+            });
+        }
+    }
+    Ok(first)
+}
+
+/// General interconnection of discrete blocks (like MATLAB's `connect`).
+///
+/// The blocks are appended (states and noise inputs in block order). Their control inputs
+/// `v` (all blocks' inputs stacked) are wired as `v = K·y + E·u` from their outputs `y` (all
+/// blocks' outputs stacked) and the new external inputs `u`; the new outputs are
+/// `z = P·y + Qd·u`. Algebraic loops through the feed-throughs are solved exactly.
+///
+/// # Errors
+/// [`Error::DimensionMismatch`] for wiring matrices of the wrong shape,
+/// [`Error::SampleTimeMismatch`], [`Error::Singular`] for an ill-posed algebraic loop.
+pub fn connect(
+    blocks: &[&DiscreteSs],
+    k: &DMatrix<f64>,
+    e: &DMatrix<f64>,
+    p: &DMatrix<f64>,
+    qd: &DMatrix<f64>,
+) -> Result<DiscreteSs> {
+    let dt = common_dt(blocks)?;
+    let parts: Vec<Parts> = blocks.iter().map(|b| parts_d(b)).collect();
+    let r = connect_parts(&parts, k, e, p, qd)?;
+    DiscreteSs::new(r.f, r.b, r.h, r.d, dt)?.with_noise(r.g, r.j, validate::symmetrize(&r.q))
+}
+
+/// [`connect`] for continuous blocks (same algebra; continuous models have no noise
+/// feed-through, and the wiring must not create one: blocks' `D` only routes control inputs).
+///
+/// # Errors
+/// As [`connect`] (without the sampling-interval check).
+pub fn connect_continuous(
+    blocks: &[&ContinuousSs],
+    k: &DMatrix<f64>,
+    e: &DMatrix<f64>,
+    p: &DMatrix<f64>,
+    qd: &DMatrix<f64>,
+) -> Result<ContinuousSs> {
+    let parts: Vec<Parts> = blocks
+        .iter()
+        .map(|s| Parts {
+            f: s.a().clone(),
+            b: s.b().clone(),
+            h: s.c().clone(),
+            d: s.d().clone(),
+            g: s.g().clone(),
+            j: DMatrix::zeros(s.n_outputs(), s.n_noise()),
+            q: s.w().clone(),
+        })
+        .collect();
+    let r = connect_parts(&parts, k, e, p, qd)?;
+    ContinuousSs::new(r.f, r.b, r.h, r.d)?.with_noise(r.g, validate::symmetrize(&r.q))
+}
+
+fn sel(rows: usize, cols: usize, r0: usize, c0: usize, size: usize) -> DMatrix<f64> {
+    let mut m = DMatrix::zeros(rows, cols);
+    for i in 0..size {
+        m[(r0 + i, c0 + i)] = 1.0;
+    }
+    m
+}
+
+/// Series connection `s1 → s2`: the outputs of `s1` drive the inputs of `s2`; states
+/// `[x1; x2]`, noise `[w1; w2]`.
+///
+/// # Errors
+/// [`Error::DimensionMismatch`] when `s1` has a different number of outputs than `s2` has
+/// inputs; [`Error::SampleTimeMismatch`].
+pub fn series(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
+    let (l1, m1, l2, m2) = (s1.n_inputs(), s1.n_outputs(), s2.n_inputs(), s2.n_outputs());
+    if m1 != l2 {
+        return Err(Error::DimensionMismatch {
+            name: "B (second system)",
+            rows: s2.n_states(),
+            cols: l2,
+            expected_rows: s2.n_states(),
+            expected_cols: m1,
+            rule: "series: inputs of the second system = outputs of the first",
+        });
+    }
+    let k = sel(l1 + l2, m1 + m2, l1, 0, m1);
+    let e = sel(l1 + l2, l1, 0, 0, l1);
+    let p = sel(m2, m1 + m2, 0, m1, m2);
+    connect(&[s1, s2], &k, &e, &p, &DMatrix::zeros(m2, l1))
+}
+
+fn same_io(
+    s1: &DiscreteSs,
+    s2: &DiscreteSs,
+    inputs: bool,
+    outputs: bool,
+    what: &'static str,
+) -> Result<()> {
+    if inputs && s1.n_inputs() != s2.n_inputs() {
+        return Err(Error::DimensionMismatch {
+            name: "B (second system)",
+            rows: s2.n_states(),
+            cols: s2.n_inputs(),
+            expected_rows: s2.n_states(),
+            expected_cols: s1.n_inputs(),
+            rule: what,
+        });
+    }
+    if outputs && s1.n_outputs() != s2.n_outputs() {
+        return Err(Error::DimensionMismatch {
+            name: "H (second system)",
+            rows: s2.n_outputs(),
+            cols: s2.n_states(),
+            expected_rows: s1.n_outputs(),
+            expected_cols: s2.n_states(),
+            rule: what,
+        });
+    }
+    Ok(())
+}
+
+/// Parallel connection: same input to both, outputs added (`y = y1 + y2`).
+///
+/// # Errors
+/// [`Error::DimensionMismatch`] unless both have the same numbers of inputs and outputs;
+/// [`Error::SampleTimeMismatch`].
+pub fn parallel(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
+    same_io(
+        s1,
+        s2,
+        true,
+        true,
+        "parallel: both systems need the same inputs and outputs",
+    )?;
+    let (l, m) = (s1.n_inputs(), s1.n_outputs());
+    let k = DMatrix::zeros(2 * l, 2 * m);
+    let mut e = sel(2 * l, l, 0, 0, l);
+    e.view_mut((l, 0), (l, l)).fill_with_identity();
+    let mut p = sel(m, 2 * m, 0, 0, m);
+    p.view_mut((0, m), (m, m)).fill_with_identity();
+    connect(&[s1, s2], &k, &e, &p, &DMatrix::zeros(m, l))
+}
+
+/// Stacking of outputs: same input to both, outputs `[y1; y2]`.
+///
+/// # Errors
+/// [`Error::DimensionMismatch`] unless both have the same number of inputs;
+/// [`Error::SampleTimeMismatch`].
+pub fn stack(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
+    same_io(
+        s1,
+        s2,
+        true,
+        false,
+        "stack: both systems need the same inputs",
+    )?;
+    let (l, m1, m2) = (s1.n_inputs(), s1.n_outputs(), s2.n_outputs());
+    let k = DMatrix::zeros(2 * l, m1 + m2);
+    let mut e = sel(2 * l, l, 0, 0, l);
+    e.view_mut((l, 0), (l, l)).fill_with_identity();
+    let p = DMatrix::identity(m1 + m2, m1 + m2);
+    connect(&[s1, s2], &k, &e, &p, &DMatrix::zeros(m1 + m2, l))
+}
+
+/// Block-diagonal append: inputs `[u1; u2]`, outputs `[y1; y2]`, no coupling.
+///
+/// # Errors
+/// [`Error::SampleTimeMismatch`].
+pub fn append(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
+    let (l, m) = (
+        s1.n_inputs() + s2.n_inputs(),
+        s1.n_outputs() + s2.n_outputs(),
+    );
+    connect(
+        &[s1, s2],
+        &DMatrix::zeros(l, m),
+        &DMatrix::identity(l, l),
+        &DMatrix::identity(m, m),
+        &DMatrix::zeros(m, l),
+    )
+}
+
+/// Keeps the outputs listed in `outputs`, in that order (repeats allowed).
+///
+/// # Errors
+/// [`Error::IndexOutOfRange`] for an index ≥ the number of outputs.
+pub fn select_outputs(s: &DiscreteSs, outputs: &[usize]) -> Result<DiscreteSs> {
+    let m = s.n_outputs();
+    let mut p = DMatrix::zeros(outputs.len(), m);
+    for (row, &i) in outputs.iter().enumerate() {
+        if i >= m {
+            return Err(Error::IndexOutOfRange {
+                name: "output",
+                index: i,
+                len: m,
+            });
+        }
+        p[(row, i)] = 1.0;
+    }
+    let l = s.n_inputs();
+    connect(
+        &[s],
+        &DMatrix::zeros(l, m),
+        &DMatrix::identity(l, l),
+        &p,
+        &DMatrix::zeros(outputs.len(), l),
+    )
+}
+
+/// Feedback loop: `u1 = u + sign·y2`, `u2 = y1`, output `y1`. `sign = −1.0` is negative
+/// feedback. States `[x1; x2]`.
+///
+/// # Errors
+/// [`Error::DimensionMismatch`] unless `s2` maps the outputs of `s1` back to its inputs;
+/// [`Error::Singular`] when `I − sign·D1·D2` is singular (ill-posed loop);
+/// [`Error::SampleTimeMismatch`].
+pub fn feedback(s1: &DiscreteSs, s2: &DiscreteSs, sign: f64) -> Result<DiscreteSs> {
+    validate::finite_scalar("sign", sign)?;
+    let (l1, m1) = (s1.n_inputs(), s1.n_outputs());
+    if s2.n_inputs() != m1 || s2.n_outputs() != l1 {
+        return Err(Error::DimensionMismatch {
+            name: "D (feedback system)",
+            rows: s2.n_outputs(),
+            cols: s2.n_inputs(),
+            expected_rows: l1,
+            expected_cols: m1,
+            rule: "feedback: the loop system maps outputs of the first back to its inputs",
+        });
+    }
+    let mut k = DMatrix::zeros(l1 + m1, m1 + l1);
+    k.view_mut((0, m1), (l1, l1))
+        .copy_from(&(DMatrix::<f64>::identity(l1, l1) * sign));
+    k.view_mut((l1, 0), (m1, m1)).fill_with_identity();
+    let e = sel(l1 + m1, l1, 0, 0, l1);
+    let p = sel(m1, m1 + l1, 0, 0, m1);
+    connect(&[s1, s2], &k, &e, &p, &DMatrix::zeros(m1, l1))
+}

@@ -1,0 +1,316 @@
+//! Shaping filters: white noise → a stationary process with a given correlation function
+//! (exponential, irregular rolling, damped cosine), with their spectra and discrete models.
+
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+use crate::discretize::{Method, NoiseConvention, discretize};
+use crate::error::{Error, Result};
+use crate::ss::{ContinuousSs, DiscreteSs};
+use crate::tf::{ContinuousTf, DiscreteTf, PaperVariant};
+use crate::validate;
+
+/// A shaping filter: a strictly proper transfer function `H(s)` driven by white noise of
+/// intensity `N`, whose stationary output has the correlation function
+/// [`ShapingFilter::correlation`] and variance `D = R(0) = N·∫|H(jω)|²dω/2π`.
+///
+/// Conventions: the spectral density is two-sided, `S(ω) = N·|H(jω)|²`, with
+/// `R(τ) = (1/2π)∫S(ω)e^{jωτ}dω`.
+pub trait ShapingFilter {
+    /// Stationary variance `D` of the output.
+    fn variance(&self) -> f64;
+    /// The normalised filter `H(s)` (unit DC gain).
+    fn transfer_function(&self) -> ContinuousTf;
+    /// White-noise intensity `N` that gives the variance `D`.
+    fn intensity(&self) -> f64;
+    /// Correlation function `R(τ)`.
+    fn correlation(&self, tau: f64) -> f64;
+    /// Two-sided spectral density `S(ω) = N·|H(jω)|²`.
+    fn spectral_density(&self, omega: f64) -> f64 {
+        self.intensity() * self.transfer_function().freq_response(omega).norm_sqr()
+    }
+    /// The shortest time constant of the correlation (1/decay rate or 1/frequency): choose
+    /// `Δt` well below it.
+    fn shortest_time_constant(&self) -> f64;
+    /// The paper's Tustin variant for this filter (SPEC F), or `None` for exact Tustin.
+    fn paper_variant(&self) -> Option<PaperVariant> {
+        None
+    }
+
+    /// Continuous model: `ẋ = A x + G w`, `y = C x`, intensity `W = [N]`, no control input.
+    fn continuous(&self) -> ContinuousSs {
+        let r = self.transfer_function().realize();
+        let n = r.n_states();
+        ContinuousSs::from_parts_unchecked(
+            r.a().clone(),
+            DMatrix::zeros(n, 0),
+            r.c().clone(),
+            DMatrix::zeros(1, 0),
+            r.b().clone(),
+            DMatrix::from_element(1, 1, self.intensity()),
+        )
+    }
+
+    /// Discrete model by any [`Method`] and [`NoiseConvention`].
+    ///
+    /// # Errors
+    /// As [`discretize`] (`dt` ≤ 0, bad pre-warp frequency).
+    fn discretize(&self, dt: f64, method: Method, noise: NoiseConvention) -> Result<DiscreteSs> {
+        discretize(&self.continuous(), dt, method, noise)
+    }
+
+    /// Discrete model by the paper's rule (SPEC F): Tustin with the paper's numerator change
+    /// where it has one (rolling: `(1+z⁻¹) → 2z⁻¹`; quantization: `(1+z⁻¹) → 2`; exponential:
+    /// exact Tustin), realised in controllable canonical form, noise `w_k` of variance `N/Δt`
+    /// entering as the filter input (`G = B`, `J = D` of the realisation).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for `dt` ≤ 0.
+    fn discretize_paper(&self, dt: f64) -> Result<DiscreteSs> {
+        let tf = self.transfer_function();
+        let dtf = match self.paper_variant() {
+            Some(v) => tf.paper_tustin(dt, v)?,
+            None => tf.tustin(dt, None)?,
+        };
+        noise_driven(&dtf, self.intensity() / dt)
+    }
+}
+
+/// Realises a discrete transfer function as a noise-driven model: the input becomes the noise
+/// `w_k` with variance `q` (`G = B`, `J = D`), no control input.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for a negative or non-finite `q`.
+pub fn noise_driven(tf: &DiscreteTf, q: f64) -> Result<DiscreteSs> {
+    validate::non_negative("q", q)?;
+    let r = tf.realize();
+    let (n, m) = (r.n_states(), r.n_outputs());
+    DiscreteSs::new(
+        r.f().clone(),
+        DMatrix::zeros(n, 0),
+        r.h().clone(),
+        DMatrix::zeros(m, 0),
+        r.dt(),
+    )?
+    .with_noise(r.b().clone(), r.d().clone(), DMatrix::from_element(1, 1, q))
+}
+
+/// Exponential correlation `R(τ) = D·e^{−|τ|/T}`; filter `1/(T s + 1)`, `N = 2·T·D`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ExponentialRaw")]
+pub struct Exponential {
+    variance: f64,
+    time_constant: f64,
+}
+
+#[derive(Deserialize)]
+struct ExponentialRaw {
+    variance: f64,
+    time_constant: f64,
+}
+
+impl TryFrom<ExponentialRaw> for Exponential {
+    type Error = Error;
+    fn try_from(r: ExponentialRaw) -> Result<Self> {
+        Exponential::new(r.variance, r.time_constant)
+    }
+}
+
+impl Exponential {
+    /// `variance` = D > 0, `time_constant` = T > 0 (seconds).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `variance` or `time_constant`.
+    pub fn new(variance: f64, time_constant: f64) -> Result<Self> {
+        Ok(Self {
+            variance: validate::positive("variance", variance)?,
+            time_constant: validate::positive("time_constant", time_constant)?,
+        })
+    }
+    /// Correlation time T.
+    pub fn time_constant(&self) -> f64 {
+        self.time_constant
+    }
+}
+
+impl ShapingFilter for Exponential {
+    fn variance(&self) -> f64 {
+        self.variance
+    }
+    fn transfer_function(&self) -> ContinuousTf {
+        ContinuousTf::from_validated(vec![1.0], vec![1.0, self.time_constant])
+    }
+    fn intensity(&self) -> f64 {
+        2.0 * self.time_constant * self.variance
+    }
+    fn correlation(&self, tau: f64) -> f64 {
+        self.variance * (-tau.abs() / self.time_constant).exp()
+    }
+    fn spectral_density(&self, omega: f64) -> f64 {
+        self.intensity() / (1.0 + (self.time_constant * omega).powi(2))
+    }
+    fn shortest_time_constant(&self) -> f64 {
+        self.time_constant
+    }
+}
+
+/// Irregular rolling `R(τ) = D·e^{−μ|τ|}(cos βτ + (μ/β)·sin β|τ|)`; filter
+/// `1/(b s² + a s + 1)` with `a = 2μ/(μ²+β²)`, `b = 1/(μ²+β²)`; `N = 2·a·D`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RollingRaw")]
+pub struct IrregularRolling {
+    variance: f64,
+    mu: f64,
+    beta: f64,
+}
+
+#[derive(Deserialize)]
+struct RollingRaw {
+    variance: f64,
+    mu: f64,
+    beta: f64,
+}
+
+impl TryFrom<RollingRaw> for IrregularRolling {
+    type Error = Error;
+    fn try_from(r: RollingRaw) -> Result<Self> {
+        IrregularRolling::new(r.variance, r.mu, r.beta)
+    }
+}
+
+impl IrregularRolling {
+    /// `variance` = D > 0, `mu` = μ > 0 (1/s, irregularity), `beta` = β > 0 (rad/s, dominant
+    /// frequency).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `variance`, `mu` or `beta`.
+    pub fn new(variance: f64, mu: f64, beta: f64) -> Result<Self> {
+        Ok(Self {
+            variance: validate::positive("variance", variance)?,
+            mu: validate::positive("mu", mu)?,
+            beta: validate::positive("beta", beta)?,
+        })
+    }
+    /// The filter coefficients `(a, b)`.
+    pub fn coefficients(&self) -> (f64, f64) {
+        let s = self.mu * self.mu + self.beta * self.beta;
+        (2.0 * self.mu / s, 1.0 / s)
+    }
+    /// μ.
+    pub fn mu(&self) -> f64 {
+        self.mu
+    }
+    /// β.
+    pub fn beta(&self) -> f64 {
+        self.beta
+    }
+}
+
+impl ShapingFilter for IrregularRolling {
+    fn variance(&self) -> f64 {
+        self.variance
+    }
+    fn transfer_function(&self) -> ContinuousTf {
+        let (a, b) = self.coefficients();
+        ContinuousTf::from_validated(vec![1.0], vec![1.0, a, b])
+    }
+    fn intensity(&self) -> f64 {
+        2.0 * self.coefficients().0 * self.variance
+    }
+    fn correlation(&self, tau: f64) -> f64 {
+        let t = tau.abs();
+        self.variance
+            * (-self.mu * t).exp()
+            * ((self.beta * t).cos() + self.mu / self.beta * (self.beta * t).sin())
+    }
+    fn spectral_density(&self, omega: f64) -> f64 {
+        let (a, b) = self.coefficients();
+        let w2 = omega * omega;
+        self.intensity() / ((1.0 - b * w2).powi(2) + a * a * w2)
+    }
+    fn shortest_time_constant(&self) -> f64 {
+        (1.0 / self.mu).min(1.0 / self.beta)
+    }
+    fn paper_variant(&self) -> Option<PaperVariant> {
+        Some(PaperVariant::Delay)
+    }
+}
+
+/// Damped cosine `R(τ) = D·e^{−ξ|τ|}·cos ωτ`; filter `(1 + √d·s)/(d s² + c s + 1)` with
+/// `c = 2ξ/(ξ²+ω²)`, `d = 1/(ξ²+ω²)`; `N = c·D`. The paper's quantization-noise model
+/// (`D = δ²/12`, `ξ = 1/T_a`, `ω = γ_q`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "DampedRaw")]
+pub struct DampedCosine {
+    variance: f64,
+    xi: f64,
+    omega: f64,
+}
+
+#[derive(Deserialize)]
+struct DampedRaw {
+    variance: f64,
+    xi: f64,
+    omega: f64,
+}
+
+impl TryFrom<DampedRaw> for DampedCosine {
+    type Error = Error;
+    fn try_from(r: DampedRaw) -> Result<Self> {
+        DampedCosine::new(r.variance, r.xi, r.omega)
+    }
+}
+
+impl DampedCosine {
+    /// `variance` = D > 0, `xi` = ξ > 0 (1/s), `omega` = ω > 0 (rad/s).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `variance`, `xi` or `omega`.
+    pub fn new(variance: f64, xi: f64, omega: f64) -> Result<Self> {
+        Ok(Self {
+            variance: validate::positive("variance", variance)?,
+            xi: validate::positive("xi", xi)?,
+            omega: validate::positive("omega", omega)?,
+        })
+    }
+    /// The filter coefficients `(c, d)`.
+    pub fn coefficients(&self) -> (f64, f64) {
+        let s = self.xi * self.xi + self.omega * self.omega;
+        (2.0 * self.xi / s, 1.0 / s)
+    }
+    /// ξ.
+    pub fn xi(&self) -> f64 {
+        self.xi
+    }
+    /// ω.
+    pub fn omega(&self) -> f64 {
+        self.omega
+    }
+}
+
+impl ShapingFilter for DampedCosine {
+    fn variance(&self) -> f64 {
+        self.variance
+    }
+    fn transfer_function(&self) -> ContinuousTf {
+        let (c, d) = self.coefficients();
+        ContinuousTf::from_validated(vec![1.0, d.sqrt()], vec![1.0, c, d])
+    }
+    fn intensity(&self) -> f64 {
+        self.coefficients().0 * self.variance
+    }
+    fn correlation(&self, tau: f64) -> f64 {
+        self.variance * (-self.xi * tau.abs()).exp() * (self.omega * tau).cos()
+    }
+    fn spectral_density(&self, omega: f64) -> f64 {
+        let (c, d) = self.coefficients();
+        let w2 = omega * omega;
+        self.intensity() * (1.0 + d * w2) / ((1.0 - d * w2).powi(2) + c * c * w2)
+    }
+    fn shortest_time_constant(&self) -> f64 {
+        (1.0 / self.xi).min(1.0 / self.omega)
+    }
+    fn paper_variant(&self) -> Option<PaperVariant> {
+        Some(PaperVariant::Drop)
+    }
+}

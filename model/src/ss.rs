@@ -1,0 +1,354 @@
+//! Continuous and discrete linear state-space models with control and noise inputs.
+
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::validate;
+
+/// A continuous-time linear model
+///
+/// ```text
+/// ẋ = A·x + B·u + G·w,     y = C·x + D·u,     E[w(t)w(s)ᵀ] = W·δ(t − s)
+/// ```
+///
+/// with n states, l control inputs `u`, p white-noise inputs `w` of intensity (spectral
+/// density) `W` (p×p, symmetric PSD) and m outputs. Built by [`ContinuousSs::new`] (no noise)
+/// and [`ContinuousSs::with_noise`]; every constructor checks shapes, finiteness, and that `W`
+/// is symmetric PSD. Deserialisation runs the same checks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ContinuousSsRaw")]
+pub struct ContinuousSs {
+    a: DMatrix<f64>,
+    b: DMatrix<f64>,
+    c: DMatrix<f64>,
+    d: DMatrix<f64>,
+    g: DMatrix<f64>,
+    w: DMatrix<f64>,
+}
+
+#[derive(Deserialize)]
+struct ContinuousSsRaw {
+    a: DMatrix<f64>,
+    b: DMatrix<f64>,
+    c: DMatrix<f64>,
+    d: DMatrix<f64>,
+    g: DMatrix<f64>,
+    w: DMatrix<f64>,
+}
+
+impl TryFrom<ContinuousSsRaw> for ContinuousSs {
+    type Error = Error;
+    fn try_from(r: ContinuousSsRaw) -> Result<Self> {
+        ContinuousSs::new(r.a, r.b, r.c, r.d)?.with_noise(r.g, r.w)
+    }
+}
+
+impl ContinuousSs {
+    /// A noise-free model `ẋ = A x + B u`, `y = C x + D u`.
+    ///
+    /// # Errors
+    /// [`Error::NotSquare`] for a non-square `A`, [`Error::DimensionMismatch`] when `B`, `C`
+    /// or `D` disagree with `A` and each other, [`Error::NonFiniteMatrix`] for NaN/∞.
+    pub fn new(a: DMatrix<f64>, b: DMatrix<f64>, c: DMatrix<f64>, d: DMatrix<f64>) -> Result<Self> {
+        let n = validate::square("A", &a)?;
+        validate::shape("B", &b, n, b.ncols(), "B must have as many rows as A")?;
+        validate::shape("C", &c, c.nrows(), n, "C must have as many columns as A")?;
+        validate::shape(
+            "D",
+            &d,
+            c.nrows(),
+            b.ncols(),
+            "D must be (rows of C)×(columns of B)",
+        )?;
+        Ok(Self {
+            g: DMatrix::zeros(n, 0),
+            w: DMatrix::zeros(0, 0),
+            a,
+            b,
+            c,
+            d,
+        })
+    }
+
+    /// Adds the noise input `G·w` with white-noise intensity `W` (replacing any earlier one).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] when `G` has the wrong number of rows or `W` is not p×p,
+    /// [`Error::NonFiniteMatrix`], [`Error::NotSymmetric`], [`Error::NotPositiveSemiDefinite`].
+    pub fn with_noise(mut self, g: DMatrix<f64>, w: DMatrix<f64>) -> Result<Self> {
+        let n = self.a.nrows();
+        validate::shape("G", &g, n, g.ncols(), "G must have as many rows as A")?;
+        validate::covariance("W", &w, g.ncols(), "W must be p×p with p = columns of G")?;
+        self.g = g;
+        self.w = w;
+        Ok(self)
+    }
+
+    /// State matrix `A` (n×n).
+    pub fn a(&self) -> &DMatrix<f64> {
+        &self.a
+    }
+    /// Control input matrix `B` (n×l).
+    pub fn b(&self) -> &DMatrix<f64> {
+        &self.b
+    }
+    /// Output matrix `C` (m×n).
+    pub fn c(&self) -> &DMatrix<f64> {
+        &self.c
+    }
+    /// Feed-through `D` (m×l).
+    pub fn d(&self) -> &DMatrix<f64> {
+        &self.d
+    }
+    /// Noise input matrix `G` (n×p).
+    pub fn g(&self) -> &DMatrix<f64> {
+        &self.g
+    }
+    /// White-noise intensity `W` (p×p).
+    pub fn w(&self) -> &DMatrix<f64> {
+        &self.w
+    }
+    /// Number of states n.
+    pub fn n_states(&self) -> usize {
+        self.a.nrows()
+    }
+    /// Number of control inputs l.
+    pub fn n_inputs(&self) -> usize {
+        self.b.ncols()
+    }
+    /// Number of noise inputs p.
+    pub fn n_noise(&self) -> usize {
+        self.g.ncols()
+    }
+    /// Number of outputs m.
+    pub fn n_outputs(&self) -> usize {
+        self.c.nrows()
+    }
+}
+
+/// A discrete-time linear model with sampling interval `dt`
+///
+/// ```text
+/// x_{k+1} = F·x_k + B·u_k + G·w_k,     y_k = H·x_k + D·u_k + J·w_k,     cov(w_k) = Q
+/// ```
+///
+/// with n states, l control inputs, p noise inputs (`w_k` white, zero mean, covariance `Q`,
+/// symmetric PSD) and m outputs. `J` is the noise feed-through (it arises from Tustin or from
+/// the paper's shaping filters, where the same `w_k` drives the state and the output: the
+/// cross-covariance of process and output noise is then `G·Q·Jᵀ`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "DiscreteSsRaw")]
+pub struct DiscreteSs {
+    f: DMatrix<f64>,
+    b: DMatrix<f64>,
+    h: DMatrix<f64>,
+    d: DMatrix<f64>,
+    g: DMatrix<f64>,
+    j: DMatrix<f64>,
+    q: DMatrix<f64>,
+    dt: f64,
+}
+
+#[derive(Deserialize)]
+struct DiscreteSsRaw {
+    f: DMatrix<f64>,
+    b: DMatrix<f64>,
+    h: DMatrix<f64>,
+    d: DMatrix<f64>,
+    g: DMatrix<f64>,
+    j: DMatrix<f64>,
+    q: DMatrix<f64>,
+    dt: f64,
+}
+
+impl TryFrom<DiscreteSsRaw> for DiscreteSs {
+    type Error = Error;
+    fn try_from(r: DiscreteSsRaw) -> Result<Self> {
+        DiscreteSs::new(r.f, r.b, r.h, r.d, r.dt)?.with_noise(r.g, r.j, r.q)
+    }
+}
+
+impl DiscreteSs {
+    /// A noise-free model `x_{k+1} = F x_k + B u_k`, `y_k = H x_k + D u_k` with interval `dt`.
+    ///
+    /// # Errors
+    /// [`Error::NotSquare`] (`F`), [`Error::DimensionMismatch`] (`B`, `H`, `D`),
+    /// [`Error::NonFiniteMatrix`], [`Error::InvalidParameter`] for `dt` not finite and > 0.
+    pub fn new(
+        f: DMatrix<f64>,
+        b: DMatrix<f64>,
+        h: DMatrix<f64>,
+        d: DMatrix<f64>,
+        dt: f64,
+    ) -> Result<Self> {
+        validate::positive("dt", dt)?;
+        let n = validate::square("F", &f)?;
+        validate::shape("B", &b, n, b.ncols(), "B must have as many rows as F")?;
+        validate::shape("H", &h, h.nrows(), n, "H must have as many columns as F")?;
+        validate::shape(
+            "D",
+            &d,
+            h.nrows(),
+            b.ncols(),
+            "D must be (rows of H)×(columns of B)",
+        )?;
+        let m = h.nrows();
+        Ok(Self {
+            g: DMatrix::zeros(n, 0),
+            j: DMatrix::zeros(m, 0),
+            q: DMatrix::zeros(0, 0),
+            f,
+            b,
+            h,
+            d,
+            dt,
+        })
+    }
+
+    /// Adds the noise input: `G·w_k` in the state, `J·w_k` in the output, `cov(w_k) = Q`.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] for `G` (n×p), `J` (m×p) or `Q` (p×p),
+    /// [`Error::NonFiniteMatrix`], [`Error::NotSymmetric`], [`Error::NotPositiveSemiDefinite`].
+    pub fn with_noise(mut self, g: DMatrix<f64>, j: DMatrix<f64>, q: DMatrix<f64>) -> Result<Self> {
+        let n = self.f.nrows();
+        let m = self.h.nrows();
+        validate::shape("G", &g, n, g.ncols(), "G must have as many rows as F")?;
+        validate::shape(
+            "J",
+            &j,
+            m,
+            g.ncols(),
+            "J must be (rows of H)×(columns of G)",
+        )?;
+        validate::covariance("Q", &q, g.ncols(), "Q must be p×p with p = columns of G")?;
+        self.g = g;
+        self.j = j;
+        self.q = q;
+        Ok(self)
+    }
+
+    /// Transition matrix `F` (n×n).
+    pub fn f(&self) -> &DMatrix<f64> {
+        &self.f
+    }
+    /// Control input matrix `B` (n×l).
+    pub fn b(&self) -> &DMatrix<f64> {
+        &self.b
+    }
+    /// Output matrix `H` (m×n).
+    pub fn h(&self) -> &DMatrix<f64> {
+        &self.h
+    }
+    /// Control feed-through `D` (m×l).
+    pub fn d(&self) -> &DMatrix<f64> {
+        &self.d
+    }
+    /// Noise input matrix `G` (n×p).
+    pub fn g(&self) -> &DMatrix<f64> {
+        &self.g
+    }
+    /// Noise feed-through `J` (m×p).
+    pub fn j(&self) -> &DMatrix<f64> {
+        &self.j
+    }
+    /// Noise covariance `Q = cov(w_k)` (p×p).
+    pub fn q(&self) -> &DMatrix<f64> {
+        &self.q
+    }
+    /// Sampling interval Δt in seconds.
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+    /// Number of states n.
+    pub fn n_states(&self) -> usize {
+        self.f.nrows()
+    }
+    /// Number of control inputs l.
+    pub fn n_inputs(&self) -> usize {
+        self.b.ncols()
+    }
+    /// Number of noise inputs p.
+    pub fn n_noise(&self) -> usize {
+        self.g.ncols()
+    }
+    /// Number of outputs m.
+    pub fn n_outputs(&self) -> usize {
+        self.h.nrows()
+    }
+    /// Process-noise covariance as it enters the state: `G·Q·Gᵀ` (n×n, symmetric).
+    pub fn process_covariance(&self) -> DMatrix<f64> {
+        validate::symmetrize(&(&self.g * &self.q * self.g.transpose()))
+    }
+    /// Output-noise covariance from the noise feed-through: `J·Q·Jᵀ` (m×m, symmetric).
+    pub fn output_noise_covariance(&self) -> DMatrix<f64> {
+        validate::symmetrize(&(&self.j * &self.q * self.j.transpose()))
+    }
+    /// Cross-covariance of process and output noise: `cov(G w_k, J w_k) = G·Q·Jᵀ` (n×m).
+    pub fn cross_covariance(&self) -> DMatrix<f64> {
+        &self.g * &self.q * self.j.transpose()
+    }
+    /// The same model with the noise inputs treated as extra control inputs appended after
+    /// `u`: `B' = [B G]`, `D' = [D J]` (no noise left). Used for impulse responses from the
+    /// noise and for composing shaping filters as signal blocks.
+    pub fn noise_as_inputs(&self) -> DiscreteSs {
+        let n = self.n_states();
+        let m = self.n_outputs();
+        let mut b = DMatrix::zeros(n, self.n_inputs() + self.n_noise());
+        b.columns_mut(0, self.n_inputs()).copy_from(&self.b);
+        b.columns_mut(self.n_inputs(), self.n_noise())
+            .copy_from(&self.g);
+        let mut d = DMatrix::zeros(m, self.n_inputs() + self.n_noise());
+        d.columns_mut(0, self.n_inputs()).copy_from(&self.d);
+        d.columns_mut(self.n_inputs(), self.n_noise())
+            .copy_from(&self.j);
+        DiscreteSs {
+            f: self.f.clone(),
+            b,
+            h: self.h.clone(),
+            d,
+            g: DMatrix::zeros(n, 0),
+            j: DMatrix::zeros(m, 0),
+            q: DMatrix::zeros(0, 0),
+            dt: self.dt,
+        }
+    }
+
+    /// Builds without re-validating: for kernels whose outputs are valid by construction.
+    pub(crate) fn from_parts_unchecked(
+        f: DMatrix<f64>,
+        b: DMatrix<f64>,
+        h: DMatrix<f64>,
+        d: DMatrix<f64>,
+        g: DMatrix<f64>,
+        j: DMatrix<f64>,
+        q: DMatrix<f64>,
+        dt: f64,
+    ) -> Self {
+        Self {
+            f,
+            b,
+            h,
+            d,
+            g,
+            j,
+            q,
+            dt,
+        }
+    }
+}
+
+impl ContinuousSs {
+    /// Builds without re-validating: for kernels whose outputs are valid by construction.
+    pub(crate) fn from_parts_unchecked(
+        a: DMatrix<f64>,
+        b: DMatrix<f64>,
+        c: DMatrix<f64>,
+        d: DMatrix<f64>,
+        g: DMatrix<f64>,
+        w: DMatrix<f64>,
+    ) -> Self {
+        Self { a, b, c, d, g, w }
+    }
+}

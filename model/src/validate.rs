@@ -1,0 +1,138 @@
+//! Shared input checks used by every constructor (shape, finiteness, symmetry, PSD, scalars).
+
+use nalgebra::DMatrix;
+
+use crate::error::{Error, Result};
+
+/// Relative tolerance for symmetry of covariance / intensity matrices: |M − Mᵀ| ≤ this × max(1, max|M|).
+pub(crate) const SYMMETRY_TOL: f64 = 1e-9;
+/// Relative tolerance for PSD: smallest eigenvalue ≥ −this × max(1, max|M|).
+pub(crate) const PSD_TOL: f64 = 1e-10;
+
+pub(crate) fn finite(name: &'static str, m: &DMatrix<f64>) -> Result<()> {
+    for c in 0..m.ncols() {
+        for r in 0..m.nrows() {
+            let v = m[(r, c)];
+            if !v.is_finite() {
+                return Err(Error::NonFiniteMatrix {
+                    name,
+                    row: r,
+                    col: c,
+                    value: v,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+pub(crate) fn square(name: &'static str, m: &DMatrix<f64>) -> Result<usize> {
+    if m.nrows() != m.ncols() {
+        return Err(Error::NotSquare {
+            name,
+            rows: m.nrows(),
+            cols: m.ncols(),
+        });
+    }
+    finite(name, m)?;
+    Ok(m.nrows())
+}
+
+pub(crate) fn shape(
+    name: &'static str,
+    m: &DMatrix<f64>,
+    rows: usize,
+    cols: usize,
+    rule: &'static str,
+) -> Result<()> {
+    if m.nrows() != rows || m.ncols() != cols {
+        return Err(Error::DimensionMismatch {
+            name,
+            rows: m.nrows(),
+            cols: m.ncols(),
+            expected_rows: rows,
+            expected_cols: cols,
+            rule,
+        });
+    }
+    finite(name, m)
+}
+
+/// Square, finite, symmetric (to [`SYMMETRY_TOL`]) and PSD (to [`PSD_TOL`]).
+pub(crate) fn covariance(
+    name: &'static str,
+    m: &DMatrix<f64>,
+    n: usize,
+    rule: &'static str,
+) -> Result<()> {
+    shape(name, m, n, n, rule)?;
+    if n == 0 {
+        return Ok(());
+    }
+    let scale = m.amax().max(1.0);
+    let mut asym: f64 = 0.0;
+    for i in 0..n {
+        for j in 0..i {
+            asym = asym.max((m[(i, j)] - m[(j, i)]).abs());
+        }
+    }
+    if asym > SYMMETRY_TOL * scale {
+        return Err(Error::NotSymmetric {
+            name,
+            asymmetry: asym,
+        });
+    }
+    let sym = (m + m.transpose()) * 0.5;
+    let min_eig = sym.symmetric_eigenvalues().min();
+    if min_eig < -PSD_TOL * scale {
+        return Err(Error::NotPositiveSemiDefinite {
+            name,
+            min_eigenvalue: min_eig,
+        });
+    }
+    Ok(())
+}
+
+/// A scalar that must be finite and strictly positive.
+pub(crate) fn positive(name: &'static str, v: f64) -> Result<f64> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            value: v,
+            rule: "finite and > 0",
+        })
+    }
+}
+
+/// A scalar that must be finite and ≥ 0.
+pub(crate) fn non_negative(name: &'static str, v: f64) -> Result<f64> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            value: v,
+            rule: "finite and ≥ 0",
+        })
+    }
+}
+
+/// A scalar that must be finite.
+pub(crate) fn finite_scalar(name: &'static str, v: f64) -> Result<f64> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            value: v,
+            rule: "finite",
+        })
+    }
+}
+
+/// Makes a matrix exactly symmetric: (M + Mᵀ)/2.
+pub(crate) fn symmetrize(m: &DMatrix<f64>) -> DMatrix<f64> {
+    (m + m.transpose()) * 0.5
+}
