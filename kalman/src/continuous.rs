@@ -1,0 +1,349 @@
+//! Continuous time (SPEC U): the Kalman–Bucy Riccati ODE
+//! Ṗ = A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q integrated by an adaptive Dormand–Prince 5(4) scheme
+//! that keeps P symmetric, the Kalman–Bucy gain K = P Hᵀ R⁻¹, and the continuous/discrete
+//! link: the matrix exponential and Van Loan's sampling of a continuous model.
+//!
+//! Here `Q` is the n×n intensity of the process noise as it enters the state (G Q_w Gᵀ in
+//! SPEC U) and `R` the m×m intensity of the measurement noise (positive definite). The
+//! steady state of the ODE is the stabilising solution of the CARE, [`crate::riccati::care`].
+#![allow(non_snake_case)]
+
+use faer::linalg::solvers::Solve;
+use faer::{Mat, MatRef, Side};
+
+use crate::riccati::{check, symmetrise};
+use crate::Error;
+
+/// The Kalman–Bucy filter's covariance equation for a time-invariant continuous model.
+#[derive(Debug, Clone)]
+pub struct KalmanBucy {
+    A: Mat<f64>,
+    H: Mat<f64>,
+    Q: Mat<f64>,
+    R: Mat<f64>,
+    /// Hᵀ R⁻¹ H (n×n, symmetric), by a Cholesky solve.
+    G: Mat<f64>,
+}
+
+/// Tolerances of the adaptive integration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OdeOptions {
+    /// Relative tolerance per entry. Default 1e-10.
+    pub rtol: f64,
+    /// Absolute tolerance per entry. Default 1e-12.
+    pub atol: f64,
+    /// Maximum number of accepted + rejected steps. Default 1 000 000.
+    pub max_steps: usize,
+}
+
+impl Default for OdeOptions {
+    fn default() -> Self {
+        Self { rtol: 1e-10, atol: 1e-12, max_steps: 1_000_000 }
+    }
+}
+
+/// Result of integrating the Riccati ODE.
+#[derive(Debug, Clone)]
+pub struct OdeSolution {
+    /// P at the final time (symmetric).
+    pub covariance: Mat<f64>,
+    /// The final time reached.
+    pub time: f64,
+    /// Accepted steps.
+    pub steps: usize,
+}
+
+impl KalmanBucy {
+    /// The Riccati equation of ẋ = A x + w, z = H x + v with intensities Q (n×n, of w as it
+    /// enters the state) and R (m×m, positive definite).
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming the matrix; [`Error::NotPositiveDefinite`]
+    /// for R.
+    pub fn new(
+        A: MatRef<'_, f64>,
+        H: MatRef<'_, f64>,
+        Q: MatRef<'_, f64>,
+        R: MatRef<'_, f64>,
+    ) -> Result<Self, Error> {
+        let n = A.nrows();
+        let m = H.nrows();
+        check("A", A, n, n)?;
+        check("H", H, m, n)?;
+        check("Q", Q, n, n)?;
+        check("R", R, m, m)?;
+        let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
+            name: "R",
+            n: m,
+            rule: "the Kalman-Bucy gain needs R^-1",
+        })?;
+        let mut G = H.transpose() * llt.solve(H);
+        symmetrise(&mut G);
+        let mut Qs = Q.to_owned();
+        symmetrise(&mut Qs);
+        Ok(Self { A: A.to_owned(), H: H.to_owned(), Q: Qs, R: R.to_owned(), G })
+    }
+
+    /// Ṗ at P: A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q (symmetrised).
+    pub fn derivative(&self, P: MatRef<'_, f64>) -> Mat<f64> {
+        let AP = &self.A * P;
+        let mut D = &AP + AP.transpose() - P * (&self.G * P) + &self.Q;
+        symmetrise(&mut D);
+        D
+    }
+
+    /// The Kalman–Bucy gain K = P Hᵀ R⁻¹ (n×m) at P.
+    ///
+    /// # Errors
+    /// [`Error::Shape`] if P is not n×n.
+    pub fn gain(&self, P: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
+        let n = self.A.nrows();
+        check("P", P, n, n)?;
+        let llt = self.R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
+            name: "R",
+            n: self.R.nrows(),
+            rule: "the Kalman-Bucy gain needs R^-1",
+        })?;
+        Ok(llt.solve(&self.H * P).transpose().to_owned())
+    }
+
+    /// Integrates Ṗ from `P0` at time 0 to time `t1` (adaptive Dormand–Prince 5(4), P
+    /// symmetrised after every step).
+    ///
+    /// # Errors
+    /// Shape/finiteness errors naming `P0`; [`Error::RiccatiNoConvergence`] if the step
+    /// budget runs out or P becomes non-finite.
+    pub fn integrate(&self, P0: MatRef<'_, f64>, t1: f64, opts: &OdeOptions) -> Result<OdeSolution, Error> {
+        self.run(P0, t1, None, opts)
+    }
+
+    /// Integrates from `P0` until ‖Ṗ‖_F ≤ `rel_rate`·‖P‖_F (per unit time) or `t_max`,
+    /// whichever is first; with `rel_rate` ≈ 1e-13 the result is the ODE's limit, the
+    /// CARE solution.
+    ///
+    /// # Errors
+    /// As [`KalmanBucy::integrate`]; also [`Error::RiccatiNoConvergence`] if `t_max` is
+    /// reached before the rate criterion.
+    pub fn until_steady(
+        &self,
+        P0: MatRef<'_, f64>,
+        rel_rate: f64,
+        t_max: f64,
+        opts: &OdeOptions,
+    ) -> Result<OdeSolution, Error> {
+        let sol = self.run(P0, t_max, Some(rel_rate), opts)?;
+        if sol.time >= t_max {
+            return Err(Error::RiccatiNoConvergence {
+                equation: "Kalman-Bucy ODE",
+                iterations: sol.steps,
+                reason: "P did not settle before t_max",
+            });
+        }
+        Ok(sol)
+    }
+
+    fn run(&self, P0: MatRef<'_, f64>, t1: f64, rate: Option<f64>, opts: &OdeOptions) -> Result<OdeSolution, Error> {
+        let n = self.A.nrows();
+        check("P0", P0, n, n)?;
+        // Dormand–Prince 5(4) tableau.
+        const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
+        const A2: [f64; 1] = [1.0 / 5.0];
+        const A3: [f64; 2] = [3.0 / 40.0, 9.0 / 40.0];
+        const A4: [f64; 3] = [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0];
+        const A5: [f64; 4] = [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0];
+        const A6: [f64; 5] = [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0];
+        const B5: [f64; 7] = [35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0, 0.0];
+        const B4: [f64; 7] = [
+            5179.0 / 57600.0,
+            0.0,
+            7571.0 / 16695.0,
+            393.0 / 640.0,
+            -92097.0 / 339200.0,
+            187.0 / 2100.0,
+            1.0 / 40.0,
+        ];
+        let _ = C;
+        let mut P = P0.to_owned();
+        symmetrise(&mut P);
+        let mut t = 0.0_f64;
+        let mut k1 = self.derivative(P.as_ref());
+        let scale = (self.A.norm_l2() + self.G.norm_l2() * P.norm_l2().max(1.0)).max(1e-12);
+        let mut h = (0.01 / scale).min(t1.max(f64::MIN_POSITIVE));
+        let mut steps = 0usize;
+        let comb = |P: &Mat<f64>, ks: &[&Mat<f64>], a: &[f64], h: f64| -> Mat<f64> {
+            let mut Y = P.clone();
+            for (k, &c) in ks.iter().zip(a) {
+                if c != 0.0 {
+                    Y += (h * c) * *k;
+                }
+            }
+            Y
+        };
+        for _ in 0..opts.max_steps {
+            if let Some(r) = rate {
+                if k1.norm_l2() <= r * P.norm_l2() {
+                    return Ok(OdeSolution { covariance: P, time: t, steps });
+                }
+            }
+            if t >= t1 {
+                return Ok(OdeSolution { covariance: P, time: t, steps });
+            }
+            let h_step = h.min(t1 - t);
+            let k2 = self.derivative(comb(&P, &[&k1], &A2, h_step).as_ref());
+            let k3 = self.derivative(comb(&P, &[&k1, &k2], &A3, h_step).as_ref());
+            let k4 = self.derivative(comb(&P, &[&k1, &k2, &k3], &A4, h_step).as_ref());
+            let k5 = self.derivative(comb(&P, &[&k1, &k2, &k3, &k4], &A5, h_step).as_ref());
+            let k6 = self.derivative(comb(&P, &[&k1, &k2, &k3, &k4, &k5], &A6, h_step).as_ref());
+            let mut Pn = comb(&P, &[&k1, &k2, &k3, &k4, &k5, &k6], &B5[..6], h_step);
+            symmetrise(&mut Pn);
+            let k7 = self.derivative(Pn.as_ref());
+            let ks = [&k1, &k2, &k3, &k4, &k5, &k6, &k7];
+            let mut err = 0.0_f64;
+            for j in 0..n {
+                for i in 0..n {
+                    let mut e = 0.0;
+                    for (k, (b5, b4)) in ks.iter().zip(B5.iter().zip(B4.iter())) {
+                        e += (b5 - b4) * k[(i, j)];
+                    }
+                    let sc = opts.atol + opts.rtol * P[(i, j)].abs().max(Pn[(i, j)].abs());
+                    err = err.max((h_step * e).abs() / sc);
+                }
+            }
+            if !err.is_finite() || !Pn.norm_l2().is_finite() {
+                if h_step < 1e-300 {
+                    break;
+                }
+                h = h_step * 0.1;
+                continue;
+            }
+            if err <= 1.0 {
+                t += h_step;
+                P = Pn;
+                k1 = k7;
+                steps += 1;
+            }
+            let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };
+            h = h_step * factor;
+        }
+        Err(Error::RiccatiNoConvergence {
+            equation: "Kalman-Bucy ODE",
+            iterations: steps,
+            reason: "step budget exhausted or P became non-finite",
+        })
+    }
+}
+
+/// Matrix exponential e^{A} by scaling and squaring with the [13/13] Padé approximant
+/// (Higham 2005); the Padé quotient is a solve, not an inverse.
+///
+/// # Errors
+/// [`Error::Shape`] if A is not square, [`Error::NonFinite`] for a non-finite entry.
+pub fn expm(A: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
+    let n = A.nrows();
+    check("A", A, n, n)?;
+    const B: [f64; 14] = [
+        64764752532480000.0,
+        32382376266240000.0,
+        7771770303897600.0,
+        1187353796428800.0,
+        129060195264000.0,
+        10559470521600.0,
+        670442572800.0,
+        33522128640.0,
+        1323241920.0,
+        40840800.0,
+        960960.0,
+        16380.0,
+        182.0,
+        1.0,
+    ];
+    const THETA13: f64 = 5.371920351148152;
+    let norm1 = (0..n).map(|j| (0..n).map(|i| A[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
+    let s = if norm1 > THETA13 { (norm1 / THETA13).log2().ceil() as i32 } else { 0 };
+    let As = A * (0.5_f64).powi(s);
+    let I = Mat::<f64>::identity(n, n);
+    let A2 = &As * &As;
+    let A4 = &A2 * &A2;
+    let A6 = &A4 * &A2;
+    let inner_u = &A6 * (B[13] * &A6 + B[11] * &A4 + B[9] * &A2) + B[7] * &A6 + B[5] * &A4 + B[3] * &A2 + B[1] * &I;
+    let U = &As * inner_u;
+    let V = &A6 * (B[12] * &A6 + B[10] * &A4 + B[8] * &A2) + B[6] * &A6 + B[4] * &A4 + B[2] * &A2 + B[0] * &I;
+    let mut E = (&V - &U).partial_piv_lu().solve(&V + &U);
+    for _ in 0..s {
+        E = &E * &E;
+    }
+    Ok(E)
+}
+
+/// Van Loan's sampling of ẋ = A x + w (w of intensity `Q`, n×n, as it enters the state) at
+/// interval `dt`: returns (F, Q_d) with F = e^{AΔt} and Q_d = ∫₀^Δt e^{Aτ} Q e^{Aᵀτ} dτ
+/// (symmetrised). Measurement noise of intensity R_c averaged over the interval has
+/// covariance R_c / Δt.
+///
+/// # Errors
+/// Shape/finiteness errors naming `A` or `Q`; [`Error::Dimension`] for a non-positive `dt`.
+pub fn van_loan(A: MatRef<'_, f64>, Q: MatRef<'_, f64>, dt: f64) -> Result<(Mat<f64>, Mat<f64>), Error> {
+    let n = A.nrows();
+    check("A", A, n, n)?;
+    check("Q", Q, n, n)?;
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(Error::Dimension { name: "dt", value: 0, rule: "the sampling interval must be positive and finite" });
+    }
+    let mut M = Mat::<f64>::zeros(2 * n, 2 * n);
+    for j in 0..n {
+        for i in 0..n {
+            M[(i, j)] = -A[(i, j)] * dt;
+            M[(i, n + j)] = Q[(i, j)] * dt;
+            M[(n + i, n + j)] = A[(j, i)] * dt;
+        }
+    }
+    let E = expm(M.as_ref())?;
+    let F = E.as_ref().submatrix(n, n, n, n).transpose().to_owned();
+    let mut Qd = &F * E.as_ref().submatrix(0, n, n, n);
+    symmetrise(&mut Qd);
+    Ok((F, Qd))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::mat;
+
+    #[test]
+    fn expm_rotation_and_nilpotent() {
+        let w = 10.0_f64;
+        let E = expm(mat![[0.0, w], [-w, 0.0]].as_ref()).unwrap();
+        // Tolerance: scaling & squaring error ~ 1e-15 · e^{‖A‖}·steps; 1e-12 is ample.
+        assert!((E[(0, 0)] - w.cos()).abs() < 1e-12 && (E[(0, 1)] - w.sin()).abs() < 1e-12);
+        let E = expm(mat![[0.0, 0.25], [0.0, 0.0]].as_ref()).unwrap();
+        assert!((E[(0, 1)] - 0.25).abs() < 1e-15 && (E[(1, 1)] - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn van_loan_white_acceleration() {
+        // Double integrator with white acceleration q: Q_d = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]].
+        let (dt, q) = (0.25, 0.1);
+        let (F, Qd) = van_loan(mat![[0.0, 1.0], [0.0, 0.0]].as_ref(), mat![[0.0, 0.0], [0.0, q]].as_ref(), dt).unwrap();
+        assert!((F[(0, 1)] - dt).abs() < 1e-15);
+        let want = [[q * dt.powi(3) / 3.0, q * dt * dt / 2.0], [q * dt * dt / 2.0, q * dt]];
+        for i in 0..2 {
+            for j in 0..2 {
+                assert!((Qd[(i, j)] - want[i][j]).abs() < 1e-15, "{i}{j}");
+            }
+        }
+    }
+
+    #[test]
+    fn scalar_ode_matches_closed_form() {
+        // ṗ = −2p − p² + 1 from p(0) = 0: p(t) = tanh-type closed form; compare the limit.
+        let kb = KalmanBucy::new(mat![[-1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref())
+            .unwrap();
+        let sol = kb.integrate(mat![[0.0]].as_ref(), 1.0, &OdeOptions::default()).unwrap();
+        // Exact: p(t) = (e^{2√2 t} − 1) / ((1 + √2) e^{2√2 t} + (√2 − 1)).
+        let r = 2f64.sqrt();
+        let e = (2.0 * r).exp();
+        let exact = (e - 1.0) / ((1.0 + r) * e + (r - 1.0));
+        // Tolerance: rtol 1e-10 per step, ~30 steps.
+        assert!((sol.covariance[(0, 0)] - exact).abs() < 1e-9, "{} vs {exact}", sol.covariance[(0, 0)]);
+    }
+}
