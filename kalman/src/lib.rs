@@ -1,2 +1,81 @@
-//! The `kalman` crate (being built).
+//! A generic linear Kalman filter engine: Joseph, standard and square-root covariance
+//! forms, exact cross-covariance of process and measurement noise, singular measurement
+//! noise, missing measurements, consistency statistics, and a step that never allocates.
+//!
+//! # Notation
+//! n states, m measurements, p control inputs:
+//!
+//! ```text
+//! x_{k+1} = F x_k + B u_k + w_k,     z_k = H x_k + v_k,
+//! cov(w_k) = Q,   cov(v_k) = R,   E[w_k v_kᵀ] = S,
+//! ```
+//!
+//! `(x0, P0)` is the prior of the first measurement. Step `k` updates with `z_k` (innovation
+//! `e_k = z_k − H x_{k|k−1}`, its covariance `Σ_k = H P_{k|k−1} Hᵀ + R`, gain
+//! `K_k = P_{k|k−1} Hᵀ Σ_k⁺`) and then predicts to `k + 1` with `u_k`; with `S ≠ 0` the
+//! prediction uses the correlated-noise recursion
+//! `x_{k+1|k} = F x_{k|k} + B u_k + S Σ_k⁺ e_k`,
+//! `P_{k+1|k} = F P_{k|k} Fᵀ + Q − F K_k Sᵀ − S K_kᵀ Fᵀ − S Σ_k⁺ Sᵀ`.
+//! After step `k` the filter holds both `x_{k|k}` ("current" form) and `x_{k+1|k}`
+//! ("delayed" form).
+//!
+//! # Storage paths
+//! [`Filter<Dyn>`](Filter) (the default) keeps heap buffers sized at construction and hands
+//! large products to faer's GEMM (`Par::Seq`; Rayon above a threshold with the `parallel`
+//! feature). [`Filter<Fixed<N, M, P>>`](Filter) keeps everything inline for n, m ≤ 16.
+//! Both run the same kernels on slices, so they share validation, semantics and tests.
+//!
+//! # Robustness
+//! Σ is factored by Cholesky with a relative pivot tolerance ([`RANK_TOL`]), falling back to
+//! a Jacobi eigen-decomposition and the pseudo-inverse when it is (numerically) singular —
+//! e.g. an exact measurement channel with `R_ii = 0`. A NaN entry of `z` drops that row; an
+//! all-NaN `z` is a predict-only step.
+//!
+//! # Example
+//! ```
+//! use kalman::{CovarianceForm, Dyn, Filter, Model};
+//! # fn main() -> Result<(), kalman::Error> {
+//! // Constant-velocity model with position measurements.
+//! let dt = 0.1;
+//! let model = Model::new(
+//!     Dyn::new(2, 1, 0)?,
+//!     &[[1.0, dt], [0.0, 1.0]],
+//!     &[[1.0, 0.0]],
+//!     &[[1e-4, 0.0], [0.0, 1e-3]],
+//!     &[[0.01]],
+//! )?;
+//! let mut filter = Filter::new(model, &[0.0, 1.0], &[[1.0, 0.0], [0.0, 1.0]], CovarianceForm::Joseph)?;
+//! for z in [0.11, 0.19, f64::NAN, 0.42] {
+//!     let info = filter.step(&[z], None)?;
+//!     assert!(info.nis >= 0.0);
+//! }
+//! assert!((filter.state()[1] - 1.0).abs() < 0.5);
+//! # Ok(())
+//! # }
+//! ```
 #![deny(missing_docs)]
+
+mod consistency;
+mod error;
+mod filter;
+pub mod continuous;
+#[doc(hidden)]
+pub mod kernels;
+mod model;
+pub mod riccati;
+pub mod smoother;
+mod storage;
+#[cfg(feature = "proptest")]
+pub mod strategies;
+
+pub use consistency::{Nees, chi2_cdf, chi2_quantile, nees};
+pub use error::Error;
+pub use filter::{CovarianceForm, Filter, StepInfo};
+pub use kernels::RANK_TOL;
+pub use model::{MatrixInput, Model, ModelSource, PSD_TOL, SYMMETRY_TOL};
+pub use storage::{Arr, Buf, Dims, Dyn, FAER_THRESHOLD, FIXED_MAX, Fixed, PARALLEL_THRESHOLD};
+
+/// The fixed-size filter: `FixedFilter<N, M, P>` = `Filter<Fixed<N, M, P>>`.
+pub type FixedFilter<const N: usize, const M: usize, const P: usize = 0> = Filter<Fixed<N, M, P>>;
+/// The fixed-size model.
+pub type FixedModel<const N: usize, const M: usize, const P: usize = 0> = Model<Fixed<N, M, P>>;

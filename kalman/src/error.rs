@@ -1,0 +1,152 @@
+//! The crate's typed error: every invalid input names the offending matrix and the rule broken.
+
+/// Errors of model construction, filter construction and filter steps.
+///
+/// Every variant names the matrix or vector it is about (`"F"`, `"Q"`, `"z"`, …) so a
+/// message points at the culprit. Steps return errors only for inputs of the wrong length;
+/// a numerically singular innovation covariance is *not* an error (it takes the
+/// rank-revealing path, see [`crate::StepInfo::rank`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A matrix or vector has the wrong shape.
+    #[error("{name} is {rows}x{cols}, expected {expected_rows}x{expected_cols}")]
+    Shape {
+        /// Name of the matrix (`"F"`, `"H"`, `"Q"`, `"R"`, `"S"`, `"B"`, `"P0"`, `"x0"`, `"z"`, `"u"`).
+        name: &'static str,
+        /// Rows found.
+        rows: usize,
+        /// Columns found.
+        cols: usize,
+        /// Rows required.
+        expected_rows: usize,
+        /// Columns required.
+        expected_cols: usize,
+    },
+    /// A matrix or vector holds a NaN or infinite entry where only finite values are allowed.
+    #[error("{name} ({rows}x{cols}) has a non-finite entry at ({row}, {col})")]
+    NonFinite {
+        /// Name of the matrix.
+        name: &'static str,
+        /// Rows of the matrix.
+        rows: usize,
+        /// Columns of the matrix.
+        cols: usize,
+        /// Row of the first offending entry.
+        row: usize,
+        /// Column of the first offending entry.
+        col: usize,
+    },
+    /// A covariance is not symmetric within the tolerance [`crate::SYMMETRY_TOL`].
+    #[error(
+        "{name} ({n}x{n}) is not symmetric: |a[{row},{col}] - a[{col},{row}]| = {diff:e} exceeds tolerance {tol:e}"
+    )]
+    NotSymmetric {
+        /// Name of the matrix.
+        name: &'static str,
+        /// Dimension.
+        n: usize,
+        /// Row of the worst pair.
+        row: usize,
+        /// Column of the worst pair.
+        col: usize,
+        /// The asymmetry found.
+        diff: f64,
+        /// The tolerance it broke.
+        tol: f64,
+    },
+    /// A covariance (or the joint noise covariance `[[R, Sᵀ], [S, Q]]`) is indefinite.
+    #[error(
+        "{name} ({n}x{n}) is not positive semidefinite: minimum eigenvalue {min_eigenvalue:e} < -{tol:e}"
+    )]
+    NotPositiveSemidefinite {
+        /// Name of the matrix (`"[[R, S^T], [S, Q]]"` for the joint noise covariance).
+        name: &'static str,
+        /// Dimension.
+        n: usize,
+        /// The most negative eigenvalue found.
+        min_eigenvalue: f64,
+        /// The tolerance (see [`crate::PSD_TOL`]).
+        tol: f64,
+    },
+    /// A dimension is out of the supported range (zero states, or a fixed-size model above
+    /// its compile-time limit).
+    #[error("dimension {name} = {value} is out of range: {rule}")]
+    Dimension {
+        /// Name of the dimension (`"n"`, `"m"`, `"p"`).
+        name: &'static str,
+        /// The value given.
+        value: usize,
+        /// The rule broken.
+        rule: &'static str,
+    },
+    /// A [`crate::ModelSource`] has no model for step `step`.
+    #[error("the model source has no model for step {step}")]
+    NoModel {
+        /// The step index.
+        step: usize,
+    },
+    /// A numerical factorisation failed at construction (e.g. an eigen-solver did not converge).
+    #[error("factorisation of {name} failed: {reason}")]
+    Factorisation {
+        /// Name of the matrix.
+        name: &'static str,
+        /// What went wrong.
+        reason: &'static str,
+    },
+    // ---- steady state, continuous time, smoothing, gain schedule (issue 5) ----
+    /// A matrix that must be positive definite (not merely semidefinite) is not.
+    #[error("{name} ({n}x{n}) is not positive definite: {rule}")]
+    NotPositiveDefinite {
+        /// Name of the matrix.
+        name: &'static str,
+        /// Dimension.
+        n: usize,
+        /// Why it must be positive definite.
+        rule: &'static str,
+    },
+    // ---- steady-state / Riccati variants (issue 5) ----
+    /// A pair fails the PBH detectability test: an eigenvalue on or outside the stability
+    /// boundary has an eigenvector the output matrix does not see.
+    #[error("{pair} is not detectable: the mode λ = {re:.6e} {im:+.6e}i on or outside the stability boundary is unobservable (PBH rank test)")]
+    NotDetectable {
+        /// The pair, e.g. "(F, H)".
+        pair: &'static str,
+        /// Real part of the offending eigenvalue.
+        re: f64,
+        /// Imaginary part of the offending eigenvalue.
+        im: f64,
+    },
+    /// A pair fails the PBH stabilisability test.
+    #[error("{pair} is not stabilisable: the mode λ = {re:.6e} {im:+.6e}i on or outside the stability boundary is uncontrollable (PBH rank test)")]
+    NotStabilisable {
+        /// The pair, e.g. "(F, Q^{1/2})".
+        pair: &'static str,
+        /// Real part of the offending eigenvalue.
+        re: f64,
+        /// Imaginary part of the offending eigenvalue.
+        im: f64,
+    },
+    /// The doubling / ODE iteration for a Riccati equation did not converge.
+    #[error("{equation}: no convergence after {iterations} iterations ({reason})")]
+    RiccatiNoConvergence {
+        /// Which equation ("filter DARE", "CARE", …).
+        equation: &'static str,
+        /// Iterations done.
+        iterations: usize,
+        /// What went wrong.
+        reason: &'static str,
+    },
+    /// The computed Riccati solution fails its residual or stability check.
+    #[error("{equation}: relative residual {residual:.3e} exceeds {tolerance:.1e} or closed loop not stable (spectral measure {closed_loop:.6})")]
+    RiccatiCheck {
+        /// Which equation.
+        equation: &'static str,
+        /// ‖residual‖_F / ‖P‖_F.
+        residual: f64,
+        /// Allowed relative residual.
+        tolerance: f64,
+        /// Spectral radius (discrete) or spectral abscissa (continuous) of the closed loop.
+        closed_loop: f64,
+    },
+}

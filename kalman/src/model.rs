@@ -1,0 +1,442 @@
+//! Validated model types and the validation layer shared by both storage paths.
+#![allow(non_snake_case)]
+
+use faer::{Mat, MatRef, Side};
+
+use crate::Error;
+use crate::storage::{Buf, Dims, FIXED_MAX};
+
+/// Symmetry tolerance of covariance inputs: `|A_ij − A_ji| ≤ SYMMETRY_TOL·max|A|` (loose
+/// enough for matrices computed as products such as `D Q Dᵀ`, tight enough to catch a
+/// transposed or mistyped entry). Accepted matrices are stored symmetrised.
+pub const SYMMETRY_TOL: f64 = 1e-10;
+
+/// PSD tolerance of covariance inputs: the smallest eigenvalue must be at least
+/// `−PSD_TOL·max|λ|` (round-off of an exactly singular covariance such as the fuel
+/// model's `R = D Q Dᵀ` stays far inside it).
+pub const PSD_TOL: f64 = 1e-10;
+
+/// Anything that can be read as a dense real matrix: faer `Mat`/`MatRef`, row-major nested
+/// arrays `[[f64; C]; R]`, nalgebra matrices (feature `nalgebra`).
+pub trait MatrixInput {
+    /// Number of rows.
+    fn nrows(&self) -> usize;
+    /// Number of columns.
+    fn ncols(&self) -> usize;
+    /// Entry `(i, j)`.
+    fn at(&self, i: usize, j: usize) -> f64;
+}
+
+impl MatrixInput for MatRef<'_, f64> {
+    fn nrows(&self) -> usize {
+        MatRef::nrows(self)
+    }
+    fn ncols(&self) -> usize {
+        MatRef::ncols(self)
+    }
+    fn at(&self, i: usize, j: usize) -> f64 {
+        self[(i, j)]
+    }
+}
+
+impl MatrixInput for Mat<f64> {
+    fn nrows(&self) -> usize {
+        Mat::nrows(self)
+    }
+    fn ncols(&self) -> usize {
+        Mat::ncols(self)
+    }
+    fn at(&self, i: usize, j: usize) -> f64 {
+        self[(i, j)]
+    }
+}
+
+impl<const R: usize, const C: usize> MatrixInput for [[f64; C]; R] {
+    fn nrows(&self) -> usize {
+        R
+    }
+    fn ncols(&self) -> usize {
+        C
+    }
+    fn at(&self, i: usize, j: usize) -> f64 {
+        self[i][j]
+    }
+}
+
+impl<T: MatrixInput + ?Sized> MatrixInput for &T {
+    fn nrows(&self) -> usize {
+        (**self).nrows()
+    }
+    fn ncols(&self) -> usize {
+        (**self).ncols()
+    }
+    fn at(&self, i: usize, j: usize) -> f64 {
+        (**self).at(i, j)
+    }
+}
+
+#[cfg(feature = "nalgebra")]
+impl<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>> MatrixInput
+    for nalgebra::Matrix<f64, R, C, S>
+{
+    fn nrows(&self) -> usize {
+        self.shape().0
+    }
+    fn ncols(&self) -> usize {
+        self.shape().1
+    }
+    fn at(&self, i: usize, j: usize) -> f64 {
+        self[(i, j)]
+    }
+}
+
+/// Checks the shape and finiteness of `a` and copies it column-major into `dst`.
+pub(crate) fn load(
+    name: &'static str,
+    a: &impl MatrixInput,
+    rows: usize,
+    cols: usize,
+    dst: &mut [f64],
+) -> Result<(), Error> {
+    if a.nrows() != rows || a.ncols() != cols {
+        return Err(Error::Shape {
+            name,
+            rows: a.nrows(),
+            cols: a.ncols(),
+            expected_rows: rows,
+            expected_cols: cols,
+        });
+    }
+    for j in 0..cols {
+        for i in 0..rows {
+            let v = a.at(i, j);
+            if !v.is_finite() {
+                return Err(Error::NonFinite {
+                    name,
+                    rows,
+                    cols,
+                    row: i,
+                    col: j,
+                });
+            }
+            dst[i + j * rows] = v;
+        }
+    }
+    Ok(())
+}
+
+/// Checks the length and finiteness of a vector and copies it.
+pub(crate) fn load_vec(
+    name: &'static str,
+    v: &[f64],
+    n: usize,
+    dst: &mut [f64],
+) -> Result<(), Error> {
+    if v.len() != n {
+        return Err(Error::Shape {
+            name,
+            rows: v.len(),
+            cols: 1,
+            expected_rows: n,
+            expected_cols: 1,
+        });
+    }
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(Error::NonFinite {
+            name,
+            rows: n,
+            cols: 1,
+            row: i,
+            col: 0,
+        });
+    }
+    dst[..n].copy_from_slice(v);
+    Ok(())
+}
+
+/// Checks symmetry within [`SYMMETRY_TOL`] and symmetrises `a` (`n`×`n`, column-major).
+pub(crate) fn symmetrise(name: &'static str, a: &mut [f64], n: usize) -> Result<(), Error> {
+    let scale = a[..n * n].iter().fold(0.0_f64, |s, x| s.max(x.abs()));
+    let tol = SYMMETRY_TOL * scale;
+    let mut worst = (0.0, 0, 0);
+    for j in 0..n {
+        for i in j + 1..n {
+            let d = (a[i + j * n] - a[j + i * n]).abs();
+            if d > worst.0 {
+                worst = (d, i, j);
+            }
+        }
+    }
+    if worst.0 > tol {
+        return Err(Error::NotSymmetric {
+            name,
+            n,
+            row: worst.1,
+            col: worst.2,
+            diff: worst.0,
+            tol,
+        });
+    }
+    for j in 0..n {
+        for i in j + 1..n {
+            let s = 0.5 * (a[i + j * n] + a[j + i * n]);
+            a[i + j * n] = s;
+            a[j + i * n] = s;
+        }
+    }
+    Ok(())
+}
+
+/// Checks that the symmetric `a` is PSD within [`PSD_TOL`] and writes a square factor
+/// `G` with `G Gᵀ = a` into `factor` (leading dimension `n`): the Cholesky factor when `a`
+/// is positive definite, else `V·diag(√λ₊)` from its eigen-decomposition.
+pub(crate) fn psd_factor(
+    name: &'static str,
+    a: &[f64],
+    n: usize,
+    factor: &mut [f64],
+) -> Result<(), Error> {
+    let A = MatRef::from_column_major_slice(&a[..n * n], n, n);
+    let scale = a[..n * n].iter().fold(0.0_f64, |s, x| s.max(x.abs()));
+    // Fast path: a Cholesky factor with pivots well above round-off proves definiteness.
+    if let Ok(llt) = A.llt(Side::Lower) {
+        let L = llt.L();
+        let min_pivot = (0..n).fold(f64::INFINITY, |s, i| s.min(L[(i, i)]));
+        if min_pivot * min_pivot > 1e-8 * scale {
+            for j in 0..n {
+                for i in 0..n {
+                    factor[i + j * n] = if i >= j { L[(i, j)] } else { 0.0 };
+                }
+            }
+            return Ok(());
+        }
+    }
+    let evd = A
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| Error::Factorisation {
+            name,
+            reason: "symmetric eigen-decomposition did not converge",
+        })?;
+    let s = evd.S().column_vector();
+    let u = evd.U();
+    let lmax = (0..n).fold(0.0_f64, |m, i| m.max(s[i].abs()));
+    let lmin = (0..n).fold(f64::INFINITY, |m, i| m.min(s[i]));
+    let tol = PSD_TOL * lmax;
+    if lmin < -tol {
+        return Err(Error::NotPositiveSemidefinite {
+            name,
+            n,
+            min_eigenvalue: lmin,
+            tol,
+        });
+    }
+    for j in 0..n {
+        let r = s[j].max(0.0).sqrt();
+        for i in 0..n {
+            factor[i + j * n] = u[(i, j)] * r;
+        }
+    }
+    Ok(())
+}
+
+/// A validated linear model `x_{k+1} = F x_k + B u_k + w_k`, `z_k = H x_k + v_k`,
+/// `cov(w) = Q`, `cov(v) = R`, `E[w_k v_kᵀ] = S`, on the storage path `D`.
+///
+/// Construction checks shapes, finiteness, symmetry ([`SYMMETRY_TOL`]) and PSD
+/// ([`PSD_TOL`]) of `Q`, `R` and of the joint noise covariance `[[R, Sᵀ], [S, Q]]`. It also
+/// stores a square factor of that joint covariance for the square-root form.
+#[derive(Clone, Debug)]
+pub struct Model<D: Dims> {
+    pub(crate) dims: D,
+    pub(crate) F: D::Nn,
+    pub(crate) H: D::Mn,
+    pub(crate) Q: D::Nn,
+    pub(crate) R: D::Mm,
+    pub(crate) S: Option<D::Nm>,
+    pub(crate) B: D::Np,
+    /// `G` with `G Gᵀ = [[R, Sᵀ], [S, Q]]`, `(n+m)`×`(n+m)`, leading dimension `n+m`.
+    pub(crate) joint: D::Joint,
+}
+
+impl<D: Dims> Model<D> {
+    /// A time-invariant model without control input or cross-covariance.
+    ///
+    /// # Errors
+    /// [`Error::Shape`], [`Error::NonFinite`], [`Error::NotSymmetric`],
+    /// [`Error::NotPositiveSemidefinite`] naming `F`, `H`, `Q` or `R`;
+    /// [`Error::Dimension`] for an empty or (fixed path) oversized model.
+    pub fn new(
+        dims: D,
+        F: &impl MatrixInput,
+        H: &impl MatrixInput,
+        Q: &impl MatrixInput,
+        R: &impl MatrixInput,
+    ) -> Result<Self, Error> {
+        let (n, m, p) = (dims.n(), dims.m(), dims.p());
+        check_dims(&dims)?;
+        let mut model = Model {
+            dims,
+            F: D::Nn::zeros(n * n),
+            H: D::Mn::zeros(m * n),
+            Q: D::Nn::zeros(n * n),
+            R: D::Mm::zeros(m * m),
+            S: None,
+            B: D::Np::zeros(n * p),
+            joint: D::Joint::zeros((n + m) * (n + m)),
+        };
+        load("F", F, n, n, model.F.as_mut_slice())?;
+        load("H", H, m, n, model.H.as_mut_slice())?;
+        load("Q", Q, n, n, model.Q.as_mut_slice())?;
+        load("R", R, m, m, model.R.as_mut_slice())?;
+        symmetrise("Q", model.Q.as_mut_slice(), n)?;
+        symmetrise("R", model.R.as_mut_slice(), m)?;
+        let mut scratch = vec![0.0; n.max(m) * n.max(m)];
+        psd_factor("Q", model.Q.as_slice(), n, &mut scratch)?;
+        psd_factor("R", model.R.as_slice(), m, &mut scratch)?;
+        model.refactor_joint()?;
+        Ok(model)
+    }
+
+    /// Adds the cross-covariance `S = E[w_k v_kᵀ]` (n×m) of process and measurement noise.
+    ///
+    /// # Errors
+    /// [`Error::Shape`]/[`Error::NonFinite`] naming `S`; [`Error::NotPositiveSemidefinite`]
+    /// naming `[[R, S^T], [S, Q]]` if the joint noise covariance is indefinite.
+    pub fn with_cross_covariance(mut self, S: &impl MatrixInput) -> Result<Self, Error> {
+        let (n, m) = (self.dims.n(), self.dims.m());
+        let mut buf = D::Nm::zeros(n * m);
+        load("S", S, n, m, buf.as_mut_slice())?;
+        self.S = Some(buf);
+        self.refactor_joint()?;
+        Ok(self)
+    }
+
+    /// Adds the control matrix `B` (n×p) of the known input `u_k`.
+    ///
+    /// # Errors
+    /// [`Error::Shape`]/[`Error::NonFinite`] naming `B`.
+    pub fn with_control(mut self, B: &impl MatrixInput) -> Result<Self, Error> {
+        let (n, p) = (self.dims.n(), self.dims.p());
+        load("B", B, n, p, self.B.as_mut_slice())?;
+        Ok(self)
+    }
+
+    fn refactor_joint(&mut self) -> Result<(), Error> {
+        let (n, m) = (self.dims.n(), self.dims.m());
+        let d = n + m;
+        let mut w = vec![0.0; d * d];
+        let (R, Q) = (self.R.as_slice(), self.Q.as_slice());
+        for j in 0..m {
+            for i in 0..m {
+                w[i + j * d] = R[i + j * m];
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                w[m + i + (m + j) * d] = Q[i + j * n];
+            }
+        }
+        if let Some(S) = &self.S {
+            let S = S.as_slice();
+            for j in 0..m {
+                for i in 0..n {
+                    w[m + i + j * d] = S[i + j * n];
+                    w[j + (m + i) * d] = S[i + j * n];
+                }
+            }
+        }
+        let mut f = vec![0.0; d * d];
+        psd_factor("[[R, S^T], [S, Q]]", &w, d, &mut f)?;
+        self.joint.as_mut_slice()[..d * d].copy_from_slice(&f);
+        Ok(())
+    }
+
+    /// The dimensions.
+    pub fn dims(&self) -> D {
+        self.dims
+    }
+    /// Transition matrix `F` (n×n).
+    pub fn F(&self) -> MatRef<'_, f64> {
+        let n = self.dims.n();
+        MatRef::from_column_major_slice(&self.F.as_slice()[..n * n], n, n)
+    }
+    /// Measurement matrix `H` (m×n).
+    pub fn H(&self) -> MatRef<'_, f64> {
+        let (n, m) = (self.dims.n(), self.dims.m());
+        MatRef::from_column_major_slice(&self.H.as_slice()[..m * n], m, n)
+    }
+    /// Process noise covariance `Q` (n×n).
+    pub fn Q(&self) -> MatRef<'_, f64> {
+        let n = self.dims.n();
+        MatRef::from_column_major_slice(&self.Q.as_slice()[..n * n], n, n)
+    }
+    /// Measurement noise covariance `R` (m×m).
+    pub fn R(&self) -> MatRef<'_, f64> {
+        let m = self.dims.m();
+        MatRef::from_column_major_slice(&self.R.as_slice()[..m * m], m, m)
+    }
+    /// Cross-covariance `S` (n×m), if any.
+    pub fn S(&self) -> Option<MatRef<'_, f64>> {
+        let (n, m) = (self.dims.n(), self.dims.m());
+        self.S
+            .as_ref()
+            .map(|s| MatRef::from_column_major_slice(&s.as_slice()[..n * m], n, m))
+    }
+    /// Control matrix `B` (n×p; zero unless set).
+    pub fn B(&self) -> MatRef<'_, f64> {
+        let (n, p) = (self.dims.n(), self.dims.p());
+        MatRef::from_column_major_slice(&self.B.as_slice()[..n * p], n, p)
+    }
+}
+
+fn check_dims<D: Dims>(dims: &D) -> Result<(), Error> {
+    for (name, v) in [("n", dims.n()), ("m", dims.m())] {
+        if v == 0 {
+            return Err(Error::Dimension {
+                name,
+                value: v,
+                rule: "must be at least 1",
+            });
+        }
+    }
+    if dims.is_fixed() {
+        for (name, v) in [("n", dims.n()), ("m", dims.m()), ("p", dims.p())] {
+            if v > FIXED_MAX {
+                return Err(Error::Dimension {
+                    name,
+                    value: v,
+                    rule: "the fixed-size path supports n, m, p <= 16",
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A source of per-step models for time-varying systems: step `k` uses `model(k)` (its `H`
+/// for the update with `z_k`, its `F`, `B`, `Q`, `S` for the prediction to `k + 1`).
+/// Models are validated once when built, so a step stays allocation-free.
+pub trait ModelSource<D: Dims> {
+    /// The model of step `k` (`None` ends the sequence: the step returns
+    /// [`Error::NoModel`]).
+    fn model(&self, k: usize) -> Option<&Model<D>>;
+}
+
+impl<D: Dims> ModelSource<D> for Model<D> {
+    fn model(&self, _k: usize) -> Option<&Model<D>> {
+        Some(self)
+    }
+}
+
+/// A list of models, one per step; steps past the end reuse the last one.
+impl<D: Dims> ModelSource<D> for [Model<D>] {
+    fn model(&self, k: usize) -> Option<&Model<D>> {
+        self.get(k).or(self.last())
+    }
+}
+
+impl<D: Dims> ModelSource<D> for Vec<Model<D>> {
+    fn model(&self, k: usize) -> Option<&Model<D>> {
+        self.as_slice().model(k)
+    }
+}
