@@ -1,0 +1,204 @@
+//! The Rauch–Tung–Striebel fixed-interval smoother over a recorded forward pass of a
+//! [`Filter`] on either storage path, with the smoothed covariances.
+//!
+//! After each filter step `k` the smoother records x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k} and
+//! the cross-covariance C_k = Cov(x_k, x_{k+1} | z_0..z_k) = P_{k|k} Fᵀ − K_k Sᵀ (the second
+//! term is the correlated-noise correction; it vanishes when S = 0 or z_k is missing). The
+//! backward pass is
+//!
+//! J_k = C_k P_{k+1|k}⁻¹,  x_{k|N} = x_{k|k} + J_k (x_{k+1|N} − x_{k+1|k}),
+//! P_{k|N} = P_{k|k} + J_k (P_{k+1|N} − P_{k+1|k}) J_kᵀ,
+//!
+//! where J_k comes from the solve P_{k+1|k} J_kᵀ = C_kᵀ by Cholesky — never an explicit
+//! inverse. A singular P_{k+1|k} (e.g. a noise-free state component) takes the documented
+//! fallback: the minimum-norm solution through the symmetric eigen-decomposition, with
+//! eigenvalues below [`crate::RANK_TOL`]·λ_max treated as zero.
+#![allow(non_snake_case)]
+
+use faer::linalg::solvers::Solve;
+use faer::{Mat, MatRef, Side};
+
+use crate::riccati::symmetrise;
+use crate::storage::Dims;
+use crate::{Error, Filter, Model, RANK_TOL};
+
+/// Recorder and backward pass of the RTS smoother (offline: it stores every step).
+#[derive(Debug, Clone)]
+pub struct RtsSmoother {
+    n: usize,
+    xf: Vec<f64>,
+    pf: Vec<f64>,
+    xp: Vec<f64>,
+    pp: Vec<f64>,
+    ct: Vec<f64>,
+    steps: usize,
+}
+
+/// Output of [`RtsSmoother::smooth`].
+#[derive(Debug, Clone)]
+pub struct Smoothed {
+    /// Smoothed means: column k is x_{k|N−1} (n×N).
+    pub means: Mat<f64>,
+    /// Smoothed covariances P_{k|N−1}, one n×n matrix per step.
+    pub covariances: Vec<Mat<f64>>,
+}
+
+impl RtsSmoother {
+    /// An empty recorder for n states.
+    pub fn new(n: usize) -> Self {
+        Self { n, xf: Vec::new(), pf: Vec::new(), xp: Vec::new(), pp: Vec::new(), ct: Vec::new(), steps: 0 }
+    }
+
+    /// Number of recorded steps.
+    pub fn len(&self) -> usize {
+        self.steps
+    }
+
+    /// Whether nothing is recorded.
+    pub fn is_empty(&self) -> bool {
+        self.steps == 0
+    }
+
+    /// Records the step the filter has just taken with its own (time-invariant) model.
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] if the filter's n differs from the smoother's.
+    pub fn record<D: Dims>(&mut self, filter: &Filter<D>) -> Result<(), Error> {
+        self.record_with(filter, filter.model())
+    }
+
+    /// Records the step the filter has just taken with `model` (time-varying systems: the
+    /// model passed to [`Filter::step_with`] for that step).
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] if n differs from the smoother's.
+    pub fn record_with<D: Dims>(&mut self, filter: &Filter<D>, model: &Model<D>) -> Result<(), Error> {
+        let n = self.n;
+        if model.dims().n() != n || filter.state().len() != n {
+            return Err(Error::Dimension {
+                name: "n",
+                value: filter.state().len(),
+                rule: "the smoother's n must match the filter's",
+            });
+        }
+        let Pf = filter.covariance();
+        // C_k = P_{k|k} Fᵀ − K_k Sᵀ.
+        let mut C = Pf * model.F().transpose();
+        if let Some(S) = model.S() {
+            C -= filter.gain() * S.transpose();
+        }
+        self.xf.extend_from_slice(filter.state());
+        self.xp.extend_from_slice(filter.predicted_state());
+        push(&mut self.pf, Pf);
+        push(&mut self.pp, filter.predicted_covariance());
+        push(&mut self.ct, C.as_ref());
+        self.steps += 1;
+        Ok(())
+    }
+
+    /// The backward pass over all recorded steps.
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] if nothing was recorded; [`Error::Factorisation`] if the eigen
+    /// fallback for a singular P_{k+1|k} fails.
+    pub fn smooth(&self) -> Result<Smoothed, Error> {
+        let (n, N) = (self.n, self.steps);
+        if N == 0 {
+            return Err(Error::Dimension { name: "steps", value: 0, rule: "record at least one filter step" });
+        }
+        fn mat(v: &[f64], k: usize, n: usize) -> MatRef<'_, f64> {
+            MatRef::from_column_major_slice(&v[k * n * n..(k + 1) * n * n], n, n)
+        }
+        fn vec(v: &[f64], k: usize, n: usize) -> MatRef<'_, f64> {
+            MatRef::from_column_major_slice(&v[k * n..(k + 1) * n], n, 1)
+        }
+        let mut means = Mat::<f64>::zeros(n, N);
+        let mut covs = vec![Mat::<f64>::zeros(n, n); N];
+        means.as_mut().col_mut(N - 1).copy_from(vec(&self.xf, N - 1, n).col(0));
+        covs[N - 1] = mat(&self.pf, N - 1, n).to_owned();
+        for k in (0..N - 1).rev() {
+            let Pp = mat(&self.pp, k, n);
+            let Jt = solve_psd(Pp, mat(&self.ct, k, n).transpose())?;
+            let J = Jt.transpose();
+            let dx = means.as_ref().col(k + 1).as_mat() - vec(&self.xp, k, n);
+            let x = vec(&self.xf, k, n) + J * dx;
+            means.as_mut().col_mut(k).copy_from(x.col(0));
+            let mut P = mat(&self.pf, k, n) + J * (&covs[k + 1] - Pp) * J.transpose();
+            symmetrise(&mut P);
+            covs[k] = P;
+        }
+        Ok(Smoothed { means, covariances: covs })
+    }
+}
+
+fn push(v: &mut Vec<f64>, M: MatRef<'_, f64>) {
+    for j in 0..M.ncols() {
+        for i in 0..M.nrows() {
+            v.push(M[(i, j)]);
+        }
+    }
+}
+
+/// Solves A X = B for symmetric PSD A: Cholesky, or the minimum-norm solution through the
+/// eigen-decomposition when A is (numerically) singular.
+fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
+    let n = A.nrows();
+    let amax = (0..n).map(|i| A[(i, i)].abs()).fold(0.0, f64::max);
+    if let Ok(llt) = A.llt(Side::Lower) {
+        // Accept the Cholesky factor only if its pivots are not tiny relative to the diagonal.
+        let L = llt.L();
+        let dmin = (0..n).map(|i| L[(i, i)] * L[(i, i)]).fold(f64::INFINITY, f64::min);
+        if dmin > RANK_TOL * amax {
+            return Ok(llt.solve(B));
+        }
+    }
+    let evd = A.self_adjoint_eigen(Side::Lower).map_err(|_| Error::Factorisation {
+        name: "P_{k+1|k}",
+        reason: "symmetric eigen-decomposition failed in the smoother's singular fallback",
+    })?;
+    let U = evd.U();
+    let s = evd.S().column_vector();
+    let smax = (0..n).map(|i| s[i].abs()).fold(0.0, f64::max);
+    let mut UtB = U.transpose() * B;
+    for i in 0..n {
+        let inv = if s[i] > RANK_TOL * smax { 1.0 / s[i] } else { 0.0 };
+        for j in 0..UtB.ncols() {
+            UtB[(i, j)] *= inv;
+        }
+    }
+    Ok(U * UtB)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{CovarianceForm, Dyn};
+
+    #[test]
+    fn scalar_random_walk_two_steps() {
+        // x1 = x0 + w, q = 1; z_k = x_k + v, r = 1; prior x0 ~ N(0, 1).
+        let model = Model::new(Dyn::new(1, 1, 0).unwrap(), &[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]]).unwrap();
+        let mut f = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph).unwrap();
+        let mut s = RtsSmoother::new(1);
+        for z in [1.0, 3.0] {
+            f.step(&[z], None).unwrap();
+            s.record(&f).unwrap();
+        }
+        let out = s.smooth().unwrap();
+        // Batch: information matrix [[1+1+1, −1], [−1, 1+1]], rhs [1, 3]: x = [5/5, 10/5]/… solve.
+        // det = 3·2 − 1 = 5; x0 = (2·1 + 1·3)/5 = 1, x1 = (1·1 + 3·3)/5 = 2.
+        assert!((out.means[(0, 0)] - 1.0).abs() < 1e-14);
+        assert!((out.means[(0, 1)] - 2.0).abs() < 1e-14);
+        // Smoothed variances: diagonal of the inverse information matrix: 2/5, 3/5.
+        assert!((out.covariances[0][(0, 0)] - 0.4).abs() < 1e-14);
+        assert!((out.covariances[1][(0, 0)] - 0.6).abs() < 1e-14);
+    }
+
+    #[test]
+    fn singular_predicted_covariance_takes_the_fallback() {
+        let a = faer::mat![[2.0, 0.0], [0.0, 0.0]];
+        let b = faer::mat![[4.0], [0.0]];
+        let x = solve_psd(a.as_ref(), b.as_ref()).unwrap();
+        assert!((x[(0, 0)] - 2.0).abs() < 1e-15 && x[(1, 0)].abs() < 1e-15);
+    }
+}
