@@ -1,2 +1,70 @@
-//! The `sensors` crate (being built).
+//! Truth-side random processes and sensor models for launch and flight-test simulation.
+//!
+//! These are the models a scenario's *world* is made of, written from the physics, not from
+//! any filter's model (SPEC F "truth simulation", B, U). SI units inside; angles are given in
+//! degrees only in configuration structs and converted once, at construction.
+//!
+//! # Notation
+//! - Δt: fixed sampling interval of every stepped object, s, given at construction.
+//! - σ, D = σ²: standard deviation and variance of a process; R(τ): its correlation
+//!   (auto-covariance) function at lag τ, s.
+//! - Platform (SPEC F): roll θ, pitch ψ, sensor angle φ, tilt α = ψ·cos φ + θ·sin φ; rolling
+//!   irregularity μ and dominant frequency β (period 2π/β).
+//! - Level sensor: step δ, damper time constant T_y, sensor radius R, tank level h.
+//! - Boom (SPEC B): angle α, rate ω, angular acceleration ε, radius r, offset angle γ, g.
+//!
+//! # Randomness
+//! Every stochastic object takes `&mut R: rand::Rng`; the crate uses
+//! [`rand_chacha::ChaCha8Rng`] seeded from a `u64` ([`seeded_rng`]) so a seed reproduces a run
+//! bit for bit. Each step draws a fixed number of normals, independent of which noise options
+//! are on. No step allocates.
+//!
+//! # Example
+//! ```
+//! use sensors::{
+//!     Attitude, IrregularRolling, IrregularRollingConfig, LevelSensor, LevelSensorConfig,
+//!     PlatformMotion, PlatformMotionConfig, Process, seeded_rng,
+//! };
+//!
+//! let dt = 0.1;
+//! let mut rng = seeded_rng(42);
+//! let mut platform = PlatformMotion::new(&PlatformMotionConfig::default(), dt)?;
+//! let mut sensor = LevelSensor::new(&LevelSensorConfig::default(), dt)?;
+//! let mut level = 1.0; // m
+//! for _ in 0..100 {
+//!     level += 0.010 * dt; // filling at 10 mm/s
+//!     let attitude: Attitude = platform.next(&mut rng);
+//!     let out = sensor.step(level, attitude, &mut rng);
+//!     // A floor quantizer never reads above the damped level (no noise configured).
+//!     assert!(out.reading <= out.damped + 1e-12);
+//! }
+//!
+//! let rolling = IrregularRolling::new(&IrregularRollingConfig::default(), dt)?;
+//! assert!((rolling.variance() - 1.0).abs() < 1e-12);
+//! # Ok::<(), sensors::Error>(())
+//! ```
 #![deny(missing_docs)]
+
+mod accel;
+mod error;
+mod gyro;
+mod lag;
+mod level;
+mod platform;
+mod process;
+mod uav;
+
+pub use accel::{Accelerometer, AccelerometerConfig, BiasVariant, BoomMotion, validate_motion};
+pub use error::Error;
+pub use gyro::{Gyro, GyroConfig};
+pub use lag::{FirstOrderLag, LagInput, Quantizer, Rounding};
+pub use level::{LevelReading, LevelSensor, LevelSensorConfig};
+pub use platform::{Attitude, PlatformMotion, PlatformMotionConfig, RollingAxisConfig};
+pub use process::{
+    DampedCosine, DampedCosineConfig, ExpCorrelated, ExpCorrelatedConfig, IrregularRolling,
+    IrregularRollingConfig, Process, Seeded, WhiteNoise, seeded_rng,
+};
+pub use uav::{ChannelSensor, ChannelSensorConfig, Quantity};
+
+/// The generator type the crate uses everywhere.
+pub use rand_chacha::ChaCha8Rng;
