@@ -17,6 +17,9 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
     /// Draw as a dashed-looking marker line (points only) rather than a solid line.
     pub markers: bool,
+    /// Palette slot of the colour; `None` = the series' position (set it to give a curve and
+    /// its fit the same colour).
+    pub color: Option<usize>,
 }
 
 impl Series {
@@ -26,6 +29,7 @@ impl Series {
             label: label.into(),
             points,
             markers: false,
+            color: None,
         }
     }
 
@@ -35,7 +39,15 @@ impl Series {
             label: label.into(),
             points,
             markers: true,
+            color: None,
         }
+    }
+
+    /// The same series drawn in palette slot `slot`.
+    #[must_use]
+    pub fn with_color(mut self, slot: usize) -> Self {
+        self.color = Some(slot);
+        self
     }
 }
 
@@ -144,7 +156,7 @@ fn render(figure: &Figure<'_>, series: &[Series]) -> std::result::Result<String,
                     .draw()
                     .map_err(|e| e.to_string())?;
                 for (i, s) in series.iter().enumerate() {
-                    let color = PALETTE[i % PALETTE.len()];
+                    let color = PALETTE[s.color.unwrap_or(i) % PALETTE.len()];
                     let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
                     let anno = if s.markers {
                         chart

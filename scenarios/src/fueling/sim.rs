@@ -1,0 +1,361 @@
+//! One fuelling run: the truth world (tank level, platform rolling, level sensor, gyro) stepped
+//! every Δt, the five stop-decision strategies fed from it, and the fuelling error each leaves.
+//!
+//! The world is built from the `sensors` crate (SPEC F "truth simulation"); the filters are
+//! `kalman` filters on the `model` crate's 7-state fuel model. Nothing here is the filter's
+//! model of the world: the truth integrates the level exactly, uses `h + R·tan α` at the
+//! sensor, an exactly integrated damper and a floor quantizer.
+#![allow(non_snake_case)]
+
+use kalman::{CovarianceForm, Filter, Fixed, FixedFilter, FixedModel};
+use model::nalgebra::{DMatrix, DVector};
+use model::{Channels, FuelModel, FuelParams, Realisation};
+use rand::Rng;
+use sensors::{
+    ExpCorrelated, ExpCorrelatedConfig, Gyro, GyroConfig, LevelSensor, LevelSensorConfig,
+    PlatformMotion, PlatformMotionConfig, Process, RollingAxisConfig,
+};
+
+/// The strategies, in the order of every per-run record and table.
+pub const STRATEGIES: [&str; 5] = ["relay", "kf1", "kf2", "kf2_cross", "kf2_midstep"];
+
+/// Human names of [`STRATEGIES`], for reports and legends.
+pub const STRATEGY_LABELS: [&str; 5] = [
+    "relay logic",
+    "one-channel KF",
+    "two-channel KF (paper)",
+    "two-channel KF + cross-cov. S",
+    "two-channel KF + mid-step",
+];
+
+/// Fuelling errors of one run, metres, in [`STRATEGIES`] order (NaN: never stopped).
+pub type Outcome = [f64; 5];
+
+/// Everything that defines one sweep point's world, in SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct World {
+    /// The model parameters (also the truth's: the filter knows the world's statistics).
+    pub fuel: FuelParams,
+    /// Target level H*, m.
+    pub target: f64,
+    /// Simulated time before the nominal crossing of H*, s (start level H* − V_c·warm-up).
+    pub warmup: f64,
+    /// Prior standard deviation of the tank level given to the filters, m.
+    pub initial_level_std: f64,
+    /// Valve-closing delay after the stop command, s.
+    pub valve_delay: f64,
+    /// Gyro noise per axis, rad.
+    pub gyro_noise: f64,
+    /// How the filters' model is discretised.
+    pub realisation: Realisation,
+}
+
+/// A filter's fixed part for one sweep point: the validated model, its prior covariance and
+/// the two row vectors that turn a state into a level.
+#[derive(Debug, Clone)]
+struct FilterSetup<const M: usize> {
+    model: FixedModel<7, M, 1>,
+    /// Prior covariance P0 (row-major 7×7).
+    p0: [[f64; 7]; 7],
+    /// State direction of "the level is one metre higher, everything in equilibrium".
+    level_direction: [f64; 7],
+    /// Row of G giving the tank level y2 (at the axis).
+    level_row: [f64; 7],
+}
+
+/// A sweep point ready to run: the world and the three filter models built from it.
+#[derive(Debug, Clone)]
+pub struct Point {
+    world: World,
+    kf1: FilterSetup<1>,
+    kf2: FilterSetup<2>,
+    kf2_cross: FilterSetup<2>,
+    max_steps: usize,
+    delay_steps: usize,
+}
+
+fn dm_to_rows<const R: usize, const C: usize>(m: &DMatrix<f64>) -> [[f64; C]; R] {
+    let mut out = [[0.0; C]; R];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = m[(i, j)];
+        }
+    }
+    out
+}
+
+/// The equilibrium "level" direction of the model: the eigenvector of A for the integrator's
+/// eigenvalue 1 (velocity, rolling and quantization states zero; damper in equilibrium),
+/// scaled so that the level output y2 moves by one.
+fn level_direction(m: &FuelModel) -> Result<[f64; 7], String> {
+    let shifted = &m.a - DMatrix::<f64>::identity(7, 7);
+    let svd = shifted.svd(false, true);
+    let v_t = svd
+        .v_t
+        .ok_or_else(|| "SVD of A − I gave no right singular vectors".to_string())?;
+    let (k, _) =
+        svd.singular_values
+            .iter()
+            .enumerate()
+            .fold(
+                (0, f64::INFINITY),
+                |best, (i, &s)| {
+                    if s < best.1 { (i, s) } else { best }
+                },
+            );
+    let v: DVector<f64> = v_t.row(k).transpose();
+    let y2 = (m.g.row(1) * &v)[(0, 0)];
+    if y2.abs() < 1e-12 {
+        return Err("A has no integrator mode that moves the level output y2".into());
+    }
+    let v = v / y2;
+    Ok(std::array::from_fn(|i| v[i]))
+}
+
+/// Prior covariance: what the stationary parts of the model (velocity fluctuation, rolling,
+/// quantization noise) spread into every state after five velocity correlation times of
+/// free run, plus `level_std²` along the level direction (the start level is known only from
+/// the first reading).
+fn prior_covariance(m: &FuelModel, dir: &[f64; 7], level_std: f64) -> DMatrix<f64> {
+    let steps = (5.0 * m.params.t_a / m.params.dt).ceil() as usize;
+    let mut p = DMatrix::<f64>::zeros(7, 7);
+    for _ in 0..steps {
+        p = &m.a * &p * m.a.transpose() + &m.process_covariance;
+    }
+    let v = DVector::from_column_slice(dir);
+    p += &v * v.transpose() * level_std.powi(2);
+    (&p + p.transpose()) * 0.5
+}
+
+fn filter_setup<const M: usize>(
+    fuel: &FuelParams,
+    channels: Channels,
+    realisation: Realisation,
+    cross: bool,
+    level_std: f64,
+) -> Result<FilterSetup<M>, String> {
+    let m = fuel
+        .build(channels, realisation)
+        .map_err(|e| e.to_string())?;
+    let F: [[f64; 7]; 7] = dm_to_rows(&m.a);
+    let H: [[f64; 7]; M] = dm_to_rows(&m.c);
+    let Q: [[f64; 7]; 7] = dm_to_rows(&m.process_covariance);
+    let R: [[f64; M]; M] = dm_to_rows(&m.r);
+    let B: [[f64; 1]; 7] = std::array::from_fn(|i| [m.known_input[i]]);
+    let mut model = FixedModel::<7, M, 1>::new(Fixed::new(), &F, &H, &Q, &R)
+        .and_then(|model| model.with_control(&B))
+        .map_err(|e| format!("filter model ({channels:?}): {e}"))?;
+    if cross {
+        let S: [[f64; M]; 7] = dm_to_rows(&m.s);
+        model = model
+            .with_cross_covariance(&S)
+            .map_err(|e| format!("filter model with S: {e}"))?;
+    }
+    let level_direction = level_direction(&m)?;
+    let p0 = dm_to_rows(&prior_covariance(&m, &level_direction, level_std));
+    Ok(FilterSetup {
+        model,
+        p0,
+        level_direction,
+        level_row: std::array::from_fn(|j| m.g[(1, j)]),
+    })
+}
+
+impl Point {
+    /// Builds the filters' models and priors for `world`.
+    ///
+    /// # Errors
+    /// A message naming the model or filter that rejected the parameters.
+    pub fn new(world: World) -> Result<Self, String> {
+        let mut fuel = world.fuel;
+        fuel.gyro_noise_var = world.gyro_noise.powi(2);
+        let (r, s) = (world.realisation, world.initial_level_std);
+        let kf1 = filter_setup::<1>(&fuel, Channels::LevelOnly, r, false, s)?;
+        let kf2 = filter_setup::<2>(&fuel, Channels::LevelAndTilt, r, false, s)?;
+        let kf2_cross = filter_setup::<2>(&fuel, Channels::LevelAndTilt, r, true, s)?;
+        let dt = fuel.dt;
+        // The nominal crossing is at `warmup`; allow as long again plus a minute for a late
+        // stop (a run that never stops records NaN and is counted, not hidden).
+        let max_steps = ((2.0 * world.warmup + 60.0) / dt).ceil() as usize;
+        let delay_steps = (world.valve_delay / dt).round() as usize;
+        Ok(Point {
+            world,
+            kf1,
+            kf2,
+            kf2_cross,
+            max_steps,
+            delay_steps,
+        })
+    }
+
+    /// The world this point simulates.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// Simulates one fuelling with the random stream `rng`.
+    ///
+    /// # Errors
+    /// A message if a sensor or filter rejects its configuration (never for valid worlds).
+    pub fn run<R: Rng + Clone>(&self, rng: &mut R) -> Result<Outcome, String> {
+        let w = &self.world;
+        let p = &w.fuel;
+        let dt = p.dt;
+        let axis = RollingAxisConfig {
+            max_amplitude_deg: p.max_tilt_amplitude.to_degrees(),
+            period_s: p.rolling_period,
+            irregularity_per_s: p.mu,
+        };
+        let mut platform = PlatformMotion::new(
+            &PlatformMotionConfig {
+                roll: axis,
+                pitch: axis,
+            },
+            dt,
+        )
+        .map_err(|e| e.to_string())?;
+        let mut velocity = ExpCorrelated::new(
+            &ExpCorrelatedConfig {
+                std_dev: p.d_c.sqrt(),
+                correlation_time_s: p.t_a,
+            },
+            dt,
+        )
+        .map_err(|e| e.to_string())?;
+        let sensor_cfg = LevelSensorConfig {
+            step_m: p.delta,
+            damper_time_constant_s: p.t_y,
+            sensor_radius_m: p.sensor_radius,
+            sensor_angle_deg: p.phi.to_degrees(),
+            ..LevelSensorConfig::default()
+        };
+        let mut sensor = LevelSensor::new(&sensor_cfg, dt).map_err(|e| e.to_string())?;
+        let mut sensor_mid = LevelSensor::new(
+            &LevelSensorConfig {
+                mid_step_compensation: true,
+                ..sensor_cfg
+            },
+            dt,
+        )
+        .map_err(|e| e.to_string())?;
+        let mut gyro = Gyro::new(
+            &GyroConfig {
+                sample_period_s: dt,
+                noise_std_deg: w.gyro_noise.to_degrees(),
+                ..GyroConfig::default()
+            },
+            dt,
+        )
+        .map_err(|e| e.to_string())?;
+
+        let target = w.target;
+        // A reading on the mark H* must count as reaching it despite rounding in δ·n.
+        let relay_target = target - 1e-9 * p.delta;
+        let mut level = target - p.v_c * w.warmup;
+        let mut v_prev = 0.0;
+        let mut levels: Vec<f64> = Vec::with_capacity(self.max_steps + self.delay_steps + 1);
+        let mut stop: [Option<usize>; 5] = [None; 5];
+        let mut kf1: Option<FixedFilter<7, 1, 1>> = None;
+        let mut kf2: Option<FixedFilter<7, 2, 1>> = None;
+        let mut kf2c: Option<FixedFilter<7, 2, 1>> = None;
+        let mut kf2m: Option<FixedFilter<7, 2, 1>> = None;
+        let u = [1.0];
+        let mut last_needed = usize::MAX;
+        for k in 0..self.max_steps + self.delay_steps {
+            let attitude = platform.next(rng);
+            let v = velocity.next(rng);
+            if k > 0 {
+                // Level integrates V_c + ΔV; trapezoid over the step (ΔV is smooth: T_a ≫ Δt).
+                level += (p.v_c + 0.5 * (v + v_prev)) * dt;
+            }
+            v_prev = v;
+            levels.push(level);
+            // The compensated sensor sees the same threshold noise as the plain one.
+            let mid = sensor_mid.step(level, attitude, &mut rng.clone()).reading;
+            let z2 = sensor.step(level, attitude, rng).reading;
+            let tilt = gyro.step(attitude, rng).tilt_toward(p.phi);
+            let z1 = p.sensor_radius * tilt;
+            if k >= last_needed {
+                break;
+            }
+            if k >= self.max_steps {
+                continue;
+            }
+            if k == 0 {
+                // Prior: level from the first reading (centred on its quantization step).
+                let h0 = z2 + 0.5 * p.delta;
+                kf1 = Some(new_filter(&self.kf1, h0)?);
+                kf2 = Some(new_filter(&self.kf2, h0)?);
+                kf2c = Some(new_filter(&self.kf2_cross, h0)?);
+                kf2m = Some(new_filter(&self.kf2, h0)?);
+            }
+            fire(&mut stop, 0, k, z2, relay_target);
+            if stop[1].is_none()
+                && let Some(f) = kf1.as_mut()
+            {
+                let h = step_level(f, &self.kf1, &[z2], &u)?;
+                fire(&mut stop, 1, k, h, target);
+            }
+            if stop[2].is_none()
+                && let Some(f) = kf2.as_mut()
+            {
+                let h = step_level(f, &self.kf2, &[z1, z2], &u)?;
+                fire(&mut stop, 2, k, h, target);
+            }
+            if stop[3].is_none()
+                && let Some(f) = kf2c.as_mut()
+            {
+                let h = step_level(f, &self.kf2_cross, &[z1, z2], &u)?;
+                fire(&mut stop, 3, k, h, target);
+            }
+            if stop[4].is_none()
+                && let Some(f) = kf2m.as_mut()
+            {
+                let h = step_level(f, &self.kf2, &[z1, mid], &u)?;
+                fire(&mut stop, 4, k, h, target);
+            }
+            if stop.iter().all(Option::is_some) {
+                last_needed = k + self.delay_steps + 1;
+                if k + 1 >= last_needed {
+                    break;
+                }
+            }
+        }
+        Ok(std::array::from_fn(|i| match stop[i] {
+            Some(k) => levels
+                .get(k + self.delay_steps)
+                .map_or(f64::NAN, |h| h - target),
+            None => f64::NAN,
+        }))
+    }
+}
+
+/// The stop command of strategy `i` fires at the first step `k` its signal reaches the limit.
+#[inline]
+fn fire(stop: &mut [Option<usize>; 5], i: usize, k: usize, signal: f64, limit: f64) {
+    if stop[i].is_none() && signal >= limit {
+        stop[i] = Some(k);
+    }
+}
+
+fn new_filter<const M: usize>(
+    s: &FilterSetup<M>,
+    level: f64,
+) -> Result<FixedFilter<7, M, 1>, String> {
+    let x0: [f64; 7] = std::array::from_fn(|i| s.level_direction[i] * level);
+    Filter::new(s.model.clone(), &x0, &s.p0, CovarianceForm::Joseph)
+        .map_err(|e| format!("filter prior: {e}"))
+}
+
+/// Updates with `z`, predicts, and returns the filtered tank level y2 = G₂·x̂_{k|k}.
+#[inline]
+fn step_level<const M: usize>(
+    f: &mut FixedFilter<7, M, 1>,
+    s: &FilterSetup<M>,
+    z: &[f64],
+    u: &[f64],
+) -> Result<f64, String> {
+    f.step(z, Some(u))
+        .map_err(|e| format!("filter step: {e}"))?;
+    Ok(f.state().iter().zip(&s.level_row).map(|(x, g)| x * g).sum())
+}

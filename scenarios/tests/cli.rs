@@ -1,0 +1,8 @@
+//! The `scenarios` crate's one integration-test binary: drives the built `scenarios`
+//! program (and its library) per command family, one submodule each under `tests/cli/`
+//! (a test crate's root resolves `mod x;` to `tests/x.rs`, hence the `#[path]`s).
+
+#[path = "cli/fueling.rs"]
+mod fueling;
+#[path = "cli/userdata.rs"]
+mod userdata;

@@ -1,0 +1,213 @@
+//! `scenarios fueling` at reduced size through the built binary: the paper's orderings at 1°,
+//! byte-identical summaries for any `--threads` and for `--shard` + `merge`, and errors that
+//! name the offending configuration key.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A fresh, empty scratch directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("scenarios-fu-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch dir");
+    dir
+}
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_scenarios"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("run scenarios")
+}
+
+fn ok(dir: &Path, args: &[&str]) {
+    let out = run(dir, args);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// One amplitude sweep of three points and one point for each other sweep: the smallest
+/// campaign that exercises every output.
+const SMALL: &str = "\
+amplitudes_deg = [0.0, 0.5, 1.0]
+periods_s = [10.0]
+fill_rates_mm_s = [10.0]
+damper_times_s = [2.0]
+invariance_amplitudes_deg = [1.0]
+invariance_periods_s = [6.0, 14.0]
+";
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&read(&dir.join("summary.json"))).expect("summary is JSON")
+}
+
+#[test]
+fn one_degree_reproduces_the_papers_orderings() {
+    let dir = scratch("orderings");
+    std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
+    // 300 runs: the std of a std estimate is ≈ 4 % at this size, far inside the margins
+    // checked below (two-channel ≈ 0.3 of relay against the 0.45 bound).
+    ok(
+        &dir,
+        &[
+            "fueling",
+            "--config",
+            "small.toml",
+            "--runs",
+            "300",
+            "--out",
+            "out",
+        ],
+    );
+    let out = dir.join("out");
+    let s = summary(&out);
+    assert_eq!(s["scenario"], "fueling");
+    assert_eq!(s["runs_per_point"], 300);
+    let top = &s["amplitude_sweep"][2];
+    assert_eq!(top["amplitude_deg"], 1.0);
+    let std = |k: &str| top[k]["std_mm"].as_f64().expect("std is a number");
+    let mean = |k: &str| top[k]["mean_mm"].as_f64().expect("mean is a number");
+    let (relay, kf1, kf2) = (std("relay"), std("kf1"), std("kf2"));
+    assert!(kf2 <= 0.45 * relay, "two-channel {kf2} vs relay {relay}");
+    assert!(
+        kf2 < kf1 && kf1 < relay,
+        "one-channel {kf1} not between {kf2} and {relay}"
+    );
+    assert!(
+        mean("kf2").abs() < mean("relay").abs(),
+        "two-channel systematic {} vs relay {}",
+        mean("kf2"),
+        mean("relay")
+    );
+    for k in ["kf2_cross", "kf2_midstep"] {
+        assert!(std(k) <= 0.45 * relay, "{k}: {} vs relay {relay}", std(k));
+    }
+    // Mid-step compensation removes the floor quantizer's −δ/2 bias: its mean is closer to 0.
+    assert!(mean("kf2_midstep").abs() < mean("kf2").abs());
+    let ratio = s["at_max_amplitude"]["std_over_relay"]["kf2"]
+        .as_f64()
+        .expect("ratio");
+    assert!((ratio - kf2 / relay).abs() < 1e-12);
+    let fits = &s["amplitude_fits"]["relay"]["std"];
+    assert!(
+        fits["slope_mm_per_deg"].as_f64().expect("slope") > 0.0,
+        "relay error grows with amplitude"
+    );
+    for key in ["period_sweep", "fill_rate_sweep", "damper_sweep"] {
+        assert_eq!(s[key].as_array().map(Vec::len), Some(1), "{key}");
+    }
+    assert_eq!(
+        s["invariance"]["std_mm"]["kf2"][0].as_array().map(Vec::len),
+        Some(2)
+    );
+    let report = read(&out.join("report.md"));
+    for needle in [
+        "0.40",
+        "0.25",
+        "amplitude_std.svg",
+        "Why the ratios differ",
+        "SBATCH",
+    ] {
+        assert!(report.contains(needle), "report.md lacks {needle}");
+    }
+    for svg in ["amplitude_std.svg", "amplitude_mean.svg", "period_std.svg"] {
+        let text = read(&out.join(svg));
+        assert!(
+            text.starts_with("<svg") && text.trim_end().ends_with("</svg>"),
+            "{svg}"
+        );
+    }
+    let csv = read(&out.join("amplitude_sweep.csv"));
+    assert!(csv.starts_with("amplitude_deg,relay_mean_mm,relay_std_mm,"));
+    assert_eq!(csv.lines().count(), 4);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn threads_and_shards_give_the_same_summary() {
+    let dir = scratch("shards");
+    std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
+    let base = [
+        "fueling",
+        "--config",
+        "small.toml",
+        "--runs",
+        "24",
+        "--seed",
+        "7",
+    ];
+    let with = |extra: &[&str]| {
+        let mut a: Vec<&str> = base.to_vec();
+        a.extend_from_slice(extra);
+        ok(&dir, &a);
+    };
+    with(&["--threads", "1", "--out", "t1"]);
+    with(&["--threads", "2", "--out", "t2"]);
+    let whole = read(&dir.join("t1/summary.json"));
+    assert_eq!(
+        whole,
+        read(&dir.join("t2/summary.json")),
+        "--threads changed the summary"
+    );
+    with(&["--shard", "1/2", "--out", "s1"]);
+    with(&["--shard", "2/2", "--out", "s2"]);
+    let half = read(&dir.join("s1/summary.json"));
+    assert!(half.contains("\"shard\": \"1/2\""), "a shard says so");
+    assert_ne!(half, whole);
+    ok(&dir, &["merge", "s1", "s2", "--out", "merged"]);
+    assert_eq!(
+        whole,
+        read(&dir.join("merged/summary.json")),
+        "merge differs from one run"
+    );
+    assert_eq!(
+        read(&dir.join("t1/runs_amplitude.csv")),
+        read(&dir.join("merged/runs_amplitude.csv"))
+    );
+    // A different seed changes the result (the check above could not pass vacuously).
+    with(&["--seed", "8", "--out", "other"]);
+    assert_ne!(whole, read(&dir.join("other/summary.json")));
+
+    // A shard given twice or a missing shard is an error naming the problem.
+    let out = run(&dir, &["merge", "s1", "s1", "--out", "bad"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("more than one shard"));
+    let out = run(&dir, &["merge", "s1", "--out", "bad"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("shard is missing"));
+    assert!(!dir.join("bad").exists(), "a failed merge writes nothing");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_configuration_exits_2_naming_the_key() {
+    let dir = scratch("badkey");
+    for (text, key) in [
+        ("stepp_mm = 5.0\n", "stepp_mm"),
+        ("step_mm = -1.0\n", "step_mm"),
+        ("periods_s = []\n", "periods_s"),
+        ("runs_per_point = 1\n", "runs_per_point"),
+        ("damper_time_s = \"two\"\n", "damper_time_s"),
+    ] {
+        std::fs::write(dir.join("bad.toml"), text).expect("write config");
+        let out = run(&dir, &["fueling", "--config", "bad.toml", "--out", "out"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{text}: {err}");
+        assert!(
+            err.contains(key) && err.contains("bad.toml"),
+            "{text}: {err}"
+        );
+        assert!(!dir.join("out").exists(), "{text}: nothing written");
+    }
+    let out = run(&dir, &["fueling", "--runs", "1", "--out", "out"]);
+    assert_eq!(out.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&dir);
+}
