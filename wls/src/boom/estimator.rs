@@ -1,0 +1,733 @@
+//! The per-cycle erector-boom estimator of SPEC B: direct inversion (2)–(3), the linearised
+//! 3×3 solve (7) and the weighted least squares (9)–(10), on fixed-size matrices.
+//!
+//! The estimator works in the *sensor* frame: with the sensor mounted γ lower along the arc it
+//! sees β = α − γ (a_x = g·sin β, a_y = g·cos β + ε·r), estimates β and reports α = β + γ.
+//! The state carried between cycles is (s₀, c₀, ε₀) = (sin β, cos β, ε) of the previous cycle.
+#![allow(non_snake_case)]
+
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// Which inversion the estimator uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum BoomMethod {
+    /// Eqs. (2)–(3): α = arcsin(a_x/g), ε = (a_y − √(g² − a_x²))/r; undefined when g² < a_x².
+    Direct,
+    /// Eq. (7): the square system in (s, c, ε) with the row s₀·s + c₀·c = 1.
+    Linear3,
+    /// Eqs. (9)–(10): (7) plus the previous cycle's (s₀, c₀, ε₀) as weighted measurements.
+    #[default]
+    Wls,
+}
+
+/// The unit an angular quantity is carried in inside the WLS state or weight law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AngleUnit {
+    /// Radians.
+    Radian,
+    /// Degrees (factor 180/π).
+    Degree,
+}
+
+impl AngleUnit {
+    /// Multiplier from radians to this unit.
+    #[must_use]
+    pub fn per_radian(self) -> f64 {
+        match self {
+            Self::Radian => 1.0,
+            Self::Degree => 180.0 / core::f64::consts::PI,
+        }
+    }
+}
+
+/// How the a_x weight v₁ depends on the previous angle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AxWeightLaw {
+    /// v₁ = scale·|cos β₀| (the paper: a_x is the bad row near 90°).
+    CosPrevious,
+    /// v₁ = scale.
+    Constant,
+}
+
+/// When the ε₀ weight v₆ = numerator/(1 + gain·|ε̇|)² is evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum RateWeight {
+    /// ε̇ from the two previous cycles, (ε₀ − ε₋₁)/dt: one solve per cycle.
+    PreviousCycle,
+    /// ε̇ = (ε − ε₀)/dt with ε from this cycle's solve, re-solved until ε changes by at most
+    /// `tolerance` (rad/s²) or `max_iterations` solves were made.
+    FixedPoint {
+        /// Maximum fixed-point iterations per cycle (≥ 1).
+        max_iterations: u32,
+        /// Convergence tolerance on ε, rad/s² (> 0).
+        tolerance: f64,
+    },
+}
+
+/// How the angle is recovered from the solved (s, c) in Linear3 and WLS.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum AngleRecovery {
+    /// β = arcsin s, the paper's; undefined when |s| > 1.
+    #[default]
+    Arcsin,
+    /// β = atan2(s, c): always defined, and insensitive to errors in s near 90°.
+    Atan2,
+}
+
+/// Which factorisation solves the 6×3 WLS system.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum BoomSolver {
+    /// Householder QR of V^{1/2}H.
+    #[default]
+    Qr,
+    /// Cholesky of HᵀVH, the paper's (10).
+    NormalEquations,
+}
+
+/// The WLS weights of eq. (8); defaults are the paper's.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct WlsWeights {
+    /// Scale of v₁ (a_x); default 1.
+    pub ax_scale: f64,
+    /// Law of v₁; default [`AxWeightLaw::CosPrevious`].
+    pub ax_law: AxWeightLaw,
+    /// v₂ (a_y); default 1.
+    pub ay: f64,
+    /// v₃ (the row s₀·s + c₀·c = 1); default 100.
+    pub unit_circle: f64,
+    /// v₄ (prior s₀); default 1.
+    pub sin_prior: f64,
+    /// v₅ (prior c₀); default 1.
+    pub cos_prior: f64,
+    /// Numerator of v₆; default 0.5.
+    pub eps_prior: f64,
+    /// Gain on |ε̇| in v₆; default 2.
+    pub eps_rate_gain: f64,
+}
+
+impl Default for WlsWeights {
+    fn default() -> Self {
+        Self {
+            ax_scale: 1.0,
+            ax_law: AxWeightLaw::CosPrevious,
+            ay: 1.0,
+            unit_circle: 100.0,
+            sin_prior: 1.0,
+            cos_prior: 1.0,
+            eps_prior: 0.5,
+            eps_rate_gain: 2.0,
+        }
+    }
+}
+
+/// The estimator's configuration. Angles in radians, accelerations in m/s², SI throughout
+/// except where a field says otherwise.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BoomConfig {
+    /// Gravity g, m/s²; default 9.8 (the paper's).
+    pub g: f64,
+    /// Sensor distance r from the pivot, m; default 25.
+    pub sensor_radius: f64,
+    /// Cycle length dt, s; default 0.01.
+    pub dt: f64,
+    /// Sensor offset angle γ, rad (sensor mounted γ lower along the arc); default 0.
+    pub sensor_offset_angle: f64,
+    /// Inversion method; default WLS.
+    pub method: BoomMethod,
+    /// WLS weights; default the paper's (8).
+    pub weights: WlsWeights,
+    /// Unit of ε inside the WLS state (so H₂₃ = r / per_radian and the ε₀ row is in this
+    /// unit); default degrees, which reproduces the paper (see the crate docs).
+    pub epsilon_unit: AngleUnit,
+    /// Unit of ε̇ inside v₆; default degrees (°/s³), which reproduces the paper.
+    pub epsilon_rate_unit: AngleUnit,
+    /// When v₆ is evaluated; default a fixed point within the cycle (≤ 100 iterations, 1e-10 rad/s² ≈ 6e-9 °/s²).
+    pub rate_weight: RateWeight,
+    /// Factorisation of the WLS system; default QR.
+    pub solver: BoomSolver,
+    /// Angle recovery from (s, c) for Linear3 and WLS; default arcsin (the paper's).
+    pub angle_recovery: AngleRecovery,
+    /// The mounting check passes while |a_z| ≤ this, m/s²; default 0.1 (5·Δa).
+    pub mounting_tolerance: f64,
+    /// Compute the condition number each cycle (a 3×3 SVD); default true.
+    pub compute_condition: bool,
+}
+
+impl Default for BoomConfig {
+    fn default() -> Self {
+        Self {
+            g: 9.8,
+            sensor_radius: 25.0,
+            dt: 0.01,
+            sensor_offset_angle: 0.0,
+            method: BoomMethod::Wls,
+            weights: WlsWeights::default(),
+            epsilon_unit: AngleUnit::Degree,
+            epsilon_rate_unit: AngleUnit::Degree,
+            rate_weight: RateWeight::FixedPoint {
+                max_iterations: 100,
+                tolerance: 1e-10,
+            },
+            solver: BoomSolver::Qr,
+            angle_recovery: AngleRecovery::Arcsin,
+            mounting_tolerance: 0.1,
+            compute_condition: true,
+        }
+    }
+}
+
+impl BoomConfig {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] / [`Error::NegativeWeight`] / [`Error::NonFinite`] naming
+    /// the field and the rule broken.
+    pub fn validate(&self) -> Result<()> {
+        let positive = |name, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::InvalidParameter {
+                    name,
+                    value,
+                    rule: "must be finite and > 0",
+                })
+            }
+        };
+        positive("g", self.g)?;
+        positive("sensor_radius", self.sensor_radius)?;
+        positive("dt", self.dt)?;
+        if !self.sensor_offset_angle.is_finite() {
+            return Err(Error::NonFinite {
+                name: "sensor_offset_angle",
+                row: 0,
+                col: 0,
+                value: self.sensor_offset_angle,
+            });
+        }
+        if !self.mounting_tolerance.is_finite() || self.mounting_tolerance < 0.0 {
+            return Err(Error::InvalidParameter {
+                name: "mounting_tolerance",
+                value: self.mounting_tolerance,
+                rule: "must be finite and ≥ 0",
+            });
+        }
+        let w = &self.weights;
+        let list = [
+            w.ax_scale,
+            w.ay,
+            w.unit_circle,
+            w.sin_prior,
+            w.cos_prior,
+            w.eps_prior,
+            w.eps_rate_gain,
+        ];
+        for (index, &value) in list.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Error::NonFinite {
+                    name: "weights",
+                    row: index,
+                    col: 0,
+                    value,
+                });
+            }
+            if value < 0.0 {
+                return Err(Error::NegativeWeight {
+                    name: "weights",
+                    index,
+                    value,
+                });
+            }
+        }
+        if let RateWeight::FixedPoint {
+            max_iterations,
+            tolerance,
+        } = self.rate_weight
+        {
+            if max_iterations == 0 {
+                return Err(Error::InvalidParameter {
+                    name: "rate_weight.max_iterations",
+                    value: 0.0,
+                    rule: "must be ≥ 1",
+                });
+            }
+            positive("rate_weight.tolerance", tolerance)?;
+        }
+        Ok(())
+    }
+}
+
+/// One cycle's output. Angles in radians, ε in rad/s².
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Estimate {
+    /// Boom angle α = β + γ, rad (NaN when not `defined`).
+    pub angle: f64,
+    /// Angular acceleration ε, rad/s² (NaN when not `defined`).
+    pub angular_acceleration: f64,
+    /// κ₂ of the system solved this cycle: the 3×3 H of (7) for Direct (at the estimated
+    /// angle) and Linear3, V^{1/2}H of (9) for WLS (from its triangular factor; equal to
+    /// κ₂(V^{1/2}H) in exact arithmetic). ∞ if singular, NaN if not computed.
+    pub condition_number: f64,
+    /// False when the method has no answer: g² < a_x² (Direct), a singular 3×3 or |s| > 1
+    /// (Linear3, WLS).
+    pub defined: bool,
+    /// |a_z| ≤ `mounting_tolerance`.
+    pub mounting_ok: bool,
+    /// s = sin β of the sensor frame as solved (may leave [−1, 1] when not `defined`).
+    pub sin_sensor: f64,
+    /// c = cos β as solved.
+    pub cos_sensor: f64,
+    /// v₆ evaluations (fixed-point iterations) made this cycle; 1 with
+    /// [`RateWeight::PreviousCycle`], 0 for Direct, Linear3 and the start-up cycle.
+    pub iterations: u32,
+    /// True on the start-up cycle, which uses direct inversion whatever the method.
+    pub startup: bool,
+}
+
+/// The state carried between cycles.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct State {
+    s: f64,
+    c: f64,
+    /// ε, rad/s².
+    eps: f64,
+    /// (ε₀ − ε₋₁)/dt, rad/s³.
+    rate: f64,
+}
+
+/// The per-cycle boom estimator.
+#[derive(Debug, Clone)]
+pub struct BoomEstimator {
+    config: BoomConfig,
+    state: Option<State>,
+}
+
+/// The largest eigenvalue of a symmetric 3×3 matrix, closed form (trigonometric method);
+/// accurate to a few ulps relative to itself.
+fn lambda_max_sym3(A: &Matrix3<f64>) -> f64 {
+    let p1 = A[(0, 1)].powi(2) + A[(0, 2)].powi(2) + A[(1, 2)].powi(2);
+    let q = A.trace() / 3.0;
+    let p2 = (A[(0, 0)] - q).powi(2) + (A[(1, 1)] - q).powi(2) + (A[(2, 2)] - q).powi(2) + 2.0 * p1;
+    let p = (p2 / 6.0).sqrt();
+    if p <= f64::MIN_POSITIVE * q.abs().max(1.0) {
+        return q;
+    }
+    let B = (A - Matrix3::identity() * q) / p;
+    let half_det = (B.determinant() / 2.0).clamp(-1.0, 1.0);
+    q + 2.0 * p * (half_det.acos() / 3.0).cos()
+}
+
+/// κ₂(M) = ‖M‖₂·‖M⁻¹‖₂ for a 3×3 M, each norm the square root of the largest eigenvalue of a
+/// Gram matrix (largest eigenvalues are computed accurately, unlike σ_min² = λ_min(MᵀM)).
+/// M⁻¹ comes from nalgebra's closed-form 3×3 inverse: this diagnostic needs the inverse's
+/// norm itself, nothing is solved with it. ∞ if M is singular. Much cheaper than an
+/// iterative 3×3 SVD.
+fn cond3(M: &Matrix3<f64>) -> f64 {
+    let Some(Minv) = M.try_inverse() else {
+        return f64::INFINITY;
+    };
+    let n2 = lambda_max_sym3(&M.tr_mul(M));
+    let i2 = lambda_max_sym3(&Minv.tr_mul(&Minv));
+    let kappa = (n2 * i2).sqrt();
+    if kappa.is_finite() {
+        kappa.max(1.0)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The five fixed rows of (9) in reduced triangular form: min ‖A₅x − b₅‖ ≡ min ‖T x − q‖
+/// up to a constant, with T upper triangular (R of a Householder QR of [A₅ | b₅], or Lᵀ and
+/// L⁻¹H₅ᵀV₅z₅ from the Cholesky factor of the normal matrix).
+#[derive(Debug, Clone, Copy)]
+struct Reduced {
+    T: Matrix3<f64>,
+    q: Vector3<f64>,
+}
+
+impl Reduced {
+    /// Adds the ε₀ row e = e₀ with weight v₆ and solves: (x, upper T with TᵀT = HᵀVH).
+    fn with_eps_row(&self, v6: f64, e0: f64) -> Option<(Vector3<f64>, Matrix3<f64>)> {
+        let (mut T, mut q) = (self.T, self.q);
+        // The new whitened row is (0, 0, √v₆ | √v₆·e₀): one Givens rotation against the third
+        // row of T zeroes it and touches only T₃₃ and q₃.
+        let (t, w) = (T[(2, 2)], v6.sqrt());
+        let rho = t.hypot(w);
+        if rho > 0.0 {
+            q[2] = (t * q[2] + w * w * e0) / rho;
+            T[(2, 2)] = rho;
+        }
+        Some((T.solve_upper_triangular(&q)?, T))
+    }
+}
+
+/// In-place Householder triangularisation of the M×3 block of `a` (the fourth column is the
+/// right-hand side and is transformed with it): afterwards the upper 3×3 of `a` is R and
+/// `a[0..3][3]` is the head of Qᵀb.
+fn householder<const M: usize>(a: &mut [[f64; 4]; M]) {
+    for j in 0..3 {
+        let norm = (j..M).map(|i| a[i][j] * a[i][j]).sum::<f64>().sqrt();
+        if norm <= 0.0 {
+            continue;
+        }
+        let alpha = if a[j][j] > 0.0 { -norm } else { norm };
+        // v = x − α·e₁, stored in a scratch column; β = 2/(vᵀv) = 1/(norm·(norm + |x₀|)).
+        let mut v = [0.0; M];
+        for i in j..M {
+            v[i] = a[i][j];
+        }
+        v[j] -= alpha;
+        let vtv = (j..M).map(|i| v[i] * v[i]).sum::<f64>();
+        if vtv <= 0.0 {
+            continue;
+        }
+        let beta = 2.0 / vtv;
+        for col in j..4 {
+            let dot = (j..M).map(|i| v[i] * a[i][col]).sum::<f64>() * beta;
+            for i in j..M {
+                a[i][col] -= dot * v[i];
+            }
+        }
+    }
+}
+
+/// |s| may exceed 1 only by rounding for the angle to be defined.
+const SIN_SLACK: f64 = 4.0 * f64::EPSILON;
+
+impl BoomEstimator {
+    /// A new estimator; the first `update` is the start-up cycle.
+    ///
+    /// # Errors
+    /// An invalid configuration (see [`BoomConfig::validate`]).
+    pub fn new(config: BoomConfig) -> Result<Self> {
+        config.validate()?;
+        Ok(Self {
+            config,
+            state: None,
+        })
+    }
+
+    /// The configuration.
+    #[must_use]
+    pub fn config(&self) -> &BoomConfig {
+        &self.config
+    }
+
+    /// Forgets the state; the next `update` is a start-up cycle again.
+    pub fn reset(&mut self) {
+        self.state = None;
+    }
+
+    /// Seeds the state with a known boom angle α (rad) and ε (rad/s²) instead of a start-up
+    /// cycle.
+    ///
+    /// # Errors
+    /// Non-finite inputs.
+    pub fn set_state(&mut self, angle: f64, angular_acceleration: f64) -> Result<()> {
+        for (name, value) in [
+            ("angle", angle),
+            ("angular_acceleration", angular_acceleration),
+        ] {
+            if !value.is_finite() {
+                return Err(Error::NonFinite {
+                    name,
+                    row: 0,
+                    col: 0,
+                    value,
+                });
+            }
+        }
+        let beta = angle - self.config.sensor_offset_angle;
+        self.state = Some(State {
+            s: beta.sin(),
+            c: beta.cos(),
+            eps: angular_acceleration,
+            rate: 0.0,
+        });
+        Ok(())
+    }
+
+    /// The 3×3 H of eq. (7) for a given (s₀, c₀).
+    fn h3(&self, s0: f64, c0: f64) -> Matrix3<f64> {
+        let (g, r) = (self.config.g, self.config.sensor_radius);
+        Matrix3::new(g, 0.0, 0.0, 0.0, g, r, s0, c0, 0.0)
+    }
+
+    /// Direct inversion (2)–(3): (s, c, ε, defined).
+    fn direct(&self, ax: f64, ay: f64) -> (f64, f64, f64, bool) {
+        let (g, r) = (self.config.g, self.config.sensor_radius);
+        let q = g * g - ax * ax;
+        if q >= 0.0 {
+            let root = q.sqrt();
+            (ax / g, root / g, (ay - root) / r, true)
+        } else {
+            (ax / g, f64::NAN, f64::NAN, false)
+        }
+    }
+
+    /// v₆ = numerator/(1 + gain·|ε̇|)² with ε̇ given in rad/s³ and converted to the configured unit.
+    fn v6(&self, rate: f64) -> f64 {
+        let w = &self.config.weights;
+        let rate_u = rate * self.config.epsilon_rate_unit.per_radian();
+        w.eps_prior / (1.0 + w.eps_rate_gain * rate_u.abs()).powi(2)
+    }
+
+    /// Reduces the five rows of (9) that do not change within a cycle (a_x, a_y, the unit
+    /// circle, s₀, c₀) to a 3×3 form; the ε₀ row is added per v₆ by [`Reduced::with_eps_row`].
+    fn reduce(&self, st: &State, ax: f64, ay: f64) -> Option<Reduced> {
+        let cfg = &self.config;
+        let w = &cfg.weights;
+        let (g, r) = (cfg.g, cfg.sensor_radius);
+        let k = cfg.epsilon_unit.per_radian();
+        let v1 = match w.ax_law {
+            AxWeightLaw::CosPrevious => w.ax_scale * st.c.abs(),
+            AxWeightLaw::Constant => w.ax_scale,
+        };
+        let (w1, w2, w3, w4, w5) = (
+            v1.sqrt(),
+            w.ay.sqrt(),
+            w.unit_circle.sqrt(),
+            w.sin_prior.sqrt(),
+            w.cos_prior.sqrt(),
+        );
+        // Rows of the whitened [V^{1/2}H | V^{1/2}z] for eqs. (9), without the ε₀ row.
+        let mut a = [
+            [w1 * g, 0.0, 0.0, w1 * ax],
+            [0.0, w2 * g, w2 * r / k, w2 * ay],
+            [w3 * st.s, w3 * st.c, 0.0, w3],
+            [w4, 0.0, 0.0, w4 * st.s],
+            [0.0, w5, 0.0, w5 * st.c],
+        ];
+        match cfg.solver {
+            BoomSolver::Qr => {
+                householder(&mut a);
+                let T = Matrix3::new(
+                    a[0][0], a[0][1], a[0][2], 0.0, a[1][1], a[1][2], 0.0, 0.0, a[2][2],
+                );
+                Some(Reduced {
+                    T,
+                    q: Vector3::new(a[0][3], a[1][3], a[2][3]),
+                })
+            }
+            BoomSolver::NormalEquations => {
+                // The paper's (10): form HᵀVH and HᵀVz, factor N = L·Lᵀ. Needs the five fixed
+                // rows to determine all three unknowns (a_y weight > 0).
+                let mut N = Matrix3::zeros();
+                let mut rhs = Vector3::zeros();
+                for row in &a {
+                    let h = Vector3::new(row[0], row[1], row[2]);
+                    N += h * h.transpose();
+                    rhs += h * row[3];
+                }
+                let L = N.cholesky()?.unpack();
+                let q = L.solve_lower_triangular(&rhs)?;
+                Some(Reduced {
+                    T: L.transpose(),
+                    q,
+                })
+            }
+        }
+    }
+
+    /// The WLS cycle: (x with ε in rad/s², T with TᵀT = HᵀVH, v₆ evaluations made).
+    fn wls_cycle(
+        &self,
+        prev: &State,
+        ax: f64,
+        ay: f64,
+    ) -> Option<(Vector3<f64>, Matrix3<f64>, u32)> {
+        let cfg = &self.config;
+        let k = cfg.epsilon_unit.per_radian();
+        let reduced = self.reduce(prev, ax, ay)?;
+        let e0 = prev.eps * k;
+        let solve = |rate: f64| {
+            reduced
+                .with_eps_row(self.v6(rate), e0)
+                .map(|(x, T)| (Vector3::new(x[0], x[1], x[2] / k), T))
+        };
+        let (max_it, tol) = match cfg.rate_weight {
+            RateWeight::PreviousCycle => {
+                let (x, T) = solve(prev.rate)?;
+                return Some((x, T, 1));
+            }
+            RateWeight::FixedPoint {
+                max_iterations,
+                tolerance,
+            } => (max_iterations, tolerance),
+        };
+        // Only v₆ changes within the cycle, and in the reduced form the third unknown is a
+        // closed-form function of v₆: e(v₆) = e₅ + θ·(e₀ − e₅) with θ = v₆/(T₃₃² + v₆) ∈ [0, 1).
+        // The self-consistent v₆ is a root of h(θ) = θ − φ(θ), φ(θ) = θ of v₆ evaluated at the
+        // ε̇ that θ implies. h(0) ≤ 0 ≤ h(1), so the root is bracketed; plain fixed-point
+        // iteration θ ← φ(θ) converges slowly or oscillates when ε̇ is large (noisy readings),
+        // so the root is found by the Illinois variant of regula falsi on [0, 1]. The full
+        // solution is back-substituted once with the converged v₆.
+        let t = reduced.T[(2, 2)];
+        let (rate, iterations) = if t.abs() < f64::MIN_POSITIVE {
+            // The five rows say nothing about ε: e = e₀ whatever v₆ > 0.
+            (0.0, 0)
+        } else {
+            let e5 = reduced.q[2] / t;
+            let d = e0 - e5;
+            let rate_of = |theta: f64| ((e5 + theta * d) / k - prev.eps) / cfg.dt;
+            let h = |theta: f64| {
+                let v6 = self.v6(rate_of(theta));
+                theta - v6 / (t * t + v6)
+            };
+            let to_eps = d.abs() / k;
+            let (mut a, mut fa) = (0.0, h(0.0));
+            let (mut b, mut fb) = (1.0, h(1.0));
+            let mut iterations = 2;
+            let root = if fa >= 0.0 {
+                0.0
+            } else if fb <= 0.0 {
+                1.0
+            } else {
+                let mut side = 0;
+                let mut c = f64::NAN;
+                while iterations < max_it {
+                    iterations += 1;
+                    let previous = c;
+                    c = (a * fb - b * fa) / (fb - fa);
+                    let fc = h(c);
+                    // Converged when the ε step is below the tolerance (the first step compares
+                    // with NaN and never stops) or the bracket itself is that narrow.
+                    if fc.abs() < f64::MIN_POSITIVE
+                        || (c - previous).abs() * to_eps <= tol
+                        || (b - a) * to_eps <= tol
+                    {
+                        break;
+                    }
+                    if (fc > 0.0) == (fb > 0.0) {
+                        b = c;
+                        fb = fc;
+                        if side == -1 {
+                            fa *= 0.5;
+                        }
+                        side = -1;
+                    } else {
+                        a = c;
+                        fa = fc;
+                        if side == 1 {
+                            fb *= 0.5;
+                        }
+                        side = 1;
+                    }
+                }
+                c
+            };
+            (rate_of(root), iterations)
+        };
+        let (x, T) = solve(rate)?;
+        Some((x, T, iterations))
+    }
+
+    /// Processes one cycle's accelerometer reading (m/s², sensor axes).
+    ///
+    /// # Errors
+    /// [`Error::NonFinite`] if any reading is NaN or infinite (the state is left unchanged).
+    pub fn update(&mut self, a_x: f64, a_y: f64, a_z: f64) -> Result<Estimate> {
+        for (name, value) in [("a_x", a_x), ("a_y", a_y), ("a_z", a_z)] {
+            if !value.is_finite() {
+                return Err(Error::NonFinite {
+                    name,
+                    row: 0,
+                    col: 0,
+                    value,
+                });
+            }
+        }
+        let cfg = &self.config;
+        let gamma = cfg.sensor_offset_angle;
+        let mounting_ok = a_z.abs() <= cfg.mounting_tolerance;
+        let undefined = |s, c, kappa, iterations, startup| Estimate {
+            angle: f64::NAN,
+            angular_acceleration: f64::NAN,
+            condition_number: kappa,
+            defined: false,
+            mounting_ok,
+            sin_sensor: s,
+            cos_sensor: c,
+            iterations,
+            startup,
+        };
+        let prev = match (cfg.method, self.state) {
+            (BoomMethod::Direct, _) | (_, None) => {
+                let startup = self.state.is_none() && cfg.method != BoomMethod::Direct;
+                let (s, c, eps, ok) = self.direct(a_x, a_y);
+                if !ok {
+                    return Ok(undefined(s, c, f64::INFINITY, 0, startup));
+                }
+                let kappa = if cfg.compute_condition {
+                    cond3(&self.h3(s, c))
+                } else {
+                    f64::NAN
+                };
+                let rate = self.state.map_or(0.0, |p| (eps - p.eps) / cfg.dt);
+                self.state = Some(State { s, c, eps, rate });
+                return Ok(Estimate {
+                    angle: s.asin() + gamma,
+                    angular_acceleration: eps,
+                    condition_number: kappa,
+                    defined: true,
+                    mounting_ok,
+                    sin_sensor: s,
+                    cos_sensor: c,
+                    iterations: 0,
+                    startup,
+                });
+            }
+            (_, Some(p)) => p,
+        };
+        let (x, kappa, iterations) = if cfg.method == BoomMethod::Linear3 {
+            let H = self.h3(prev.s, prev.c);
+            let kappa = if cfg.compute_condition {
+                cond3(&H)
+            } else {
+                f64::NAN
+            };
+            match H.lu().solve(&Vector3::new(a_x, a_y, 1.0)) {
+                Some(x) => (x, kappa, 0),
+                None => return Ok(undefined(f64::NAN, f64::NAN, f64::INFINITY, 0, false)),
+            }
+        } else {
+            match self.wls_cycle(&prev, a_x, a_y) {
+                Some((x, T, iterations)) => {
+                    let kappa = if cfg.compute_condition {
+                        cond3(&T)
+                    } else {
+                        f64::NAN
+                    };
+                    (x, kappa, iterations)
+                }
+                None => return Ok(undefined(f64::NAN, f64::NAN, f64::INFINITY, 0, false)),
+            }
+        };
+        let (s, c, eps) = (x[0], x[1], x[2]);
+        self.state = Some(State {
+            s,
+            c,
+            eps,
+            rate: (eps - prev.eps) / cfg.dt,
+        });
+        let beta = match cfg.angle_recovery {
+            AngleRecovery::Arcsin if s.abs() <= 1.0 + SIN_SLACK => s.clamp(-1.0, 1.0).asin(),
+            AngleRecovery::Arcsin => return Ok(undefined(s, c, kappa, iterations, false)),
+            AngleRecovery::Atan2 => s.atan2(c),
+        };
+        Ok(Estimate {
+            angle: beta + gamma,
+            angular_acceleration: eps,
+            condition_number: kappa,
+            defined: true,
+            mounting_ok,
+            sin_sensor: s,
+            cos_sensor: c,
+            iterations,
+            startup: false,
+        })
+    }
+}

@@ -1,0 +1,289 @@
+//! Running the estimator over a whole turn with constant measurement errors, and choosing the
+//! sensor offset angle γ: sweep γ, record the worst errors per γ, report the feasible window
+//! and the smallest feasible γ (SPEC B, "Sensor offset angle γ" and "Error model").
+
+use serde::{Deserialize, Serialize};
+
+use super::estimator::{BoomConfig, BoomEstimator};
+use super::profile::TrajectoryPoint;
+use crate::error::{Error, Result};
+
+/// A constant measurement error added to every reading of a turn (the paper's "+" and "−"
+/// variants add ±Δa to a_x and a_y).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ErrorVariant {
+    /// A label for reports ("+", "−", …).
+    pub label: String,
+    /// The error added to (a_x, a_y, a_z), m/s².
+    pub bias: [f64; 3],
+}
+
+impl ErrorVariant {
+    /// The paper's "+" variant: +Δa on a_x and a_y.
+    #[must_use]
+    pub fn plus(delta_a: f64) -> Self {
+        Self {
+            label: "+".into(),
+            bias: [delta_a, delta_a, 0.0],
+        }
+    }
+
+    /// The paper's "−" variant: −Δa on a_x and a_y.
+    #[must_use]
+    pub fn minus(delta_a: f64) -> Self {
+        Self {
+            label: "-".into(),
+            bias: [-delta_a, -delta_a, 0.0],
+        }
+    }
+
+    /// No error.
+    #[must_use]
+    pub fn nominal() -> Self {
+        Self {
+            label: "nominal".into(),
+            bias: [0.0; 3],
+        }
+    }
+}
+
+/// The ideal accelerometer of eq. (1) with the offset angle γ, plus the variant's bias:
+/// a_x = g·sin(α − γ), a_y = g·cos(α − γ) + ε·r, a_z = 0 (no centripetal term, as the paper).
+#[must_use]
+pub fn ideal_accelerometer(
+    g: f64,
+    sensor_radius: f64,
+) -> impl Fn(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3] {
+    move |p, gamma, v| {
+        let beta = p.alpha - gamma;
+        [
+            g * beta.sin() + v.bias[0],
+            g * beta.cos() + p.epsilon * sensor_radius + v.bias[1],
+            v.bias[2],
+        ]
+    }
+}
+
+/// Allowed errors.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Limits {
+    /// Δα, rad.
+    pub angle: f64,
+    /// Δε, rad/s².
+    pub angular_acceleration: f64,
+}
+
+impl Limits {
+    /// The paper's Δα = 1°, Δε = 0.5 °/s².
+    #[must_use]
+    pub fn paper() -> Self {
+        Self {
+            angle: 1f64.to_radians(),
+            angular_acceleration: 0.5f64.to_radians(),
+        }
+    }
+}
+
+/// One cycle of a turn compared with the nominal trajectory.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CycleError {
+    /// Time, s.
+    pub t: f64,
+    /// Nominal α, rad.
+    pub alpha: f64,
+    /// |α̂ − α_n|, rad (∞ when undefined).
+    pub angle_error: f64,
+    /// |ε̂ − ε_n|, rad/s² (∞ when undefined).
+    pub epsilon_error: f64,
+    /// The estimator's flag.
+    pub defined: bool,
+    /// The estimator's condition number.
+    pub condition_number: f64,
+}
+
+/// A whole turn under one error variant.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TurnRun {
+    /// The variant's label.
+    pub label: String,
+    /// Per-cycle errors; the first cycle (start-up) is included here but excluded from the
+    /// maxima below.
+    pub cycles: Vec<CycleError>,
+    /// max |α̂ − α_n| over all cycles but the first, rad.
+    pub max_angle_error: f64,
+    /// max |ε̂ − ε_n| over all cycles but the first, rad/s².
+    pub max_epsilon_error: f64,
+    /// The first cycle (after start-up) whose angle or ε error exceeds the limits: (t, α_n).
+    pub first_violation: Option<(f64, f64)>,
+    /// The first cycle (after start-up) the estimate is undefined: (t, α_n).
+    pub first_undefined: Option<(f64, f64)>,
+}
+
+/// Runs a fresh estimator over `trajectory` with readings from `measure(point, γ, variant)`.
+///
+/// # Errors
+/// An invalid configuration or limit, or a non-finite reading from `measure`.
+pub fn run_turn<M: Fn(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3]>(
+    trajectory: &[TrajectoryPoint],
+    config: &BoomConfig,
+    measure: &M,
+    variant: &ErrorVariant,
+    limits: Limits,
+) -> Result<TurnRun> {
+    for (name, value) in [
+        ("limits.angle", limits.angle),
+        ("limits.angular_acceleration", limits.angular_acceleration),
+    ] {
+        if !value.is_finite() || value <= 0.0 {
+            return Err(Error::InvalidParameter {
+                name,
+                value,
+                rule: "must be finite and > 0",
+            });
+        }
+    }
+    let mut est = BoomEstimator::new(config.clone())?;
+    let gamma = config.sensor_offset_angle;
+    let mut run = TurnRun {
+        label: variant.label.clone(),
+        cycles: Vec::with_capacity(trajectory.len()),
+        max_angle_error: 0.0,
+        max_epsilon_error: 0.0,
+        first_violation: None,
+        first_undefined: None,
+    };
+    for (k, p) in trajectory.iter().enumerate() {
+        let [ax, ay, az] = measure(p, gamma, variant);
+        let e = est.update(ax, ay, az)?;
+        let (da, de) = if e.defined {
+            (
+                (e.angle - p.alpha).abs(),
+                (e.angular_acceleration - p.epsilon).abs(),
+            )
+        } else {
+            (f64::INFINITY, f64::INFINITY)
+        };
+        run.cycles.push(CycleError {
+            t: p.t,
+            alpha: p.alpha,
+            angle_error: da,
+            epsilon_error: de,
+            defined: e.defined,
+            condition_number: e.condition_number,
+        });
+        if k == 0 {
+            continue;
+        }
+        run.max_angle_error = run.max_angle_error.max(da);
+        run.max_epsilon_error = run.max_epsilon_error.max(de);
+        if run.first_violation.is_none() && (da > limits.angle || de > limits.angular_acceleration)
+        {
+            run.first_violation = Some((p.t, p.alpha));
+        }
+        if run.first_undefined.is_none() && !e.defined {
+            run.first_undefined = Some((p.t, p.alpha));
+        }
+    }
+    Ok(run)
+}
+
+/// The worst errors at one γ over all variants.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GammaRow {
+    /// γ, rad.
+    pub gamma: f64,
+    /// max over variants of the max angle error, rad.
+    pub max_angle_error: f64,
+    /// max over variants of the max ε error, rad/s².
+    pub max_epsilon_error: f64,
+    /// Both within the limits.
+    pub feasible: bool,
+}
+
+/// The result of [`sweep_gamma`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GammaSweepReport {
+    /// One row per γ, in the order given.
+    pub rows: Vec<GammaRow>,
+    /// The smallest feasible γ, rad.
+    pub smallest_feasible: Option<f64>,
+    /// The contiguous run of feasible γ (in sweep order) that starts at the smallest feasible
+    /// γ: (first, last), rad.
+    pub window: Option<(f64, f64)>,
+}
+
+/// Sweeps γ over `gammas` (rad, increasing), running every variant at each γ.
+///
+/// # Errors
+/// As [`run_turn`]; an empty or non-increasing γ list or empty variant list.
+pub fn sweep_gamma<M: Fn(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3]>(
+    trajectory: &[TrajectoryPoint],
+    base: &BoomConfig,
+    measure: &M,
+    variants: &[ErrorVariant],
+    gammas: &[f64],
+    limits: Limits,
+) -> Result<GammaSweepReport> {
+    if gammas.is_empty() || variants.is_empty() {
+        return Err(Error::Shape {
+            name: if gammas.is_empty() {
+                "gammas"
+            } else {
+                "variants"
+            },
+            rows: 0,
+            cols: 1,
+            expected: "at least one entry".into(),
+        });
+    }
+    for (i, &g) in gammas.iter().enumerate() {
+        if !g.is_finite() {
+            return Err(Error::NonFinite {
+                name: "gammas",
+                row: i,
+                col: 0,
+                value: g,
+            });
+        }
+        if i > 0 && g <= gammas[i - 1] {
+            return Err(Error::InvalidParameter {
+                name: "gammas",
+                value: g,
+                rule: "γ values must increase strictly",
+            });
+        }
+    }
+    let mut rows = Vec::with_capacity(gammas.len());
+    for &gamma in gammas {
+        let config = BoomConfig {
+            sensor_offset_angle: gamma,
+            ..base.clone()
+        };
+        let (mut da, mut de) = (0.0_f64, 0.0_f64);
+        for v in variants {
+            let run = run_turn(trajectory, &config, measure, v, limits)?;
+            da = da.max(run.max_angle_error);
+            de = de.max(run.max_epsilon_error);
+        }
+        rows.push(GammaRow {
+            gamma,
+            max_angle_error: da,
+            max_epsilon_error: de,
+            feasible: da <= limits.angle && de <= limits.angular_acceleration,
+        });
+    }
+    let first = rows.iter().position(|r| r.feasible);
+    let window = first.map(|i| {
+        let last = rows[i..]
+            .iter()
+            .take_while(|r| r.feasible)
+            .last()
+            .map_or(rows[i].gamma, |r| r.gamma);
+        (rows[i].gamma, last)
+    });
+    Ok(GammaSweepReport {
+        smallest_feasible: first.map(|i| rows[i].gamma),
+        window,
+        rows,
+    })
+}

@@ -1,0 +1,657 @@
+//! General weighted least squares: min ‖V^{1/2}(H x − z)‖² by QR of the weighted system (or
+//! the paper's normal equations), with conditioning diagnostics, Tikhonov regularisation,
+//! prior rows, iteratively re-weighted solves and worst-case error propagation.
+//!
+//! Every entry point first *whitens* the problem: with W such that WᵀW = V (W = diag(√vᵢ) for
+//! diagonal weights, W = Lᵀ from the Cholesky factor V = L·Lᵀ for full weights) the weighted
+//! problem is the ordinary least-squares problem min ‖A x − b‖² with A = W H, b = W z.
+//! Regularisation and prior information are appended to A and b as extra rows, so one
+//! factorisation serves the solve, the covariance and the sensitivity.
+#![allow(non_snake_case)]
+
+use nalgebra::{DMatrix, DVector, Dim, Matrix, Storage};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// The weight matrix V of the measurement rows.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Weights {
+    /// V = I.
+    Identity,
+    /// V = diag(v), every vᵢ ≥ 0 (a zero weight drops its row).
+    Diagonal(DVector<f64>),
+    /// A full symmetric positive definite V (m×m), factorised by Cholesky.
+    Full(DMatrix<f64>),
+}
+
+/// How the whitened system is solved.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Method {
+    /// Householder QR of A = V^{1/2}H: x = R⁻¹Qᵀb, covariance R⁻¹R⁻ᵀ. Accuracy ∝ κ(A).
+    #[default]
+    Qr,
+    /// The paper's form x = (HᵀVH)⁻¹HᵀVz, solved by Cholesky of the normal matrix (LU if the
+    /// Cholesky factorisation breaks down in rounding). Accuracy ∝ κ(A)²; kept for comparison.
+    NormalEquations,
+}
+
+/// Tikhonov regularisation: adds λ‖L(x − x_p)‖² to the objective.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Tikhonov {
+    /// λ ≥ 0.
+    pub lambda: f64,
+    /// The prior mean x_p (n); `None` means 0.
+    pub prior_mean: Option<DVector<f64>>,
+    /// The operator L (k×n); `None` means the identity.
+    pub operator: Option<DMatrix<f64>>,
+}
+
+/// Prior information as extra weighted measurement rows: P x ≈ p with weight V_p.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PriorRows {
+    /// P (k×n).
+    pub rows: DMatrix<f64>,
+    /// p (k).
+    pub values: DVector<f64>,
+    /// V_p (k×k), same rules as the measurement weights.
+    pub weights: Weights,
+}
+
+/// Options of [`solve`].
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct SolveOptions {
+    /// QR (default) or normal equations.
+    pub method: Method,
+    /// Scale the covariance by the residual variance σ̂² = ‖Ax − b‖²/(rows − n).
+    pub scale_covariance: bool,
+    /// Singular values of V^{1/2}H at or below this count as zero; default
+    /// max(m, n)·ε·σ_max (the LAPACK/NumPy convention).
+    pub rank_tolerance: Option<f64>,
+    /// Tikhonov regularisation.
+    pub tikhonov: Option<Tikhonov>,
+    /// Prior information as extra rows.
+    pub prior: Option<PriorRows>,
+}
+
+/// The result of [`solve`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Solution {
+    /// The estimate x̂ (n).
+    pub x: DVector<f64>,
+    /// (HᵀVH + regularisation)⁻¹ (n×n), symmetric; times σ̂² if `covariance_scaled`.
+    pub covariance: DMatrix<f64>,
+    /// Whether `covariance` was scaled by the residual variance.
+    pub covariance_scaled: bool,
+    /// Unweighted residuals z − H x̂ of the measurement rows (m).
+    pub residuals: DVector<f64>,
+    /// ‖A x̂ − b‖² over all solved rows (measurements, prior and regularisation rows).
+    pub weighted_sum_of_squares: f64,
+    /// σ̂² = `weighted_sum_of_squares` / (rows − n), `None` without degrees of freedom.
+    pub residual_variance: Option<f64>,
+    /// Singular values of V^{1/2}H, descending.
+    pub singular_values: DVector<f64>,
+    /// κ₂(V^{1/2}H) = σ_max/σ_min by SVD (∞ if rank-deficient).
+    pub condition_weighted: f64,
+    /// κ₂(HᵀVH) by SVD of the normal matrix (≈ `condition_weighted`², up to rounding).
+    pub condition_normal: f64,
+    /// κ₂ of the system actually solved (with regularisation and prior rows).
+    pub condition_solved: f64,
+    /// Numerical rank of V^{1/2}H.
+    pub rank: usize,
+    /// The tolerance that defined `rank`.
+    pub rank_tolerance: f64,
+    /// The method used.
+    pub method: Method,
+}
+
+/// Options of the iteratively re-weighted solve [`solve_irls`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IrlsOptions {
+    /// Stop when ‖x_{k+1} − x_k‖ ≤ tolerance·(1 + ‖x_{k+1}‖).
+    pub tolerance: f64,
+    /// Iteration cap (≥ 1).
+    pub max_iterations: usize,
+}
+
+impl Default for IrlsOptions {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-12,
+            max_iterations: 50,
+        }
+    }
+}
+
+/// The result of [`solve_irls`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IrlsSolution {
+    /// The last solve.
+    pub solution: Solution,
+    /// Solves performed.
+    pub iterations: usize,
+    /// Whether the fixed-point tolerance was met within the cap.
+    pub converged: bool,
+    /// ‖x_k − x_{k−1}‖ of the last iteration.
+    pub last_step: f64,
+}
+
+/// Checks that every entry of `m` is finite.
+pub(crate) fn check_finite<R: Dim, C: Dim, S: Storage<f64, R, C>>(
+    name: &'static str,
+    m: &Matrix<f64, R, C, S>,
+) -> Result<()> {
+    for col in 0..m.ncols() {
+        for row in 0..m.nrows() {
+            let value = m[(row, col)];
+            if !value.is_finite() {
+                return Err(Error::NonFinite {
+                    name,
+                    row,
+                    col,
+                    value,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks that a vector has `len` entries.
+fn check_len(name: &'static str, v: &DVector<f64>, len: usize, what: &str) -> Result<()> {
+    if v.len() == len {
+        Ok(())
+    } else {
+        Err(Error::Shape {
+            name,
+            rows: v.len(),
+            cols: 1,
+            expected: format!("{len}×1 ({what})"),
+        })
+    }
+}
+
+/// A validated whitening operator W with WᵀW = V.
+#[derive(Debug, Clone)]
+enum Whitener {
+    Identity,
+    /// √vᵢ.
+    Diagonal(DVector<f64>),
+    /// Lᵀ, upper triangular, from V = L·Lᵀ.
+    Upper(DMatrix<f64>),
+}
+
+impl Whitener {
+    /// Validates `weights` for `m` rows and builds W.
+    fn new(name: &'static str, weights: &Weights, m: usize) -> Result<Self> {
+        match weights {
+            Weights::Identity => Ok(Self::Identity),
+            Weights::Diagonal(v) => {
+                check_len(name, v, m, "one weight per row")?;
+                check_finite(name, v)?;
+                if let Some((index, &value)) = v.iter().enumerate().find(|(_, w)| **w < 0.0) {
+                    return Err(Error::NegativeWeight { name, index, value });
+                }
+                Ok(Self::Diagonal(v.map(f64::sqrt)))
+            }
+            Weights::Full(V) => {
+                if V.nrows() != m || V.ncols() != m {
+                    return Err(Error::Shape {
+                        name,
+                        rows: V.nrows(),
+                        cols: V.ncols(),
+                        expected: format!("{m}×{m} (one row and column per measurement)"),
+                    });
+                }
+                check_finite(name, V)?;
+                let scale = V.amax();
+                // Asymmetry up to a few hundred ulps of the largest entry is rounding from
+                // whoever assembled V; anything larger is a modelling error.
+                let tol = 256.0 * f64::EPSILON * scale;
+                let mut worst = (0, 0, 0.0_f64);
+                for i in 0..m {
+                    for j in 0..i {
+                        let d = (V[(i, j)] - V[(j, i)]).abs();
+                        if d > worst.2 {
+                            worst = (i, j, d);
+                        }
+                    }
+                }
+                if worst.2 > tol {
+                    return Err(Error::NotSymmetric {
+                        name,
+                        n: m,
+                        row: worst.0,
+                        col: worst.1,
+                        difference: worst.2,
+                    });
+                }
+                let sym = (V + V.transpose()) * 0.5;
+                let chol = sym
+                    .cholesky()
+                    .ok_or(Error::NotPositiveDefinite { name, n: m })?;
+                Ok(Self::Upper(chol.l().transpose()))
+            }
+        }
+    }
+
+    /// W·M.
+    fn apply(&self, M: &DMatrix<f64>) -> DMatrix<f64> {
+        match self {
+            Self::Identity => M.clone(),
+            Self::Diagonal(w) => {
+                let mut out = M.clone();
+                for (i, mut row) in out.row_iter_mut().enumerate() {
+                    row *= w[i];
+                }
+                out
+            }
+            Self::Upper(U) => U * M,
+        }
+    }
+
+    /// W·v.
+    fn apply_vec(&self, v: &DVector<f64>) -> DVector<f64> {
+        match self {
+            Self::Identity => v.clone(),
+            Self::Diagonal(w) => v.component_mul(w),
+            Self::Upper(U) => U * v,
+        }
+    }
+
+    /// M·W (M has m columns).
+    fn right_apply(&self, M: &DMatrix<f64>) -> DMatrix<f64> {
+        match self {
+            Self::Identity => M.clone(),
+            Self::Diagonal(w) => {
+                let mut out = M.clone();
+                for (j, mut col) in out.column_iter_mut().enumerate() {
+                    col *= w[j];
+                }
+                out
+            }
+            Self::Upper(U) => M * U,
+        }
+    }
+}
+
+/// κ₂ from descending singular values of a matrix with n columns (∞ if fewer than n or the
+/// smallest is zero).
+fn condition_from(sv: &DVector<f64>, n: usize) -> f64 {
+    if sv.len() < n || n == 0 {
+        return f64::INFINITY;
+    }
+    let smin = sv[n - 1];
+    if smin > 0.0 {
+        sv[0] / smin
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The whitened (and possibly augmented) system, validated.
+#[derive(Debug)]
+struct System {
+    /// Rows: W·H, then √λ·L, then W_p·P.
+    A: DMatrix<f64>,
+    /// W·z, √λ·L·x_p, W_p·p.
+    b: DVector<f64>,
+    /// The measurement rows' whitener.
+    W: Whitener,
+    /// Measurement rows m.
+    m: usize,
+    /// Singular values of W·H, descending.
+    sv: DVector<f64>,
+    rank: usize,
+    tolerance: f64,
+    condition_solved: f64,
+}
+
+/// Validates the inputs and assembles the whitened system; errors on rank deficiency unless
+/// regularisation or prior rows make the augmented system full rank.
+fn assemble(
+    H: &DMatrix<f64>,
+    z: &DVector<f64>,
+    weights: &Weights,
+    options: &SolveOptions,
+) -> Result<System> {
+    let (m, n) = H.shape();
+    if m == 0 || n == 0 {
+        return Err(Error::Shape {
+            name: "H",
+            rows: m,
+            cols: n,
+            expected: "m×n with m ≥ 1 and n ≥ 1".into(),
+        });
+    }
+    check_finite("H", H)?;
+    check_len("z", z, m, "rows(H)")?;
+    check_finite("z", z)?;
+    let W = Whitener::new("V", weights, m)?;
+    let A0 = W.apply(H);
+    let b0 = W.apply_vec(z);
+    let sv = A0.singular_values();
+    let smax = if sv.is_empty() { 0.0 } else { sv[0] };
+    let tolerance = match options.rank_tolerance {
+        Some(t) if !t.is_finite() || t < 0.0 => {
+            return Err(Error::InvalidParameter {
+                name: "rank_tolerance",
+                value: t,
+                rule: "must be finite and ≥ 0",
+            });
+        }
+        Some(t) => t,
+        None => m.max(n) as f64 * f64::EPSILON * smax,
+    };
+    let rank = sv.iter().filter(|&&s| s > tolerance).count();
+
+    let mut blocks_A = vec![A0];
+    let mut blocks_b = vec![b0];
+    if let Some(t) = &options.tikhonov {
+        if !t.lambda.is_finite() || t.lambda < 0.0 {
+            return Err(Error::InvalidParameter {
+                name: "tikhonov.lambda",
+                value: t.lambda,
+                rule: "must be finite and ≥ 0",
+            });
+        }
+        let L = match &t.operator {
+            Some(L) => {
+                if L.ncols() != n || L.nrows() == 0 {
+                    return Err(Error::Shape {
+                        name: "tikhonov.operator",
+                        rows: L.nrows(),
+                        cols: L.ncols(),
+                        expected: format!("k×{n} with k ≥ 1 (one column per unknown)"),
+                    });
+                }
+                check_finite("tikhonov.operator", L)?;
+                L.clone()
+            }
+            None => DMatrix::identity(n, n),
+        };
+        let xp = match &t.prior_mean {
+            Some(xp) => {
+                check_len("tikhonov.prior_mean", xp, n, "one entry per unknown")?;
+                check_finite("tikhonov.prior_mean", xp)?;
+                xp.clone()
+            }
+            None => DVector::zeros(n),
+        };
+        let s = t.lambda.sqrt();
+        blocks_b.push(&L * &xp * s);
+        blocks_A.push(L * s);
+    }
+    if let Some(p) = &options.prior {
+        let k = p.rows.nrows();
+        if p.rows.ncols() != n || k == 0 {
+            return Err(Error::Shape {
+                name: "prior.rows",
+                rows: k,
+                cols: p.rows.ncols(),
+                expected: format!("k×{n} with k ≥ 1 (one column per unknown)"),
+            });
+        }
+        check_finite("prior.rows", &p.rows)?;
+        check_len("prior.values", &p.values, k, "rows(prior.rows)")?;
+        check_finite("prior.values", &p.values)?;
+        let Wp = Whitener::new("prior.weights", &p.weights, k)?;
+        blocks_A.push(Wp.apply(&p.rows));
+        blocks_b.push(Wp.apply_vec(&p.values));
+    }
+    let regularised = blocks_A.len() > 1;
+    let total: usize = blocks_A.iter().map(DMatrix::nrows).sum();
+    let mut A = DMatrix::zeros(total, n);
+    let mut b = DVector::zeros(total);
+    let mut at = 0;
+    for (Ai, bi) in blocks_A.iter().zip(&blocks_b) {
+        A.rows_mut(at, Ai.nrows()).copy_from(Ai);
+        b.rows_mut(at, bi.nrows()).copy_from(bi);
+        at += Ai.nrows();
+    }
+    let condition_solved = if regularised {
+        let sv_aug = A.singular_values();
+        let smax_aug = if sv_aug.is_empty() { 0.0 } else { sv_aug[0] };
+        let tol_aug = options
+            .rank_tolerance
+            .unwrap_or(total.max(n) as f64 * f64::EPSILON * smax_aug);
+        let rank_aug = sv_aug.iter().filter(|&&s| s > tol_aug).count();
+        if rank_aug < n {
+            return Err(Error::RankDeficient {
+                name: "regularised system",
+                rank: rank_aug,
+                cols: n,
+                tolerance: tol_aug,
+            });
+        }
+        condition_from(&sv_aug, n)
+    } else {
+        if rank < n {
+            return Err(Error::RankDeficient {
+                name: "V^(1/2) H",
+                rank,
+                cols: n,
+                tolerance,
+            });
+        }
+        condition_from(&sv, n)
+    };
+    Ok(System {
+        A,
+        b,
+        W,
+        m,
+        sv,
+        rank,
+        tolerance,
+        condition_solved,
+    })
+}
+
+/// R from the QR factorisation of a full-column-rank A (rows ≥ n), and the QR itself.
+fn qr_of(
+    A: &DMatrix<f64>,
+) -> (
+    nalgebra::linalg::QR<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    DMatrix<f64>,
+) {
+    let qr = A.clone().qr();
+    let R = qr.r();
+    (qr, R)
+}
+
+/// (RᵀR)⁻¹ = R⁻¹R⁻ᵀ by triangular solves, symmetrised.
+fn covariance_from_r(R: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+    let n = R.ncols();
+    let Rinv = R
+        .solve_upper_triangular(&DMatrix::identity(n, n))
+        .ok_or(Error::Singular {
+            name: "R (QR factor)",
+            detail: "zero on the diagonal",
+        })?;
+    let C = &Rinv * Rinv.transpose();
+    Ok((&C + C.transpose()) * 0.5)
+}
+
+/// Solves min ‖V^{1/2}(H x − z)‖² (+ regularisation and prior rows from `options`).
+///
+/// # Errors
+/// Shape mismatch, non-finite entries, negative or non-SPD weights, invalid λ or tolerance,
+/// rank deficiency without regularisation, and residual-variance scaling without degrees of
+/// freedom are all typed [`Error`]s.
+pub fn solve(
+    H: &DMatrix<f64>,
+    z: &DVector<f64>,
+    weights: &Weights,
+    options: &SolveOptions,
+) -> Result<Solution> {
+    let sys = assemble(H, z, weights, options)?;
+    let n = H.ncols();
+    let (x, mut covariance) = match options.method {
+        Method::Qr => {
+            let (qr, R) = qr_of(&sys.A);
+            let mut qtb = sys.b.clone();
+            qr.q_tr_mul(&mut qtb);
+            let rhs = qtb.rows(0, n).into_owned();
+            let x = R.solve_upper_triangular(&rhs).ok_or(Error::Singular {
+                name: "R (QR factor)",
+                detail: "zero on the diagonal",
+            })?;
+            (x, covariance_from_r(&R)?)
+        }
+        Method::NormalEquations => {
+            let N = sys.A.transpose() * &sys.A;
+            let rhs = sys.A.transpose() * &sys.b;
+            let I = DMatrix::identity(n, n);
+            let (x, C) = if let Some(chol) = N.clone().cholesky() {
+                (chol.solve(&rhs), chol.solve(&I))
+            } else {
+                // Rounding can make HᵀVH indefinite when κ(A)² ≳ 1/ε; LU still returns the
+                // (inaccurate) answer the paper's formula would give.
+                let lu = N.lu();
+                let singular = Error::Singular {
+                    name: "HᵀVH",
+                    detail: "LU met a zero pivot",
+                };
+                let x = lu.solve(&rhs).ok_or(singular.clone())?;
+                let C = lu.solve(&I).ok_or(singular)?;
+                (x, C)
+            };
+            (x, (&C + C.transpose()) * 0.5)
+        }
+    };
+    let r_all = &sys.A * &x - &sys.b;
+    let weighted_sum_of_squares = r_all.norm_squared();
+    let rows = sys.A.nrows();
+    let residual_variance = (rows > n).then(|| weighted_sum_of_squares / (rows - n) as f64);
+    if options.scale_covariance {
+        let s2 = residual_variance.ok_or(Error::NoDegreesOfFreedom { rows, cols: n })?;
+        covariance *= s2;
+    }
+    let residuals = z - H * &x;
+    let A_meas = sys.A.rows(0, sys.m);
+    let normal = A_meas.transpose() * A_meas;
+    let condition_normal = condition_from(&normal.singular_values(), n);
+    Ok(Solution {
+        x,
+        covariance,
+        covariance_scaled: options.scale_covariance,
+        residuals,
+        weighted_sum_of_squares,
+        residual_variance,
+        condition_weighted: condition_from(&sys.sv, n),
+        singular_values: sys.sv,
+        condition_normal,
+        condition_solved: sys.condition_solved,
+        rank: sys.rank,
+        rank_tolerance: sys.tolerance,
+        method: options.method,
+    })
+}
+
+/// The sensitivity ∂x̂/∂z (n×m) of the solution to the measurements: (HᵀVH)⁻¹HᵀV without
+/// regularisation, and the corresponding block of the regularised solution map with it.
+///
+/// Computed from the QR factors of the whitened system (R⁻¹Q₁ᵀW), never by inverting HᵀVH.
+///
+/// # Errors
+/// As [`solve`] (the measurement vector is not needed).
+pub fn sensitivity(
+    H: &DMatrix<f64>,
+    weights: &Weights,
+    options: &SolveOptions,
+) -> Result<DMatrix<f64>> {
+    let z = DVector::zeros(H.nrows());
+    let sys = assemble(H, &z, weights, options)?;
+    let n = H.ncols();
+    let (qr, R) = qr_of(&sys.A);
+    let Q = qr.q();
+    let Q1t = Q.rows(0, sys.m).transpose();
+    let M = sys.W.right_apply(&Q1t);
+    R.solve_upper_triangular(&M)
+        .ok_or(Error::Singular {
+            name: "R (QR factor)",
+            detail: "zero on the diagonal",
+        })
+        .map(|S| {
+            debug_assert_eq!(S.nrows(), n);
+            S
+        })
+}
+
+/// Worst-case error of each unknown when every measurement error is bounded, |δzᵢ| ≤ Δᵢ:
+/// the row sums of |∂x̂/∂z|·Δ. Exact for the linear map (attained at a corner δz = ±Δ).
+///
+/// # Errors
+/// As [`sensitivity`], plus `delta` of the wrong length, non-finite or negative.
+pub fn worst_case_bounds(
+    H: &DMatrix<f64>,
+    weights: &Weights,
+    delta: &DVector<f64>,
+    options: &SolveOptions,
+) -> Result<DVector<f64>> {
+    check_len("delta", delta, H.nrows(), "one bound per measurement")?;
+    check_finite("delta", delta)?;
+    if let Some((_, &value)) = delta.iter().enumerate().find(|(_, d)| **d < 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "delta",
+            value,
+            rule: "error bounds must be ≥ 0",
+        });
+    }
+    let S = sensitivity(H, weights, options)?;
+    Ok(S.abs() * delta)
+}
+
+/// Iteratively re-weighted least squares: weights V(x) from a closure, iterated from
+/// `initial` to a fixed point x = argmin ‖V(x)^{1/2}(H x − z)‖².
+///
+/// Returns the last solve with the iteration count and whether ‖x_{k+1} − x_k‖ ≤
+/// tolerance·(1 + ‖x_{k+1}‖) was reached within `max_iterations` (not converging is reported,
+/// not an error).
+///
+/// # Errors
+/// As [`solve`] for any iterate, plus invalid `initial`, tolerance or iteration cap.
+pub fn solve_irls<F: FnMut(&DVector<f64>) -> Weights>(
+    H: &DMatrix<f64>,
+    z: &DVector<f64>,
+    initial: &DVector<f64>,
+    mut weights_of: F,
+    options: &SolveOptions,
+    irls: &IrlsOptions,
+) -> Result<IrlsSolution> {
+    check_len("initial", initial, H.ncols(), "one entry per unknown")?;
+    check_finite("initial", initial)?;
+    if !irls.tolerance.is_finite() || irls.tolerance <= 0.0 {
+        return Err(Error::InvalidParameter {
+            name: "irls.tolerance",
+            value: irls.tolerance,
+            rule: "must be finite and > 0",
+        });
+    }
+    if irls.max_iterations == 0 {
+        return Err(Error::InvalidParameter {
+            name: "irls.max_iterations",
+            value: 0.0,
+            rule: "must be ≥ 1",
+        });
+    }
+    let mut x = initial.clone();
+    let mut k = 0;
+    loop {
+        k += 1;
+        let w = weights_of(&x);
+        let solution = solve(H, z, &w, options)?;
+        let last_step = (&solution.x - &x).norm();
+        let converged = last_step <= irls.tolerance * (1.0 + solution.x.norm());
+        if converged || k >= irls.max_iterations {
+            return Ok(IrlsSolution {
+                solution,
+                iterations: k,
+                converged,
+                last_step,
+            });
+        }
+        x = solution.x;
+    }
+}

@@ -1,0 +1,9 @@
+//! The `wls` integration tests: the general solver (QR vs normal equations, worst-case bounds,
+//! Tikhonov limits, typed errors) and the boom estimator (exactness, definedness, conditioning,
+//! the paper's full turn and the γ sweep).
+#![allow(non_snake_case)]
+
+#[path = "wls/boom.rs"]
+mod boom;
+#[path = "wls/solver.rs"]
+mod solver;
