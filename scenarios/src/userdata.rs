@@ -412,8 +412,44 @@ fn write_model(path: &Path, file: &DiscreteFile) -> Result<()> {
             .map_err(|e| Error::Compute(format!("{}: cannot serialise: {e}", path.display())))?;
         crate::output::write_atomic(path, text.as_bytes())
     } else {
-        crate::output::write_json(path, file)
+        crate::output::write_atomic(path, model_json(file).as_bytes())
     }
+}
+
+/// A discrete model as JSON with one matrix row per line (readable, and diff-friendly).
+fn model_json(file: &DiscreteFile) -> String {
+    // Serialising plain numbers cannot fail (a non-finite one would become `null`, but
+    // every matrix here was checked or computed finite).
+    fn json<T: serde::Serialize + ?Sized>(v: &T) -> String {
+        serde_json::to_string(v).unwrap_or_default()
+    }
+    let mut fields = vec![format!("  \"dt\": {}", json(&file.dt))];
+    let matrices = [
+        ("F", Some(&file.F)),
+        ("B", file.B.as_ref()),
+        ("H", Some(&file.H)),
+        ("D", file.D.as_ref()),
+        ("Q", Some(&file.Q)),
+        ("R", file.R.as_ref()),
+        ("S", file.S.as_ref()),
+    ];
+    for (name, m) in matrices {
+        if let Some(m) = m {
+            let lines: Vec<String> = m.iter().map(|r| json(r.as_slice())).collect();
+            fields.push(format!(
+                "  \"{name}\": [\n    {}\n  ]",
+                lines.join(",\n    ")
+            ));
+        }
+    }
+    if let Some(x0) = &file.x0 {
+        fields.push(format!("  \"x0\": {}", json(x0)));
+    }
+    if let Some(p0) = &file.P0 {
+        let lines: Vec<String> = p0.iter().map(|r| json(r.as_slice())).collect();
+        fields.push(format!("  \"P0\": [\n    {}\n  ]", lines.join(",\n    ")));
+    }
+    format!("{{\n{}\n}}\n", fields.join(",\n"))
 }
 
 /// `scenarios steady-state`: the DARE solution of a discrete model.
