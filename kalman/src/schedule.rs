@@ -27,8 +27,9 @@ use crate::{CovarianceForm, Error, Filter, MatrixInput, Model};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScheduleOptions {
     /// The schedule ends at the first step k with
-    /// max|K_k − K_{k−1}| ≤ `tolerance`·max|K_k| (and the same for S Σ_k⁻¹). Default 1e-14,
-    /// so the steady gain is the filter's own fixed point to rounding.
+    /// max|K_k − K_{k−1}| ≤ `tolerance`·max|K_k| and the same for S Σ_k⁻¹ and for
+    /// P_{k+1|k} against P_{k|k−1}. Default 1e-14, so the steady gain is the filter's own
+    /// fixed point to rounding.
     pub tolerance: f64,
     /// Give up (with an error) after this many steps. Default 1 000 000.
     pub max_steps: usize,
@@ -82,8 +83,16 @@ impl<D: Dims> GainSchedule<D> {
             if let Some(S) = model.S() {
                 cross.push(to_buf::<D::Nm>(cross_gain(S, f.innovation_covariance())?.as_ref()));
             }
-            if k > 0 && settled(&gains, opts.tolerance) && (cross.is_empty() || settled(&cross, opts.tolerance)) {
-                let steady_prior = to_buf::<D::Nn>(f.predicted_covariance());
+            let P = to_buf::<D::Nn>(f.predicted_covariance());
+            // The gain alone can settle while P diverges (an unobservable unstable mode the
+            // gain never touches), so P must settle too.
+            let p_settled = settled(&[priors[k].clone(), P.clone()], opts.tolerance);
+            if k > 0
+                && p_settled
+                && settled(&gains, opts.tolerance)
+                && (cross.is_empty() || settled(&cross, opts.tolerance))
+            {
+                let steady_prior = P;
                 return Ok(Self { template, model, gains, cross, priors, steady_prior, opts });
             }
         }

@@ -1,0 +1,89 @@
+//! Kalman–Bucy: the Riccati ODE's limit is the CARE solution; the discrete steady-state
+//! gain of the sampled model divided by Δt tends to the continuous gain at first order.
+
+use faer::{Mat, mat};
+use kalman::continuous::{KalmanBucy, OdeOptions, van_loan};
+use kalman::riccati::{care, care_residual, clqr, dare};
+use proptest::prelude::*;
+
+use super::common::{randn, rel, rng, spd, with_radius};
+
+/// A lightly damped oscillator driven by white acceleration, position measured.
+fn oscillator() -> (Mat<f64>, Mat<f64>, Mat<f64>, Mat<f64>) {
+    let A = mat![[0.0, 1.0], [-1.0, -0.4]];
+    let H = mat![[1.0, 0.0]];
+    let Q = mat![[0.0, 0.0], [0.0, 0.5]];
+    let R = mat![[0.2]];
+    (A, H, Q, R)
+}
+
+#[test]
+fn ode_limit_is_care() {
+    let (A, H, Q, R) = oscillator();
+    let ss = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()).expect("CARE");
+    assert!(ss.relative_residual < 1e-12);
+    let kb = KalmanBucy::new(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()).expect("KB");
+    let P0 = Mat::<f64>::identity(2, 2) * 10.0;
+    // Rate 1e-10: an explicit scheme near a stable fixed point hovers at ~rtol·‖P‖·|λ|, so
+    // rates much below 100·rtol are not reachable (see `KalmanBucy::until_steady`).
+    let sol = kb.until_steady(P0.as_ref(), 1e-10, 1e4, &OdeOptions::default()).expect("ODE settles");
+    // Tolerance: ‖Ṗ‖ ≤ 1e-10‖P‖ at the stop; the distance to the fixed point is that over the
+    // closed-loop decay rate (~0.5 here), plus the integrator's rtol 1e-10: ~1e-10 ≪ 1e-8.
+    let d = rel(&sol.covariance, &ss.covariance);
+    assert!(d < 1e-8, "ODE limit vs CARE: {d:e}");
+    let K = kb.gain(sol.covariance.as_ref()).expect("gain");
+    assert!(rel(&K, &ss.gain) < 1e-8);
+    // Symmetric along the way.
+    let mid = kb.integrate(P0.as_ref(), 0.7, &OdeOptions::default()).expect("ODE");
+    // P is symmetrised after every step, so the two triangles agree exactly.
+    assert!((mid.covariance[(0, 1)] - mid.covariance[(1, 0)]).abs() <= 0.0);
+}
+
+#[test]
+fn discrete_gain_over_dt_tends_to_continuous_gain_at_first_order() {
+    let (A, H, Q, R) = oscillator();
+    let Kc = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()).expect("CARE").gain;
+    let mut errs = Vec::new();
+    for dt in [0.04, 0.02, 0.01] {
+        let (F, Qd) = van_loan(A.as_ref(), Q.as_ref(), dt).expect("Van Loan");
+        // Measurement noise of intensity R averaged over Δt has covariance R/Δt.
+        let Rd = &R * (1.0 / dt);
+        let ss = dare(F.as_ref(), H.as_ref(), Qd.as_ref(), Rd.as_ref(), None).expect("DARE");
+        let Kd = &ss.gain * (1.0 / dt);
+        errs.push((&Kd - &Kc).norm_l2());
+    }
+    // Expected order 1: K_d/Δt = P Hᵀ(H P Hᵀ Δt + R)⁻¹ = K_c + O(Δt) (and P_d = P_c + O(Δt)).
+    // Tolerance on the observed order: ±0.1 (the next term is O(Δt²)/O(Δt) ≈ Δt·const).
+    let p1 = (errs[0] / errs[1]).log2();
+    let p2 = (errs[1] / errs[2]).log2();
+    assert!((p1 - 1.0).abs() < 0.1 && (p2 - 1.0).abs() < 0.1, "observed orders {p1}, {p2}; errors {errs:?}");
+    assert!(errs[2] < 0.05 * Kc.norm_l2());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    /// Random continuous models: CARE residual small, and the continuous LQR gain solves its
+    /// own CARE X A + AᵀX − X B R⁻¹ Bᵀ X + Q = 0 (the filter form with A → Aᵀ, H → Bᵀ).
+    #[test]
+    fn care_and_clqr_residuals(seed in any::<u64>(), n in 1usize..=5, m in 1usize..=3, r in 0.1f64..2.0) {
+        let mut g = rng(seed);
+        // Spectrum of A shifted so some eigenvalues are unstable.
+        let mut A = with_radius(&mut g, n, r);
+        for i in 0..n {
+            A[(i, i)] -= 0.5;
+        }
+        let H = randn(&mut g, m, n);
+        let Q = spd(&mut g, n, 0.1);
+        let R = spd(&mut g, m, 0.1);
+        if let Ok(ss) = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()) {
+            let res = care_residual(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), ss.covariance.as_ref());
+            prop_assert!(res < 1e-10, "CARE residual {res:e}");
+        }
+        let B = H.transpose().to_owned();
+        if let Ok(l) = clqr(A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref()) {
+            let res = care_residual(A.transpose(), B.transpose(), Q.as_ref(), R.as_ref(), l.cost.as_ref());
+            prop_assert!(res < 1e-10, "CLQR residual {res:e}");
+        }
+    }
+}

@@ -1,0 +1,184 @@
+//! DARE / LQR / PBH: random detectable models converge to the DARE solution, residuals,
+//! the LQR gain against its own Riccati equation, typed errors for undetectable and
+//! unstabilisable pairs.
+
+use faer::linalg::solvers::Solve;
+use faer::{Mat, Side, mat};
+use kalman::riccati::{dare, dare_residual, dlqr};
+use kalman::{CovarianceForm, Dyn, Error, Filter, Model};
+use proptest::prelude::*;
+
+use super::common::{joint_noise, randn, rel, rho, rng, spd, with_radius};
+
+/// Runs the engine's filter (no data needed: P does not depend on z) until P_{k+1|k} settles.
+fn iterate_filter(F: &Mat<f64>, H: &Mat<f64>, Q: &Mat<f64>, R: &Mat<f64>, S: Option<&Mat<f64>>) -> (Mat<f64>, usize) {
+    let (n, m) = (F.nrows(), H.nrows());
+    let mut model = Model::new(Dyn::new(n, m, 0).expect("dims"), F, H, Q, R).expect("model");
+    if let Some(S) = S {
+        model = model.with_cross_covariance(S).expect("S");
+    }
+    let P0 = Mat::<f64>::identity(n, n);
+    let mut f = Filter::new(model, &vec![0.0; n], &P0, CovarianceForm::Joseph).expect("filter");
+    let z = vec![0.0; m];
+    let mut prev = P0;
+    for k in 0..20_000 {
+        f.step(&z, None).expect("step");
+        let P = f.predicted_covariance().to_owned();
+        if rel(&P, &prev) < 1e-14 {
+            return (P, k);
+        }
+        prev = P;
+    }
+    (prev, 20_000)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// Random detectable, stabilisable models (Q > 0, generic H, spectral radius up to 1.3,
+    /// with or without cross-covariance): the filter's P converges to the DARE prior, the
+    /// DARE residual is below 1e-10·‖P‖, and the gains match the converged filter.
+    #[test]
+    fn filter_converges_to_dare(seed in any::<u64>(), n in 1usize..=6, m in 1usize..=3, r in 0.2f64..1.3, cross in any::<bool>()) {
+        let mut g = rng(seed);
+        let F = with_radius(&mut g, n, r);
+        let H = randn(&mut g, m, n);
+        let (Q, R, S) = joint_noise(&mut g, n, m);
+        let S = cross.then_some(S);
+        let ss = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), S.as_ref().map(|s| s.as_ref()));
+        let ss = match ss {
+            Ok(ss) => ss,
+            // A random H can make a mode nearly unobservable; then the typed PBH error is the
+            // right answer and no NaN may appear.
+            Err(Error::NotDetectable { .. }) => return Ok(()),
+            Err(e) => return Err(TestCaseError::fail(format!("{e}"))),
+        };
+        let res = dare_residual(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), S.as_ref().map(|s| s.as_ref()), ss.prior.as_ref());
+        prop_assert!(res < 1e-10, "residual {res:e}");
+        prop_assert!(ss.relative_residual < 1e-10);
+        let (P, _) = iterate_filter(&F, &H, &Q, &R, S.as_ref());
+        // Tolerance: the iterated filter stops at a relative change of 1e-14; its distance to
+        // the fixed point is that times 1/(1 − ρ_cl), and ρ_cl can be ~0.999 here.
+        let d = rel(&P, &ss.prior);
+        prop_assert!(d < 1e-8, "filter vs DARE {d:e}");
+        // Closed loop of the predictor is stable.
+        let cl = &F - &ss.predictor_gain * &H;
+        prop_assert!(rho(&cl) < 1.0);
+    }
+
+    /// LQR: the returned X satisfies X = AᵀXA + Q − AᵀXB(R + BᵀXB)⁻¹BᵀXA (written out here
+    /// independently of the solver) and L = (R + BᵀXB)⁻¹BᵀXA stabilises A − BL.
+    #[test]
+    fn lqr_satisfies_its_riccati_equation(seed in any::<u64>(), n in 1usize..=6, p in 1usize..=3, r in 0.2f64..1.5) {
+        let mut g = rng(seed);
+        let A = with_radius(&mut g, n, r);
+        let B = randn(&mut g, n, p);
+        let Q = spd(&mut g, n, 0.1);
+        let R = spd(&mut g, p, 0.1);
+        let lqr = match dlqr(A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref(), None) {
+            Ok(l) => l,
+            Err(Error::NotStabilisable { .. }) => return Ok(()),
+            Err(e) => return Err(TestCaseError::fail(format!("{e}"))),
+        };
+        let X = &lqr.cost;
+        let Sig = &R + B.transpose() * X * &B;
+        let llt = Sig.llt(Side::Lower).expect("R + BᵀXB > 0");
+        let BtXA = B.transpose() * X * &A;
+        let rhs = A.transpose() * X * &A + &Q - BtXA.transpose() * llt.solve(&BtXA);
+        let res = rel(X, &rhs);
+        prop_assert!(res < 1e-10, "LQR residual {res:e}");
+        let L = llt.solve(&BtXA);
+        prop_assert!(rel(&lqr.gain, &L) < 1e-10);
+        prop_assert!(rho(&(&A - &B * &lqr.gain)) < 1.0);
+    }
+
+    /// An unstable mode that H cannot see is a typed `NotDetectable`, not a NaN.
+    #[test]
+    fn undetectable_is_typed(seed in any::<u64>(), n in 2usize..=6, m in 1usize..=3, lam in 1.05f64..2.0, neg in any::<bool>()) {
+        let mut g = rng(seed);
+        let lam = if neg { -lam } else { lam };
+        // D = [[F1, 0], [d, λ]]: e_n is an eigenvector with eigenvalue λ; H_D = [H1, 0] misses it.
+        let mut D = randn(&mut g, n, n) * 0.3;
+        for i in 0..n - 1 {
+            D[(i, n - 1)] = 0.0;
+        }
+        D[(n - 1, n - 1)] = lam;
+        let mut HD = randn(&mut g, m, n);
+        for i in 0..m {
+            HD[(i, n - 1)] = 0.0;
+        }
+        let T = Mat::<f64>::identity(n, n) + randn(&mut g, n, n) * 0.2;
+        let lu = T.partial_piv_lu();
+        // F = T D T⁻¹ and H = H_D T⁻¹ by solves: Tᵀ Fᵀ = (T D)ᵀ.
+        let F = lu.solve_transpose((&T * &D).transpose()).transpose().to_owned();
+        let H = lu.solve_transpose(HD.transpose()).transpose().to_owned();
+        let Q = spd(&mut g, n, 0.1);
+        let R = spd(&mut g, m, 0.1);
+        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None);
+        prop_assert!(matches!(e, Err(Error::NotDetectable { pair: "(F, H)", .. })), "{:?}", e.map(|s| s.prior));
+    }
+
+    /// An unstable mode the process noise cannot excite is a typed `NotStabilisable`.
+    #[test]
+    fn unstabilisable_is_typed(seed in any::<u64>(), n in 2usize..=6, m in 1usize..=3, lam in 1.05f64..2.0) {
+        let mut g = rng(seed);
+        // D = [[F1, d], [0, λ]]: e_nᵀ is a left eigenvector; Q_D = diag(Q1, 0) misses it.
+        let mut D = randn(&mut g, n, n) * 0.3;
+        for j in 0..n - 1 {
+            D[(n - 1, j)] = 0.0;
+        }
+        D[(n - 1, n - 1)] = lam;
+        let mut QD = Mat::<f64>::zeros(n, n);
+        let Q1 = spd(&mut g, n - 1, 0.1);
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                QD[(i, j)] = Q1[(i, j)];
+            }
+        }
+        let T = Mat::<f64>::identity(n, n) + randn(&mut g, n, n) * 0.2;
+        let lu = T.partial_piv_lu();
+        let F = lu.solve_transpose((&T * &D).transpose()).transpose().to_owned();
+        let Q = &T * &QD * T.transpose();
+        let H = randn(&mut g, m, n);
+        let R = spd(&mut g, m, 0.1);
+        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None);
+        prop_assert!(
+            matches!(e, Err(Error::NotStabilisable { .. }) | Err(Error::NotDetectable { .. })),
+            "{:?}", e.map(|s| s.prior)
+        );
+        // With a generic H the failing pair is the noise pair.
+        if let Err(Error::NotDetectable { .. }) = e {
+            prop_assert!(false, "random H should be detectable");
+        }
+    }
+}
+
+/// The UAV loop of SPEC U: discrete LQR with state weight diag(1, 0.1), input weight 1.
+#[test]
+fn uav_lqr() {
+    let dt = 0.25;
+    let A = mat![[1.0, dt], [0.0, 1.0]];
+    let B = mat![[dt * dt / 2.0], [dt]];
+    let Q = mat![[1.0, 0.0], [0.0, 0.1]];
+    let R = mat![[1.0]];
+    let lqr = dlqr(A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref(), None).expect("UAV LQR");
+    assert!(lqr.relative_residual < 1e-12);
+    let cl = &A - &B * &lqr.gain;
+    assert!(rho(&cl) < 1.0);
+    // The value iteration X_{k+1} = AᵀX_kA + Q − AᵀX_kB(R + BᵀX_kB)⁻¹BᵀX_kA from X_0 = Q
+    // reaches the same X (tolerance: 5000 iterations reach the fixed point to rounding).
+    let mut X = Q.clone();
+    for _ in 0..5000 {
+        let S = &R + B.transpose() * &X * &B;
+        let BtXA = B.transpose() * &X * &A;
+        let l = S.llt(Side::Lower).expect("pd");
+        X = A.transpose() * &X * &A + &Q - BtXA.transpose() * l.solve(&BtXA);
+    }
+    assert!(rel(&lqr.cost, &X) < 1e-10);
+    // Double integrator without damping: (A, B) stabilisable, but B = 0 is not.
+    let e = dlqr(A.as_ref(), Mat::<f64>::zeros(2, 1).as_ref(), Q.as_ref(), R.as_ref(), None).unwrap_err();
+    assert!(matches!(e, Error::NotStabilisable { pair: "(A, B)", .. }), "{e}");
+    // Q that does not see the position mode: (Q^{1/2}, A) not detectable.
+    let e = dlqr(A.as_ref(), B.as_ref(), mat![[0.0, 0.0], [0.0, 1.0]].as_ref(), R.as_ref(), None).unwrap_err();
+    assert!(matches!(e, Error::NotDetectable { pair: "(Q^{1/2}, A)", .. }), "{e}");
+}
