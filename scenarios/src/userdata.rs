@@ -62,8 +62,8 @@ pub struct FilterArgs {
     /// Covariance-update form.
     #[arg(long, value_enum, default_value_t = Form::Joseph)]
     pub form: Form,
-    /// Write RTS-smoothed estimates (this keeps the whole filter pass in memory: about
-    /// 2n(n+1) numbers per row) instead of streaming the filtered ones.
+    /// Write RTS-smoothed estimates instead of streaming the filtered ones (this keeps the
+    /// whole pass in memory: about 4n² + 3n numbers per row).
     #[arg(long)]
     pub smooth: bool,
     /// Write every covariance entry Pi_j instead of the diagonal.
@@ -322,18 +322,63 @@ fn copy_col_major(m: faer::MatRef<'_, f64>, out: &mut [f64]) {
     }
 }
 
-/// `filter --smooth`: runs the whole pass (stored), then the RTS smoother, then writes.
+/// `filter --smooth`: runs the whole forward pass, recording it in `kalman`'s RTS smoother
+/// (about 3n² + 2n numbers per row, plus n² + n per row for the smoothed output), then the
+/// backward pass, then writes. The `nis` column is the forward pass's.
 fn smooth<R: std::io::Read>(
     args: &FilterArgs,
     model: &DiscreteModel,
     kf: &mut kalman::Filter<kalman::Dyn>,
     reader: &mut DataReader<R>,
 ) -> Result<()> {
-    let _ = (model, kf, reader);
-    Err(Error::Compute(format!(
-        "{}: --smooth needs the RTS smoother of the kalman crate, which is not available yet",
-        args.model.display()
-    )))
+    let n = model.n();
+    let mut rts = kalman::smoother::RtsSmoother::new(n);
+    let mut times = Vec::new();
+    let mut nis = Vec::new();
+    let mut row = Row::default();
+    while reader.read_row(&mut row)? {
+        remove_feedthrough(&model.D, &mut row);
+        let info = step(kf, reader, &row)?;
+        rts.record(kf)
+            .map_err(|e| Error::Compute(format!("smoother: {e}")))?;
+        times.push(row.t);
+        nis.push(if info.observed > 0 {
+            info.nis
+        } else {
+            f64::NAN
+        });
+    }
+    let smoothed = if times.is_empty() {
+        None
+    } else {
+        Some(
+            rts.smooth()
+                .map_err(|e| Error::Compute(format!("smoother: {e}")))?,
+        )
+    };
+    drop(rts);
+    let out = args.out.as_path();
+    crate::output::write_with(out, |w| {
+        writeln!(w, "{}", data::estimates_header(n, args.full_covariance)).map_err(|source| {
+            Error::Write {
+                path: out.to_path_buf(),
+                source,
+            }
+        })?;
+        let Some(s) = &smoothed else {
+            return Ok(());
+        };
+        let mut x = vec![0.0; n];
+        let mut P = vec![0.0; n * n];
+        for (k, (&t, &nis)) in times.iter().zip(&nis).enumerate() {
+            for (i, xi) in x.iter_mut().enumerate() {
+                *xi = s.means[(i, k)];
+            }
+            copy_col_major(s.covariances[k].as_ref(), &mut P);
+            data::write_estimate(w, out, t, &x, &P, args.full_covariance, nis)?;
+        }
+        Ok(())
+    })
 }
 
 /// `scenarios discretize`: discretises a continuous model with `model::discretize` and
@@ -416,52 +461,92 @@ fn write_model(path: &Path, file: &DiscreteFile) -> Result<()> {
     }
 }
 
-/// A discrete model as JSON with one matrix row per line (readable, and diff-friendly).
-fn model_json(file: &DiscreteFile) -> String {
-    // Serialising plain numbers cannot fail (a non-finite one would become `null`, but
-    // every matrix here was checked or computed finite).
-    fn json<T: serde::Serialize + ?Sized>(v: &T) -> String {
-        serde_json::to_string(v).unwrap_or_default()
-    }
-    let mut fields = vec![format!("  \"dt\": {}", json(&file.dt))];
-    let matrices = [
-        ("F", Some(&file.F)),
-        ("B", file.B.as_ref()),
-        ("H", Some(&file.H)),
-        ("D", file.D.as_ref()),
-        ("Q", Some(&file.Q)),
-        ("R", file.R.as_ref()),
-        ("S", file.S.as_ref()),
-    ];
-    for (name, m) in matrices {
-        if let Some(m) = m {
-            let lines: Vec<String> = m.iter().map(|r| json(r.as_slice())).collect();
-            fields.push(format!(
-                "  \"{name}\": [\n    {}\n  ]",
-                lines.join(",\n    ")
-            ));
-        }
-    }
-    if let Some(x0) = &file.x0 {
-        fields.push(format!("  \"x0\": {}", json(x0)));
-    }
-    if let Some(p0) = &file.P0 {
-        let lines: Vec<String> = p0.iter().map(|r| json(r.as_slice())).collect();
-        fields.push(format!("  \"P0\": [\n    {}\n  ]", lines.join(",\n    ")));
-    }
-    format!("{{\n{}\n}}\n", fields.join(",\n"))
+/// A JSON object with the fields in the given order, one matrix row per line (readable
+/// and diff-friendly); `None` fields are left out.
+fn json_object(fields: &[(&str, Option<serde_json::Value>)]) -> String {
+    let body: Vec<String> = fields
+        .iter()
+        .filter_map(|(name, v)| v.as_ref().map(|v| (name, v)))
+        .map(|(name, v)| match v.as_array() {
+            Some(rows) if !rows.is_empty() && rows.iter().all(serde_json::Value::is_array) => {
+                let lines: Vec<String> = rows.iter().map(ToString::to_string).collect();
+                format!("  \"{name}\": [\n    {}\n  ]", lines.join(",\n    "))
+            }
+            _ => format!("  \"{name}\": {v}"),
+        })
+        .collect();
+    format!("{{\n{}\n}}\n", body.join(",\n"))
 }
 
-/// `scenarios steady-state`: the DARE solution of a discrete model.
+/// A discrete model file as JSON (fields in the documented order).
+fn model_json(f: &DiscreteFile) -> String {
+    use serde_json::json;
+    let opt = |m: &Option<model_file::Rows>| m.as_ref().map(|m| json!(m));
+    json_object(&[
+        ("dt", Some(json!(f.dt))),
+        ("F", Some(json!(f.F))),
+        ("B", opt(&f.B)),
+        ("H", Some(json!(f.H))),
+        ("D", opt(&f.D)),
+        ("Q", Some(json!(f.Q))),
+        ("R", opt(&f.R)),
+        ("S", opt(&f.S)),
+        ("x0", f.x0.as_ref().map(|x| json!(x))),
+        ("P0", opt(&f.P0)),
+    ])
+}
+
+fn faer_rows(m: faer::MatRef<'_, f64>) -> model_file::Rows {
+    (0..m.nrows())
+        .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+        .collect()
+}
+
+/// `scenarios steady-state`: the steady state of a discrete model's filter, from `kalman`'s
+/// DARE solver (structured doubling with PBH detectability / stabilisability checks).
+///
+/// Writes `{"P": prior covariance (the DARE solution), "P_post": posterior covariance,
+/// "K": gain P Hᵀ Σ⁻¹, "residual": ‖DARE residual‖_F / ‖P‖_F, "predictor_gain":
+/// (F P Hᵀ + S) Σ⁻¹, "innovation_covariance": Σ = H P Hᵀ + R, "iterations": doubling steps}`.
 ///
 /// # Errors
 /// [`Error::Invalid`] for a bad model, or one that has no steady state (not detectable, not
-/// stabilisable); [`Error::Write`].
+/// stabilisable, R not positive definite); [`Error::Compute`] if the solver does not converge
+/// or its residual check fails; [`Error::Write`].
 pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
-    let model = model_file::load_discrete(&args.model)?;
-    let _engine = engine_model(&args.model, &model)?;
-    Err(Error::Compute(format!(
-        "{}: steady-state needs the DARE solver of the kalman crate, which is not available yet",
-        args.model.display()
-    )))
+    let path = args.model.as_path();
+    let model = model_file::load_discrete(path)?;
+    // The engine's model checks symmetry and PSD of Q, R and the joint noise covariance.
+    engine_model(path, &model)?;
+    let (F, H, Q, R) = (
+        to_faer(&model.F),
+        to_faer(&model.H),
+        to_faer(&model.Q),
+        to_faer(&model.R),
+    );
+    let S = model.S.as_ref().map(to_faer);
+    let ss = kalman::riccati::dare(
+        F.as_ref(),
+        H.as_ref(),
+        Q.as_ref(),
+        R.as_ref(),
+        S.as_ref().map(Mat::as_ref),
+    )
+    .map_err(|e| match e {
+        kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
+            Error::Compute(format!("{}: steady state: {e}", path.display()))
+        }
+        e => model_error(path, e),
+    })?;
+    let m = |a: &Mat<f64>| Some(serde_json::json!(faer_rows(a.as_ref())));
+    let text = json_object(&[
+        ("P", m(&ss.prior)),
+        ("P_post", m(&ss.posterior)),
+        ("K", m(&ss.gain)),
+        ("residual", Some(serde_json::json!(ss.relative_residual))),
+        ("predictor_gain", m(&ss.predictor_gain)),
+        ("innovation_covariance", m(&ss.innovation_cov)),
+        ("iterations", Some(serde_json::json!(ss.iterations))),
+    ]);
+    crate::output::write_atomic(&args.out, text.as_bytes())
 }

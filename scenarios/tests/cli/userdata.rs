@@ -317,6 +317,220 @@ fn filter_streams_a_long_csv() {
     assert!(close(rows[19_999][2], post, 1e-12), "{}", rows[19_999][2]);
 }
 
+#[test]
+fn smooth_against_textbook_rts() {
+    // The 2-state model of `filter_two_state…` without S or D, with gaps and a control:
+    // the reference runs the filter above, then J_k = P_{k|k} Fᵀ P_{k+1|k}⁻¹,
+    // x_{k|N} = x_{k|k} + J_k (x_{k+1|N} − x_{k+1|k}), P_{k|N} = P_{k|k} + J_k (P_{k+1|N} − P_{k+1|k}) J_kᵀ.
+    let dir = scratch("smooth");
+    let F = DMatrix::from_row_slice(2, 2, &[1.0, 0.1, -0.2, 0.9]);
+    let B = DMatrix::from_row_slice(2, 1, &[0.0, 0.1]);
+    let H = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
+    let D = DMatrix::zeros(1, 1);
+    let Q = DMatrix::from_row_slice(2, 2, &[0.02, 0.005, 0.005, 0.04]);
+    let R = DMatrix::from_row_slice(1, 1, &[0.3]);
+    let S = DMatrix::zeros(2, 1);
+    let x0 = DVector::from_column_slice(&[0.5, -0.5]);
+    let P0 = DMatrix::from_row_slice(2, 2, &[2.0, 0.3, 0.3, 1.0]);
+    write(
+        &dir,
+        "m.json",
+        &format!(
+            "{{\"dt\": 0.1, \"F\": {}, \"B\": {}, \"H\": {}, \"Q\": {}, \"R\": {}, \"x0\": [0.5, -0.5], \"P0\": {}}}",
+            rows_json(&F),
+            rows_json(&B),
+            rows_json(&H),
+            rows_json(&Q),
+            rows_json(&R),
+            rows_json(&P0)
+        ),
+    );
+    let nan = f64::NAN;
+    let zs = [0.7, 0.9, nan, 1.2, nan, 1.1, 0.8];
+    let us = [1.0, 0.5, -1.0, 0.0, 2.0, 0.3, 0.0];
+    let data: Vec<(Vec<f64>, Vec<f64>)> = zs
+        .iter()
+        .zip(&us)
+        .map(|(z, u)| (vec![*z], vec![*u]))
+        .collect();
+    let mut csv = String::from("t,z1,u1\n");
+    for (k, (z, u)) in zs.iter().zip(&us).enumerate() {
+        let cell = if z.is_nan() {
+            "NaN".to_string()
+        } else {
+            format!("{z:?}")
+        };
+        csv.push_str(&format!("{k},{cell},{u:?}\n"));
+    }
+    write(&dir, "z.csv", &csv);
+    let filt = reference(&F, &B, &H, &D, &Q, &R, &S, &x0, &P0, &data);
+    let N = filt.len();
+    let mut xs = vec![filt[N - 1].x.clone()];
+    let mut Ps = vec![filt[N - 1].P.clone()];
+    for k in (0..N - 1).rev() {
+        let (xf, Pf) = (&filt[k].x, &filt[k].P);
+        let u = DVector::from_column_slice(&data[k].1);
+        let xp = &F * xf + &B * &u;
+        let Pp = &F * Pf * F.transpose() + &Q;
+        let J = Pf * F.transpose() * Pp.clone().try_inverse().expect("invertible P_{k+1|k}");
+        let (xn, Pn) = (&xs[0], &Ps[0]);
+        let x = xf + &J * (xn - xp);
+        let P = Pf + &J * (Pn - Pp) * J.transpose();
+        xs.insert(0, x);
+        Ps.insert(0, P);
+    }
+    for form in ["joseph", "sqrt"] {
+        ok(
+            &dir,
+            &[
+                "filter",
+                "--model",
+                "m.json",
+                "--data",
+                "z.csv",
+                "--out",
+                "s.csv",
+                "--smooth",
+                "--full-covariance",
+                "--form",
+                form,
+            ],
+        );
+        let (header, rows) = read_csv(&dir.join("s.csv"));
+        assert_eq!(header, "t,x1,x2,P1_1,P1_2,P2_1,P2_2,nis");
+        assert_eq!(rows.len(), N);
+        for k in 0..N {
+            let r = &rows[k];
+            let want = [
+                xs[k][0],
+                xs[k][1],
+                Ps[k][(0, 0)],
+                Ps[k][(0, 1)],
+                Ps[k][(1, 0)],
+                Ps[k][(1, 1)],
+                filt[k].nis,
+            ];
+            // Seven steps forward and back on a well-conditioned 2-state model: round-off
+            // ~1e-15; 1e-10 relative as in the filter test.
+            for (a, b) in r[1..].iter().zip(&want) {
+                assert!(close(*a, *b, 1e-10), "{form} row {k}: {r:?} vs {want:?}");
+            }
+        }
+    }
+    // Smoothing never increases the variance, and the last row is the filtered one.
+    ok(
+        &dir,
+        &[
+            "filter", "--model", "m.json", "--data", "z.csv", "--out", "f.csv",
+        ],
+    );
+    ok(
+        &dir,
+        &[
+            "filter", "--model", "m.json", "--data", "z.csv", "--out", "s.csv", "--smooth",
+        ],
+    );
+    let (_, f) = read_csv(&dir.join("f.csv"));
+    let (_, s) = read_csv(&dir.join("s.csv"));
+    for (a, b) in f.iter().zip(&s) {
+        assert!(b[3] <= a[3] * (1.0 + 1e-12) && b[4] <= a[4] * (1.0 + 1e-12));
+    }
+    assert!(close(f[N - 1][1], s[N - 1][1], 1e-12));
+}
+
+#[test]
+fn steady_state_against_iterated_riccati() {
+    let dir = scratch("steady");
+    // Scalar random walk, q = r = 1: P = (1 + √5)/2, K = P/(P + 1), P_post = P/(P + 1).
+    write(
+        &dir,
+        "rw.toml",
+        "dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\n",
+    );
+    ok(
+        &dir,
+        &["steady-state", "--model", "rw.toml", "--out", "ss.json"],
+    );
+    let ss = read_json(&dir.join("ss.json"));
+    let p = (1.0 + 5f64.sqrt()) / 2.0;
+    // A converged doubling solution agrees with the closed form to round-off: 1e-12.
+    assert!(close(mat(&ss["P"])[0][0], p, 1e-12), "{ss}");
+    assert!(close(mat(&ss["K"])[0][0], p / (p + 1.0), 1e-12));
+    assert!(close(mat(&ss["P_post"])[0][0], p / (p + 1.0), 1e-12));
+    assert!(ss["residual"].as_f64().expect("residual") < 1e-12);
+    // A 2-state model with cross-covariance: iterate the correlated-noise Riccati recursion
+    // P ← F P Fᵀ + Q − (F P Hᵀ + S)(H P Hᵀ + R)⁻¹(…)ᵀ here until it stops moving.
+    let F = DMatrix::from_row_slice(2, 2, &[0.95, 0.1, -0.1, 0.9]);
+    let H = DMatrix::from_row_slice(1, 2, &[1.0, 0.5]);
+    let Q = DMatrix::from_row_slice(2, 2, &[0.1, 0.02, 0.02, 0.05]);
+    let R = DMatrix::from_row_slice(1, 1, &[0.2]);
+    let S = DMatrix::from_row_slice(2, 1, &[0.03, -0.01]);
+    write(
+        &dir,
+        "m.json",
+        &format!(
+            "{{\"dt\": 0.5, \"F\": {}, \"H\": {}, \"Q\": {}, \"R\": {}, \"S\": {}}}",
+            rows_json(&F),
+            rows_json(&H),
+            rows_json(&Q),
+            rows_json(&R),
+            rows_json(&S)
+        ),
+    );
+    let mut P = DMatrix::<f64>::identity(2, 2);
+    for _ in 0..5000 {
+        let sig = &H * &P * H.transpose() + &R;
+        let M = &F * &P * H.transpose() + &S;
+        P = &F * &P * F.transpose() + &Q - &M * sig.try_inverse().expect("Σ") * M.transpose();
+    }
+    let sig = &H * &P * H.transpose() + &R;
+    let K = &P * H.transpose() * sig.clone().try_inverse().expect("Σ");
+    let Ppost = &P - &K * &sig * K.transpose();
+    ok(
+        &dir,
+        &["steady-state", "--model", "m.json", "--out", "ss.json"],
+    );
+    let ss = read_json(&dir.join("ss.json"));
+    let (gp, gk, gpp) = (mat(&ss["P"]), mat(&ss["K"]), mat(&ss["P_post"]));
+    // The iteration contracts geometrically (closed-loop radius < 0.95): after 5000 steps
+    // it is at its round-off floor; 1e-10 relative.
+    for i in 0..2 {
+        assert!(close(gk[i][0], K[(i, 0)], 1e-10), "K {gk:?} vs {K}");
+        for j in 0..2 {
+            assert!(close(gp[i][j], P[(i, j)], 1e-10), "P {gp:?} vs {P}");
+            assert!(
+                close(gpp[i][j], Ppost[(i, j)], 1e-10),
+                "P_post {gpp:?} vs {Ppost}"
+            );
+        }
+    }
+    // Not detectable: an unstable mode H does not see.
+    write(
+        &dir,
+        "nd.json",
+        r#"{"dt": 1, "F": [[2, 0], [0, 0.5]], "H": [[0, 1]], "Q": [[1, 0], [0, 1]], "R": [[1]]}"#,
+    );
+    std::fs::remove_file(dir.join("ss.json")).expect("remove");
+    fails(
+        &dir,
+        &["steady-state", "--model", "nd.json", "--out", "ss.json"],
+        &["nd.json", "(F, H) is not detectable"],
+        3,
+    );
+    // The model rules apply to steady-state too.
+    write(
+        &dir,
+        "nd.json",
+        r#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[-1]], "R": [[1]]}"#,
+    );
+    fails(
+        &dir,
+        &["steady-state", "--model", "nd.json", "--out", "ss.json"],
+        &["nd.json", "Q (1x1) is not positive semidefinite"],
+        3,
+    );
+}
+
 /// Reads a JSON file written by the program.
 fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("JSON")
@@ -652,8 +866,7 @@ fn model_errors_name_matrix_and_rule() {
             "discretize",
             "--model",
             "c.json",
-            "--dt",
-            "-1",
+            "--dt=-1",
             "--method",
             "zoh",
             "--out",
