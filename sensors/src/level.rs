@@ -69,6 +69,8 @@ pub struct LevelReading {
 pub struct LevelSensor {
     radius: f64,
     phi: f64,
+    /// (sin φ, cos φ), precomputed.
+    sin_cos_phi: (f64, f64),
     noise_std: f64,
     step: f64,
     damper: FirstOrderLag,
@@ -90,9 +92,11 @@ impl LevelSensor {
         } else {
             0.0
         };
+        let phi = finite("sensor_angle_deg", config.sensor_angle_deg)?.to_radians();
         Ok(Self {
             radius: non_negative("sensor_radius_m", config.sensor_radius_m)?,
-            phi: finite("sensor_angle_deg", config.sensor_angle_deg)?.to_radians(),
+            phi,
+            sin_cos_phi: phi.sin_cos(),
             noise_std: non_negative("noise_std_m", config.noise_std_m)?,
             step,
             damper: FirstOrderLag::new(
@@ -119,7 +123,8 @@ impl LevelSensor {
     /// Level at the sensor for tank level `level_m` and platform `attitude`: h + R·tan α, m.
     #[inline]
     pub fn level_at_sensor(&self, level_m: f64, attitude: Attitude) -> f64 {
-        level_m + self.radius * attitude.tilt_toward(self.phi).tan()
+        let (s, c) = self.sin_cos_phi;
+        level_m + self.radius * (attitude.pitch * c + attitude.roll * s).tan()
     }
     /// Advances one step with the true tank level `level_m` (on the axis) and the platform
     /// attitude at this sample.
