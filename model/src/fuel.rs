@@ -31,30 +31,30 @@ pub const OUTPUT_NAMES: [&str; 5] = [
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FuelParams {
-    /// Sampling interval Δt [s].
+    /// Sampling interval Δt (s).
     pub dt: f64,
-    /// Correlation time T_a of the fill-velocity fluctuation [s].
+    /// Correlation time T_a of the fill-velocity fluctuation (s).
     pub t_a: f64,
-    /// Variance D_c of the fill-velocity fluctuation [(m/s)²].
+    /// Variance D_c of the fill-velocity fluctuation ((m/s)²).
     pub d_c: f64,
-    /// Mean fill rate V_c [m/s].
+    /// Mean fill rate V_c (m/s).
     pub v_c: f64,
-    /// Quantization step δ of the level sensor [m].
+    /// Quantization step δ of the level sensor (m).
     pub delta: f64,
-    /// Time constant T_y of the hydro-damper [s].
+    /// Time constant T_y of the hydro-damper (s).
     pub t_y: f64,
-    /// Distance R of the sensor from the tank axis [m] (the paper's R).
+    /// Distance R of the sensor from the tank axis (m) (the paper's R).
     pub sensor_radius: f64,
-    /// Angle φ between the direction to the stern and to the sensor [rad].
+    /// Angle φ between the direction to the stern and to the sensor (rad).
     pub phi: f64,
-    /// Dominant rolling period 2π/β [s].
+    /// Dominant rolling period 2π/β (s).
     pub rolling_period: f64,
-    /// Irregularity μ of rolling [1/s].
+    /// Irregularity μ of rolling (1/s).
     pub mu: f64,
-    /// Maximum tilt amplitude A_max [rad]; σ_α = A_max/3 for each of ψ and θ. 0 is allowed
+    /// Maximum tilt amplitude A_max (rad); σ_α = A_max/3 for each of ψ and θ. 0 is allowed
     /// (no rolling: a zero entry of Q).
     pub max_tilt_amplitude: f64,
-    /// Variance of the gyro's tilt reading [rad²]; adds `R²·gyro_noise_var` to R₁₁.
+    /// Variance of the gyro's tilt reading (rad²); adds `R²·gyro_noise_var` to R₁₁.
     /// 0 is the paper (noise-free tilt channel, singular R).
     pub gyro_noise_var: f64,
 }
@@ -174,9 +174,12 @@ pub struct FuelModel {
     pub process_covariance: DMatrix<f64>,
     /// Known input added to the state every step for the mean fill rate V_c. Paper and exact
     /// Tustin: `[0, V_c, 0, 0, 0, 0, 0]` (x2 += V_c ⇒ level y2 = Δt·x2 + … rises by V_c·Δt);
-    /// the integrator's half-step feed-through of the constant rate (Δt/2·V_c in y2 and
-    /// downstream) is the same as starting x2 higher by V_c/2, so it needs no separate term.
-    /// ZOH: the exact held-input response to V_c (level += V_c·Δt, plus the damper's share).
+    /// the Tustin integrator's half-step feed-through of the constant rate (Δt/2·V_c into the
+    /// level and downstream, including the damper state) is exactly the same as starting x2
+    /// higher by V_c/2, so it needs no separate term: with this vector there is no output
+    /// offset. ZOH: the exact held-input response to V_c (x2 is the level itself, so
+    /// level += V_c·Δt, plus the damper's share). Serialised as a plain list.
+    #[serde(with = "vector_as_list")]
     pub known_input: DVector<f64>,
 }
 
@@ -203,11 +206,11 @@ impl FuelParams {
         Ok(())
     }
 
-    /// Dominant rolling frequency β = 2π / rolling period [rad/s].
+    /// Dominant rolling frequency β = 2π / rolling period (rad/s).
     pub fn beta(&self) -> f64 {
         2.0 * PI / self.rolling_period
     }
-    /// σ_α = A_max/3 [rad].
+    /// σ_α = A_max/3 (rad).
     pub fn sigma_alpha(&self) -> f64 {
         self.max_tilt_amplitude / 3.0
     }
@@ -216,15 +219,15 @@ impl FuelParams {
     pub fn d_alpha(&self) -> f64 {
         self.sigma_alpha().powi(2)
     }
-    /// Mean time to pass one quantization step T_c = δ/V_c [s].
+    /// Mean time to pass one quantization step T_c = δ/V_c (s).
     pub fn t_c(&self) -> f64 {
         self.delta / self.v_c
     }
-    /// Quantization frequency γ_q = 2π/T_c [rad/s].
+    /// Quantization frequency γ_q = 2π/T_c (rad/s).
     pub fn gamma_q(&self) -> f64 {
         2.0 * PI / self.t_c()
     }
-    /// ξ = 1/T_a [1/s].
+    /// ξ = 1/T_a (1/s).
     pub fn xi(&self) -> f64 {
         1.0 / self.t_a
     }
@@ -349,9 +352,20 @@ impl FuelParams {
                 (phi, gamma, sys.c().clone(), sys.d().clone())
             }
         };
-        // Column 3 of the wiring is the known mean fill rate, entering at the integrator.
         let b = bfull.columns(0, 3).into_owned();
-        let known_input = bfull.column(3) * self.v_c;
+        // Column 3 of the wiring is the known mean fill rate, entering at the integrator.
+        // Through a Tustin integrator that column is e2 plus the half-step feed-through
+        // Δt/2 into the damper (and Δt/2·V_c into the outputs); that constant part is the
+        // same as starting x2 higher by V_c/2, so SPEC F's form `x2 += V_c` is exact up to
+        // the initial state and is what we use.
+        let known_input = match realisation {
+            Realisation::Zoh => bfull.column(3) * self.v_c,
+            _ => {
+                let mut v = DVector::zeros(7);
+                v[1] = self.v_c;
+                v
+            }
+        };
         let g = hfull.rows(0, 5).into_owned();
         let g_feedthrough = dfull.view((0, 0), (5, 3)).into_owned();
         let (c, d) = match channels {
@@ -454,5 +468,20 @@ impl FuelModel {
             self.params.dt,
         )?
         .with_noise(self.b.clone(), self.d.clone(), self.q.clone())
+    }
+}
+
+/// Serde for a `DVector` as a plain list of numbers (nalgebra's own format writes the
+/// static column count as a unit value, which TOML cannot hold).
+mod vector_as_list {
+    use nalgebra::DVector;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub(super) fn serialize<S: Serializer>(v: &DVector<f64>, s: S) -> Result<S::Ok, S::Error> {
+        v.as_slice().serialize(s)
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<DVector<f64>, D::Error> {
+        Ok(DVector::from_vec(Vec::<f64>::deserialize(d)?))
     }
 }

@@ -23,7 +23,7 @@
 //!
 //! # Discretisation methods
 //!
-//! [`discretize`] maps a [`ContinuousSs`] with a [`Method`] and a [`NoiseConvention`]:
+//! [`discretize()`](fn@discretize) maps a [`ContinuousSs`] with a [`Method`] and a [`NoiseConvention`]:
 //!
 //! | method | map | use it when |
 //! |---|---|---|
