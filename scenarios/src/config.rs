@@ -27,7 +27,18 @@ pub fn parse_toml<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
             .span()
             .map(|span| {
                 let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
-                format!("line {line}: ")
+                // Name the key of a `key = value` line too (a wrong-type value's message
+                // from the parser does not).
+                let key = text
+                    .lines()
+                    .nth(line - 1)
+                    .and_then(|l| l.split_once('='))
+                    .map(|(k, _)| k.trim())
+                    .filter(|k| !k.is_empty() && !k.starts_with('['));
+                match key {
+                    Some(k) => format!("line {line}, key `{k}`: "),
+                    None => format!("line {line}: "),
+                }
             })
             .unwrap_or_default();
         Error::invalid(path, format!("{at}{message}"))

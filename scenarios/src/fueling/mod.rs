@@ -100,6 +100,9 @@ pub struct FuelingParams {
     pub fill_rates_mm_s: Vec<f64>,
     /// Damper time-constant sweep, s.
     pub damper_times_s: Vec<f64>,
+    /// Quantization-step sweep, mm (explains the gap to the paper: the two-channel gain over
+    /// relay logic grows as δ shrinks against the tilt swing).
+    pub steps_mm: Vec<f64>,
     /// Amplitudes of the invariance table, degrees.
     pub invariance_amplitudes_deg: Vec<f64>,
     /// Periods of the invariance table, s.
@@ -132,6 +135,7 @@ impl Default for FuelingParams {
             periods_s: vec![6.0, 8.0, 10.0, 12.0, 14.0],
             fill_rates_mm_s: vec![5.0, 10.0, 15.0, 20.0],
             damper_times_s: vec![0.5, 1.0, 2.0, 4.0],
+            steps_mm: vec![1.0, 2.5, 5.0, 10.0, 20.0],
             invariance_amplitudes_deg: vec![0.25, 0.5, 0.75, 1.0],
             invariance_periods_s: vec![6.0, 10.0, 14.0],
         }
@@ -205,11 +209,12 @@ impl FuelingParams {
                 self.warmup_s.to_string(),
             );
         }
-        let lists: [(&str, &[f64], bool); 6] = [
+        let lists: [(&str, &[f64], bool); 7] = [
             ("amplitudes_deg", &self.amplitudes_deg, true),
             ("periods_s", &self.periods_s, false),
             ("fill_rates_mm_s", &self.fill_rates_mm_s, false),
             ("damper_times_s", &self.damper_times_s, false),
+            ("steps_mm", &self.steps_mm, false),
             (
                 "invariance_amplitudes_deg",
                 &self.invariance_amplitudes_deg,
@@ -241,7 +246,7 @@ impl FuelingParams {
             );
         }
         // Let the model check the combination (e.g. an overflowing discretisation).
-        let world = self.world(self.max_amplitude_deg, None, None, None);
+        let world = self.world(self.max_amplitude_deg, Swept::Nothing);
         world
             .fuel
             .build(model::Channels::LevelAndTilt, world.realisation)
@@ -254,21 +259,23 @@ impl FuelingParams {
         Ok(())
     }
 
-    /// The world at amplitude `amplitude_deg`, with optional period, fill rate and damper
-    /// time overriding the base values.
-    pub fn world(
-        &self,
-        amplitude_deg: f64,
-        period_s: Option<f64>,
-        fill_rate_mm_s: Option<f64>,
-        damper_time_s: Option<f64>,
-    ) -> World {
+    /// The world at amplitude `amplitude_deg`, with one swept value overriding its base.
+    pub fn world(&self, amplitude_deg: f64, swept: Swept) -> World {
+        let (mut period_s, mut fill_rate_mm_s, mut damper_time_s, mut step_mm) =
+            (None, None, None, None);
+        match swept {
+            Swept::Nothing => {}
+            Swept::Period(x) => period_s = Some(x),
+            Swept::FillRate(x) => fill_rate_mm_s = Some(x),
+            Swept::Damper(x) => damper_time_s = Some(x),
+            Swept::Step(x) => step_mm = Some(x),
+        }
         let fuel = model::FuelParams {
             dt: self.dt_s,
             t_a: self.velocity_time_s,
             d_c: (self.velocity_std_mm_s * 1e-3).powi(2),
             v_c: fill_rate_mm_s.unwrap_or(self.fill_rate_mm_s) * 1e-3,
-            delta: self.step_mm * 1e-3,
+            delta: step_mm.unwrap_or(self.step_mm) * 1e-3,
             t_y: damper_time_s.unwrap_or(self.damper_time_s),
             sensor_radius: self.sensor_radius_m,
             phi: self.sensor_angle_deg.to_radians(),
@@ -301,7 +308,7 @@ impl FuelingParams {
         let mut invariance = Vec::new();
         for &amp in &self.invariance_amplitudes_deg {
             for &period in &self.invariance_periods_s {
-                invariance.push((vec![amp, period], self.world(amp, Some(period), None, None)));
+                invariance.push((vec![amp, period], self.world(amp, Swept::Period(period))));
             }
         }
         vec![
@@ -311,7 +318,7 @@ impl FuelingParams {
                 "maximum tilt amplitude A_max [°]",
                 self.runs_per_point,
                 &self.amplitudes_deg,
-                &|x| self.world(x, None, None, None),
+                &|x| self.world(x, Swept::Nothing),
             ),
             one(
                 "period",
@@ -319,7 +326,7 @@ impl FuelingParams {
                 "dominant rolling period 2π/β [s]",
                 self.sweep_runs_per_point,
                 &self.periods_s,
-                &|x| self.world(a, Some(x), None, None),
+                &|x| self.world(a, Swept::Period(x)),
             ),
             one(
                 "fill_rate",
@@ -327,7 +334,7 @@ impl FuelingParams {
                 "mean fill rate V_c [mm/s]",
                 self.sweep_runs_per_point,
                 &self.fill_rates_mm_s,
-                &|x| self.world(a, None, Some(x), None),
+                &|x| self.world(a, Swept::FillRate(x)),
             ),
             one(
                 "damper",
@@ -335,7 +342,15 @@ impl FuelingParams {
                 "hydro-damper time constant T_y [s]",
                 self.sweep_runs_per_point,
                 &self.damper_times_s,
-                &|x| self.world(a, None, None, Some(x)),
+                &|x| self.world(a, Swept::Damper(x)),
+            ),
+            one(
+                "step",
+                "step_mm",
+                "quantization step δ [mm]",
+                self.sweep_runs_per_point,
+                &self.steps_mm,
+                &|x| self.world(a, Swept::Step(x)),
             ),
             Sweep {
                 id: "invariance",
@@ -346,6 +361,21 @@ impl FuelingParams {
             },
         ]
     }
+}
+
+/// Which parameter a sweep point moves away from its base value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Swept {
+    /// None (the amplitude sweep moves only the amplitude).
+    Nothing,
+    /// Rolling period, s.
+    Period(f64),
+    /// Fill rate, mm/s.
+    FillRate(f64),
+    /// Damper time constant, s.
+    Damper(f64),
+    /// Quantization step, mm.
+    Step(f64),
 }
 
 /// One sweep: its points (coordinates and world) and runs per point.

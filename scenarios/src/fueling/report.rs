@@ -150,6 +150,8 @@ pub struct Summary {
     pub fill_rate_sweep: Vec<Entry>,
     /// Damper time-constant sweep.
     pub damper_sweep: Vec<Entry>,
+    /// Quantization-step sweep.
+    pub step_sweep: Vec<Entry>,
     /// Amplitude × period.
     pub invariance: Invariance,
     /// Runs in which a strategy never stopped within the simulated time (excluded from its
@@ -262,7 +264,7 @@ pub fn summarise(results: &Results) -> Result<Summary> {
         paper_kf2: PAPER_KF2_RATIO,
     };
     let p = &results.params;
-    let inv = &all[4];
+    let inv = &all[5];
     let np = p.invariance_periods_s.len();
     let std_mm = PerStrategy::from_fn(|i| {
         inv.chunks(np)
@@ -290,6 +292,7 @@ pub fn summarise(results: &Results) -> Result<Summary> {
     let period_sweep = next();
     let fill_rate_sweep = next();
     let damper_sweep = next();
+    let step_sweep = next();
     Ok(Summary {
         scenario: "fueling",
         runs_per_point: p.runs_per_point,
@@ -303,6 +306,7 @@ pub fn summarise(results: &Results) -> Result<Summary> {
         period_sweep,
         fill_rate_sweep,
         damper_sweep,
+        step_sweep,
         invariance: Invariance {
             amplitudes_deg: p.invariance_amplitudes_deg.clone(),
             periods_s: p.invariance_periods_s.clone(),
@@ -354,6 +358,7 @@ pub fn write_all(results: &Results, dir: &Path) -> Result<()> {
         ("period", &summary.period_sweep),
         ("fill_rate", &summary.fill_rate_sweep),
         ("damper", &summary.damper_sweep),
+        ("step", &summary.step_sweep),
     ];
     for (id, entries) in sweeps {
         write_entries_csv(&dir.join(format!("{id}_sweep.csv")), entries)?;
@@ -381,7 +386,7 @@ pub fn write_all(results: &Results, dir: &Path) -> Result<()> {
 
 fn entries_of_invariance(results: &Results, _summary: &Summary) -> Vec<Entry> {
     let sweeps = results.params.sweeps();
-    entries(&sweeps[4], &results.sweeps[4])
+    entries(&sweeps[5], &results.sweeps[5])
 }
 
 fn write_entries_csv(path: &Path, entries: &[Entry]) -> Result<()> {
@@ -475,6 +480,12 @@ fn write_plots(summary: &Summary, dir: &Path) -> Result<()> {
             "damper_time_s",
             "hydro-damper time constant T_y [s]",
             &summary.damper_sweep,
+        ),
+        (
+            "step",
+            "step_mm",
+            "quantization step δ [mm]",
+            &summary.step_sweep,
         ),
     ];
     for (id, key, x_label, entries) in sweeps {
@@ -770,6 +781,13 @@ pub fn report_md(sm: &Summary) -> String {
             "T_y [s]",
             &sm.damper_sweep,
             "damper_std.svg",
+        ),
+        (
+            "quantization step",
+            "step_mm",
+            "δ [mm]",
+            &sm.step_sweep,
+            "step_std.svg",
         ),
     ] {
         let _ = writeln!(
