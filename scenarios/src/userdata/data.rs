@@ -275,7 +275,8 @@ pub fn estimates_header(n: usize, full: bool) -> String {
 }
 
 /// Writes one estimates row: `t`, `x`, the diagonal (or all, row by row) of the n×n
-/// column-major `p`, and `nis` (NaN when no measurement was available).
+/// column-major `p`, and `nis` (NaN when no measurement was available). Numbers use the
+/// shortest representation that reads back to the same `f64` (`zmij`, as serde_json).
 ///
 /// # Errors
 /// [`Error::Write`] naming `path` on an I/O error.
@@ -289,21 +290,27 @@ pub fn write_estimate(
     nis: f64,
 ) -> Result<()> {
     let n = x.len();
+    let mut buf = zmij::Buffer::new();
     let mut go = || -> std::io::Result<()> {
-        write!(out, "{t}")?;
-        for v in x {
-            write!(out, ",{v}")?;
+        out.write_all(buf.format(t).as_bytes())?;
+        let mut put = |v: f64| -> std::io::Result<()> {
+            out.write_all(b",")?;
+            out.write_all(buf.format(v).as_bytes())
+        };
+        for &v in x {
+            put(v)?;
         }
         for i in 0..n {
             if full {
                 for j in 0..n {
-                    write!(out, ",{}", p[i + j * n])?;
+                    put(p[i + j * n])?;
                 }
             } else {
-                write!(out, ",{}", p[i + i * n])?;
+                put(p[i + i * n])?;
             }
         }
-        writeln!(out, ",{nis}")
+        put(nis)?;
+        out.write_all(b"\n")
     };
     go().map_err(|source| Error::Write {
         path: path.to_path_buf(),
@@ -383,6 +390,9 @@ mod tests {
             f64::NAN,
         )
         .expect("write");
-        assert_eq!(String::from_utf8_lossy(&out), "0.5,1,-2,1,2,3,4,NaN\n");
+        assert_eq!(
+            String::from_utf8_lossy(&out),
+            "0.5,1.0,-2.0,1.0,2.0,3.0,4.0,NaN\n"
+        );
     }
 }
