@@ -568,15 +568,12 @@ pub fn sensitivity(
     let Q = qr.q();
     let Q1t = Q.rows(0, sys.m).transpose();
     let M = sys.W.right_apply(&Q1t);
-    R.solve_upper_triangular(&M)
-        .ok_or(Error::Singular {
-            name: "R (QR factor)",
-            detail: "zero on the diagonal",
-        })
-        .map(|S| {
-            debug_assert_eq!(S.nrows(), n);
-            S
-        })
+    let S = R.solve_upper_triangular(&M).ok_or(Error::Singular {
+        name: "R (QR factor)",
+        detail: "zero on the diagonal",
+    })?;
+    debug_assert_eq!(S.nrows(), n);
+    Ok(S)
 }
 
 /// Worst-case error of each unknown when every measurement error is bounded, |δzᵢ| ≤ Δᵢ:

@@ -49,7 +49,6 @@ impl ErrorVariant {
 
 /// The ideal accelerometer of eq. (1) with the offset angle γ, plus the variant's bias:
 /// a_x = g·sin(α − γ), a_y = g·cos(α − γ) + ε·r, a_z = 0 (no centripetal term, as the paper).
-#[must_use]
 pub fn ideal_accelerometer(
     g: f64,
     sensor_radius: f64,

@@ -342,8 +342,10 @@ mod tests {
             p.trajectory(),
             Err(Error::InvalidParameter { .. })
         ));
-        let mut p = RotationProfile::default();
-        p.dt = f64::NAN;
+        let p = RotationProfile {
+            dt: f64::NAN,
+            ..RotationProfile::default()
+        };
         assert!(matches!(
             p.trajectory(),
             Err(Error::InvalidParameter { .. })
