@@ -531,6 +531,80 @@ fn steady_state_against_iterated_riccati() {
     );
 }
 
+/// Peak resident memory (VmHWM, kB) of the program on `args`, sampled from /proc while it
+/// runs (the high-water mark only grows, so the last sample is the peak up to then).
+#[cfg(target_os = "linux")]
+fn peak_rss_kb(dir: &Path, args: &[&str]) -> u64 {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_scenarios"))
+        .current_dir(dir)
+        .args(args)
+        .spawn()
+        .expect("spawn scenarios");
+    let status = format!("/proc/{}/status", child.id());
+    let mut peak = 0;
+    loop {
+        if let Ok(text) = std::fs::read_to_string(&status)
+            && let Some(kb) = text
+                .lines()
+                .find_map(|l| l.strip_prefix("VmHWM:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        {
+            peak = peak.max(kb);
+        }
+        if child.try_wait().expect("wait").is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    assert!(child.wait().expect("wait").success(), "{args:?} failed");
+    peak
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn filter_memory_does_not_grow_with_the_csv() {
+    // 100 000 rows: streaming keeps the peak at the program's own few MB; `--smooth`, which
+    // must keep the pass (≥ 100 bytes a row for n = 2), shows what growth looks like — so
+    // the first assertion is known to be able to fail.
+    let dir = scratch("memory");
+    write(
+        &dir,
+        "m.json",
+        r#"{"dt": 1, "F": [[1, 1], [0, 1]], "H": [[1, 0]], "Q": [[0.01, 0], [0, 0.01]], "R": [[1]], "P0": [[1, 0], [0, 1]]}"#,
+    );
+    let rows = |n: usize| {
+        let mut csv = String::with_capacity(n * 16);
+        csv.push_str("t,z1\n");
+        for k in 0..n {
+            csv.push_str(&format!("{k},{}\n", k % 13));
+        }
+        csv
+    };
+    write(&dir, "small.csv", &rows(3_000));
+    write(&dir, "big.csv", &rows(100_000));
+    let args = |data: &'static str, smooth: bool| {
+        let mut a = vec![
+            "filter", "--model", "m.json", "--data", data, "--out", "est.csv",
+        ];
+        if smooth {
+            a.push("--smooth");
+        }
+        a
+    };
+    let small = peak_rss_kb(&dir, &args("small.csv", false));
+    let big = peak_rss_kb(&dir, &args("big.csv", false));
+    let smooth = peak_rss_kb(&dir, &args("big.csv", true));
+    // Allocator noise is well under 4 MB; the smoother keeps ≥ 30 MB here.
+    assert!(
+        big <= small + 4_096,
+        "streaming peak grew: {small} kB → {big} kB"
+    );
+    assert!(
+        smooth >= big + 20_000,
+        "smoothing should store the pass: {big} kB vs {smooth} kB"
+    );
+}
+
 /// Reads a JSON file written by the program.
 fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("JSON")
