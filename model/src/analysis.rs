@@ -369,3 +369,26 @@ impl DiscreteSs {
         ))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_and_trivial_cases() {
+        assert!(eigenvalues(&DMatrix::zeros(0, 0)).expect("ok").is_empty());
+        assert!(spectral_radius(&DMatrix::zeros(0, 0)).expect("ok").abs() < 1e-300);
+        let f = DMatrix::from_element(1, 1, 0.5);
+        assert!(markov_parameters(&f, &f, &f, &f, 0).is_empty());
+        let h = markov_parameters(&f, &f, &f, &f, 3);
+        assert!((h[2][(0, 0)] - 0.125).abs() < 1e-15);
+        assert_eq!(rank(&DMatrix::zeros(0, 3), None).expect("ok"), 0);
+    }
+
+    #[test]
+    fn psd_factor_of_singular_matrix() {
+        let q = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
+        let l = psd_factor(&q).expect("PSD");
+        assert!((&l * l.transpose() - &q).amax() < 1e-14);
+    }
+}

@@ -362,3 +362,37 @@ pub fn feedback(s1: &DiscreteSs, s2: &DiscreteSs, sign: f64) -> Result<DiscreteS
     let p = sel(m1, m1 + l1, 0, 0, m1);
     connect(&[s1, s2], &k, &e, &p, &DMatrix::zeros(m1, l1))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn block_diag_places_blocks() {
+        let a = DMatrix::from_element(1, 2, 1.0);
+        let b = DMatrix::from_element(2, 1, 2.0);
+        let e = DMatrix::<f64>::zeros(0, 3);
+        let m = block_diag(&[&a, &e, &b]);
+        assert_eq!(m.shape(), (3, 6));
+        assert!((m[(0, 1)] - 1.0).abs() < 1e-15 && (m[(2, 5)] - 2.0).abs() < 1e-15);
+        assert!(m[(0, 5)].abs() < 1e-15);
+    }
+
+    #[test]
+    fn series_of_static_gains_multiplies() {
+        let g = |k: f64| {
+            DiscreteSs::new(
+                DMatrix::zeros(0, 0),
+                DMatrix::zeros(0, 1),
+                DMatrix::zeros(1, 0),
+                DMatrix::from_element(1, 1, k),
+                0.1,
+            )
+            .expect("valid")
+        };
+        let s = series(&g(2.0), &g(3.0)).expect("ok");
+        assert!((s.d()[(0, 0)] - 6.0).abs() < 1e-15);
+        let f = feedback(&g(2.0), &g(0.5), -1.0).expect("ok");
+        assert!((f.d()[(0, 0)] - 1.0).abs() < 1e-15, "2/(1 + 2·0.5)");
+    }
+}

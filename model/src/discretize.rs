@@ -220,6 +220,21 @@ impl Mapped {
     }
 }
 
+impl ContinuousSs {
+    /// Discretises this model: shorthand for [`discretize`]`(self, dt, method, noise)`.
+    ///
+    /// # Errors
+    /// As [`discretize`].
+    pub fn discretize(
+        &self,
+        dt: f64,
+        method: Method,
+        noise: NoiseConvention,
+    ) -> Result<DiscreteSs> {
+        discretize(self, dt, method, noise)
+    }
+}
+
 /// Discretises a continuous model with interval `dt`, `method` for the dynamics and `noise`
 /// for the white-noise input (see [`NoiseConvention`]).
 ///
@@ -249,5 +264,39 @@ pub fn discretize(
             let (g, j) = mapped.input(sys.g())?;
             base.with_noise(g, j, sys.w() / dt)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scalar_van_loan_closed_form() {
+        // ẋ = a x + w, intensity W: Q = W (e^{2aΔt} − 1)/(2a).
+        let (a, w, dt) = (-0.7, 3.0, 0.4);
+        let (phi, q) = van_loan(
+            &DMatrix::from_element(1, 1, a),
+            &DMatrix::from_element(1, 1, 1.0),
+            &DMatrix::from_element(1, 1, w),
+            dt,
+        )
+        .expect("ok");
+        assert!((phi[(0, 0)] - (a * dt).exp()).abs() < 1e-15);
+        let want = w * ((2.0 * a * dt).exp() - 1.0) / (2.0 * a);
+        assert!((q[(0, 0)] - want).abs() < 1e-14 * want);
+    }
+
+    #[test]
+    fn tustin_singular_when_pole_at_two_over_dt() {
+        let sys = ContinuousSs::new(
+            DMatrix::from_element(1, 1, 20.0),
+            DMatrix::from_element(1, 1, 1.0),
+            DMatrix::from_element(1, 1, 1.0),
+            DMatrix::zeros(1, 1),
+        )
+        .expect("valid");
+        let e = discretize(&sys, 0.1, Method::Tustin, NoiseConvention::IntensityOverDt);
+        assert!(matches!(e, Err(Error::Singular { .. })), "{e:?}");
     }
 }

@@ -485,3 +485,29 @@ mod vector_as_list {
         Ok(DVector::from_vec(Vec::<f64>::deserialize(d)?))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_as_documented() {
+        let p = FuelParams::default();
+        assert!(p.validate().is_ok());
+        assert!((p.beta() - 2.0 * PI / 10.0).abs() < 1e-15);
+        assert!((p.t_c() - 1.0).abs() < 1e-15, "T_c = δ/V_c = 1 s");
+        assert!((p.sigma_alpha() - 1f64.to_radians() / 3.0).abs() < 1e-18);
+    }
+
+    #[test]
+    fn wiring_shapes() {
+        let w = wiring();
+        assert_eq!(w.k.shape(), (5, 5));
+        assert_eq!(w.e.shape(), (5, 4));
+        assert_eq!(w.p.shape(), (7, 5));
+        // No block feeds itself: no algebraic self-loop.
+        for i in 0..5 {
+            assert!(w.k[(i, i)].abs() < 1e-300);
+        }
+    }
+}

@@ -314,3 +314,23 @@ impl ShapingFilter for DampedCosine {
         Some(PaperVariant::Drop)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coefficients_match_spec() {
+        let r = IrregularRolling::new(1.0, 0.08, 0.6).expect("valid");
+        let (a, b) = r.coefficients();
+        let s = 0.08f64.powi(2) + 0.36;
+        assert!((a - 0.16 / s).abs() < 1e-15 && (b - 1.0 / s).abs() < 1e-15);
+        assert!((r.intensity() - 2.0 * a).abs() < 1e-15);
+        let q = DampedCosine::new(2.0, 0.05, 6.0).expect("valid");
+        let (c, _) = q.coefficients();
+        assert!((q.intensity() - 2.0 * c).abs() < 1e-15);
+        let e = Exponential::new(3.0, 2.0).expect("valid");
+        assert!((e.intensity() - 12.0).abs() < 1e-15);
+        assert!((e.correlation(-2.0) - 3.0 / std::f64::consts::E).abs() < 1e-15);
+    }
+}

@@ -352,3 +352,32 @@ impl ContinuousSs {
         Self { a, b, c, d, g, w }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn noise_as_inputs_appends_columns() {
+        let s = DiscreteSs::new(
+            DMatrix::from_element(1, 1, 0.5),
+            DMatrix::from_element(1, 1, 1.0),
+            DMatrix::from_element(1, 1, 2.0),
+            DMatrix::from_element(1, 1, 0.0),
+            0.1,
+        )
+        .expect("valid")
+        .with_noise(
+            DMatrix::from_element(1, 1, 3.0),
+            DMatrix::from_element(1, 1, 4.0),
+            DMatrix::from_element(1, 1, 2.0),
+        )
+        .expect("valid");
+        let t = s.noise_as_inputs();
+        assert_eq!((t.n_inputs(), t.n_noise()), (2, 0));
+        assert!((t.b()[(0, 1)] - 3.0).abs() < 1e-15 && (t.d()[(0, 1)] - 4.0).abs() < 1e-15);
+        assert!((s.process_covariance()[(0, 0)] - 18.0).abs() < 1e-15);
+        assert!((s.cross_covariance()[(0, 0)] - 24.0).abs() < 1e-15);
+        assert!((s.output_noise_covariance()[(0, 0)] - 32.0).abs() < 1e-15);
+    }
+}

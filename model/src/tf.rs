@@ -407,3 +407,45 @@ impl ContinuousTf {
         Self { num, den }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polynomial_helpers() {
+        assert_eq!(poly_mul(&[1.0, 1.0], &[1.0, -1.0]), vec![1.0, 0.0, -1.0]);
+        assert_eq!(poly_pow(&[1.0, 1.0], 3), vec![1.0, 3.0, 3.0, 1.0]);
+        assert_eq!(trim_high(vec![1.0, 2.0, 0.0, 0.0]), vec![1.0, 2.0]);
+        assert_eq!(trim_high(vec![0.0]), vec![0.0]);
+    }
+
+    #[test]
+    fn tustin_of_integrator_is_trapezoid() {
+        let int = ContinuousTf::new(vec![1.0], vec![0.0, 1.0]).expect("valid");
+        let d = int.tustin(0.2, None).expect("ok");
+        // (Δt/2)(1 + z⁻¹)/(1 − z⁻¹)
+        assert!((d.num()[0] - 0.1).abs() < 1e-15 && (d.num()[1] - 0.1).abs() < 1e-15);
+        assert!((d.den()[1] + 1.0).abs() < 1e-15);
+        let r = d.realize();
+        assert!((r.h()[(0, 0)] - 0.2).abs() < 1e-15, "H = Δt");
+        assert!((r.d()[(0, 0)] - 0.1).abs() < 1e-15, "D = Δt/2");
+    }
+
+    #[test]
+    fn static_gain_realises_without_states() {
+        let g = ContinuousTf::new(vec![3.0], vec![2.0]).expect("valid");
+        let r = g.realize();
+        assert_eq!(r.n_states(), 0);
+        assert!((r.d()[(0, 0)] - 1.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn kappa_with_and_without_prewarp() {
+        assert!((tustin_kappa(0.1, None).expect("ok") - 20.0).abs() < 1e-12);
+        // Small ωΔt: pre-warped κ → 2/Δt.
+        let k = tustin_kappa(0.1, Some(1e-3)).expect("ok");
+        assert!((k - 20.0).abs() < 1e-5);
+        assert!(tustin_kappa(0.1, Some(std::f64::consts::PI / 0.1)).is_err());
+    }
+}

@@ -136,3 +136,32 @@ pub(crate) fn finite_scalar(name: &'static str, v: f64) -> Result<f64> {
 pub(crate) fn symmetrize(m: &DMatrix<f64>) -> DMatrix<f64> {
     (m + m.transpose()) * 0.5
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn covariance_checks() {
+        let ok = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
+        assert!(covariance("Q", &ok, 2, "test").is_ok());
+        // Singular PSD is fine.
+        let sing = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
+        assert!(covariance("Q", &sing, 2, "test").is_ok());
+        let indefinite = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
+        assert!(matches!(
+            covariance("Q", &indefinite, 2, "test"),
+            Err(Error::NotPositiveSemiDefinite { name: "Q", .. })
+        ));
+        assert!(covariance("Q", &DMatrix::zeros(0, 0), 0, "test").is_ok());
+    }
+
+    #[test]
+    fn scalar_checks() {
+        assert!(positive("dt", 0.1).is_ok());
+        assert!(positive("dt", 0.0).is_err());
+        assert!(non_negative("v", 0.0).is_ok());
+        assert!(non_negative("v", f64::INFINITY).is_err());
+        assert!(finite_scalar("phi", f64::NAN).is_err());
+    }
+}
