@@ -11,8 +11,8 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
 
-use crate::riccati::{check, symmetrise};
 use crate::Error;
+use crate::riccati::{check, symmetrise};
 
 /// The Kalman–Bucy filter's covariance equation for a time-invariant continuous model.
 #[derive(Debug, Clone)]
@@ -38,7 +38,11 @@ pub struct OdeOptions {
 
 impl Default for OdeOptions {
     fn default() -> Self {
-        Self { rtol: 1e-10, atol: 1e-12, max_steps: 1_000_000 }
+        Self {
+            rtol: 1e-10,
+            atol: 1e-12,
+            max_steps: 1_000_000,
+        }
     }
 }
 
@@ -81,7 +85,13 @@ impl KalmanBucy {
         symmetrise(&mut G);
         let mut Qs = Q.to_owned();
         symmetrise(&mut Qs);
-        Ok(Self { A: A.to_owned(), H: H.to_owned(), Q: Qs, R: R.to_owned(), G })
+        Ok(Self {
+            A: A.to_owned(),
+            H: H.to_owned(),
+            Q: Qs,
+            R: R.to_owned(),
+            G,
+        })
     }
 
     /// Ṗ at P: A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q (symmetrised).
@@ -99,11 +109,14 @@ impl KalmanBucy {
     pub fn gain(&self, P: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
         let n = self.A.nrows();
         check("P", P, n, n)?;
-        let llt = self.R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
-            name: "R",
-            n: self.R.nrows(),
-            rule: "the Kalman-Bucy gain needs R^-1",
-        })?;
+        let llt = self
+            .R
+            .llt(Side::Lower)
+            .map_err(|_| Error::NotPositiveDefinite {
+                name: "R",
+                n: self.R.nrows(),
+                rule: "the Kalman-Bucy gain needs R^-1",
+            })?;
         Ok(llt.solve(&self.H * P).transpose().to_owned())
     }
 
@@ -113,7 +126,12 @@ impl KalmanBucy {
     /// # Errors
     /// Shape/finiteness errors naming `P0`; [`Error::RiccatiNoConvergence`] if the step
     /// budget runs out or P becomes non-finite.
-    pub fn integrate(&self, P0: MatRef<'_, f64>, t1: f64, opts: &OdeOptions) -> Result<OdeSolution, Error> {
+    pub fn integrate(
+        &self,
+        P0: MatRef<'_, f64>,
+        t1: f64,
+        opts: &OdeOptions,
+    ) -> Result<OdeSolution, Error> {
         self.run(P0, t1, None, opts)
     }
 
@@ -144,7 +162,13 @@ impl KalmanBucy {
         Ok(sol)
     }
 
-    fn run(&self, P0: MatRef<'_, f64>, t1: f64, rate: Option<f64>, opts: &OdeOptions) -> Result<OdeSolution, Error> {
+    fn run(
+        &self,
+        P0: MatRef<'_, f64>,
+        t1: f64,
+        rate: Option<f64>,
+        opts: &OdeOptions,
+    ) -> Result<OdeSolution, Error> {
         let n = self.A.nrows();
         check("P0", P0, n, n)?;
         // Dormand–Prince 5(4) tableau.
@@ -152,9 +176,28 @@ impl KalmanBucy {
         const A2: [f64; 1] = [1.0 / 5.0];
         const A3: [f64; 2] = [3.0 / 40.0, 9.0 / 40.0];
         const A4: [f64; 3] = [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0];
-        const A5: [f64; 4] = [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0];
-        const A6: [f64; 5] = [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0];
-        const B5: [f64; 7] = [35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0, 0.0];
+        const A5: [f64; 4] = [
+            19372.0 / 6561.0,
+            -25360.0 / 2187.0,
+            64448.0 / 6561.0,
+            -212.0 / 729.0,
+        ];
+        const A6: [f64; 5] = [
+            9017.0 / 3168.0,
+            -355.0 / 33.0,
+            46732.0 / 5247.0,
+            49.0 / 176.0,
+            -5103.0 / 18656.0,
+        ];
+        const B5: [f64; 7] = [
+            35.0 / 384.0,
+            0.0,
+            500.0 / 1113.0,
+            125.0 / 192.0,
+            -2187.0 / 6784.0,
+            11.0 / 84.0,
+            0.0,
+        ];
         const B4: [f64; 7] = [
             5179.0 / 57600.0,
             0.0,
@@ -182,13 +225,20 @@ impl KalmanBucy {
             Y
         };
         for _ in 0..opts.max_steps {
-            if let Some(r) = rate {
-                if k1.norm_l2() <= r * P.norm_l2() {
-                    return Ok(OdeSolution { covariance: P, time: t, steps });
-                }
+            let settled = rate.is_some_and(|r| k1.norm_l2() <= r * P.norm_l2());
+            if settled {
+                return Ok(OdeSolution {
+                    covariance: P,
+                    time: t,
+                    steps,
+                });
             }
             if t >= t1 {
-                return Ok(OdeSolution { covariance: P, time: t, steps });
+                return Ok(OdeSolution {
+                    covariance: P,
+                    time: t,
+                    steps,
+                });
             }
             let h_step = h.min(t1 - t);
             let k2 = self.derivative(comb(&P, &[&k1], &A2, h_step).as_ref());
@@ -224,7 +274,11 @@ impl KalmanBucy {
                 k1 = k7;
                 steps += 1;
             }
-            let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };
+            let factor = if err == 0.0 {
+                5.0
+            } else {
+                (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
+            };
             h = h_step * factor;
         }
         Err(Error::RiccatiNoConvergence {
@@ -260,16 +314,30 @@ pub fn expm(A: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
         1.0,
     ];
     const THETA13: f64 = 5.371920351148152;
-    let norm1 = (0..n).map(|j| (0..n).map(|i| A[(i, j)].abs()).sum::<f64>()).fold(0.0, f64::max);
-    let s = if norm1 > THETA13 { (norm1 / THETA13).log2().ceil() as i32 } else { 0 };
+    let norm1 = (0..n)
+        .map(|j| (0..n).map(|i| A[(i, j)].abs()).sum::<f64>())
+        .fold(0.0, f64::max);
+    let s = if norm1 > THETA13 {
+        (norm1 / THETA13).log2().ceil() as i32
+    } else {
+        0
+    };
     let As = A * (0.5_f64).powi(s);
     let I = Mat::<f64>::identity(n, n);
     let A2 = &As * &As;
     let A4 = &A2 * &A2;
     let A6 = &A4 * &A2;
-    let inner_u = &A6 * (B[13] * &A6 + B[11] * &A4 + B[9] * &A2) + B[7] * &A6 + B[5] * &A4 + B[3] * &A2 + B[1] * &I;
+    let inner_u = &A6 * (B[13] * &A6 + B[11] * &A4 + B[9] * &A2)
+        + B[7] * &A6
+        + B[5] * &A4
+        + B[3] * &A2
+        + B[1] * &I;
     let U = &As * inner_u;
-    let V = &A6 * (B[12] * &A6 + B[10] * &A4 + B[8] * &A2) + B[6] * &A6 + B[4] * &A4 + B[2] * &A2 + B[0] * &I;
+    let V = &A6 * (B[12] * &A6 + B[10] * &A4 + B[8] * &A2)
+        + B[6] * &A6
+        + B[4] * &A4
+        + B[2] * &A2
+        + B[0] * &I;
     let mut E = (&V - &U).partial_piv_lu().solve(&V + &U);
     for _ in 0..s {
         E = &E * &E;
@@ -284,12 +352,20 @@ pub fn expm(A: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
 ///
 /// # Errors
 /// Shape/finiteness errors naming `A` or `Q`; [`Error::Dimension`] for a non-positive `dt`.
-pub fn van_loan(A: MatRef<'_, f64>, Q: MatRef<'_, f64>, dt: f64) -> Result<(Mat<f64>, Mat<f64>), Error> {
+pub fn van_loan(
+    A: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    dt: f64,
+) -> Result<(Mat<f64>, Mat<f64>), Error> {
     let n = A.nrows();
     check("A", A, n, n)?;
     check("Q", Q, n, n)?;
     if !(dt > 0.0 && dt.is_finite()) {
-        return Err(Error::Dimension { name: "dt", value: 0, rule: "the sampling interval must be positive and finite" });
+        return Err(Error::Dimension {
+            name: "dt",
+            value: 0,
+            rule: "the sampling interval must be positive and finite",
+        });
     }
     let mut M = Mat::<f64>::zeros(2 * n, 2 * n);
     for j in 0..n {
@@ -314,10 +390,10 @@ mod tests {
     #[test]
     fn expm_rotation_and_nilpotent() {
         let w = 10.0_f64;
-        let E = expm(mat![[0.0, w], [-w, 0.0]].as_ref()).unwrap();
+        let E = expm(mat![[0.0, w], [-w, 0.0]].as_ref()).expect("must succeed");
         // Tolerance: scaling & squaring error ~ 1e-15 · e^{‖A‖}·steps; 1e-12 is ample.
         assert!((E[(0, 0)] - w.cos()).abs() < 1e-12 && (E[(0, 1)] - w.sin()).abs() < 1e-12);
-        let E = expm(mat![[0.0, 0.25], [0.0, 0.0]].as_ref()).unwrap();
+        let E = expm(mat![[0.0, 0.25], [0.0, 0.0]].as_ref()).expect("must succeed");
         assert!((E[(0, 1)] - 0.25).abs() < 1e-15 && (E[(1, 1)] - 1.0).abs() < 1e-15);
     }
 
@@ -325,9 +401,17 @@ mod tests {
     fn van_loan_white_acceleration() {
         // Double integrator with white acceleration q: Q_d = q [[Δt³/3, Δt²/2], [Δt²/2, Δt]].
         let (dt, q) = (0.25, 0.1);
-        let (F, Qd) = van_loan(mat![[0.0, 1.0], [0.0, 0.0]].as_ref(), mat![[0.0, 0.0], [0.0, q]].as_ref(), dt).unwrap();
+        let (F, Qd) = van_loan(
+            mat![[0.0, 1.0], [0.0, 0.0]].as_ref(),
+            mat![[0.0, 0.0], [0.0, q]].as_ref(),
+            dt,
+        )
+        .expect("must succeed");
         assert!((F[(0, 1)] - dt).abs() < 1e-15);
-        let want = [[q * dt.powi(3) / 3.0, q * dt * dt / 2.0], [q * dt * dt / 2.0, q * dt]];
+        let want = [
+            [q * dt.powi(3) / 3.0, q * dt * dt / 2.0],
+            [q * dt * dt / 2.0, q * dt],
+        ];
         for i in 0..2 {
             for j in 0..2 {
                 assert!((Qd[(i, j)] - want[i][j]).abs() < 1e-15, "{i}{j}");
@@ -338,14 +422,25 @@ mod tests {
     #[test]
     fn scalar_ode_matches_closed_form() {
         // ṗ = −2p − p² + 1 from p(0) = 0: p(t) = tanh-type closed form; compare the limit.
-        let kb = KalmanBucy::new(mat![[-1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref())
-            .unwrap();
-        let sol = kb.integrate(mat![[0.0]].as_ref(), 1.0, &OdeOptions::default()).unwrap();
+        let kb = KalmanBucy::new(
+            mat![[-1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+        )
+        .expect("must succeed");
+        let sol = kb
+            .integrate(mat![[0.0]].as_ref(), 1.0, &OdeOptions::default())
+            .expect("must succeed");
         // Exact: p(t) = (e^{2√2 t} − 1) / ((1 + √2) e^{2√2 t} + (√2 − 1)).
         let r = 2f64.sqrt();
         let e = (2.0 * r).exp();
         let exact = (e - 1.0) / ((1.0 + r) * e + (r - 1.0));
         // Tolerance: rtol 1e-10 per step, ~30 steps.
-        assert!((sol.covariance[(0, 0)] - exact).abs() < 1e-9, "{} vs {exact}", sol.covariance[(0, 0)]);
+        assert!(
+            (sol.covariance[(0, 0)] - exact).abs() < 1e-9,
+            "{} vs {exact}",
+            sol.covariance[(0, 0)]
+        );
     }
 }

@@ -123,7 +123,7 @@ pub struct ContinuousSteadyState {
 /// // Random walk observed in unit noise, q = 1: P = (1 + √5)/2, K = P/(P + 1).
 /// let ss = kalman::riccati::dare(
 ///     mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), None,
-/// ).unwrap();
+/// ).expect("must succeed");
 /// let p = (1.0 + 5f64.sqrt()) / 2.0;
 /// assert!((ss.prior[(0, 0)] - p).abs() < 1e-12);
 /// assert!((ss.gain[(0, 0)] - p / (p + 1.0)).abs() < 1e-12);
@@ -159,7 +159,11 @@ pub fn dare_with(
     let names = Names {
         equation: "filter DARE",
         detect: Pair::Detect("(F, H)"),
-        stab: Pair::Stab(if S.is_some() { "(F - S R^-1 H, (Q - S R^-1 S^T)^{1/2})" } else { "(F, Q^{1/2})" }),
+        stab: Pair::Stab(if S.is_some() {
+            "(F - S R^-1 H, (Q - S R^-1 S^T)^{1/2})"
+        } else {
+            "(F, Q^{1/2})"
+        }),
     };
     let sol = discrete_dual(F, H, Q, R, S, opts, &names)?;
     let P = sol.x;
@@ -169,9 +173,13 @@ pub fn dare_with(
     symmetrise(&mut Sigma);
     let llt = Sigma
         .llt(Side::Lower)
-        .map_err(|_| Error::NotPositiveDefinite { name: "H P H^T + R", n: m, rule: "the steady-state innovation covariance must be invertible" })?;
+        .map_err(|_| Error::NotPositiveDefinite {
+            name: "H P H^T + R",
+            n: m,
+            rule: "the steady-state innovation covariance must be invertible",
+        })?;
     let gain = llt.solve(&HP).transpose().to_owned();
-    let mut FPHt_S = &F * (&P * H.transpose());
+    let mut FPHt_S = F * (&P * H.transpose());
     if let Some(S) = S {
         FPHt_S += S;
     }
@@ -204,10 +212,10 @@ pub fn dare_with(
 /// let b = mat![[dt * dt / 2.0], [dt]];
 /// let q = mat![[1.0, 0.0], [0.0, 0.1]];
 /// let r = mat![[1.0]];
-/// let lqr = kalman::riccati::dlqr(a.as_ref(), b.as_ref(), q.as_ref(), r.as_ref(), None).unwrap();
+/// let lqr = kalman::riccati::dlqr(a.as_ref(), b.as_ref(), q.as_ref(), r.as_ref(), None).expect("must succeed");
 /// // The closed loop A − B L is stable.
 /// let cl = &a - &b * &lqr.gain;
-/// let rho = cl.eigenvalues().unwrap().iter().map(|l| l.norm()).fold(0.0, f64::max);
+/// let rho = cl.eigenvalues().expect("must succeed").iter().map(|l| l.norm()).fold(0.0, f64::max);
 /// assert!(rho < 1.0);
 /// ```
 pub fn dlqr(
@@ -243,7 +251,11 @@ pub fn dlqr_with(
         // Detectability of (Aᵀ, Bᵀ) is stabilisability of (A, B), and stabilisability of
         // (Aᵀ, Q^{1/2}) is detectability of (Q^{1/2}, A).
         detect: Pair::Stab("(A, B)"),
-        stab: Pair::Detect(if N.is_some() { "((Q - N R^-1 N^T)^{1/2}, A - B R^-1 N^T)" } else { "(Q^{1/2}, A)" }),
+        stab: Pair::Detect(if N.is_some() {
+            "((Q - N R^-1 N^T)^{1/2}, A - B R^-1 N^T)"
+        } else {
+            "(Q^{1/2}, A)"
+        }),
     };
     let sol = discrete_dual(A.transpose(), B.transpose(), Q, R, N, opts, &names)?;
     let X = sol.x;
@@ -252,13 +264,22 @@ pub fn dlqr_with(
     symmetrise(&mut Sigma);
     let llt = Sigma
         .llt(Side::Lower)
-        .map_err(|_| Error::NotPositiveDefinite { name: "R + B^T X B", n: m, rule: "the LQR gain needs its inverse" })?;
+        .map_err(|_| Error::NotPositiveDefinite {
+            name: "R + B^T X B",
+            n: m,
+            rule: "the LQR gain needs its inverse",
+        })?;
     let mut rhs = &BtX * A;
     if let Some(N) = N {
         rhs += N.transpose();
     }
     let gain = llt.solve(&rhs);
-    Ok(Lqr { gain, cost: X, iterations: sol.iterations, relative_residual: sol.relative_residual })
+    Ok(Lqr {
+        gain,
+        cost: X,
+        iterations: sol.iterations,
+        relative_residual: sol.relative_residual,
+    })
 }
 
 /// Steady state of the Kalman–Bucy filter: the stabilising P of the filter CARE
@@ -279,7 +300,7 @@ pub fn dlqr_with(
 /// // ẋ = −x + w, z = x + v, q = r = 1: −2P − P² + 1 = 0, P = √2 − 1.
 /// let ss = kalman::riccati::care(
 ///     mat![[-1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(),
-/// ).unwrap();
+/// ).expect("must succeed");
 /// assert!((ss.covariance[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-12);
 /// ```
 pub fn care(
@@ -312,7 +333,11 @@ pub fn care_with(
     };
     let sol = continuous_dual(A, H, Q, R, opts, &names)?;
     let P = sol.x;
-    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite { name: "R", n: R.nrows(), rule: "the Riccati solvers need R^-1" })?;
+    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
+        name: "R",
+        n: R.nrows(),
+        rule: "the Riccati solvers need R^-1",
+    })?;
     let gain = llt.solve(H * &P).transpose().to_owned();
     Ok(ContinuousSteadyState {
         covariance: P,
@@ -339,13 +364,25 @@ pub fn clqr(
     check("B", B, n, m)?;
     check("Q", Q, n, n)?;
     check("R", R, m, m)?;
-    let names =
-        Names { equation: "LQR CARE", detect: Pair::Stab("(A, B)"), stab: Pair::Detect("(Q^{1/2}, A)") };
+    let names = Names {
+        equation: "LQR CARE",
+        detect: Pair::Stab("(A, B)"),
+        stab: Pair::Detect("(Q^{1/2}, A)"),
+    };
     let opts = RiccatiOptions::default();
     let sol = continuous_dual(A.transpose(), B.transpose(), Q, R, &opts, &names)?;
-    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite { name: "R", n: R.nrows(), rule: "the Riccati solvers need R^-1" })?;
+    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
+        name: "R",
+        n: R.nrows(),
+        rule: "the Riccati solvers need R^-1",
+    })?;
     let gain = llt.solve(B.transpose() * &sol.x);
-    Ok(Lqr { gain, cost: sol.x, iterations: sol.iterations, relative_residual: sol.relative_residual })
+    Ok(Lqr {
+        gain,
+        cost: sol.x,
+        iterations: sol.iterations,
+        relative_residual: sol.relative_residual,
+    })
 }
 
 /// Relative residual ‖F P Fᵀ + Q − (F P Hᵀ + S)(H P Hᵀ + R)⁻¹(⋯)ᵀ − P‖_F / ‖P‖_F of a
@@ -424,10 +461,21 @@ struct Solved {
 }
 
 fn relative(num: f64, den: f64) -> f64 {
-    if num == 0.0 { 0.0 } else if den > 0.0 { num / den } else { f64::INFINITY }
+    if num == 0.0 {
+        0.0
+    } else if den > 0.0 {
+        num / den
+    } else {
+        f64::INFINITY
+    }
 }
 
-pub(crate) fn check(name: &'static str, M: MatRef<'_, f64>, rows: usize, cols: usize) -> Result<(), Error> {
+pub(crate) fn check(
+    name: &'static str,
+    M: MatRef<'_, f64>,
+    rows: usize,
+    cols: usize,
+) -> Result<(), Error> {
     if M.nrows() != rows || M.ncols() != cols {
         return Err(Error::Shape {
             name,
@@ -440,7 +488,13 @@ pub(crate) fn check(name: &'static str, M: MatRef<'_, f64>, rows: usize, cols: u
     for j in 0..cols {
         for i in 0..rows {
             if !M[(i, j)].is_finite() {
-                return Err(Error::NonFinite { name, rows, cols, row: i, col: j });
+                return Err(Error::NonFinite {
+                    name,
+                    rows,
+                    cols,
+                    row: i,
+                    col: j,
+                });
             }
         }
     }
@@ -466,11 +520,13 @@ pub(crate) fn symmetrise(M: &mut Mat<f64>) {
 fn psd_sqrt(Q: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
     let mut Qs = Q.to_owned();
     symmetrise(&mut Qs);
-    let evd = Qs.self_adjoint_eigen(Side::Lower).map_err(|_| Error::RiccatiNoConvergence {
-        equation: "Q^{1/2}",
-        iterations: 0,
-        reason: "symmetric eigendecomposition failed",
-    })?;
+    let evd = Qs
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| Error::RiccatiNoConvergence {
+            equation: "Q^{1/2}",
+            iterations: 0,
+            reason: "symmetric eigendecomposition failed",
+        })?;
     let U = evd.U();
     let s = evd.S().column_vector();
     let n = Qs.nrows();
@@ -487,7 +543,12 @@ fn psd_sqrt(Q: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
 /// PBH test: returns the first eigenvalue λ of F on or outside the stability boundary
 /// whose eigenvector C does not see, i.e. σ_min([λI − F; C]) small. C (p×n) is rescaled to
 /// ‖F‖_F so the test does not depend on the units of the output.
-fn pbh(F: MatRef<'_, f64>, C: MatRef<'_, f64>, continuous: bool, opts: &RiccatiOptions) -> Result<Option<(f64, f64)>, Error> {
+fn pbh(
+    F: MatRef<'_, f64>,
+    C: MatRef<'_, f64>,
+    continuous: bool,
+    opts: &RiccatiOptions,
+) -> Result<Option<(f64, f64)>, Error> {
     let n = F.nrows();
     let p = C.nrows();
     if n == 0 {
@@ -519,10 +580,17 @@ fn pbh(F: MatRef<'_, f64>, C: MatRef<'_, f64>, continuous: bool, opts: &RiccatiO
         // Real embedding of the complex matrix M = [λI − F; C]: [[Re M, −Im M], [Im M, Re M]]
         // has the singular values of M, each twice.
         let complex = im > 0.0;
-        let (rows, cols) = if complex { (2 * (n + p), 2 * n) } else { (n + p, n) };
+        let (rows, cols) = if complex {
+            (2 * (n + p), 2 * n)
+        } else {
+            (n + p, n)
+        };
         let mut M = Mat::<f64>::zeros(rows, cols);
-        let blocks: &[(usize, usize, f64)] =
-            if complex { &[(0, 0, 1.0), (n + p, n, 1.0)] } else { &[(0, 0, 1.0)] };
+        let blocks: &[(usize, usize, f64)] = if complex {
+            &[(0, 0, 1.0), (n + p, n, 1.0)]
+        } else {
+            &[(0, 0, 1.0)]
+        };
         for &(r0, c0, _) in blocks {
             for j in 0..n {
                 for i in 0..n {
@@ -540,11 +608,13 @@ fn pbh(F: MatRef<'_, f64>, C: MatRef<'_, f64>, continuous: bool, opts: &RiccatiO
                 M[(n + p + j, j)] = im; // Im M in the bottom-left block
             }
         }
-        let sv = M.singular_values().map_err(|_| Error::RiccatiNoConvergence {
-            equation: "PBH test",
-            iterations: 0,
-            reason: "singular value decomposition failed",
-        })?;
+        let sv = M
+            .singular_values()
+            .map_err(|_| Error::RiccatiNoConvergence {
+                equation: "PBH test",
+                iterations: 0,
+                reason: "singular value decomposition failed",
+            })?;
         let smin = sv.iter().copied().fold(f64::INFINITY, f64::min);
         if smin <= opts.pbh_tolerance * scale {
             return Ok(Some((re, im)));
@@ -564,7 +634,11 @@ fn discrete_dual(
     opts: &RiccatiOptions,
     names: &Names,
 ) -> Result<Solved, Error> {
-    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite { name: "R", n: R.nrows(), rule: "the Riccati solvers need R^-1" })?;
+    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
+        name: "R",
+        n: R.nrows(),
+        rule: "the Riccati solvers need R^-1",
+    })?;
     // F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ.
     let (Ft, Qt) = match S {
         Some(S) => {
@@ -600,7 +674,9 @@ fn discrete_dual(
         }
         Err(_) => f64::INFINITY,
     };
-    if !(relative_residual <= opts.residual_tolerance) || !(rho < 1.0) {
+    // Written so that a NaN residual or radius fails the check.
+    let ok = relative_residual <= opts.residual_tolerance && rho < 1.0;
+    if !ok {
         return Err(Error::RiccatiCheck {
             equation: names.equation,
             residual: relative_residual,
@@ -608,7 +684,11 @@ fn discrete_dual(
             closed_loop: rho,
         });
     }
-    Ok(Solved { x: X, iterations, relative_residual })
+    Ok(Solved {
+        x: X,
+        iterations,
+        relative_residual,
+    })
 }
 
 /// PBH tests and SDA-after-Cayley for the filter-form CARE A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0.
@@ -621,7 +701,11 @@ fn continuous_dual(
     names: &Names,
 ) -> Result<Solved, Error> {
     let n = A.nrows();
-    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite { name: "R", n: R.nrows(), rule: "the Riccati solvers need R^-1" })?;
+    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
+        name: "R",
+        n: R.nrows(),
+        rule: "the Riccati solvers need R^-1",
+    })?;
     if let Some((re, im)) = pbh(A, H, true, opts)? {
         return Err(names.detect.error(re, im));
     }
@@ -663,7 +747,8 @@ fn continuous_dual(
     let Kt = llt.solve(H * &X);
     let cl = A.to_owned() - Kt.transpose() * H;
     let abscissa = spectral(cl.as_ref(), true);
-    if !(relative_residual <= opts.residual_tolerance) || !(abscissa < 0.0) {
+    let ok = relative_residual <= opts.residual_tolerance && abscissa < 0.0;
+    if !ok {
         return Err(Error::RiccatiCheck {
             equation: names.equation,
             residual: relative_residual,
@@ -671,7 +756,11 @@ fn continuous_dual(
             closed_loop: abscissa,
         });
     }
-    Ok(Solved { x: X, iterations, relative_residual })
+    Ok(Solved {
+        x: X,
+        iterations,
+        relative_residual,
+    })
 }
 
 /// Spectral radius (discrete) or spectral abscissa (continuous); +∞ if the eigenvalue
@@ -705,7 +794,10 @@ fn sda(
         let mut H_next = &Hh + A.transpose() * (&Hh * &WA);
         symmetrise(&mut G_next);
         symmetrise(&mut H_next);
-        if !all_finite(A_next.as_ref()) || !all_finite(G_next.as_ref()) || !all_finite(H_next.as_ref()) {
+        if !all_finite(A_next.as_ref())
+            || !all_finite(G_next.as_ref())
+            || !all_finite(H_next.as_ref())
+        {
             return Err(Error::RiccatiNoConvergence {
                 equation,
                 iterations: it,
@@ -739,18 +831,34 @@ mod tests {
         let (f, q, r) = (0.9_f64, 0.5, 2.0);
         let b = r * (1.0 - f * f) - q;
         let p = (-b + (b * b + 4.0 * q * r).sqrt()) / 2.0;
-        let ss = dare(mat![[f]].as_ref(), mat![[1.0]].as_ref(), mat![[q]].as_ref(), mat![[r]].as_ref(), None)
-            .unwrap();
+        let ss = dare(
+            mat![[f]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[q]].as_ref(),
+            mat![[r]].as_ref(),
+            None,
+        )
+        .expect("must succeed");
         // Tolerance: a few ulps of p ≈ 1 after ~10 doubling steps.
-        assert!((ss.prior[(0, 0)] - p).abs() < 1e-13, "{} vs {p}", ss.prior[(0, 0)]);
+        assert!(
+            (ss.prior[(0, 0)] - p).abs() < 1e-13,
+            "{} vs {p}",
+            ss.prior[(0, 0)]
+        );
         assert!((ss.gain[(0, 0)] - p / (p + r)).abs() < 1e-13);
         assert!((ss.posterior[(0, 0)] - p * r / (p + r)).abs() < 1e-13);
     }
 
     #[test]
     fn zero_noise_stable_gives_zero() {
-        let ss = dare(mat![[0.5]].as_ref(), mat![[1.0]].as_ref(), mat![[0.0]].as_ref(), mat![[1.0]].as_ref(), None)
-            .unwrap();
+        let ss = dare(
+            mat![[0.5]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[0.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            None,
+        )
+        .expect("must succeed");
         assert!(ss.prior[(0, 0)].abs() < 1e-300);
     }
 
@@ -760,11 +868,16 @@ mod tests {
         let H = mat![[0.0, 1.0]];
         let Q = mat![[1.0, 0.0], [0.0, 1.0]];
         let R = mat![[1.0]];
-        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None).unwrap_err();
-        assert!(matches!(e, Error::NotDetectable { pair: "(F, H)", .. }), "{e}");
+        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None)
+            .expect_err("must be an error");
+        assert!(
+            matches!(e, Error::NotDetectable { pair: "(F, H)", .. }),
+            "{e}"
+        );
         let H = mat![[1.0, 1.0]];
         let Q = mat![[0.0, 0.0], [0.0, 1.0]];
-        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None).unwrap_err();
+        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None)
+            .expect_err("must be an error");
         assert!(matches!(e, Error::NotStabilisable { .. }), "{e}");
         // Complex unstable pair, unobservable.
         let c = 1.1 * 0.6_f64.cos();
@@ -772,31 +885,66 @@ mod tests {
         let F = mat![[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 0.3]];
         let H = mat![[0.0, 0.0, 1.0]];
         let Q = Mat::<f64>::identity(3, 3);
-        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None).unwrap_err();
-        assert!(matches!(e, Error::NotDetectable { im, .. } if im > 0.5), "{e}");
+        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None)
+            .expect_err("must be an error");
+        assert!(
+            matches!(e, Error::NotDetectable { im, .. } if im > 0.5),
+            "{e}"
+        );
     }
 
     #[test]
     fn scalar_care_and_clqr() {
-        let ss = care(mat![[-1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref())
-            .unwrap();
+        let ss = care(
+            mat![[-1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+        )
+        .expect("must succeed");
         assert!((ss.covariance[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-13);
         // Unstable a = 2, b = 1, q = r = 1: 4X − X² + 1 = 0, X = 2 + √5, L = X.
-        let l = clqr(mat![[2.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref())
-            .unwrap();
+        let l = clqr(
+            mat![[2.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+        )
+        .expect("must succeed");
         assert!((l.gain[(0, 0)] - (2.0 + 5f64.sqrt())).abs() < 1e-12);
     }
 
     #[test]
     fn shape_and_pd_errors_name_the_matrix() {
-        let e = dare(mat![[1.0]].as_ref(), mat![[1.0, 0.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), None)
-            .unwrap_err();
+        let e = dare(
+            mat![[1.0]].as_ref(),
+            mat![[1.0, 0.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            None,
+        )
+        .expect_err("must be an error");
         assert!(matches!(e, Error::Shape { name: "H", .. }), "{e}");
-        let e = dare(mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[0.0]].as_ref(), None)
-            .unwrap_err();
-        assert!(matches!(e, Error::NotPositiveDefinite { name: "R", .. }), "{e}");
-        let e = dare(mat![[f64::NAN]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), None)
-            .unwrap_err();
+        let e = dare(
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[0.0]].as_ref(),
+            None,
+        )
+        .expect_err("must be an error");
+        assert!(
+            matches!(e, Error::NotPositiveDefinite { name: "R", .. }),
+            "{e}"
+        );
+        let e = dare(
+            mat![[f64::NAN]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            None,
+        )
+        .expect_err("must be an error");
         assert!(matches!(e, Error::NonFinite { name: "F", .. }), "{e}");
     }
 }

@@ -42,7 +42,12 @@ pub struct ScheduleOptions {
 
 impl Default for ScheduleOptions {
     fn default() -> Self {
-        Self { tolerance: 1e-14, max_steps: 1_000_000, reentry_tolerance: 1e-14, form: CovarianceForm::Joseph }
+        Self {
+            tolerance: 1e-14,
+            max_steps: 1_000_000,
+            reentry_tolerance: 1e-14,
+            form: CovarianceForm::Joseph,
+        }
     }
 }
 
@@ -66,7 +71,11 @@ impl<D: Dims> GainSchedule<D> {
     /// Validation errors naming `P0` (as [`Filter::new`]); [`Error::RiccatiNoConvergence`]
     /// if the gain has not converged after `opts.max_steps` steps (e.g. an undetectable
     /// model).
-    pub fn new(model: Model<D>, P0: &impl MatrixInput, opts: ScheduleOptions) -> Result<Self, Error> {
+    pub fn new(
+        model: Model<D>,
+        P0: &impl MatrixInput,
+        opts: ScheduleOptions,
+    ) -> Result<Self, Error> {
         let d = model.dims();
         let (n, m) = (d.n(), d.m());
         let zeros_n = vec![0.0; n];
@@ -81,7 +90,9 @@ impl<D: Dims> GainSchedule<D> {
             f.step(&zeros_m, None)?;
             gains.push(to_buf::<D::Nm>(f.gain()));
             if let Some(S) = model.S() {
-                cross.push(to_buf::<D::Nm>(cross_gain(S, f.innovation_covariance())?.as_ref()));
+                cross.push(to_buf::<D::Nm>(
+                    cross_gain(S, f.innovation_covariance())?.as_ref(),
+                ));
             }
             let P = to_buf::<D::Nn>(f.predicted_covariance());
             // The gain alone can settle while P diverges (an unobservable unstable mode the
@@ -93,7 +104,15 @@ impl<D: Dims> GainSchedule<D> {
                 && (cross.is_empty() || settled(&cross, opts.tolerance))
             {
                 let steady_prior = P;
-                return Ok(Self { template, model, gains, cross, priors, steady_prior, opts });
+                return Ok(Self {
+                    template,
+                    model,
+                    gains,
+                    cross,
+                    priors,
+                    steady_prior,
+                    opts,
+                });
             }
         }
         Err(Error::RiccatiNoConvergence {
@@ -121,10 +140,17 @@ impl<D: Dims> GainSchedule<D> {
                 expected_cols: m,
             });
         }
-        let template = Filter::new(model.clone(), &vec![0.0; n], &steady.prior, CovarianceForm::Joseph)?;
+        let template = Filter::new(
+            model.clone(),
+            &vec![0.0; n],
+            &steady.prior,
+            CovarianceForm::Joseph,
+        )?;
         let mut cross = Vec::new();
         if let Some(S) = model.S() {
-            cross.push(to_buf::<D::Nm>(cross_gain(S, steady.innovation_cov.as_ref())?.as_ref()));
+            cross.push(to_buf::<D::Nm>(
+                cross_gain(S, steady.innovation_cov.as_ref())?.as_ref(),
+            ));
         }
         let P = to_buf::<D::Nn>(steady.prior.as_ref());
         Ok(Self {
@@ -204,10 +230,22 @@ impl<D: Dims> ScheduledFilter<'_, D> {
     pub fn reset(&mut self, x0: &[f64]) -> Result<(), Error> {
         let n = self.s.model.dims().n();
         if x0.len() != n {
-            return Err(Error::Shape { name: "x0", rows: x0.len(), cols: 1, expected_rows: n, expected_cols: 1 });
+            return Err(Error::Shape {
+                name: "x0",
+                rows: x0.len(),
+                cols: 1,
+                expected_rows: n,
+                expected_cols: 1,
+            });
         }
         if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFinite { name: "x0", rows: n, cols: 1, row: i, col: 0 });
+            return Err(Error::NonFinite {
+                name: "x0",
+                rows: n,
+                cols: 1,
+                row: i,
+                col: 0,
+            });
         }
         self.xp.as_mut_slice()[..n].copy_from_slice(x0);
         self.xf.as_mut_slice()[..n].copy_from_slice(x0);
@@ -228,22 +266,46 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         let d = s.model.dims();
         let (n, m, p) = (d.n(), d.m(), d.p());
         if z.len() != m {
-            return Err(Error::Shape { name: "z", rows: z.len(), cols: 1, expected_rows: m, expected_cols: 1 });
+            return Err(Error::Shape {
+                name: "z",
+                rows: z.len(),
+                cols: 1,
+                expected_rows: m,
+                expected_cols: 1,
+            });
         }
         let mut missing = false;
         for (i, &v) in z.iter().enumerate() {
             if v.is_nan() {
                 missing = true;
             } else if !v.is_finite() {
-                return Err(Error::NonFinite { name: "z", rows: m, cols: 1, row: i, col: 0 });
+                return Err(Error::NonFinite {
+                    name: "z",
+                    rows: m,
+                    cols: 1,
+                    row: i,
+                    col: 0,
+                });
             }
         }
         if let Some(u) = u {
             if u.len() != p {
-                return Err(Error::Shape { name: "u", rows: u.len(), cols: 1, expected_rows: p, expected_cols: 1 });
+                return Err(Error::Shape {
+                    name: "u",
+                    rows: u.len(),
+                    cols: 1,
+                    expected_rows: p,
+                    expected_cols: 1,
+                });
             }
             if let Some(i) = u.iter().position(|v| !v.is_finite()) {
-                return Err(Error::NonFinite { name: "u", rows: p, cols: 1, row: i, col: 0 });
+                return Err(Error::NonFinite {
+                    name: "u",
+                    rows: p,
+                    cols: 1,
+                    row: i,
+                    col: 0,
+                });
             }
         }
         if missing || self.in_full {
@@ -257,9 +319,7 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         let xf = &mut self.xf.as_mut_slice()[..n];
         let e = &mut self.e.as_mut_slice()[..m];
         // e = z − H x_{k|k−1}
-        for i in 0..m {
-            e[i] = z[i];
-        }
+        e.copy_from_slice(&z[..m]);
         for j in 0..n {
             let xj = xp[j];
             for i in 0..m {
@@ -306,7 +366,11 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         let s = self.s;
         let n = s.model.dims().n();
         if !self.in_full {
-            let P = if self.k < s.priors.len() { &s.priors[self.k] } else { &s.steady_prior };
+            let P = if self.k < s.priors.len() {
+                &s.priors[self.k]
+            } else {
+                &s.steady_prior
+            };
             let P = MatRef::from_column_major_slice(&P.as_slice()[..n * n], n, n);
             self.full.reset(&self.xp.as_slice()[..n], &P)?;
             self.in_full = true;
@@ -364,7 +428,10 @@ impl<D: Dims> ScheduledFilter<'_, D> {
 fn settled<B: Buf>(seq: &[B], tol: f64) -> bool {
     let (a, b) = (seq[seq.len() - 1].as_slice(), seq[seq.len() - 2].as_slice());
     let big = a.iter().fold(0.0_f64, |acc, v| acc.max(v.abs()));
-    let diff = a.iter().zip(b).fold(0.0_f64, |acc, (x, y)| acc.max((x - y).abs()));
+    let diff = a
+        .iter()
+        .zip(b)
+        .fold(0.0_f64, |acc, (x, y)| acc.max((x - y).abs()));
     diff <= tol * big
 }
 
@@ -387,21 +454,29 @@ fn cross_gain(S: MatRef<'_, f64>, Sigma: MatRef<'_, f64>) -> Result<Mat<f64>, Er
     let smax = (0..m).map(|i| Sigma[(i, i)].abs()).fold(0.0, f64::max);
     if let Ok(llt) = Sigma.llt(Side::Lower) {
         let L = llt.L();
-        let dmin = (0..m).map(|i| L[(i, i)] * L[(i, i)]).fold(f64::INFINITY, f64::min);
+        let dmin = (0..m)
+            .map(|i| L[(i, i)] * L[(i, i)])
+            .fold(f64::INFINITY, f64::min);
         if dmin > crate::RANK_TOL * smax {
             return Ok(llt.solve(S.transpose()).transpose().to_owned());
         }
     }
-    let evd = Sigma.self_adjoint_eigen(Side::Lower).map_err(|_| Error::Factorisation {
-        name: "H P H^T + R",
-        reason: "symmetric eigen-decomposition failed",
-    })?;
+    let evd = Sigma
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| Error::Factorisation {
+            name: "H P H^T + R",
+            reason: "symmetric eigen-decomposition failed",
+        })?;
     let U = evd.U();
     let w = evd.S().column_vector();
     let wmax = (0..m).map(|i| w[i].abs()).fold(0.0, f64::max);
     let mut SU = S * U;
     for j in 0..m {
-        let inv = if w[j] > crate::RANK_TOL * wmax { 1.0 / w[j] } else { 0.0 };
+        let inv = if w[j] > crate::RANK_TOL * wmax {
+            1.0 / w[j]
+        } else {
+            0.0
+        };
         for i in 0..SU.nrows() {
             SU[(i, j)] *= inv;
         }

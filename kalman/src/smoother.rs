@@ -46,7 +46,15 @@ pub struct Smoothed {
 impl RtsSmoother {
     /// An empty recorder for n states.
     pub fn new(n: usize) -> Self {
-        Self { n, xf: Vec::new(), pf: Vec::new(), xp: Vec::new(), pp: Vec::new(), ct: Vec::new(), steps: 0 }
+        Self {
+            n,
+            xf: Vec::new(),
+            pf: Vec::new(),
+            xp: Vec::new(),
+            pp: Vec::new(),
+            ct: Vec::new(),
+            steps: 0,
+        }
     }
 
     /// Number of recorded steps.
@@ -72,7 +80,11 @@ impl RtsSmoother {
     ///
     /// # Errors
     /// [`Error::Dimension`] if n differs from the smoother's.
-    pub fn record_with<D: Dims>(&mut self, filter: &Filter<D>, model: &Model<D>) -> Result<(), Error> {
+    pub fn record_with<D: Dims>(
+        &mut self,
+        filter: &Filter<D>,
+        model: &Model<D>,
+    ) -> Result<(), Error> {
         let n = self.n;
         if model.dims().n() != n || filter.state().len() != n {
             return Err(Error::Dimension {
@@ -104,7 +116,11 @@ impl RtsSmoother {
     pub fn smooth(&self) -> Result<Smoothed, Error> {
         let (n, N) = (self.n, self.steps);
         if N == 0 {
-            return Err(Error::Dimension { name: "steps", value: 0, rule: "record at least one filter step" });
+            return Err(Error::Dimension {
+                name: "steps",
+                value: 0,
+                rule: "record at least one filter step",
+            });
         }
         fn mat(v: &[f64], k: usize, n: usize) -> MatRef<'_, f64> {
             MatRef::from_column_major_slice(&v[k * n * n..(k + 1) * n * n], n, n)
@@ -114,7 +130,10 @@ impl RtsSmoother {
         }
         let mut means = Mat::<f64>::zeros(n, N);
         let mut covs = vec![Mat::<f64>::zeros(n, n); N];
-        means.as_mut().col_mut(N - 1).copy_from(vec(&self.xf, N - 1, n).col(0));
+        means
+            .as_mut()
+            .col_mut(N - 1)
+            .copy_from(vec(&self.xf, N - 1, n).col(0));
         covs[N - 1] = mat(&self.pf, N - 1, n).to_owned();
         for k in (0..N - 1).rev() {
             let Pp = mat(&self.pp, k, n);
@@ -127,7 +146,10 @@ impl RtsSmoother {
             symmetrise(&mut P);
             covs[k] = P;
         }
-        Ok(Smoothed { means, covariances: covs })
+        Ok(Smoothed {
+            means,
+            covariances: covs,
+        })
     }
 }
 
@@ -147,21 +169,29 @@ fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f64>, Error> 
     if let Ok(llt) = A.llt(Side::Lower) {
         // Accept the Cholesky factor only if its pivots are not tiny relative to the diagonal.
         let L = llt.L();
-        let dmin = (0..n).map(|i| L[(i, i)] * L[(i, i)]).fold(f64::INFINITY, f64::min);
+        let dmin = (0..n)
+            .map(|i| L[(i, i)] * L[(i, i)])
+            .fold(f64::INFINITY, f64::min);
         if dmin > RANK_TOL * amax {
             return Ok(llt.solve(B));
         }
     }
-    let evd = A.self_adjoint_eigen(Side::Lower).map_err(|_| Error::Factorisation {
-        name: "P_{k+1|k}",
-        reason: "symmetric eigen-decomposition failed in the smoother's singular fallback",
-    })?;
+    let evd = A
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| Error::Factorisation {
+            name: "P_{k+1|k}",
+            reason: "symmetric eigen-decomposition failed in the smoother's singular fallback",
+        })?;
     let U = evd.U();
     let s = evd.S().column_vector();
     let smax = (0..n).map(|i| s[i].abs()).fold(0.0, f64::max);
     let mut UtB = U.transpose() * B;
     for i in 0..n {
-        let inv = if s[i] > RANK_TOL * smax { 1.0 / s[i] } else { 0.0 };
+        let inv = if s[i] > RANK_TOL * smax {
+            1.0 / s[i]
+        } else {
+            0.0
+        };
         for j in 0..UtB.ncols() {
             UtB[(i, j)] *= inv;
         }
@@ -177,14 +207,22 @@ mod tests {
     #[test]
     fn scalar_random_walk_two_steps() {
         // x1 = x0 + w, q = 1; z_k = x_k + v, r = 1; prior x0 ~ N(0, 1).
-        let model = Model::new(Dyn::new(1, 1, 0).unwrap(), &[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]]).unwrap();
-        let mut f = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph).unwrap();
+        let model = Model::new(
+            Dyn::new(1, 1, 0).expect("must succeed"),
+            &[[1.0]],
+            &[[1.0]],
+            &[[1.0]],
+            &[[1.0]],
+        )
+        .expect("must succeed");
+        let mut f =
+            Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph).expect("must succeed");
         let mut s = RtsSmoother::new(1);
         for z in [1.0, 3.0] {
-            f.step(&[z], None).unwrap();
-            s.record(&f).unwrap();
+            f.step(&[z], None).expect("must succeed");
+            s.record(&f).expect("must succeed");
         }
-        let out = s.smooth().unwrap();
+        let out = s.smooth().expect("must succeed");
         // Batch: information matrix [[1+1+1, −1], [−1, 1+1]], rhs [1, 3]: x = [5/5, 10/5]/… solve.
         // det = 3·2 − 1 = 5; x0 = (2·1 + 1·3)/5 = 1, x1 = (1·1 + 3·3)/5 = 2.
         assert!((out.means[(0, 0)] - 1.0).abs() < 1e-14);
@@ -198,7 +236,7 @@ mod tests {
     fn singular_predicted_covariance_takes_the_fallback() {
         let a = faer::mat![[2.0, 0.0], [0.0, 0.0]];
         let b = faer::mat![[4.0], [0.0]];
-        let x = solve_psd(a.as_ref(), b.as_ref()).unwrap();
+        let x = solve_psd(a.as_ref(), b.as_ref()).expect("must succeed");
         assert!((x[(0, 0)] - 2.0).abs() < 1e-15 && x[(1, 0)].abs() < 1e-15);
     }
 }

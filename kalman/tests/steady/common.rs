@@ -17,7 +17,11 @@ pub fn randn(rng: &mut ChaCha8Rng, r: usize, c: usize) -> Mat<f64> {
 
 /// Spectral radius.
 pub fn rho(M: &Mat<f64>) -> f64 {
-    M.eigenvalues().expect("eig").iter().map(|l| l.norm()).fold(0.0, f64::max)
+    M.eigenvalues()
+        .expect("eig")
+        .iter()
+        .map(|l| l.norm())
+        .fold(0.0, f64::max)
 }
 
 /// A random n×n matrix scaled to spectral radius `r`.

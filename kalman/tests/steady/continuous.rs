@@ -26,7 +26,9 @@ fn ode_limit_is_care() {
     let P0 = Mat::<f64>::identity(2, 2) * 10.0;
     // Rate 1e-10: an explicit scheme near a stable fixed point hovers at ~rtol·‖P‖·|λ|, so
     // rates much below 100·rtol are not reachable (see `KalmanBucy::until_steady`).
-    let sol = kb.until_steady(P0.as_ref(), 1e-10, 1e4, &OdeOptions::default()).expect("ODE settles");
+    let sol = kb
+        .until_steady(P0.as_ref(), 1e-10, 1e4, &OdeOptions::default())
+        .expect("ODE settles");
     // Tolerance: ‖Ṗ‖ ≤ 1e-10‖P‖ at the stop; the distance to the fixed point is that over the
     // closed-loop decay rate (~0.5 here), plus the integrator's rtol 1e-10: ~1e-10 ≪ 1e-8.
     let d = rel(&sol.covariance, &ss.covariance);
@@ -34,7 +36,9 @@ fn ode_limit_is_care() {
     let K = kb.gain(sol.covariance.as_ref()).expect("gain");
     assert!(rel(&K, &ss.gain) < 1e-8);
     // Symmetric along the way.
-    let mid = kb.integrate(P0.as_ref(), 0.7, &OdeOptions::default()).expect("ODE");
+    let mid = kb
+        .integrate(P0.as_ref(), 0.7, &OdeOptions::default())
+        .expect("ODE");
     // P is symmetrised after every step, so the two triangles agree exactly.
     assert!((mid.covariance[(0, 1)] - mid.covariance[(1, 0)]).abs() <= 0.0);
 }
@@ -42,7 +46,9 @@ fn ode_limit_is_care() {
 #[test]
 fn discrete_gain_over_dt_tends_to_continuous_gain_at_first_order() {
     let (A, H, Q, R) = oscillator();
-    let Kc = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()).expect("CARE").gain;
+    let Kc = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref())
+        .expect("CARE")
+        .gain;
     let mut errs = Vec::new();
     for dt in [0.04, 0.02, 0.01] {
         let (F, Qd) = van_loan(A.as_ref(), Q.as_ref(), dt).expect("Van Loan");
@@ -56,12 +62,14 @@ fn discrete_gain_over_dt_tends_to_continuous_gain_at_first_order() {
     // Tolerance on the observed order: ±0.1 (the next term is O(Δt²)/O(Δt) ≈ Δt·const).
     let p1 = (errs[0] / errs[1]).log2();
     let p2 = (errs[1] / errs[2]).log2();
-    assert!((p1 - 1.0).abs() < 0.1 && (p2 - 1.0).abs() < 0.1, "observed orders {p1}, {p2}; errors {errs:?}");
+    assert!(
+        (p1 - 1.0).abs() < 0.1 && (p2 - 1.0).abs() < 0.1,
+        "observed orders {p1}, {p2}; errors {errs:?}"
+    );
     assert!(errs[2] < 0.05 * Kc.norm_l2());
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
 
     /// Random continuous models: CARE residual small, and the continuous LQR gain solves its
     /// own CARE X A + AᵀX − X B R⁻¹ Bᵀ X + Q = 0 (the filter form with A → Aᵀ, H → Bᵀ).

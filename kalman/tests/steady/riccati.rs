@@ -11,7 +11,13 @@ use proptest::prelude::*;
 use super::common::{joint_noise, randn, rel, rho, rng, spd, with_radius};
 
 /// Runs the engine's filter (no data needed: P does not depend on z) until P_{k+1|k} settles.
-fn iterate_filter(F: &Mat<f64>, H: &Mat<f64>, Q: &Mat<f64>, R: &Mat<f64>, S: Option<&Mat<f64>>) -> (Mat<f64>, usize) {
+fn iterate_filter(
+    F: &Mat<f64>,
+    H: &Mat<f64>,
+    Q: &Mat<f64>,
+    R: &Mat<f64>,
+    S: Option<&Mat<f64>>,
+) -> (Mat<f64>, usize) {
     let (n, m) = (F.nrows(), H.nrows());
     let mut model = Model::new(Dyn::new(n, m, 0).expect("dims"), F, H, Q, R).expect("model");
     if let Some(S) = S {
@@ -33,7 +39,6 @@ fn iterate_filter(F: &Mat<f64>, H: &Mat<f64>, Q: &Mat<f64>, R: &Mat<f64>, S: Opt
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
 
     /// Random detectable, stabilisable models (Q > 0, generic H, spectral radius up to 1.3,
     /// with or without cross-covariance): the filter's P converges to the DARE prior, the
@@ -176,9 +181,35 @@ fn uav_lqr() {
     }
     assert!(rel(&lqr.cost, &X) < 1e-10);
     // Double integrator without damping: (A, B) stabilisable, but B = 0 is not.
-    let e = dlqr(A.as_ref(), Mat::<f64>::zeros(2, 1).as_ref(), Q.as_ref(), R.as_ref(), None).unwrap_err();
-    assert!(matches!(e, Error::NotStabilisable { pair: "(A, B)", .. }), "{e}");
+    let e = dlqr(
+        A.as_ref(),
+        Mat::<f64>::zeros(2, 1).as_ref(),
+        Q.as_ref(),
+        R.as_ref(),
+        None,
+    )
+    .expect_err("must be an error");
+    assert!(
+        matches!(e, Error::NotStabilisable { pair: "(A, B)", .. }),
+        "{e}"
+    );
     // Q that does not see the position mode: (Q^{1/2}, A) not detectable.
-    let e = dlqr(A.as_ref(), B.as_ref(), mat![[0.0, 0.0], [0.0, 1.0]].as_ref(), R.as_ref(), None).unwrap_err();
-    assert!(matches!(e, Error::NotDetectable { pair: "(Q^{1/2}, A)", .. }), "{e}");
+    let e = dlqr(
+        A.as_ref(),
+        B.as_ref(),
+        mat![[0.0, 0.0], [0.0, 1.0]].as_ref(),
+        R.as_ref(),
+        None,
+    )
+    .expect_err("must be an error");
+    assert!(
+        matches!(
+            e,
+            Error::NotDetectable {
+                pair: "(Q^{1/2}, A)",
+                ..
+            }
+        ),
+        "{e}"
+    );
 }

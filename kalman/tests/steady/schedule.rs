@@ -37,30 +37,61 @@ fn problem(seed: u64, n: usize, m: usize, steps: usize, missing: bool) -> Proble
             (0..m)
                 .map(|i| {
                     // Missing: one channel at steps 40 and 41, everything at step 90.
-                    if missing && ((k == 40 || k == 41) && i == 0 || k == 90) { f64::NAN } else { g.random_range(-3.0..3.0) }
+                    if missing && ((k == 40 || k == 41) && i == 0 || k == 90) {
+                        f64::NAN
+                    } else {
+                        g.random_range(-3.0..3.0)
+                    }
                 })
                 .collect()
         })
         .collect();
-    let us = (0..steps).map(|_| vec![g.random_range(-1.0..1.0)]).collect();
-    Problem { F, H, Q, R, S, B, P0, x0, zs, us }
+    let us = (0..steps)
+        .map(|_| vec![g.random_range(-1.0..1.0)])
+        .collect();
+    Problem {
+        F,
+        H,
+        Q,
+        R,
+        S,
+        B,
+        P0,
+        x0,
+        zs,
+        us,
+    }
 }
 
 fn model<D: Dims>(dims: D, p: &Problem, cross: bool) -> Model<D> {
-    let m = Model::new(dims, &p.F, &p.H, &p.Q, &p.R).expect("model").with_control(&p.B).expect("B");
-    if cross { m.with_cross_covariance(&p.S).expect("S") } else { m }
+    let m = Model::new(dims, &p.F, &p.H, &p.Q, &p.R)
+        .expect("model")
+        .with_control(&p.B)
+        .expect("B");
+    if cross {
+        m.with_cross_covariance(&p.S).expect("S")
+    } else {
+        m
+    }
 }
 
 /// Max over steps of |x_sched − x_full| / max(1, |x_full|), for x_{k|k} and x_{k+1|k}.
 fn compare<D: Dims>(dims: D, p: &Problem, cross: bool) -> (f64, usize) {
-    let sched = GainSchedule::new(model(dims, p, cross), &p.P0, ScheduleOptions::default()).expect("schedule");
+    let sched = GainSchedule::new(model(dims, p, cross), &p.P0, ScheduleOptions::default())
+        .expect("schedule");
     let mut run = sched.runner(&p.x0).expect("runner");
-    let mut full = Filter::new(model(dims, p, cross), &p.x0, &p.P0, CovarianceForm::Joseph).expect("filter");
+    let mut full =
+        Filter::new(model(dims, p, cross), &p.x0, &p.P0, CovarianceForm::Joseph).expect("filter");
     let mut worst = 0.0_f64;
     for (z, u) in p.zs.iter().zip(&p.us) {
         run.step(z, Some(u)).expect("scheduled step");
         full.step(z, Some(u)).expect("full step");
-        for (a, b) in run.state().iter().zip(full.state()).chain(run.predicted_state().iter().zip(full.predicted_state())) {
+        for (a, b) in run
+            .state()
+            .iter()
+            .zip(full.state())
+            .chain(run.predicted_state().iter().zip(full.predicted_state()))
+        {
             worst = worst.max((a - b).abs() / b.abs().max(1.0));
         }
     }
@@ -69,7 +100,12 @@ fn compare<D: Dims>(dims: D, p: &Problem, cross: bool) -> (f64, usize) {
 
 #[test]
 fn reproduces_the_full_filter() {
-    for (seed, cross, missing) in [(1, false, false), (2, true, false), (3, false, true), (4, true, true)] {
+    for (seed, cross, missing) in [
+        (1, false, false),
+        (2, true, false),
+        (3, false, true),
+        (4, true, true),
+    ] {
         let p = problem(seed, 7, 2, 300, missing);
         let (d, len) = compare(Dyn::new(7, 2, 1).expect("dims"), &p, cross);
         // Tolerance 1e-12 (the issue's): the schedule's gains are the engine's own, bit for
@@ -89,7 +125,13 @@ fn fixed_gain_mode_matches_a_filter_started_at_steady_state() {
     let sched = GainSchedule::fixed_gain(model(dims, &p, false), &ss).expect("fixed gain");
     assert_eq!(sched.len(), 1);
     let mut run = sched.runner(&p.x0).expect("runner");
-    let mut full = Filter::new(model(dims, &p, false), &p.x0, &ss.prior, CovarianceForm::Joseph).expect("filter");
+    let mut full = Filter::new(
+        model(dims, &p, false),
+        &p.x0,
+        &ss.prior,
+        CovarianceForm::Joseph,
+    )
+    .expect("filter");
     for (z, u) in p.zs.iter().zip(&p.us) {
         run.step(z, Some(u)).expect("step");
         full.step(z, Some(u)).expect("step");
@@ -103,7 +145,8 @@ fn fixed_gain_mode_matches_a_filter_started_at_steady_state() {
 
 fn steady_allocations<D: Dims>(dims: D) -> usize {
     let p = problem(6, 7, 2, 1000, false);
-    let sched = GainSchedule::new(model(dims, &p, true), &p.P0, ScheduleOptions::default()).expect("schedule");
+    let sched = GainSchedule::new(model(dims, &p, true), &p.P0, ScheduleOptions::default())
+        .expect("schedule");
     let mut run = sched.runner(&p.x0).expect("runner");
     run.step(&p.zs[0], Some(&p.us[0])).expect("step");
     let before = allocations();
@@ -130,16 +173,43 @@ fn no_allocation_per_scheduled_step() {
 #[test]
 fn bad_inputs_are_typed_errors() {
     let p = problem(7, 3, 2, 10, false);
-    let sched = GainSchedule::new(model(Dyn::new(3, 2, 1).expect("dims"), &p, false), &p.P0, ScheduleOptions::default()).expect("schedule");
+    let sched = GainSchedule::new(
+        model(Dyn::new(3, 2, 1).expect("dims"), &p, false),
+        &p.P0,
+        ScheduleOptions::default(),
+    )
+    .expect("schedule");
     let mut run = sched.runner(&p.x0).expect("runner");
-    assert!(matches!(run.step(&[1.0], None), Err(kalman::Error::Shape { name: "z", .. })));
-    assert!(matches!(run.step(&[1.0, f64::INFINITY], None), Err(kalman::Error::NonFinite { name: "z", .. })));
-    assert!(matches!(run.reset(&[0.0]), Err(kalman::Error::Shape { name: "x0", .. })));
+    assert!(matches!(
+        run.step(&[1.0], None),
+        Err(kalman::Error::Shape { name: "z", .. })
+    ));
+    assert!(matches!(
+        run.step(&[1.0, f64::INFINITY], None),
+        Err(kalman::Error::NonFinite { name: "z", .. })
+    ));
+    assert!(matches!(
+        run.reset(&[0.0]),
+        Err(kalman::Error::Shape { name: "x0", .. })
+    ));
     // An undetectable model never settles: a typed error, not a hang.
     let F = faer::mat![[1.5, 0.0], [0.0, 0.5]];
     let H = faer::mat![[0.0, 1.0]];
     let I = Mat::<f64>::identity(2, 2);
-    let m = Model::new(Dyn::new(2, 1, 0).expect("dims"), &F, &H, &I, &faer::mat![[1.0]]).expect("model");
-    let opts = ScheduleOptions { max_steps: 500, ..ScheduleOptions::default() };
-    assert!(matches!(GainSchedule::new(m, &I, opts), Err(kalman::Error::RiccatiNoConvergence { .. })));
+    let m = Model::new(
+        Dyn::new(2, 1, 0).expect("dims"),
+        &F,
+        &H,
+        &I,
+        &faer::mat![[1.0]],
+    )
+    .expect("model");
+    let opts = ScheduleOptions {
+        max_steps: 500,
+        ..ScheduleOptions::default()
+    };
+    assert!(matches!(
+        GainSchedule::new(m, &I, opts),
+        Err(kalman::Error::RiccatiNoConvergence { .. })
+    ));
 }

@@ -11,7 +11,16 @@ use rand::Rng;
 
 use super::common::{min_eig, randn, rng, spd, with_radius};
 
-fn smooth<D: Dims>(dims: D, F: &Mat<f64>, H: &Mat<f64>, Q: &Mat<f64>, R: &Mat<f64>, x0: &[f64], P0: &Mat<f64>, zs: &[Vec<f64>]) -> (Smoothed, Vec<Mat<f64>>) {
+fn smooth<D: Dims>(
+    dims: D,
+    F: &Mat<f64>,
+    H: &Mat<f64>,
+    Q: &Mat<f64>,
+    R: &Mat<f64>,
+    x0: &[f64],
+    P0: &Mat<f64>,
+    zs: &[Vec<f64>],
+) -> (Smoothed, Vec<Mat<f64>>) {
     let model = Model::new(dims, F, H, Q, R).expect("model");
     let mut f = Filter::new(model, x0, P0, CovarianceForm::Joseph).expect("filter");
     let mut s = RtsSmoother::new(F.nrows());
@@ -26,9 +35,21 @@ fn smooth<D: Dims>(dims: D, F: &Mat<f64>, H: &Mat<f64>, Q: &Mat<f64>, R: &Mat<f6
 
 /// Batch least squares over x_0..x_{N−1}: prior, measurement and dynamics residuals weighted
 /// by P0⁻¹, R⁻¹, Q⁻¹. Returns (solution n×N, inverse information blocks).
-fn batch(F: &Mat<f64>, H: &Mat<f64>, Q: &Mat<f64>, R: &Mat<f64>, x0: &[f64], P0: &Mat<f64>, zs: &[Vec<f64>]) -> (Mat<f64>, Vec<Mat<f64>>) {
+fn batch(
+    F: &Mat<f64>,
+    H: &Mat<f64>,
+    Q: &Mat<f64>,
+    R: &Mat<f64>,
+    x0: &[f64],
+    P0: &Mat<f64>,
+    zs: &[Vec<f64>],
+) -> (Mat<f64>, Vec<Mat<f64>>) {
     let (n, N) = (F.nrows(), zs.len());
-    let inv = |A: &Mat<f64>| A.llt(Side::Lower).expect("pd").solve(Mat::<f64>::identity(A.nrows(), A.nrows()));
+    let inv = |A: &Mat<f64>| {
+        A.llt(Side::Lower)
+            .expect("pd")
+            .solve(Mat::<f64>::identity(A.nrows(), A.nrows()))
+    };
     let (Qi, P0i) = (inv(Q), inv(P0));
     let mut J = Mat::<f64>::zeros(n * N, n * N);
     let mut h = Mat::<f64>::zeros(n * N, 1);
@@ -70,7 +91,9 @@ fn batch(F: &Mat<f64>, H: &Mat<f64>, Q: &Mat<f64>, R: &Mat<f64>, x0: &[f64], P0:
     let x = llt.solve(&h);
     let Jinv = llt.solve(Mat::<f64>::identity(n * N, n * N));
     let means = Mat::from_fn(n, N, |i, k| x[(k * n + i, 0)]);
-    let covs = (0..N).map(|k| Jinv.as_ref().submatrix(k * n, k * n, n, n).to_owned()).collect();
+    let covs = (0..N)
+        .map(|k| Jinv.as_ref().submatrix(k * n, k * n, n, n).to_owned())
+        .collect();
     (means, covs)
 }
 
@@ -83,20 +106,45 @@ fn smoothed_means_equal_batch_least_squares_on_both_paths() {
     let P0 = mat![[2.0, 0.1], [0.1, 1.0]];
     let x0 = [0.5, -0.2];
     let mut g = rng(11);
-    let zs: Vec<Vec<f64>> = (0..12).map(|k| vec![if k == 5 { f64::NAN } else { g.random_range(-2.0..2.0) }]).collect();
+    let zs: Vec<Vec<f64>> = (0..12)
+        .map(|k| {
+            vec![if k == 5 {
+                f64::NAN
+            } else {
+                g.random_range(-2.0..2.0)
+            }]
+        })
+        .collect();
     let (lsx, lsP) = batch(&F, &H, &Q, &R, &x0, &P0, &zs);
-    let (dyn_s, filtered) = smooth(Dyn::new(2, 1, 0).expect("dims"), &F, &H, &Q, &R, &x0, &P0, &zs);
+    let (dyn_s, filtered) = smooth(
+        Dyn::new(2, 1, 0).expect("dims"),
+        &F,
+        &H,
+        &Q,
+        &R,
+        &x0,
+        &P0,
+        &zs,
+    );
     let (fix_s, _) = smooth(Fixed::<2, 1>::new(), &F, &H, &Q, &R, &x0, &P0, &zs);
     // Tolerance: both sides are backward-stable solves of a well-conditioned (cond ~1e3)
     // problem with values O(1): 1e-10 leaves a wide margin over ~1e-13 round-off.
     for k in 0..zs.len() {
         for i in 0..2 {
-            assert!((dyn_s.means[(i, k)] - lsx[(i, k)]).abs() < 1e-10, "mean {k},{i}");
+            assert!(
+                (dyn_s.means[(i, k)] - lsx[(i, k)]).abs() < 1e-10,
+                "mean {k},{i}"
+            );
             // The two storage paths run the same kernels: agree to 1e-12.
             assert!((dyn_s.means[(i, k)] - fix_s.means[(i, k)]).abs() < 1e-12);
             for j in 0..2 {
-                assert!((dyn_s.covariances[k][(i, j)] - lsP[k][(i, j)]).abs() < 1e-10, "cov {k},{i},{j}");
-                assert!((dyn_s.covariances[k][(i, j)] - fix_s.covariances[k][(i, j)]).abs() < 1e-12);
+                assert!(
+                    (dyn_s.covariances[k][(i, j)] - lsP[k][(i, j)]).abs() < 1e-10,
+                    "cov {k},{i},{j}"
+                );
+                assert!(
+                    (dyn_s.covariances[k][(i, j)] - fix_s.covariances[k][(i, j)]).abs() < 1e-12
+                );
             }
         }
         // Smoothed ≤ filtered.
@@ -106,7 +154,6 @@ fn smoothed_means_equal_batch_least_squares_on_both_paths() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
 
     /// Random models: P_{k|k} − P_{k|N} is PSD (to round-off 1e-10·‖P_{k|k}‖) and the
     /// smoothed covariance is symmetric PSD.
