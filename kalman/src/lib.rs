@@ -63,6 +63,7 @@ pub mod continuous;
 pub mod kernels;
 mod model;
 pub mod riccati;
+pub mod schedule;
 pub mod smoother;
 mod storage;
 #[cfg(feature = "proptest")]
