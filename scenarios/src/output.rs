@@ -83,6 +83,31 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
     write_atomic(path, text.as_bytes())
 }
 
+/// Copies every regular, non-hidden file of directory `from` into `to` (each written whole or
+/// not at all); used by `merge` to carry over the files every shard writes identically.
+pub fn copy_files(from: &Path, to: &Path) -> Result<()> {
+    let read_err = |source| Error::Read {
+        path: from.to_path_buf(),
+        source,
+    };
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(from).map_err(read_err)? {
+        let entry = entry.map_err(read_err)?;
+        let name = entry.file_name();
+        let is_file = entry.file_type().map_err(read_err)?.is_file();
+        if is_file && !name.to_string_lossy().starts_with('.') {
+            names.push(name);
+        }
+    }
+    names.sort();
+    for name in names {
+        let src = from.join(&name);
+        let bytes = std::fs::read(&src).map_err(|source| Error::Read { path: src, source })?;
+        write_atomic(&to.join(&name), &bytes)?;
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,7 +2,11 @@
 //! program (and its library) per command family, one submodule each under `tests/cli/`
 //! (a test crate's root resolves `mod x;` to `tests/x.rs`, hence the `#[path]`s).
 
+#[path = "cli/boom.rs"]
+mod boom;
 #[path = "cli/fueling.rs"]
 mod fueling;
+#[path = "cli/uav.rs"]
+mod uav;
 #[path = "cli/userdata.rs"]
 mod userdata;

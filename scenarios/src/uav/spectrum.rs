@@ -1,0 +1,248 @@
+//! Spectral and whiteness tools for the reports: an in-place radix-2 FFT, Welch's averaged
+//! periodogram (one-sided PSD in units²/Hz), the sample autocorrelation and the Ljung–Box
+//! portmanteau statistic.
+
+use std::f64::consts::PI;
+
+use crate::error::{Error, Result};
+
+/// In-place iterative radix-2 decimation-in-time FFT, X_k = Σ x_n e^{−2πikn/N}, of the
+/// complex sequence (`re`, `im`).
+///
+/// # Errors
+/// [`Error::Compute`] if the lengths differ or are not a power of two.
+pub fn fft(re: &mut [f64], im: &mut [f64]) -> Result<()> {
+    let n = re.len();
+    if im.len() != n || !n.is_power_of_two() {
+        return Err(Error::Compute(format!(
+            "fft: re has length {n}, im {}; both must be the same power of two",
+            im.len()
+        )));
+    }
+    // Bit-reversal permutation.
+    let mut j = 0;
+    for i in 1..n {
+        let mut bit = n >> 1;
+        while j & bit != 0 {
+            j ^= bit;
+            bit >>= 1;
+        }
+        j |= bit;
+        if i < j {
+            re.swap(i, j);
+            im.swap(i, j);
+        }
+    }
+    let mut len = 2;
+    while len <= n {
+        let ang = -2.0 * PI / len as f64;
+        for start in (0..n).step_by(len) {
+            for k in 0..len / 2 {
+                // Twiddles computed directly (not by recurrence) to keep round-off at O(ε).
+                let (s, c) = (ang * k as f64).sin_cos();
+                let (a, b) = (start + k, start + k + len / 2);
+                let tr = re[b] * c - im[b] * s;
+                let ti = re[b] * s + im[b] * c;
+                re[b] = re[a] - tr;
+                im[b] = im[a] - ti;
+                re[a] += tr;
+                im[a] += ti;
+            }
+        }
+        len <<= 1;
+    }
+    Ok(())
+}
+
+/// A one-sided power spectral density.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Psd {
+    /// Frequencies, Hz: 0, fs/L, …, fs/2 (L the segment length).
+    pub freq: Vec<f64>,
+    /// Density, units²/Hz; Σ psd·Δf over the bins ≈ the signal's variance (Parseval).
+    pub psd: Vec<f64>,
+    /// Segments averaged.
+    pub segments: usize,
+}
+
+/// Welch's method: Hann-windowed segments of `segment` samples (a power of two) with 50 %
+/// overlap, each with its mean removed, periodograms averaged, scaled to a one-sided density
+/// at sampling frequency `fs`: P(f_k) = c·|X_k|²/(fs·Σw²) with c = 2 except at 0 and fs/2.
+///
+/// # Errors
+/// [`Error::Compute`] for a segment length that is not a power of two ≥ 4, a signal shorter
+/// than one segment, or a non-positive `fs`.
+pub fn welch(x: &[f64], fs: f64, segment: usize) -> Result<Psd> {
+    if segment < 4 || !segment.is_power_of_two() {
+        return Err(Error::Compute(format!(
+            "welch: segment length {segment} must be a power of two ≥ 4"
+        )));
+    }
+    if x.len() < segment {
+        return Err(Error::Compute(format!(
+            "welch: the signal has {} samples, fewer than one segment of {segment}",
+            x.len()
+        )));
+    }
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(Error::Compute(format!(
+            "welch: sampling frequency {fs} must be > 0"
+        )));
+    }
+    let w: Vec<f64> = (0..segment)
+        .map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / segment as f64).cos())
+        .collect();
+    let wss: f64 = w.iter().map(|v| v * v).sum();
+    let half = segment / 2;
+    let mut acc = vec![0.0; half + 1];
+    let (mut re, mut im) = (vec![0.0; segment], vec![0.0; segment]);
+    let mut segments = 0;
+    let mut start = 0;
+    while start + segment <= x.len() {
+        let seg = &x[start..start + segment];
+        let mean = seg.iter().sum::<f64>() / segment as f64;
+        for i in 0..segment {
+            re[i] = (seg[i] - mean) * w[i];
+            im[i] = 0.0;
+        }
+        fft(&mut re, &mut im)?;
+        for (k, a) in acc.iter_mut().enumerate() {
+            *a += re[k] * re[k] + im[k] * im[k];
+        }
+        segments += 1;
+        start += half;
+    }
+    let scale = 1.0 / (fs * wss * segments as f64);
+    let psd = acc
+        .iter()
+        .enumerate()
+        .map(|(k, a)| {
+            let c = if k == 0 || k == half { 1.0 } else { 2.0 };
+            c * a * scale
+        })
+        .collect();
+    let freq = (0..=half).map(|k| k as f64 * fs / segment as f64).collect();
+    Ok(Psd {
+        freq,
+        psd,
+        segments,
+    })
+}
+
+/// Sample autocorrelation ρ_k, k = 0..=`max_lag`, of `x` about its mean (ρ₀ = 1; all zero for
+/// a constant signal).
+pub fn autocorrelation(x: &[f64], max_lag: usize) -> Vec<f64> {
+    let n = x.len();
+    let mean = x.iter().sum::<f64>() / n.max(1) as f64;
+    let c0: f64 = x.iter().map(|v| (v - mean) * (v - mean)).sum();
+    (0..=max_lag)
+        .map(|k| {
+            if c0 <= 0.0 || k >= n {
+                return 0.0;
+            }
+            let ck: f64 = (0..n - k).map(|i| (x[i] - mean) * (x[i + k] - mean)).sum();
+            ck / c0
+        })
+        .collect()
+}
+
+/// The Ljung–Box statistic Q = N(N+2)·Σ_{k=1}^{h} ρ_k²/(N−k): χ² with h degrees of freedom
+/// for a white sequence.
+pub fn ljung_box(x: &[f64], lags: usize) -> f64 {
+    let n = x.len() as f64;
+    let rho = autocorrelation(x, lags);
+    n * (n + 2.0)
+        * rho
+            .iter()
+            .enumerate()
+            .skip(1)
+            .map(|(k, r)| r * r / (n - k as f64))
+            .sum::<f64>()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    fn white(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        (0..n)
+            .map(|_| sigma * Distribution::<f64>::sample(&StandardNormal, &mut rng))
+            .collect::<Vec<f64>>()
+    }
+
+    #[test]
+    fn fft_matches_direct_dft() {
+        let x: Vec<f64> = (0..16).map(|i| ((i * i) as f64 * 0.37).sin()).collect();
+        let (mut re, mut im) = (x.clone(), vec![0.0; 16]);
+        fft(&mut re, &mut im).expect("power of two");
+        for k in 0..16 {
+            let (mut sr, mut si) = (0.0, 0.0);
+            for (n, v) in x.iter().enumerate() {
+                let a = -2.0 * PI * (k * n) as f64 / 16.0;
+                sr += v * a.cos();
+                si += v * a.sin();
+            }
+            // 16-point transform of O(1) data: round-off ~ 16·log2(16)·ε.
+            assert!(
+                (re[k] - sr).abs() < 1e-12 && (im[k] - si).abs() < 1e-12,
+                "bin {k}"
+            );
+        }
+        assert!(fft(&mut [0.0; 6], &mut [0.0; 6]).is_err());
+    }
+
+    #[test]
+    fn white_noise_level_is_two_sigma_squared_over_fs() {
+        let (sigma, fs) = (1.5, 4.0);
+        let x = white(16384, sigma, 7);
+        let p = welch(&x, fs, 256).expect("valid");
+        let inner = &p.psd[1..p.psd.len() - 1];
+        let mean = inner.iter().sum::<f64>() / inner.len() as f64;
+        let expected = 2.0 * sigma * sigma / fs;
+        // 127 segments × 127 bins, Hann-correlated: the mean level's relative standard error
+        // is ≈ 1/√(127·127/2) ≈ 1 %; 5 % is a 5σ bound.
+        assert!((mean / expected - 1.0).abs() < 0.05, "{mean} vs {expected}");
+        // Parseval: the integrated density is the variance.
+        let df = p.freq[1];
+        let total: f64 = p.psd.iter().sum::<f64>() * df;
+        assert!((total / (sigma * sigma) - 1.0).abs() < 0.05, "{total}");
+    }
+
+    #[test]
+    fn sinusoid_peak_sits_at_its_frequency_with_its_power() {
+        let (fs, f0, amp) = (4.0, 0.5, 2.0);
+        let x: Vec<f64> = (0..4096)
+            .map(|i| amp * (2.0 * PI * f0 * i as f64 / fs).sin())
+            .collect();
+        let p = welch(&x, fs, 256).expect("valid");
+        let (imax, _) = p
+            .psd
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .expect("non-empty");
+        assert!((p.freq[imax] - f0).abs() < 1e-12);
+        let df = p.freq[1];
+        let power: f64 = p.psd[imax - 2..=imax + 2].iter().sum::<f64>() * df;
+        // A Hann window spreads an on-bin tone over 3 bins; the density integrates to A²/2.
+        assert!((power / (amp * amp / 2.0) - 1.0).abs() < 1e-6, "{power}");
+    }
+
+    #[test]
+    fn ljung_box_separates_white_from_correlated() {
+        let x = white(4000, 1.0, 3);
+        let q_white = ljung_box(&x, 20);
+        // χ²₂₀: 99.9 % quantile 45.3.
+        assert!(q_white < 45.3, "{q_white}");
+        let mut y = vec![0.0; 4000];
+        for i in 1..4000 {
+            y[i] = 0.5 * y[i - 1] + x[i];
+        }
+        assert!(ljung_box(&y, 20) > 500.0);
+        let rho = autocorrelation(&[2.0; 10], 3);
+        assert!(rho.iter().all(|r| r.abs() < 1e-15));
+    }
+}

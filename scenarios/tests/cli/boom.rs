@@ -1,0 +1,204 @@
+//! `scenarios boom` at reduced size through the built binary: the acceptance checks of
+//! issue 8 (direct inversion fails near 90°, WLS at γ = 10° holds both limits for both
+//! variants, WLS at γ = 0 stays defined, the γ window contains 10°), the summary schema, the
+//! units/weights verdict in the report, deterministic shards and `merge`, and errors that
+//! name the key.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("scenarios-boom-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch dir");
+    dir
+}
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_scenarios"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("run scenarios")
+}
+
+fn ok(dir: &Path, args: &[&str]) {
+    let out = run(dir, args);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The full turn and all cases, with a coarse γ sweep (0, 5, …, 20°) to keep it fast.
+const SMALL: &str = "[sweep]\nstep_deg = 5.0\n";
+
+fn case<'a>(
+    s: &'a serde_json::Value,
+    method: &str,
+    gamma: f64,
+    bias: &str,
+) -> &'a serde_json::Value {
+    s["cases"]
+        .as_array()
+        .expect("cases is a list")
+        .iter()
+        .find(|c| {
+            c["method"] == method
+                && (c["gamma_deg"].as_f64().expect("γ") - gamma).abs() < 1e-9
+                && c["bias"] == bias
+        })
+        .unwrap_or_else(|| panic!("no case {method} γ={gamma} {bias}"))
+}
+
+#[test]
+fn the_papers_conclusions_hold() {
+    let dir = scratch("accept");
+    std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
+    ok(&dir, &["boom", "--config", "small.toml", "--out", "out"]);
+    let out = dir.join("out");
+    let s: serde_json::Value =
+        serde_json::from_str(&read(&out.join("summary.json"))).expect("JSON");
+    assert_eq!(s["scenario"], "boom");
+    assert_eq!(s["limits"]["alpha_deg"], 1.0);
+    assert_eq!(s["limits"]["eps_deg_s2"], 0.5);
+    // The issue's schema, exactly, for every case.
+    let keys = [
+        "bias",
+        "first_violation_alpha_deg",
+        "gamma_deg",
+        "max_alpha_err_deg",
+        "max_eps_err_deg_s2",
+        "method",
+        "undefined_from_alpha_deg",
+    ];
+    for c in s["cases"].as_array().expect("cases") {
+        let mut k: Vec<&str> = c
+            .as_object()
+            .expect("object")
+            .keys()
+            .map(String::as_str)
+            .collect();
+        k.sort_unstable();
+        assert_eq!(k, keys);
+    }
+    assert_eq!(s["cases"].as_array().map(Vec::len), Some(12));
+    // Direct inversion fails near 90° in both variants: over the limits (or undefined) from
+    // somewhere in (80°, 90°), and nowhere before.
+    for bias in ["+", "-"] {
+        let c = case(&s, "direct", 0.0, bias);
+        let from = c["first_violation_alpha_deg"]
+            .as_f64()
+            .expect("direct must fail");
+        assert!(from > 80.0 && from < 90.0, "direct {bias}: {from}");
+    }
+    assert!(case(&s, "direct", 0.0, "+")["undefined_from_alpha_deg"].is_number());
+    // WLS at γ = 10° holds both limits over the whole turn, both variants.
+    for bias in ["+", "-"] {
+        let c = case(&s, "wls", 10.0, bias);
+        assert!(c["first_violation_alpha_deg"].is_null(), "{c}");
+        assert!(c["undefined_from_alpha_deg"].is_null(), "{c}");
+        assert!(c["max_alpha_err_deg"].as_f64().expect("num") <= 1.0);
+        assert!(c["max_eps_err_deg_s2"].as_f64().expect("num") <= 0.5);
+    }
+    // WLS at γ = 0 stays defined in both variants.
+    for bias in ["+", "-"] {
+        assert!(case(&s, "wls", 0.0, bias)["undefined_from_alpha_deg"].is_null());
+    }
+    // The feasible window contains 10°; the sweep rows carry within_limits.
+    let w = s["feasible_gamma_deg"].as_array().expect("a window");
+    let (lo, hi) = (w[0].as_f64().expect("lo"), w[1].as_f64().expect("hi"));
+    assert!(lo <= 10.0 && 10.0 <= hi, "{lo}..{hi}");
+    let sweep = s["gamma_sweep"].as_array().expect("sweep");
+    assert_eq!(sweep.len(), 5);
+    assert!(sweep.iter().all(|r| r["within_limits"].is_boolean()));
+    assert_eq!(
+        sweep[0]["within_limits"], false,
+        "γ = 0 must not be feasible"
+    );
+    // The report states which units/weights reproduce the paper and embeds the plots.
+    let report = read(&out.join("report.md"));
+    assert!(report.contains("Which units and weights reproduce the paper"));
+    assert!(report.contains("**Verdict.**"));
+    assert!(report.contains("Maxima exclude only the first cycle"));
+    assert_eq!(s["alternative_verdicts"].as_array().map(Vec::len), Some(16));
+    for svg in [
+        "gamma_sweep.svg",
+        "wls_gamma10_eps.svg",
+        "direct_gamma0_alpha.svg",
+    ] {
+        assert!(report.contains(&format!("]({svg})")), "{svg}");
+        assert!(read(&out.join(svg)).contains("</svg>"));
+    }
+}
+
+#[test]
+fn shards_agree_and_merge_copies() {
+    let dir = scratch("merge");
+    // The smallest useful campaign: one γ sweep point beyond 0 and no extras.
+    std::fs::write(
+        dir.join("tiny.toml"),
+        "case_gammas_deg = [10.0]\n[sweep]\nfrom_deg = 8.0\nto_deg = 12.0\nstep_deg = 4.0\n[beyond]\nenabled = false\n",
+    )
+    .expect("write config");
+    ok(
+        &dir,
+        &[
+            "boom",
+            "--config",
+            "tiny.toml",
+            "--shard",
+            "1/2",
+            "--out",
+            "a",
+        ],
+    );
+    ok(
+        &dir,
+        &[
+            "boom",
+            "--config",
+            "tiny.toml",
+            "--shard",
+            "2/2",
+            "--out",
+            "b",
+        ],
+    );
+    ok(&dir, &["merge", "a", "b", "--out", "m"]);
+    let a = read(&dir.join("a/summary.json"));
+    assert_eq!(a, read(&dir.join("m/summary.json")));
+    assert_eq!(
+        read(&dir.join("a/report.md")),
+        read(&dir.join("m/report.md"))
+    );
+    // A shard from another seed-independent but differently configured run is refused.
+    std::fs::write(dir.join("other.toml"), "case_gammas_deg = [5.0]\n[sweep]\nfrom_deg = 8.0\nto_deg = 12.0\nstep_deg = 4.0\n[beyond]\nenabled = false\n").expect("write");
+    ok(&dir, &["boom", "--config", "other.toml", "--out", "c"]);
+    let out = run(&dir, &["merge", "a", "c", "--out", "bad"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("differs"));
+}
+
+#[test]
+fn bad_configuration_is_named() {
+    let dir = scratch("errors");
+    std::fs::write(dir.join("bad.toml"), "[limits]\nalpha_deg = 0.0\n").expect("write");
+    let out = run(&dir, &["boom", "--config", "bad.toml", "--out", "o"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("limits.alpha_deg") && err.contains("bad.toml"),
+        "{err}"
+    );
+    std::fs::write(dir.join("typo.toml"), "[estimator]\nunits = \"Degree\"\n").expect("write");
+    let out = run(&dir, &["boom", "--config", "typo.toml", "--out", "o"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("units"));
+    assert!(!dir.join("o").exists());
+}
