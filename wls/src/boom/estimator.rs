@@ -57,8 +57,12 @@ pub enum AxWeightLaw {
 pub enum RateWeight {
     /// ε̇ from the two previous cycles, (ε₀ − ε₋₁)/dt: one solve per cycle.
     PreviousCycle,
-    /// ε̇ = (ε − ε₀)/dt with ε from this cycle's solve, re-solved until ε changes by at most
-    /// `tolerance` (rad/s²) or `max_iterations` solves were made.
+    /// ε̇ = (ε − ε₀)/dt with ε from this cycle's own solution: v₆ is made self-consistent
+    /// (a stable fixed point of v₆ ↦ ε ↦ ε̇ ↦ v₆). Found by Newton safeguarded by bisection,
+    /// started from the one-solve answer with the previous cycle's ε̇, until the ε step is at
+    /// most `tolerance` (rad/s²) or `max_iterations` evaluations were made. Where the weight
+    /// law admits several fixed points (rare; seen on noisy data) the one this search reaches
+    /// is taken; plain iteration v₆ ← v₆(ε(v₆)) may settle on a neighbouring one.
     FixedPoint {
         /// Maximum fixed-point iterations per cycle (≥ 1).
         max_iterations: u32,
@@ -305,19 +309,35 @@ pub struct BoomEstimator {
     state: Option<State>,
 }
 
-/// The largest eigenvalue of a symmetric 3×3 matrix, closed form (trigonometric method);
-/// accurate to a few ulps relative to itself.
-fn lambda_max_sym3(A: &Matrix3<f64>) -> f64 {
-    let p1 = A[(0, 1)].powi(2) + A[(0, 2)].powi(2) + A[(1, 2)].powi(2);
-    let q = A.trace() / 3.0;
-    let p2 = (A[(0, 0)] - q).powi(2) + (A[(1, 1)] - q).powi(2) + (A[(2, 2)] - q).powi(2) + 2.0 * p1;
-    let p = (p2 / 6.0).sqrt();
-    if p <= f64::MIN_POSITIVE * q.abs().max(1.0) {
-        return q;
+/// The largest eigenvalue of a symmetric positive semidefinite 3×3 matrix: Newton on the
+/// characteristic polynomial from the trace, which lies right of the largest root, so the
+/// iterates fall monotonically onto it (quadratically when it is simple). No transcendental
+/// functions; relative accuracy a few ulps.
+fn lambda_max_spd3(G: &Matrix3<f64>) -> f64 {
+    let c2 = G.trace();
+    let c1 = G[(0, 0)] * G[(1, 1)] - G[(0, 1)] * G[(1, 0)] + G[(0, 0)] * G[(2, 2)]
+        - G[(0, 2)] * G[(2, 0)]
+        + G[(1, 1)] * G[(2, 2)]
+        - G[(1, 2)] * G[(2, 1)];
+    let c0 = G.determinant();
+    let mut x = c2;
+    for _ in 0..64 {
+        let p = ((x - c2) * x + c1) * x - c0;
+        let dp = (3.0 * x - 2.0 * c2) * x + c1;
+        if dp <= 0.0 {
+            break;
+        }
+        let step = p / dp;
+        if step.is_nan() || step <= 4.0 * f64::EPSILON * x {
+            // Converged, or rounding made p ≤ 0 at the root: stop without overshooting.
+            if step > 0.0 {
+                x -= step;
+            }
+            break;
+        }
+        x -= step;
     }
-    let B = (A - Matrix3::identity() * q) / p;
-    let half_det = (B.determinant() / 2.0).clamp(-1.0, 1.0);
-    q + 2.0 * p * (half_det.acos() / 3.0).cos()
+    x.max(0.0)
 }
 
 /// κ₂(M) = ‖M‖₂·‖M⁻¹‖₂ for a 3×3 M, each norm the square root of the largest eigenvalue of a
@@ -329,8 +349,8 @@ fn cond3(M: &Matrix3<f64>) -> f64 {
     let Some(Minv) = M.try_inverse() else {
         return f64::INFINITY;
     };
-    let n2 = lambda_max_sym3(&M.tr_mul(M));
-    let i2 = lambda_max_sym3(&Minv.tr_mul(&Minv));
+    let n2 = lambda_max_spd3(&M.tr_mul(M));
+    let i2 = lambda_max_spd3(&Minv.tr_mul(&Minv));
     let kappa = (n2 * i2).sqrt();
     if kappa.is_finite() {
         kappa.max(1.0)
@@ -573,51 +593,53 @@ impl BoomEstimator {
             let e5 = reduced.q[2] / t;
             let d = e0 - e5;
             let rate_of = |theta: f64| ((e5 + theta * d) / k - prev.eps) / cfg.dt;
+            let w = &cfg.weights;
+            // ε̇(θ) in the configured rate unit is affine in θ: r(θ) = r₀ + θ·r₁.
+            let unit = cfg.epsilon_rate_unit.per_radian();
+            let (r0, r1) = (rate_of(0.0) * unit, d / k / cfg.dt * unit);
+            let t2 = t * t;
+            // h(θ) and h'(θ), with v₆ = a/u², u = 1 + b·|r(θ)|.
             let h = |theta: f64| {
-                let v6 = self.v6(rate_of(theta));
-                theta - v6 / (t * t + v6)
+                let r = r0 + theta * r1;
+                let u = 1.0 + w.eps_rate_gain * r.abs();
+                let v6 = w.eps_prior / (u * u);
+                let dv6 = -2.0 * w.eps_prior * w.eps_rate_gain * r.signum() * r1 / (u * u * u);
+                let den = t2 + v6;
+                (theta - v6 / den, 1.0 - t2 * dv6 / (den * den))
             };
             let to_eps = d.abs() / k;
-            let (mut a, mut fa) = (0.0, h(0.0));
-            let (mut b, mut fb) = (1.0, h(1.0));
-            let mut iterations = 2;
-            let root = if fa >= 0.0 {
+            let mut iterations = 0;
+            let root = if w.eps_prior <= 0.0 || to_eps <= tol {
+                // v₆ ≡ 0, or e₀ = e₅ and v₆ cannot move the answer.
                 0.0
-            } else if fb <= 0.0 {
-                1.0
             } else {
-                let mut side = 0;
-                let mut c = f64::NAN;
+                // Newton safeguarded by bisection on the bracket [0, 1] (h(0) < 0 < h(1) as
+                // T₃₃ ≠ 0 and the numerator of v₆ is > 0), started from the one-solve answer
+                // with ε̇ of the previous cycle.
+                let (mut a, mut b) = (0.0, 1.0);
+                let v_prev = self.v6(prev.rate);
+                let mut x = v_prev / (t2 + v_prev);
                 while iterations < max_it {
                     iterations += 1;
-                    let previous = c;
-                    c = (a * fb - b * fa) / (fb - fa);
-                    let fc = h(c);
-                    // Converged when the ε step is below the tolerance (the first step compares
-                    // with NaN and never stops) or the bracket itself is that narrow.
-                    if fc.abs() < f64::MIN_POSITIVE
-                        || (c - previous).abs() * to_eps <= tol
-                        || (b - a) * to_eps <= tol
-                    {
+                    let (f, df) = h(x);
+                    if f < 0.0 {
+                        a = x;
+                    } else {
+                        b = x;
+                    }
+                    let newton = x - f / df;
+                    let next = if df > 0.0 && newton > a && newton < b {
+                        newton
+                    } else {
+                        0.5 * (a + b)
+                    };
+                    let step = (next - x).abs();
+                    x = next;
+                    if step * to_eps <= tol || (b - a) * to_eps <= tol {
                         break;
                     }
-                    if (fc > 0.0) == (fb > 0.0) {
-                        b = c;
-                        fb = fc;
-                        if side == -1 {
-                            fa *= 0.5;
-                        }
-                        side = -1;
-                    } else {
-                        a = c;
-                        fa = fc;
-                        if side == 1 {
-                            fb *= 0.5;
-                        }
-                        side = 1;
-                    }
                 }
-                c
+                x
             };
             (rate_of(root), iterations)
         };
