@@ -1,6 +1,6 @@
 //! The error type of the `scenarios` program: every variant names the file, key or value at
-//! fault, and all of them map to exit code 2 (bad input the user can fix) except [`Error::Io`]
-//! on output and [`Error::Internal`].
+//! fault, and all of them map to exit code 2 (bad input the user can fix) except
+//! [`Error::Write`] on output and [`Error::Compute`].
 
 use std::path::PathBuf;
 
