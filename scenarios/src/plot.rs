@@ -11,7 +11,7 @@ use crate::output;
 /// One curve of a plot.
 #[derive(Debug, Clone)]
 pub struct Series {
-    /// Legend label.
+    /// Legend label (empty: not in the legend).
     pub label: String,
     /// The points (x, y); non-finite points are skipped.
     pub points: Vec<(f64, f64)>,
@@ -167,9 +167,13 @@ fn render(figure: &Figure<'_>, series: &[Series]) -> std::result::Result<String,
                             .draw_series(LineSeries::new(pts, color.stroke_width(2)))
                             .map_err(|e| e.to_string())?
                     };
-                    anno.label(s.label.clone()).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3))
-                    });
+                    // An empty label keeps the series out of the legend (e.g. the data
+                    // points drawn beside their labelled fit line).
+                    if !s.label.is_empty() {
+                        anno.label(s.label.clone()).legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(3))
+                        });
+                    }
                 }
                 chart
                     .configure_series_labels()

@@ -113,7 +113,7 @@ impl Default for FuelingParams {
     fn default() -> Self {
         Self {
             runs_per_point: 1000,
-            sweep_runs_per_point: 400,
+            sweep_runs_per_point: 1000,
             dt_s: 0.1,
             velocity_time_s: 20.0,
             velocity_std_mm_s: 1.0,

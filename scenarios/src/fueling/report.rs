@@ -620,7 +620,7 @@ pub fn report_md(sm: &Summary) -> String {
     s.push_str("| quantity | paper | ours | comment |\n|---|---|---|---|\n");
     let cmp = |ours: f64, paper: f64| {
         if (ours - paper).abs() <= 0.05 {
-            "agrees within 0.05".to_string()
+            format!("close: {:+.2} (the coarse δ; see below)", ours - paper)
         } else if ours > paper {
             format!(
                 "{:.2} higher: see *Why the ratios differ* below",
@@ -680,9 +680,18 @@ pub fn report_md(sm: &Summary) -> String {
     let (lo, hi) = range(amp.iter().map(|e| e.stats.kf2.std_mm));
     let (lo1, hi1) = range(amp.iter().map(|e| e.stats.kf1.std_mm));
     let (rlo, rhi) = range(amp.iter().map(|e| e.stats.relay.std_mm));
+    let growth = format!(
+        "grows {} mm over the sweep against relay logic's {} mm ({:.0} %): far less \
+         sensitive, not invariant — with a floor quantizer the residual is the quantization \
+         error, and the rolling moves the damped surface across the marks at a rate the \
+         model's quantization noise (steps passed at the fill rate) does not describe",
+        f2(hi - lo),
+        f2(rhi - rlo),
+        100.0 * (hi - lo) / (rhi - rlo)
+    );
     let _ = writeln!(
         s,
-        "| two-channel random error vs amplitude 0–{}° | \"fully invariant\" | {}–{} mm (relay {}–{}, one-channel {}–{}) | {} |",
+        "| two-channel random error vs amplitude 0–{}° | \"fully invariant\" | {}–{} mm (relay {}–{}, one-channel {}–{}) | {growth} |",
         r.amplitude_deg,
         f2(lo),
         f2(hi),
@@ -690,11 +699,6 @@ pub fn report_md(sm: &Summary) -> String {
         f2(rhi),
         f2(lo1),
         f2(hi1),
-        if hi - lo < 0.25 * (rhi - rlo) {
-            "nearly invariant: the tilt channel removes the rolling; what remains is quantization, which the rolling partly dithers"
-        } else {
-            "not invariant: quantization dominates and the rolling dithers it (δ is large against the damped tilt swing)"
-        }
     );
     let pr = &sm.period_sweep;
     let (plo, phi) = range(pr.iter().map(|e| e.stats.kf2.std_mm));
@@ -706,10 +710,15 @@ pub fn report_md(sm: &Summary) -> String {
         f2(phi),
         f2(p1lo),
         f2(p1hi),
-        if phi - plo < 0.5 * (p1hi - p1lo).max(0.2) {
-            "nearly invariant, unlike the one-channel filter"
+        if phi - plo < 0.5 * (p1hi - p1lo) {
+            format!(
+                "varies {} mm against the one-channel filter's {} mm: far less sensitive, not \
+                 strictly invariant (shorter periods move the surface across the marks faster)",
+                f2(phi - plo),
+                f2(p1hi - p1lo)
+            )
         } else {
-            "varies: longer periods pass the damper with less attenuation and dither the quantizer differently"
+            "not invariant at these parameters".to_string()
         }
     );
 
@@ -732,6 +741,46 @@ pub fn report_md(sm: &Summary) -> String {
         p.sensor_radius_m * (r.amplitude_deg / 3.0).to_radians() * 1e3,
         r.amplitude_deg,
         p.step_mm
+    );
+    let kf1_best = sm
+        .step_sweep
+        .iter()
+        .map(|e| e.stats.kf1.std_mm / e.stats.relay.std_mm)
+        .fold(f64::INFINITY, f64::min);
+    let steps: Vec<String> = sm
+        .step_sweep
+        .iter()
+        .map(|e| {
+            format!(
+                "δ = {} mm: {} / {}",
+                e.at["step_mm"],
+                f2(e.stats.kf2.std_mm / e.stats.relay.std_mm),
+                f2(e.stats.kf1.std_mm / e.stats.relay.std_mm)
+            )
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "The quantization-step sweep below measures this directly. Two-channel / one-channel \
+         random error over relay logic's at {}°: {}. A finer sensor brings the two-channel \
+         ratio to or below the paper's 0.25 (until δ/V_c approaches Δt and the quantization \
+         noise model aliases); the best one-channel ratio is {}, {}.\n\n\
+         The cross-covariance S = BQDᵀ is exact for the model, but the truth's quantization \
+         error is a deterministic floor, not the model's coloured noise; trusting the \
+         correlation raises the error at small amplitudes ({} mm against {} mm at {}°), so the \
+         paper's choice to ignore S is the better one here.\n",
+        r.amplitude_deg,
+        steps.join("; "),
+        f2(kf1_best),
+        if kf1_best > PAPER_KF1_RATIO + 0.1 {
+            "so the paper's one-channel figure must rest on parameters (rolling period against \
+             T_a and T_y, fill-rate noise) that we cannot recover"
+        } else {
+            "close to the paper's 0.40"
+        },
+        f2(amp.first().map_or(f64::NAN, |e| e.stats.kf2_cross.std_mm)),
+        f2(amp.first().map_or(f64::NAN, |e| e.stats.kf2.std_mm)),
+        amp.first().map_or(f64::NAN, |e| e.at["amplitude_deg"]),
     );
 
     // --- Fig. 1
