@@ -554,6 +554,8 @@ fn step_dense<D: Dims>(
             // Rank-revealing fallback: Σ = V Λ Vᵀ, Z = V Λ₊^{-1/2} (dropped columns zero),
             // Σ⁺ = Z Zᵀ.
             let w = st.eigw.as_mut_slice();
+            // The failed Cholesky overwrote part of `fact`: start again from Σ.
+            fact[..m * m].copy_from_slice(&sig[..m * m]);
             jacobi_eigen(fact, m, eigv, w);
             let lmax = w[..m].iter().fold(0.0_f64, |a, b| a.max(*b));
             let mut r = 0usize;
@@ -632,28 +634,19 @@ fn step_dense<D: Dims>(
                 );
             }
             _ => {
-                // Joseph: A = I − K H, P⁺ = A P Aᵀ + K R Kᵀ (R over observed entries).
-                let a = st.a.as_mut_slice();
+                // Joseph: P⁺ = A P Aᵀ + K R Kᵀ with A = I − K H, applied as the identity
+                // minus a rank-m term from each side (O(n²m) instead of O(n³), same
+                // expression): T = A P = P − K (HP), A P Aᵀ = T − (T Hᵀ) Kᵀ.
                 let t = st.t.as_mut_slice();
-                mm(&d, a, (n, n, m), -1.0, false, (K, false), (H, false), false);
-                for i in 0..n {
-                    a[i + i * n] += 1.0;
-                }
-                mm(&d, t, (n, n, n), 1.0, false, (a, false), (pp, false), false);
-                mm(&d, pf, (n, n, n), 1.0, false, (t, false), (a, true), true);
+                t[..n * n].copy_from_slice(&pp[..n * n]);
+                mm(&d, t, (n, n, m), -1.0, true, (K, false), (hp, false), false);
+                let th = st.tnm.as_mut_slice();
+                mm(&d, th, (n, m, n), 1.0, false, (t, false), (H, true), false);
+                pf[..n * n].copy_from_slice(&t[..n * n]);
+                mm(&d, pf, (n, n, m), -1.0, true, (th, false), (K, true), true);
                 // K R Kᵀ: gain columns of missing entries are zero, so R needs no masking.
-                let tnm = st.tnm.as_mut_slice();
-                mm(
-                    &d,
-                    tnm,
-                    (n, m, m),
-                    1.0,
-                    false,
-                    (K, false),
-                    (R, false),
-                    false,
-                );
-                mm(&d, pf, (n, n, m), 1.0, true, (tnm, false), (K, true), true);
+                mm(&d, th, (n, m, m), 1.0, false, (K, false), (R, false), false);
+                mm(&d, pf, (n, n, m), 1.0, true, (th, false), (K, true), true);
             }
         }
         mirror_lower(pf, n);

@@ -3,5 +3,11 @@
 
 mod engine {
     pub mod agreement;
+    pub mod alloc;
+    pub mod correlated;
+    pub mod errors;
+    pub mod fuel;
+    pub mod nis;
+    pub mod props;
     pub mod reference;
 }

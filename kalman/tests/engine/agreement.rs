@@ -15,7 +15,10 @@ const FORMS: [CovarianceForm; 3] = [
 /// Largest |a − b| relative to max(1, max|b|) over the entries.
 fn rel_vec(a: &[f64], b: &[f64]) -> f64 {
     let scale = b.iter().fold(1.0_f64, |s, v| s.max(v.abs()));
-    a.iter().zip(b).fold(0.0_f64, |s, (x, y)| s.max((x - y).abs())) / scale
+    a.iter()
+        .zip(b)
+        .fold(0.0_f64, |s, (x, y)| s.max((x - y).abs()))
+        / scale
 }
 
 fn rel_mat(a: faer::MatRef<'_, f64>, b: &reference::M) -> f64 {
@@ -64,7 +67,10 @@ fn dyn_matches_reference_on_seeded_models() {
             let p = FilterProblem::generate(3 + seed as usize, 1 + seed as usize % 3, opts, seed);
             for form in FORMS {
                 let dev = deviation(&p, Dyn::new(p.n(), p.m(), 2).expect("dims"), form);
-                assert!(dev < 1e-10, "seed {seed} {form:?} S={correlated} miss={missing}: {dev:e}");
+                assert!(
+                    dev < 1e-10,
+                    "seed {seed} {form:?} S={correlated} miss={missing}: {dev:e}"
+                );
             }
         }
     }

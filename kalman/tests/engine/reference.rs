@@ -29,7 +29,9 @@ fn mul(a: &M, b: &M) -> M {
 
 fn tr(a: &M) -> M {
     let c = a.first().map_or(0, Vec::len);
-    (0..c).map(|j| a.iter().map(|row| row[j]).collect()).collect()
+    (0..c)
+        .map(|j| a.iter().map(|row| row[j]).collect())
+        .collect()
 }
 
 fn add(a: &M, b: &M, s: f64) -> M {
@@ -87,10 +89,9 @@ pub fn run(p: &kalman::strategies::FilterProblem) -> Vec<RefStep> {
     let H = from_faer(p.H.as_ref());
     let Q = from_faer(p.Q.as_ref());
     let R = from_faer(p.R.as_ref());
-    let S = p
-        .S
-        .as_ref()
-        .map_or(vec![vec![0.0; m]; n], |s| from_faer(s.as_ref()));
+    let S =
+        p.S.as_ref()
+            .map_or(vec![vec![0.0; m]; n], |s| from_faer(s.as_ref()));
     let B = from_faer(p.B.as_ref());
     let mut x = p.x0.clone();
     let mut P = from_faer(p.P0.as_ref());

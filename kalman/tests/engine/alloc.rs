@@ -1,0 +1,95 @@
+//! Zero heap allocations per step, for each covariance form and both storage paths, with a
+//! counting global allocator (thread-local counts, so parallel tests do not interfere).
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use kalman::strategies::{FilterProblem, ProblemOptions};
+use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed};
+
+struct Counting;
+
+thread_local! {
+    static COUNT: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: forwards every call to the system allocator unchanged; only counts.
+#[allow(unsafe_code)]
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = COUNT.try_with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    COUNT.with(Cell::get)
+}
+
+/// Allocations during all steps of `p` after the first (construction and the first step
+/// are outside the count).
+fn count<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> usize {
+    let model = p.model(dims).expect("model");
+    let mut f = Filter::new(model, &p.x0, &p.P0, form).expect("filter");
+    let _ = f.step(&p.z[0], Some(&p.u[0]));
+    let before = allocations();
+    for (z, u) in p.z.iter().zip(&p.u).skip(1) {
+        let info = f.step(z, Some(u));
+        assert!(info.is_ok());
+    }
+    // An all-missing (predict-only) step too.
+    let nan = [f64::NAN; 16];
+    let _ = f.step(&nan[..p.m()], Some(&p.u[0]));
+    allocations() - before
+}
+
+#[test]
+fn no_allocation_per_step() {
+    for form in [
+        CovarianceForm::Joseph,
+        CovarianceForm::Standard,
+        CovarianceForm::SquareRoot,
+    ] {
+        for (correlated, exact_channel) in [(false, false), (true, true)] {
+            let opts = ProblemOptions {
+                steps: 10,
+                correlated,
+                exact_channel,
+                missing: 0.2,
+                p: 1,
+            };
+            // Small model: fixed path and dynamic path with the crate's own loops.
+            let small = FilterProblem::generate(7, 2, opts, 11);
+            assert_eq!(
+                count(&small, Fixed::<7, 2, 1>::new(), form),
+                0,
+                "{form:?} fixed"
+            );
+            assert_eq!(
+                count(&small, Dyn::new(7, 2, 1).expect("dims"), form),
+                0,
+                "{form:?} dyn"
+            );
+            // Larger model: products go through faer's GEMM.
+            let big = FilterProblem::generate(24, 6, opts, 12);
+            assert_eq!(
+                count(&big, Dyn::new(24, 6, 1).expect("dims"), form),
+                0,
+                "{form:?} dyn faer"
+            );
+        }
+    }
+}

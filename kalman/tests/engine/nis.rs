@@ -1,0 +1,126 @@
+//! Consistency: the NIS of a consistent filter lies in its 95 % χ² band, and the
+//! log-likelihood is the Gaussian density of the innovation.
+
+use kalman::strategies::{FilterProblem, ProblemOptions};
+use kalman::{CovarianceForm, Dyn, Filter, Fixed, chi2_quantile};
+
+#[test]
+fn nis_of_a_consistent_filter_is_in_the_95_percent_band() {
+    let steps = 2000;
+    let opts = ProblemOptions {
+        steps,
+        correlated: true,
+        missing: 0.1,
+        ..ProblemOptions::default()
+    };
+    let p = FilterProblem::generate(4, 3, opts, 5);
+    for form in [
+        CovarianceForm::Joseph,
+        CovarianceForm::Standard,
+        CovarianceForm::SquareRoot,
+    ] {
+        let mut f = Filter::new(
+            p.model(Fixed::<4, 3, 0>::new()).expect("model"),
+            &p.x0,
+            &p.P0,
+            form,
+        )
+        .expect("filter");
+        let (mut sum, mut dof, mut inside, mut used) = (0.0, 0usize, 0usize, 0usize);
+        for z in &p.z {
+            let info = f.step(z, None).expect("step");
+            sum += info.nis;
+            dof += info.rank;
+            if info.rank > 0 {
+                used += 1;
+                let lo = chi2_quantile(0.025, info.rank);
+                let hi = chi2_quantile(0.975, info.rank);
+                if info.nis >= lo && info.nis <= hi {
+                    inside += 1;
+                }
+            }
+        }
+        // Innovations of a consistent filter are independent, so the summed NIS is χ² with
+        // Σ rank degrees of freedom: it must lie in that distribution's 95 % band.
+        let (lo, hi) = (chi2_quantile(0.025, dof), chi2_quantile(0.975, dof));
+        assert!(
+            sum >= lo && sum <= hi,
+            "{form:?}: ΣNIS {sum} not in [{lo}, {hi}] (dof {dof})"
+        );
+        // Per step, 95 % of the NIS values fall in their own 95 % band (binomial standard
+        // deviation over ~2000 steps is 0.5 %; allow 3 of them).
+        let frac = inside as f64 / used as f64;
+        assert!(
+            (frac - 0.95).abs() < 0.015,
+            "{form:?}: {frac} of steps inside the band"
+        );
+    }
+}
+
+#[test]
+fn log_likelihood_is_the_gaussian_density_of_the_innovation() {
+    let p = FilterProblem::generate(3, 2, ProblemOptions::default(), 9);
+    let mut f = Filter::new(
+        p.model(Dyn::new(3, 2, 0).expect("dims")).expect("model"),
+        &p.x0,
+        &p.P0,
+        CovarianceForm::Joseph,
+    )
+    .expect("filter");
+    for z in &p.z {
+        let info = f.step(z, None).expect("step");
+        let s = f.innovation_covariance();
+        let e = f.innovation();
+        let det = s[(0, 0)] * s[(1, 1)] - s[(0, 1)] * s[(1, 0)];
+        let q = (s[(1, 1)] * e[0] * e[0] - 2.0 * s[(0, 1)] * e[0] * e[1] + s[(0, 0)] * e[1] * e[1])
+            / det;
+        let ll = -0.5 * (q + det.ln() + 2.0 * (2.0 * std::f64::consts::PI).ln());
+        // 1e-10: closed-form 2×2 inverse of a well-conditioned Σ.
+        assert!((info.nis - q).abs() < 1e-10 * q.max(1.0));
+        assert!((info.log_likelihood - ll).abs() < 1e-10 * ll.abs().max(1.0));
+    }
+}
+
+#[test]
+fn singular_innovation_covariance_takes_the_rank_revealing_path() {
+    // Two identical exact channels: Σ has rank 1. The update must stay finite, symmetric,
+    // PSD, and report rank 1 with one degree of freedom.
+    use kalman::Model;
+    let F = [[1.0, 0.1], [0.0, 1.0]];
+    let H = [[1.0, 0.0], [1.0, 0.0]];
+    let Q = [[1e-4, 0.0], [0.0, 1e-3]];
+    let R = [[0.0, 0.0], [0.0, 0.0]];
+    for form in [
+        CovarianceForm::Joseph,
+        CovarianceForm::Standard,
+        CovarianceForm::SquareRoot,
+    ] {
+        let model = Model::new(Dyn::new(2, 2, 0).expect("dims"), &F, &H, &Q, &R).expect("model");
+        let mut f =
+            Filter::new(model, &[0.0, 0.0], &[[1.0, 0.0], [0.0, 1.0]], form).expect("filter");
+        for k in 0..50 {
+            let z = 0.1 * k as f64;
+            let info = f.step(&[z, z], None).expect("step");
+            assert_eq!(info.rank, 1, "{form:?} step {k}");
+            assert_eq!(info.observed, 2);
+            let P = f.covariance();
+            // The exactly measured position has zero filtered variance (to round-off of the
+            // prior's scale, ~1).
+            assert!(P[(0, 0)].abs() < 1e-12, "{form:?}: P00 {}", P[(0, 0)]);
+            assert!(
+                (f.state()[0] - z).abs() < 1e-9,
+                "{form:?}: x0 {} vs {z}",
+                f.state()[0]
+            );
+            let ev = P.self_adjoint_eigenvalues(faer::Side::Lower).expect("evd");
+            assert!(ev[0] >= -1e-12 && P[(0, 1)].is_finite());
+            assert!((P[(0, 1)] - P[(1, 0)]).abs() <= 0.0);
+        }
+        // Velocity is learned from the exact positions: 0.1 per 0.1 s step = 1.
+        assert!(
+            (f.state()[1] - 1.0).abs() < 1e-6,
+            "{form:?}: v {}",
+            f.state()[1]
+        );
+    }
+}
