@@ -108,7 +108,9 @@ pub enum Error {
     // ---- steady-state / Riccati variants (issue 5) ----
     /// A pair fails the PBH detectability test: an eigenvalue on or outside the stability
     /// boundary has an eigenvector the output matrix does not see.
-    #[error("{pair} is not detectable: the mode λ = {re:.6e} {im:+.6e}i on or outside the stability boundary is unobservable (PBH rank test)")]
+    #[error(
+        "{pair} is not detectable: the mode λ = {re:.6e} {im:+.6e}i on or outside the stability boundary is unobservable (PBH rank test)"
+    )]
     NotDetectable {
         /// The pair, e.g. "(F, H)".
         pair: &'static str,
@@ -118,7 +120,9 @@ pub enum Error {
         im: f64,
     },
     /// A pair fails the PBH stabilisability test.
-    #[error("{pair} is not stabilisable: the mode λ = {re:.6e} {im:+.6e}i on or outside the stability boundary is uncontrollable (PBH rank test)")]
+    #[error(
+        "{pair} is not stabilisable: the mode λ = {re:.6e} {im:+.6e}i on or outside the stability boundary is uncontrollable (PBH rank test)"
+    )]
     NotStabilisable {
         /// The pair, e.g. "(F, Q^{1/2})".
         pair: &'static str,
@@ -138,7 +142,9 @@ pub enum Error {
         reason: &'static str,
     },
     /// The computed Riccati solution fails its residual or stability check.
-    #[error("{equation}: relative residual {residual:.3e} exceeds {tolerance:.1e} or closed loop not stable (spectral measure {closed_loop:.6})")]
+    #[error(
+        "{equation}: relative residual {residual:.3e} exceeds {tolerance:.1e} or closed loop not stable (spectral measure {closed_loop:.6})"
+    )]
     RiccatiCheck {
         /// Which equation.
         equation: &'static str,

@@ -100,29 +100,35 @@ impl FilterProblem {
         let W = &G * G.transpose();
         let R = W.submatrix(0, 0, m, m).to_owned();
         let Q = W.submatrix(m, m, n, n).to_owned();
-        let S = opts
-            .correlated
-            .then(|| W.submatrix(m, 0, n, m).to_owned());
+        let S = opts.correlated.then(|| W.submatrix(m, 0, n, m).to_owned());
         let B = randn(&mut rng, n, opts.p);
         let Gp = randn(&mut rng, n, n);
         let P0 = &Gp * Gp.transpose() + Mat::<f64>::identity(n, n) * faer::Scale(0.1);
-        let x0: Vec<f64> = (0..n).map(|_| rng.sample::<f64, _>(StandardNormal)).collect();
+        let x0: Vec<f64> = (0..n)
+            .map(|_| rng.sample::<f64, _>(StandardNormal))
+            .collect();
         // x_true0 ~ N(x0, P0) through a Cholesky factor of P0 (positive definite here).
         let L = match P0.llt(faer::Side::Lower) {
             Ok(l) => l.L().to_owned(),
             Err(_) => Mat::<f64>::identity(n, n),
         };
-        let eta: Vec<f64> = (0..n).map(|_| rng.sample::<f64, _>(StandardNormal)).collect();
+        let eta: Vec<f64> = (0..n)
+            .map(|_| rng.sample::<f64, _>(StandardNormal))
+            .collect();
         let mut x: Vec<f64> = (0..n)
             .map(|i| x0[i] + (0..n).map(|j| L[(i, j)] * eta[j]).sum::<f64>())
             .collect();
         let (mut truth, mut zs, mut us) = (Vec::new(), Vec::new(), Vec::new());
         for _ in 0..opts.steps {
-            let eta: Vec<f64> = (0..d).map(|_| rng.sample::<f64, _>(StandardNormal)).collect();
+            let eta: Vec<f64> = (0..d)
+                .map(|_| rng.sample::<f64, _>(StandardNormal))
+                .collect();
             let noise: Vec<f64> = (0..d)
                 .map(|i| (0..d).map(|j| G[(i, j)] * eta[j]).sum())
                 .collect();
-            let u: Vec<f64> = (0..opts.p).map(|_| rng.sample::<f64, _>(StandardNormal)).collect();
+            let u: Vec<f64> = (0..opts.p)
+                .map(|_| rng.sample::<f64, _>(StandardNormal))
+                .collect();
             let z: Vec<f64> = (0..m)
                 .map(|i| {
                     let zi = (0..n).map(|j| H[(i, j)] * x[j]).sum::<f64>() + noise[i];
