@@ -29,7 +29,8 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
 
-use crate::Error;
+use crate::storage::Dims;
+use crate::{Error, Model};
 
 /// Tuning and tolerances of the Riccati solvers. `Default` is right for almost every use.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -136,6 +137,17 @@ pub fn dare(
     S: Option<MatRef<'_, f64>>,
 ) -> Result<SteadyState, Error> {
     dare_with(F, H, Q, R, S, &RiccatiOptions::default())
+}
+
+impl SteadyState {
+    /// The steady state of an engine [`Model`] (either storage path): [`dare`] on its F, H,
+    /// Q, R and S.
+    ///
+    /// # Errors
+    /// As [`dare`].
+    pub fn of<D: Dims>(model: &Model<D>) -> Result<Self, Error> {
+        dare(model.F(), model.H(), model.Q(), model.R(), model.S())
+    }
 }
 
 /// [`dare`] with explicit options.
@@ -396,18 +408,74 @@ pub fn dare_residual(
     S: Option<MatRef<'_, f64>>,
     P: MatRef<'_, f64>,
 ) -> f64 {
+    match dare_residual_matrix(F, H, Q, R, S, P) {
+        Some(res) => relative(res.norm_l2(), P.norm_l2()),
+        None => f64::INFINITY,
+    }
+}
+
+/// The DARE residual matrix F P Fᵀ + Q − (F P Hᵀ + S) Σ⁻¹ (⋯)ᵀ − P (`None` if Σ is not
+/// positive definite).
+fn dare_residual_matrix(
+    F: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    S: Option<MatRef<'_, f64>>,
+    P: MatRef<'_, f64>,
+) -> Option<Mat<f64>> {
     let mut Sigma = H * P * H.transpose() + R;
     symmetrise(&mut Sigma);
     let mut C = F * P * H.transpose();
     if let Some(S) = S {
         C += S;
     }
-    let corr = match Sigma.llt(Side::Lower) {
-        Ok(llt) => &C * llt.solve(C.transpose()),
-        Err(_) => return f64::INFINITY,
-    };
-    let res = F * P * F.transpose() + Q - corr - P;
-    relative(res.norm_l2(), P.norm_l2())
+    let llt = Sigma.llt(Side::Lower).ok()?;
+    let corr = &C * llt.solve(C.transpose());
+    let mut res = F * P * F.transpose() + Q - corr - P;
+    symmetrise(&mut res);
+    Some(res)
+}
+
+/// One Newton (Hewer) correction of a DARE solution: with the closed loop
+/// A_cl = F − K_p H, the correction E solves the Stein equation E − A_cl E A_clᵀ = Res(P),
+/// here by Smith's doubling E = Σ_k A_cl^k Res (A_clᵀ)^k (squaring A_cl each step). Returns
+/// `None` if the closed loop is not contractive enough for the doubling to converge.
+fn newton_polish(
+    F: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    S: Option<MatRef<'_, f64>>,
+    P: &Mat<f64>,
+) -> Option<Mat<f64>> {
+    let res = dare_residual_matrix(F, H, Q, R, S, P.as_ref())?;
+    let mut Sigma = H * P * H.transpose() + R;
+    symmetrise(&mut Sigma);
+    let llt = Sigma.llt(Side::Lower).ok()?;
+    let mut C = F * (P * H.transpose());
+    if let Some(S) = S {
+        C += S;
+    }
+    let Kp = llt.solve(C.transpose()).transpose().to_owned();
+    let mut T = F - &Kp * H;
+    let mut E = res;
+    for _ in 0..64 {
+        let mut E_next = &E + &T * &E * T.transpose();
+        symmetrise(&mut E_next);
+        let change = (&E_next - &E).norm_l2();
+        E = E_next;
+        T = &T * &T;
+        if !all_finite(T.as_ref()) || !all_finite(E.as_ref()) {
+            return None;
+        }
+        if change <= f64::EPSILON * E.norm_l2() || T.norm_l2() <= f64::EPSILON {
+            let mut Pn = P + &E;
+            symmetrise(&mut Pn);
+            return Some(Pn);
+        }
+    }
+    None
 }
 
 /// Relative residual ‖A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q‖_F / ‖P‖_F of a candidate filter-CARE
@@ -661,8 +729,27 @@ fn discrete_dual(
     symmetrise(&mut G);
     let mut Qs = Qt.clone();
     symmetrise(&mut Qs);
-    let (X, iterations) = sda(Ft.transpose().to_owned(), G, Qs, opts, names.equation)?;
-    let relative_residual = dare_residual(F, H, Q, R, S, X.as_ref());
+    let (mut X, iterations) = sda(Ft.transpose().to_owned(), G, Qs, opts, names.equation)?;
+    let mut relative_residual = dare_residual(F, H, Q, R, S, X.as_ref());
+    // Ill-conditioned problems leave the doubling a little short of full accuracy: up to two
+    // Newton corrections, each kept only if it lowers the residual.
+    for _ in 0..2 {
+        if relative_residual <= 1e-3 * opts.residual_tolerance {
+            break;
+        }
+        match newton_polish(F, H, Q, R, S, &X) {
+            Some(Xn) => {
+                let r = dare_residual(F, H, Q, R, S, Xn.as_ref());
+                if r < relative_residual {
+                    X = Xn;
+                    relative_residual = r;
+                } else {
+                    break;
+                }
+            }
+            None => break,
+        }
+    }
     // Closed loop of the predictor: F̃ − F̃ P Hᵀ Σ⁻¹ H (= F − K_p H).
     let mut Sigma = H * &X * H.transpose() + R;
     symmetrise(&mut Sigma);

@@ -95,3 +95,44 @@ proptest! {
         }
     }
 }
+
+/// SPEC U's continuous model: position/velocity driven by white acceleration of intensity
+/// q = 0.1, position measured with intensity r = 1. Closed form of the CARE:
+/// P = [[√2 q^¼ r^¾, √(qr)], [√(qr), √2 q^¾ r^¼]], K = [√2 (q/r)^¼, √(q/r)]ᵀ. The double
+/// eigenvalue 0 of A lies on the stability boundary, so this also exercises the PBH test
+/// of marginal modes.
+#[test]
+fn uav_kalman_bucy_closed_form() {
+    let (q, r) = (0.1_f64, 1.0_f64);
+    let A = mat![[0.0, 1.0], [0.0, 0.0]];
+    let H = mat![[1.0, 0.0]];
+    let Q = mat![[0.0, 0.0], [0.0, q]];
+    let R = mat![[r]];
+    let ss = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()).expect("UAV CARE");
+    let want = [
+        [2f64.sqrt() * q.powf(0.25) * r.powf(0.75), (q * r).sqrt()],
+        [(q * r).sqrt(), 2f64.sqrt() * q.powf(0.75) * r.powf(0.25)],
+    ];
+    // Tolerance: a few ulps of O(1) entries after ~20 doubling steps.
+    for i in 0..2 {
+        for j in 0..2 {
+            assert!(
+                (ss.covariance[(i, j)] - want[i][j]).abs() < 1e-12,
+                "P[{i},{j}]"
+            );
+        }
+    }
+    assert!((ss.gain[(0, 0)] - 2f64.sqrt() * (q / r).powf(0.25)).abs() < 1e-12);
+    assert!((ss.gain[(1, 0)] - (q / r).sqrt()).abs() < 1e-12);
+    // The Kalman–Bucy ODE from P0 = 0 reaches the same limit.
+    let kb = KalmanBucy::new(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()).expect("KB");
+    let sol = kb
+        .until_steady(
+            Mat::<f64>::zeros(2, 2).as_ref(),
+            1e-9,
+            1e4,
+            &OdeOptions::default(),
+        )
+        .expect("settles");
+    assert!(rel(&sol.covariance, &ss.covariance) < 1e-7);
+}

@@ -213,3 +213,17 @@ fn uav_lqr() {
         "{e}"
     );
 }
+
+/// A poorly controllable single-input case found by the LQR property test (relative
+/// residual 7.7e-10 from the doubling alone): the Newton polish brings it below 1e-10.
+#[test]
+fn ill_conditioned_lqr_is_polished() {
+    let mut g = rng(10793998847586351072);
+    let (n, p, r) = (6, 1, 1.302292803561311);
+    let A = with_radius(&mut g, n, r);
+    let B = randn(&mut g, n, p);
+    let Q = spd(&mut g, n, 0.1);
+    let R = spd(&mut g, p, 0.1);
+    let l = dlqr(A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref(), None).expect("polished LQR");
+    assert!(l.relative_residual < 1e-10, "{:e}", l.relative_residual);
+}

@@ -213,3 +213,27 @@ fn bad_inputs_are_typed_errors() {
         Err(kalman::Error::RiccatiNoConvergence { .. })
     ));
 }
+
+/// `SteadyState::of` on an engine model equals `dare` on its matrices, on both paths, and the
+/// schedule's steady prior equals it.
+#[test]
+fn steady_state_of_model_matches_schedule() {
+    let p = problem(8, 7, 2, 10, false);
+    let dyn_ss =
+        kalman::riccati::SteadyState::of(&model(Dyn::new(7, 2, 1).expect("dims"), &p, true))
+            .expect("dyn");
+    let fix_ss =
+        kalman::riccati::SteadyState::of(&model(Fixed::<7, 2, 1>::new(), &p, true)).expect("fixed");
+    assert!((&dyn_ss.prior - &fix_ss.prior).norm_l2() <= 1e-14 * dyn_ss.prior.norm_l2());
+    let sched = GainSchedule::new(
+        model(Dyn::new(7, 2, 1).expect("dims"), &p, true),
+        &p.P0,
+        ScheduleOptions::default(),
+    )
+    .expect("schedule");
+    let d = (sched.steady_prior().to_owned() - &dyn_ss.prior).norm_l2() / dyn_ss.prior.norm_l2();
+    // Tolerance: the schedule stops at a relative change of 1e-14 (times 1/(1 − ρ_cl)).
+    assert!(d < 1e-10, "{d:e}");
+    let k = (sched.gain(usize::MAX).to_owned() - &dyn_ss.gain).norm_l2() / dyn_ss.gain.norm_l2();
+    assert!(k < 1e-10, "{k:e}");
+}
