@@ -18,10 +18,23 @@
 //!
 //! # Reproducing the paper
 //! The paper's WLS (9)–(10) does not say in which units ε sits in the state, nor when the
-//! ε₀ weight v₆ = 0.5/(1 + 2|ε̇|)² is evaluated. The defaults of [`boom::BoomConfig`] — ε in
-//! °/s² inside the state (H₂₃ = r·π/180), ε̇ in °/s³ in v₆, v₆ re-evaluated to a fixed point
-//! within each cycle — are the choices under which the full turn behaves as the paper reports;
-//! each is a configuration field ([`boom::AngleUnit`], [`boom::RateWeight`]).
+//! ε₀ weight v₆ = 0.5/(1 + 2|ε̇|)² is evaluated. Both are configuration fields
+//! ([`boom::AngleUnit`] for ε and ε̇, [`boom::RateWeight`]); the defaults of
+//! [`boom::BoomConfig`] — ε in °/s² inside the state (H₂₃ = r·π/180), ε̇ in °/s³ in v₆, v₆
+//! made self-consistent within each cycle — are the ones under which the full turn
+//! (±Δa = 0.02 m/s², Δα = 1°, Δε = 0.5 °/s²) behaves as the paper reports:
+//! - direct inversion and the 3×3 solve exceed the limits from α ≈ 83° and the "+" variant is
+//!   undefined from α ≈ 86.3° (sin α > 1 − Δa/g; the paper says ≈ 88°);
+//! - WLS at γ = 0 keeps "−" within limits and exceeds Δε slightly for "+" (max ≈ 0.58 °/s²,
+//!   from α ≈ 79°, t ≈ 28.8 s; the paper: α > 81°, t > 29 s);
+//! - WLS at γ = 10° is within both limits over the whole turn (max ≈ 0.56°, 0.26 °/s²);
+//!   the smallest feasible γ is ≈ 4.5° (0.5° grid), 11° with Δε = 0.25 °/s².
+//!
+//! Not reproduced: at γ = 0 the "+" variant also exceeds Δα (≈ 1.4°), and s passes 1 near the
+//! end (arcsin undefined from α ≈ 88.6°; [`boom::AngleRecovery::Atan2`] keeps it defined).
+//! With ε in rad/s² the ε₀ prior is (180/π)² ≈ 3283 times weaker and WLS behaves like direct
+//! inversion for "−" (δα ≈ 3.7°). When v₆ is evaluated (previous cycle or fixed point)
+//! hardly matters on this profile.
 //!
 //! # Example
 //! ```
