@@ -1075,8 +1075,8 @@ fn write_outputs(dir: &Path, c: &Computed) -> Result<()> {
         &Figure {
             title: "WLS: worst errors over the turn (both variants) against γ",
             x_label: "γ, degrees",
-            y_label: "max δα, ° / max δε, °/s² (log)",
-            y_scale: Scale::Log,
+            y_label: "max δα, ° / max δε, °/s²",
+            y_scale: Scale::Linear,
         },
         &[
             Series::line(

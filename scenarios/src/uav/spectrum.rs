@@ -194,6 +194,33 @@ mod tests {
         assert!(fft(&mut [0.0; 6], &mut [0.0; 6]).is_err());
     }
 
+    proptest::proptest! {
+        /// Any complex sequence of length 2^k (k ≤ 7) transforms as the O(N²) DFT does.
+        #[test]
+        fn fft_equals_dft_for_any_input(
+            k in 0usize..=7,
+            data in proptest::collection::vec(-1e3f64..1e3, 256),
+        ) {
+            let n = 1 << k;
+            let (x, y) = (&data[..n], &data[128..128 + n]);
+            let (mut re, mut im) = (x.to_vec(), y.to_vec());
+            fft(&mut re, &mut im).expect("power of two");
+            let scale = data.iter().fold(1.0f64, |m, v| m.max(v.abs())) * n as f64;
+            for j in 0..n {
+                let (mut sr, mut si) = (0.0, 0.0);
+                for t in 0..n {
+                    let a = -2.0 * PI * ((j * t) % n) as f64 / n as f64;
+                    sr += x[t] * a.cos() - y[t] * a.sin();
+                    si += x[t] * a.sin() + y[t] * a.cos();
+                }
+                // Both sums carry O(N·ε·max|x|) round-off; 1e-12 relative to N·max|x| is
+                // ~100× that bound.
+                proptest::prop_assert!((re[j] - sr).abs() <= 1e-12 * scale);
+                proptest::prop_assert!((im[j] - si).abs() <= 1e-12 * scale);
+            }
+        }
+    }
+
     #[test]
     fn white_noise_level_is_two_sigma_squared_over_fs() {
         let (sigma, fs) = (1.5, 4.0);
