@@ -667,8 +667,8 @@ fn step_dense<D: Dims>(
             pp[i + j * n] += Q[i + j * n];
         }
     }
-    if has_s {
-        if let Some(S) = &model.S {
+    if let Some(S) = model.S.as_ref().filter(|_| has_s) {
+        {
             let S = S.as_slice();
             let mask = st.mask.as_slice();
             let sm = st.sm.as_mut_slice();

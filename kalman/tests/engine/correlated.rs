@@ -38,10 +38,8 @@ fn errors(ignore_s: bool) -> (Vec<Vec<f64>>, faer::Mat<f64>, Nees) {
             &base.R,
         )
         .expect("model");
-        if !ignore_s {
-            if let Some(S) = &base.S {
-                model = model.with_cross_covariance(S).expect("S");
-            }
+        if let Some(S) = base.S.as_ref().filter(|_| !ignore_s) {
+            model = model.with_cross_covariance(S).expect("S");
         }
         let mut f = Filter::new(model, &base.x0, &base.P0, CovarianceForm::Joseph).expect("filter");
         for z in &zs[..STEPS - 1] {

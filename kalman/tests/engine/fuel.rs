@@ -7,9 +7,11 @@ use kalman::{CovarianceForm, Filter, Fixed, Model};
 use rand::{Rng, SeedableRng};
 
 type M7 = [[f64; 7]; 7];
+/// (F, G, H, D, diag Qu).
+type Fuel = (M7, [[f64; 3]; 7], [[f64; 7]; 2], [[f64; 3]; 2], [f64; 3]);
 
 /// (F, G_u, H, D, Qu) of SPEC F: x_k = A x_{k−1} + B u_{k−1}, z_k = C x_k + D u_k.
-fn fuel() -> (M7, [[f64; 3]; 7], [[f64; 7]; 2], [[f64; 3]; 2], [f64; 3]) {
+fn fuel() -> Fuel {
     let dt: f64 = 0.1;
     let (ta, dc, vc, delta, ty, radius) = (20.0, 1e-6, 0.01, 0.01, 2.0, 1.5);
     let beta = 2.0 * std::f64::consts::PI / 10.0;
