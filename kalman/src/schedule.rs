@@ -53,6 +53,9 @@ impl Default for ScheduleOptions {
 
 /// The data-independent gain sequence K_0, K_1, … of a time-invariant model from a fixed
 /// P0, ending at the steady-state gain.
+///
+/// Memory: the transient's gains (n·m each) and prior covariances P_{k|k−1} (n² each, kept
+/// for the missing-value fallback), `len()` of each.
 #[derive(Debug, Clone)]
 pub struct GainSchedule<D: Dims> {
     template: Filter<D>,

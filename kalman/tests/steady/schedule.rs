@@ -237,3 +237,47 @@ fn steady_state_of_model_matches_schedule() {
     let k = (sched.gain(usize::MAX).to_owned() - &dyn_ss.gain).norm_l2() / dyn_ss.gain.norm_l2();
     assert!(k < 1e-10, "{k:e}");
 }
+
+/// Entering the missing-value fallback restarts the engine filter (`Filter::reset`
+/// validates P and may allocate); the full steps after that allocate nothing, and neither
+/// do scheduled steps after re-entry.
+#[test]
+fn fallback_allocates_only_on_entry() {
+    let p = problem(9, 7, 2, 400, true);
+    for fixed in [false, true] {
+        let counts = if fixed {
+            fallback_counts(Fixed::<7, 2, 1>::new(), &p)
+        } else {
+            fallback_counts(Dyn::new(7, 2, 1).expect("dims"), &p)
+        };
+        let (before_entry, after_entry, back_on_schedule) = counts;
+        assert_eq!(before_entry, 0, "fixed {fixed}");
+        assert_eq!(after_entry, 0, "fixed {fixed}");
+        assert!(
+            back_on_schedule,
+            "fixed {fixed}: the runner never returned to the schedule"
+        );
+    }
+}
+
+/// (allocations in steps 1..40, allocations in steps 41..end, back on schedule at the end).
+fn fallback_counts<D: Dims>(dims: D, p: &Problem) -> (usize, usize, bool) {
+    let sched = GainSchedule::new(model(dims, p, false), &p.P0, ScheduleOptions::default())
+        .expect("schedule");
+    let mut run = sched.runner(&p.x0).expect("runner");
+    run.step(&p.zs[0], Some(&p.us[0])).expect("step");
+    let a0 = allocations();
+    for k in 1..40 {
+        run.step(&p.zs[k], Some(&p.us[k])).expect("step");
+    }
+    let a1 = allocations();
+    // Step 40 has a missing entry: enters the fallback (may allocate).
+    run.step(&p.zs[40], Some(&p.us[40])).expect("step");
+    assert!(!run.on_schedule());
+    let a2 = allocations();
+    for k in 41..p.zs.len() {
+        run.step(&p.zs[k], Some(&p.us[k])).expect("step");
+    }
+    let a3 = allocations();
+    (a1 - a0, a3 - a2, run.on_schedule())
+}
