@@ -85,6 +85,10 @@ pub struct FuelingParams {
     pub valve_delay_s: f64,
     /// Target level H*, m (put on a sensor mark so relay logic is not penalised by δ).
     pub target_level_m: f64,
+    /// Put H* at a uniformly random height within the quantization step above
+    /// `target_level_m` in each run (true: the dose sets H*, so relay logic also pays the
+    /// sensor's discreteness, as in the paper's error budget) or on the mark itself (false).
+    pub random_target_phase: bool,
     /// Filling time before the nominal crossing of H*, s (start level = H* − V_c·warm-up):
     /// how long the filters have to converge.
     pub warmup_s: f64,
@@ -128,6 +132,7 @@ impl Default for FuelingParams {
             gyro_noise_deg: 0.0,
             valve_delay_s: 0.0,
             target_level_m: 10.0,
+            random_target_phase: true,
             warmup_s: 60.0,
             initial_level_std_mm: 50.0,
             realisation: RealisationName::Paper,
@@ -269,7 +274,12 @@ impl FuelingParams {
             Swept::FillRate(x) => fill_rate_mm_s = Some(x),
             Swept::Damper(x) => damper_time_s = Some(x),
             Swept::Step(x) => step_mm = Some(x),
+            Swept::RandomTargetPhase(_) => {}
         }
+        let random_target_phase = match swept {
+            Swept::RandomTargetPhase(on) => on,
+            _ => self.random_target_phase,
+        };
         let fuel = model::FuelParams {
             dt: self.dt_s,
             t_a: self.velocity_time_s,
@@ -287,6 +297,7 @@ impl FuelingParams {
         World {
             fuel,
             target: self.target_level_m,
+            random_target_phase,
             warmup: self.warmup_s,
             initial_level_std: self.initial_level_std_mm * 1e-3,
             valve_delay: self.valve_delay_s,
@@ -352,6 +363,14 @@ impl FuelingParams {
                 &self.steps_mm,
                 &|x| self.world(a, Swept::Step(x)),
             ),
+            one(
+                "target",
+                "random_target_phase",
+                "H* within a step (1) or on a mark (0)",
+                self.sweep_runs_per_point,
+                &[0.0, 1.0],
+                &|x| self.world(a, Swept::RandomTargetPhase(x > 0.5)),
+            ),
             Sweep {
                 id: "invariance",
                 keys: vec!["amplitude_deg", "rolling_period_s"],
@@ -376,6 +395,8 @@ pub enum Swept {
     Damper(f64),
     /// Quantization step, mm.
     Step(f64),
+    /// Whether H* is drawn within a step (true) or put on a mark (false).
+    RandomTargetPhase(bool),
 }
 
 /// One sweep: its points (coordinates and world) and runs per point.

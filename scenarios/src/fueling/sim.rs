@@ -39,6 +39,9 @@ pub struct World {
     pub fuel: FuelParams,
     /// Target level H*, m.
     pub target: f64,
+    /// Draw H* uniformly within the quantization step above `target` for each run (the dose
+    /// sets the target, not the sensor's marks); `false` puts H* on a mark.
+    pub random_target_phase: bool,
     /// Simulated time before the nominal crossing of H*, s (start level H* − V_c·warm-up).
     pub warmup: f64,
     /// Prior standard deviation of the tank level given to the filters, m.
@@ -256,7 +259,13 @@ impl Point {
         )
         .map_err(|e| e.to_string())?;
 
-        let target = w.target;
+        // Drawn first, and always, so that the rest of the stream is the same either way.
+        let phase: f64 = rng.random();
+        let target = if w.random_target_phase {
+            w.target + phase * p.delta
+        } else {
+            w.target
+        };
         // A reading on the mark H* must count as reaching it despite rounding in δ·n.
         let relay_target = target - 1e-9 * p.delta;
         let mut level = target - p.v_c * w.warmup;
@@ -421,9 +430,21 @@ mod tests {
         // logic stops late by; the filter knows the damper, and with mid-step compensation
         // also the quantizer's −δ/2. 40 runs: the run-to-run std is ≈ 2 mm (velocity noise
         // through the lag), so the mean is good to ≈ 0.3 mm; the bounds allow 2 mm.
-        let point = Point::new(world(0.0)).expect("point");
+        let on_mark = World {
+            random_target_phase: false,
+            ..world(0.0)
+        };
+        let point = Point::new(on_mark).expect("point");
         let m = mean_errors(&point, 40);
         assert!((m[0] - 0.020).abs() < 0.002, "relay mean {}", m[0]);
+        // With H* anywhere within a step, relay logic stops at the next mark: + δ/2 = 5 mm on
+        // average (uniform over the step: the mean of 40 is good to ≈ 0.5 mm).
+        let anywhere = mean_errors(&Point::new(world(0.0)).expect("point"), 40);
+        assert!(
+            (anywhere[0] - 0.025).abs() < 0.002,
+            "relay mean {}",
+            anywhere[0]
+        );
         assert!(m[4].abs() < 0.002, "mid-step mean {}", m[4]);
         // Without compensation the floor quantizer reads δ/2 low on average: stops ≈ 5 mm late.
         assert!((m[2] - 0.005).abs() < 0.002, "two-channel mean {}", m[2]);
