@@ -608,43 +608,52 @@ fn psd_sqrt(Q: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
     Ok(&US * U.transpose())
 }
 
-/// PBH test: returns the first eigenvalue λ of F on or outside the stability boundary
-/// whose eigenvector C does not see, i.e. σ_min([λI − F; C]) small. C (p×n) is rescaled to
-/// ‖F‖_F so the test does not depend on the units of the output.
-fn pbh(
+/// Eigenvalues of F on or outside the stability boundary (|λ| ≥ 1 − margin discrete,
+/// Re λ ≥ −margin·max(1, |λ|) continuous), one of each conjugate pair.
+fn marginal_modes(
     F: MatRef<'_, f64>,
-    C: MatRef<'_, f64>,
     continuous: bool,
     opts: &RiccatiOptions,
-) -> Result<Option<(f64, f64)>, Error> {
-    let n = F.nrows();
-    let p = C.nrows();
-    if n == 0 {
-        return Ok(None);
+) -> Result<Vec<(f64, f64)>, Error> {
+    if F.nrows() == 0 {
+        return Ok(Vec::new());
     }
     let eig = F.eigenvalues().map_err(|_| Error::RiccatiNoConvergence {
         equation: "PBH test",
         iterations: 0,
         reason: "eigenvalue computation failed",
     })?;
+    Ok(eig
+        .into_iter()
+        .filter(|l| l.im >= 0.0)
+        .filter(|l| {
+            let modulus = l.norm();
+            if continuous {
+                l.re >= -opts.marginal_margin * modulus.max(1.0)
+            } else {
+                modulus >= 1.0 - opts.marginal_margin
+            }
+        })
+        .map(|l| (l.re, l.im))
+        .collect())
+}
+
+/// PBH test: returns the first of the (marginal or unstable) `modes` of F whose
+/// eigenvector C does not see, i.e. σ_min([λI − F; C]) small. C (p×n) is rescaled to ‖F‖_F
+/// so the test does not depend on the units of the output.
+fn pbh(
+    F: MatRef<'_, f64>,
+    C: MatRef<'_, f64>,
+    modes: &[(f64, f64)],
+    opts: &RiccatiOptions,
+) -> Result<Option<(f64, f64)>, Error> {
+    let n = F.nrows();
+    let p = C.nrows();
     let fnorm = F.norm_l2();
     let scale = fnorm.max(1.0);
     let cnorm = C.norm_l2();
     let cscale = if cnorm > 0.0 { scale / cnorm } else { 0.0 };
-    for l in eig {
-        let (re, im) = (l.re, l.im);
-        if im < 0.0 {
-            continue; // its conjugate is tested
-        }
-        let modulus = (re * re + im * im).sqrt();
-        let marginal = if continuous {
-            re >= -opts.marginal_margin * modulus.max(1.0)
-        } else {
-            modulus >= 1.0 - opts.marginal_margin
-        };
-        if !marginal {
-            continue;
-        }
+    for &(re, im) in modes {
         // Real embedding of the complex matrix M = [λI − F; C]: [[Re M, −Im M], [Im M, Re M]]
         // has the singular values of M, each twice.
         let complex = im > 0.0;
@@ -718,12 +727,21 @@ fn discrete_dual(
         }
         None => (F.to_owned(), Q.to_owned()),
     };
-    if let Some((re, im)) = pbh(F, H, false, opts)? {
+    // F̃ = F − S R⁻¹ H has F's eigenvalues when S = 0: one eigen-decomposition then.
+    let modes = marginal_modes(F, false, opts)?;
+    if let Some((re, im)) = pbh(F, H, &modes, opts)? {
         return Err(names.detect.error(re, im));
     }
-    let Qh = psd_sqrt(Qt.as_ref())?;
-    if let Some((re, im)) = pbh(Ft.transpose(), Qh.as_ref(), false, opts)? {
-        return Err(names.stab.error(re, im));
+    let modes_t = if S.is_some() {
+        marginal_modes(Ft.as_ref(), false, opts)?
+    } else {
+        modes
+    };
+    if !modes_t.is_empty() {
+        let Qh = psd_sqrt(Qt.as_ref())?;
+        if let Some((re, im)) = pbh(Ft.transpose(), Qh.as_ref(), &modes_t, opts)? {
+            return Err(names.stab.error(re, im));
+        }
     }
     let mut G = H.transpose() * llt.solve(H);
     symmetrise(&mut G);
@@ -793,12 +811,15 @@ fn continuous_dual(
         n: R.nrows(),
         rule: "the Riccati solvers need R^-1",
     })?;
-    if let Some((re, im)) = pbh(A, H, true, opts)? {
+    let modes = marginal_modes(A, true, opts)?;
+    if let Some((re, im)) = pbh(A, H, &modes, opts)? {
         return Err(names.detect.error(re, im));
     }
-    let Qh = psd_sqrt(Q)?;
-    if let Some((re, im)) = pbh(A.transpose(), Qh.as_ref(), true, opts)? {
-        return Err(names.stab.error(re, im));
+    if !modes.is_empty() {
+        let Qh = psd_sqrt(Q)?;
+        if let Some((re, im)) = pbh(A.transpose(), Qh.as_ref(), &modes, opts)? {
+            return Err(names.stab.error(re, im));
+        }
     }
     let mut G = H.transpose() * llt.solve(H);
     symmetrise(&mut G);
