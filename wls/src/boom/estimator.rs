@@ -376,10 +376,11 @@ impl Reduced {
         let (mut T, mut q) = (self.T, self.q);
         // The new whitened row is (0, 0, √v₆ | √v₆·e₀): one Givens rotation against the third
         // row of T zeroes it and touches only T₃₃ and q₃.
-        let (t, w) = (T[(2, 2)], v6.sqrt());
-        let rho = t.hypot(w);
+        let t = T[(2, 2)];
+        // T₃₃ and √v₆ are O(1)–O(10³) here: no overflow guard (hypot) needed.
+        let rho = (t * t + v6).sqrt();
         if rho > 0.0 {
-            q[2] = (t * q[2] + w * w * e0) / rho;
+            q[2] = (t * q[2] + v6 * e0) / rho;
             T[(2, 2)] = rho;
         }
         Some((T.solve_upper_triangular(&q)?, T))

@@ -425,6 +425,16 @@ fn full_turn_with_constant_errors_behaves_as_the_paper_describes() {
         nominal.max_angle_error.to_degrees() < 0.2 && nominal.max_epsilon_error.to_degrees() < 0.1
     );
 
+    // Direct inversion has no memory: exact along the moving trajectory too (up to the
+    // 1/cos α amplification of rounding, < 1e-9 up to the last sample at ≈ 89.99°).
+    let exact_run = run(&config(BoomMethod::Direct), &ErrorVariant::nominal());
+    assert!(
+        exact_run.max_angle_error < 1e-9 && exact_run.max_epsilon_error < 1e-9,
+        "{} {}",
+        exact_run.max_angle_error,
+        exact_run.max_epsilon_error
+    );
+
     for method in [BoomMethod::Direct, BoomMethod::Linear3] {
         let cfg = config(method);
         let p = run(&cfg, &plus);
