@@ -104,7 +104,7 @@ pub fn gemm_faer(g: Gemm<'_>, c: &mut [f64]) {
     let C = MatMut::from_column_major_slice_with_stride_mut(c, g.rows, g.cols, g.ldc);
     let par = par_for(g.rows * g.cols * g.inner);
     let beta = if g.acc { Accum::Add } else { Accum::Replace };
-    if g.lower {
+    if g.lower && g.rows >= TRIANGULAR_MIN {
         faer::linalg::matmul::triangular::matmul(
             C,
             BlockStructure::TriangularLower,
@@ -120,6 +120,11 @@ pub fn gemm_faer(g: Gemm<'_>, c: &mut [f64]) {
         faer::linalg::matmul::matmul(C, beta, A, B, g.alpha, par);
     }
 }
+
+/// Below this size faer's triangular-output product is slower than its full GEMM (the
+/// upper triangle is then computed too and overwritten when the caller mirrors the lower
+/// one); measured with `benches/step.rs`.
+pub const TRIANGULAR_MIN: usize = 128;
 
 #[cfg(feature = "parallel")]
 fn par_for(work: usize) -> Par {

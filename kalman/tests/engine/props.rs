@@ -87,8 +87,6 @@ fn opts(correlated: bool, exact: bool, missing: f64) -> ProblemOptions {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
-
     #[test]
     fn forms_agree_and_paths_agree(
         p in prop_oneof![
