@@ -16,13 +16,13 @@ use std::path::{Path, PathBuf};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use wls::boom::{
-    AngleUnit, AxWeightLaw, BoomConfig, BoomMethod, Deceleration, ErrorVariant, Level, Limits,
-    RateWeight, RotationProfile, TrajectoryPoint, TurnRun, run_turn, sweep_gamma,
+    AngleRecovery, AngleUnit, AxWeightLaw, BoomConfig, BoomMethod, Deceleration, ErrorVariant,
+    Level, Limits, RateWeight, RotationProfile, TrajectoryPoint, TurnRun, run_turn, sweep_gamma,
 };
 
 use crate::Campaign;
 use crate::error::{Error, Result};
-use crate::montecarlo::run_rng;
+use crate::montecarlo::{par_runs, run_rng};
 use crate::output;
 use crate::plot::{Figure, Scale, Series, line_plot};
 
@@ -126,17 +126,24 @@ pub struct EstimatorParams {
     pub fixed_point: bool,
     /// v₁ = cos α₀ (true, the paper) or v₁ = 1 (false).
     pub ax_weight_cos: bool,
+    /// α from the solved (s, c): "Arcsin" (the paper's; undefined when |s| > 1) or "Atan2"
+    /// (always defined).
+    pub angle_recovery: AngleRecovery,
 }
 
 impl Default for EstimatorParams {
-    /// Radian/radian, fixed point, v₁ = cos α₀: the combination that keeps WLS at γ = 0
-    /// defined over the whole turn (see the alternatives table of the report).
+    /// ε in °/s² in the state, ε̇ in °/s³ in v₆, v₆ to a fixed point, v₁ = cos α₀ (the `wls`
+    /// crate's defaults, SPEC B's prototype choice) with α = atan2(s, c): of the option sets
+    /// that keep WLS at γ = 0 defined and within the limits at γ = 10°, the one closest to
+    /// the paper's Fig. 5 (only the "+" variant departs, from t ≈ 29 s, δε⁺ ≈ 0.58 °/s²) and
+    /// to the prototype's smallest feasible γ ≈ 5° (see the alternatives table of the report).
     fn default() -> Self {
         Self {
-            epsilon_unit: AngleUnit::Radian,
-            epsilon_rate_unit: AngleUnit::Radian,
+            epsilon_unit: AngleUnit::Degree,
+            epsilon_rate_unit: AngleUnit::Degree,
             fixed_point: true,
             ax_weight_cos: true,
+            angle_recovery: AngleRecovery::Atan2,
         }
     }
 }
@@ -334,6 +341,7 @@ impl BoomParams {
             },
             epsilon_unit: opt.epsilon_unit,
             epsilon_rate_unit: opt.epsilon_rate_unit,
+            angle_recovery: opt.angle_recovery,
             rate_weight: if opt.fixed_point {
                 RateWeight::FixedPoint {
                     max_iterations: 20,
@@ -624,11 +632,21 @@ struct Computed {
 ///
 /// # Errors
 /// An invalid parameter set (named by key) or a library error.
-pub fn compute(params: &BoomParams, seed: u64, config_path: &Path) -> Result<BoomSummary> {
-    Ok(compute_all(params, seed, config_path)?.summary)
+pub fn compute(
+    params: &BoomParams,
+    seed: u64,
+    threads: Option<usize>,
+    config_path: &Path,
+) -> Result<BoomSummary> {
+    Ok(compute_all(params, seed, threads, config_path)?.summary)
 }
 
-fn compute_all(params: &BoomParams, seed: u64, config_path: &Path) -> Result<Computed> {
+fn compute_all(
+    params: &BoomParams,
+    seed: u64,
+    threads: Option<usize>,
+    config_path: &Path,
+) -> Result<Computed> {
     params.validate(config_path)?;
     let trajectory = params
         .rotation_profile()
@@ -698,48 +716,61 @@ fn compute_all(params: &BoomParams, seed: u64, config_path: &Path) -> Result<Com
     let feasible_gamma_deg =
         window_deg(report.window).map(|[a, b]| [nearest(&gammas_deg, a), nearest(&gammas_deg, b)]);
 
-    // The unit/weight alternatives.
-    let mut alternatives = Vec::new();
-    let mut alternative_verdicts = Vec::new();
+    // The unit/weight alternatives, one job per option set (in a fixed order, so the result
+    // does not depend on the number of threads).
+    let mut option_sets = Vec::new();
     for epsilon_unit in [AngleUnit::Radian, AngleUnit::Degree] {
         for epsilon_rate_unit in [AngleUnit::Radian, AngleUnit::Degree] {
             for fixed_point in [true, false] {
                 for ax_weight_cos in [true, false] {
-                    let o = EstimatorParams {
-                        epsilon_unit,
-                        epsilon_rate_unit,
-                        fixed_point,
-                        ax_weight_cos,
-                    };
-                    let mut rows = Vec::new();
-                    for gamma in [0.0, 10.0] {
-                        let cfg = params.config(BoomMethod::Wls, gamma, &o);
-                        for v in &variants {
-                            let run = turn(&cfg, v, &quiet())?;
-                            let s = stats(&run);
-                            let defined = s.undefined_from_deg.is_none();
-                            rows.push(AlternativeRow {
-                                options: o,
-                                gamma_deg: gamma,
-                                bias: run.label.clone(),
-                                max_alpha_err_deg: s.max_alpha_deg,
-                                max_eps_err_deg_s2: s.max_eps_deg,
-                                undefined_from_alpha_deg: s.undefined_from_deg,
-                                first_violation_alpha_deg: s.violation.map(|v| v.1),
-                                first_violation_t_s: s.violation.map(|v| v.0),
-                                alpha_within: defined && s.max_alpha_deg <= params.limits.alpha_deg,
-                                eps_within: defined && s.max_eps_deg <= params.limits.eps_deg_s2,
-                            });
-                        }
+                    for angle_recovery in [AngleRecovery::Arcsin, AngleRecovery::Atan2] {
+                        option_sets.push(EstimatorParams {
+                            epsilon_unit,
+                            epsilon_rate_unit,
+                            fixed_point,
+                            ax_weight_cos,
+                            angle_recovery,
+                        });
                     }
-                    let mut v = verdict(o, &rows);
-                    v.feasible_gamma_deg = window_deg(sweep(false, &o)?.window)
-                        .map(|[a, b]| [nearest(&gammas_deg, a), nearest(&gammas_deg, b)]);
-                    alternative_verdicts.push(v);
-                    alternatives.extend(rows);
                 }
             }
         }
+    }
+    let alternative = |o: &EstimatorParams| -> Result<(AlternativeVerdict, Vec<AlternativeRow>)> {
+        let mut rows = Vec::new();
+        for gamma in [0.0, 10.0] {
+            let cfg = params.config(BoomMethod::Wls, gamma, o);
+            for v in &variants {
+                let run = turn(&cfg, v, &quiet())?;
+                let s = stats(&run);
+                let defined = s.undefined_from_deg.is_none();
+                rows.push(AlternativeRow {
+                    options: *o,
+                    gamma_deg: gamma,
+                    bias: run.label.clone(),
+                    max_alpha_err_deg: s.max_alpha_deg,
+                    max_eps_err_deg_s2: s.max_eps_deg,
+                    undefined_from_alpha_deg: s.undefined_from_deg,
+                    first_violation_alpha_deg: s.violation.map(|v| v.1),
+                    first_violation_t_s: s.violation.map(|v| v.0),
+                    alpha_within: defined && s.max_alpha_deg <= params.limits.alpha_deg,
+                    eps_within: defined && s.max_eps_deg <= params.limits.eps_deg_s2,
+                });
+            }
+        }
+        let mut v = verdict(*o, &rows);
+        v.feasible_gamma_deg = window_deg(sweep(false, o)?.window)
+            .map(|[a, b]| [nearest(&gammas_deg, a), nearest(&gammas_deg, b)]);
+        Ok((v, rows))
+    };
+    let mut alternatives = Vec::new();
+    let mut alternative_verdicts = Vec::new();
+    for done in par_runs(0..option_sets.len(), threads, "boom", |i| {
+        alternative(&option_sets[i])
+    })? {
+        let (v, rows) = done?;
+        alternative_verdicts.push(v);
+        alternatives.extend(rows);
     }
 
     // Beyond the paper: centripetal term, and noise on top of the constant errors.
@@ -864,7 +895,7 @@ pub fn run(campaign: &Campaign) -> Result<()> {
         .config
         .clone()
         .unwrap_or_else(|| PathBuf::from("<defaults>"));
-    let computed = compute_all(&params, campaign.seed, &path)?;
+    let computed = compute_all(&params, campaign.seed, campaign.threads, &path)?;
     write_outputs(&campaign.out_dir("boom"), &computed)
 }
 
@@ -1139,7 +1170,7 @@ fn unit(u: AngleUnit) -> &'static str {
 
 fn options_label(o: &EstimatorParams) -> String {
     format!(
-        "ε in {}, ε̇ in {}, v₆ {}, v₁ {}",
+        "ε in {}, ε̇ in {}, v₆ {}, v₁ {}, α by {}",
         unit(o.epsilon_unit),
         unit(o.epsilon_rate_unit),
         if o.fixed_point {
@@ -1147,8 +1178,63 @@ fn options_label(o: &EstimatorParams) -> String {
         } else {
             "previous cycle"
         },
-        if o.ax_weight_cos { "cos α₀" } else { "1" }
+        if o.ax_weight_cos { "cos α₀" } else { "1" },
+        match o.angle_recovery {
+            AngleRecovery::Arcsin => "arcsin",
+            AngleRecovery::Atan2 => "atan2",
+        }
     )
+}
+
+/// How the main options' WLS at γ = 0 compares with the paper's Fig. 5.
+fn wls0_comment(s: &BoomSummary) -> String {
+    let lim = s.limits;
+    let over = |c: &&&CaseSummary| {
+        c.undefined_from_alpha_deg.is_some()
+            || c.max_alpha_err_deg > lim.alpha_deg
+            || c.max_eps_err_deg_s2 > lim.eps_deg_s2
+    };
+    let cases: Vec<&CaseSummary> = ["+", "-"]
+        .iter()
+        .filter_map(|b| case(s, "wls", 0.0, b))
+        .collect();
+    let departing: Vec<&&CaseSummary> = cases.iter().filter(over).collect();
+    let mut t = String::new();
+    if cases.iter().all(|c| c.undefined_from_alpha_deg.is_none()) {
+        t.push_str("defined over the whole turn, as the paper says; ");
+    } else {
+        t.push_str("NOT defined over the whole turn; ");
+    }
+    match departing.as_slice() {
+        [] => t.push_str("no excess at all (the paper has δε⁺ slightly over)"),
+        [c] if c.bias == "+" => {
+            let _ = write!(
+                t,
+                "only the \"+\" variant departs, as in the paper (δε⁺ = {:.2} °/s² vs Δε = {}: \
+                 \"slightly\"); {}",
+                c.max_eps_err_deg_s2,
+                lim.eps_deg_s2,
+                if c.max_alpha_err_deg > lim.alpha_deg {
+                    format!(
+                        "but δα⁺ = {:.2}° also exceeds Δα, which the paper does not show; no \
+                         unit/weight choice avoids that (alternatives table)",
+                        c.max_alpha_err_deg
+                    )
+                } else {
+                    "δα⁺ stays within Δα".to_string()
+                }
+            );
+        }
+        [c] => {
+            let _ = write!(
+                t,
+                "the \"{}\" variant departs where the paper has \"+\" (alternatives table)",
+                c.bias
+            );
+        }
+        _ => t.push_str("both variants depart; the paper has only δε⁺"),
+    }
+    t
 }
 
 /// The verdict of the alternatives table in words.
@@ -1192,6 +1278,7 @@ fn alternatives_conclusion(s: &BoomSummary) -> String {
         epsilon_rate_unit: lib.epsilon_rate_unit,
         fixed_point: matches!(lib.rate_weight, RateWeight::FixedPoint { .. }),
         ax_weight_cos: lib.weights.ax_law == AxWeightLaw::CosPrevious,
+        angle_recovery: lib.angle_recovery,
     };
     if let Some(d) = v.iter().find(|x| x.options == lib_options) {
         let _ = write!(
@@ -1303,20 +1390,27 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         "| direct inversion undefined | past α ≈ 88° (t > 31 s) | from α = {} (variant +; − stays defined) | g² < a_x² starts at arcsin(1 − Δa/g) = {bound_undef:.2}° in variant +; variant − never leaves the domain |",
         show(undef("direct", 0.0))
     );
-    let d_l = ["+", "-"]
-        .iter()
-        .filter_map(|b| Some((pick("direct", 0.0, b)?, pick("linear3", 0.0, b)?)))
-        .map(|(a, b)| {
-            (a.max_alpha_err_deg - b.max_alpha_err_deg)
-                .abs()
-                .max((a.max_eps_err_deg_s2 - b.max_eps_err_deg_s2).abs())
-        })
-        .fold(0.0, f64::max);
+    let worst = |m: &str| {
+        ["+", "-"]
+            .iter()
+            .filter_map(|b| pick(m, 0.0, b))
+            .fold((0.0f64, 0.0f64), |(a, e), c| {
+                (a.max(c.max_alpha_err_deg), e.max(c.max_eps_err_deg_s2))
+            })
+    };
+    let (la, le) = worst("linear3");
+    let (da, de) = worst("direct");
+    let same_onset = (viol("linear3", 0.0) - viol("direct", 0.0)).abs() < 0.5;
     let _ = writeln!(
         r,
-        "| linearised 3×3 no better | \"practically the same\" (Fig. 4) | over the limits from α = {}, undefined from {}; worst maxima differ from direct by {d_l:.2e} | agrees: det H = −g r c₀ → 0 |",
+        "| linearised 3×3 no better | \"practically the same\"; near 90° the errors fluctuate with a large swing, as nothing like condition (3) stops them (Fig. 4) | over the limits from α = {}, undefined from {}; worst δα {la:.2}°, δε {le:.2} °/s² (direct: {da:.2}°, {de:.2} °/s²) | {}; det H = −g r c₀ → 0 |",
         show(viol("linear3", 0.0)),
-        show(undef("linear3", 0.0))
+        show(undef("linear3", 0.0)),
+        if same_onset {
+            "agrees: the limits break at the same angle as direct inversion"
+        } else {
+            "the onset differs from direct inversion"
+        }
     );
     let w0 = |b: &str| pick("wls", 0.0, b);
     let fmt_case = |c: Option<&CaseSummary>| {
@@ -1336,11 +1430,7 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         "| WLS at γ = 0 | defined; within limits except δε⁺ past α ≈ 81° (t > 29 s), \"slightly\" (Fig. 5) | {}; {} | {} |",
         fmt_case(w0("+")),
         fmt_case(w0("-")),
-        if s.alternative_verdicts.iter().any(|v| v.reproduces_paper) {
-            "the alternatives table names the option sets that reproduce this figure"
-        } else {
-            "no unit/weight choice reproduces this figure exactly (see the alternatives table); the main options keep WLS defined, as the paper requires"
-        }
+        wls0_comment(s)
     );
     let w10 = |b: &str| pick("wls", 10.0, b);
     let _ = writeln!(
@@ -1420,10 +1510,13 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
          The paper does not say in which unit ε sits in the WLS state (H₂₃ = r or r·π/180, \
          and the ε₀ row), in which unit ε̇ enters v₆ = 0.5/(1 + 2|ε̇|)², when v₆ is evaluated \
          (from the previous cycles, or re-evaluated to a fixed point within the cycle), and \
-         v₁ = cos α₀ could be read as a constant. All 16 combinations, γ = 0 and 10°: a set \
+         v₁ = cos α₀ could be read as a constant; the paper takes α = arcsin s, which is \
+         undefined once the solved s passes 1, whereas atan2(s, c) never is. All {} \
+         combinations, γ = 0 and 10°: a set \
          *reproduces the paper* if at γ = 0 both variants stay defined, δα stays within Δα, \
          at most one variant exceeds Δε and only past α = 75°, and at γ = 10° everything is \
-         within the limits.\n"
+         within the limits.\n",
+        s.alternative_verdicts.len()
     );
     let _ = writeln!(
         r,

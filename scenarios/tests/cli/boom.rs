@@ -126,7 +126,7 @@ fn the_papers_conclusions_hold() {
     assert!(report.contains("Which units and weights reproduce the paper"));
     assert!(report.contains("**Verdict.**"));
     assert!(report.contains("Maxima exclude only the first cycle"));
-    assert_eq!(s["alternative_verdicts"].as_array().map(Vec::len), Some(16));
+    assert_eq!(s["alternative_verdicts"].as_array().map(Vec::len), Some(32));
     for svg in [
         "gamma_sweep.svg",
         "wls_gamma10_eps.svg",
