@@ -7,6 +7,7 @@ mod engine {
     pub mod correlated;
     pub mod errors;
     pub mod fuel;
+    pub mod misc;
     pub mod nis;
     pub mod props;
     pub mod reference;

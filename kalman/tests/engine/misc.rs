@@ -1,0 +1,122 @@
+//! Adoption paths: nalgebra inputs (feature `nalgebra`), time-varying models through
+//! `ModelSource`, and `reset`.
+
+use kalman::strategies::{FilterProblem, ProblemOptions};
+use kalman::{CovarianceForm, Dyn, Filter, Fixed, Model};
+
+#[test]
+fn nalgebra_matrices_build_the_same_model() {
+    let p = FilterProblem::generate(4, 2, ProblemOptions::default(), 21);
+    let to_na =
+        |a: &faer::Mat<f64>| nalgebra::DMatrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)]);
+    let F: nalgebra::SMatrix<f64, 4, 4> = nalgebra::SMatrix::from_fn(|i, j| p.F[(i, j)]);
+    let model = Model::new(
+        Fixed::<4, 2, 0>::new(),
+        &F,
+        &to_na(&p.H),
+        &to_na(&p.Q),
+        &to_na(&p.R),
+    )
+    .expect("model");
+    let mut a = Filter::new(model, &p.x0, &to_na(&p.P0), CovarianceForm::Joseph).expect("filter");
+    let mut b = Filter::new(
+        p.model(Fixed::<4, 2, 0>::new()).expect("model"),
+        &p.x0,
+        &p.P0,
+        CovarianceForm::Joseph,
+    )
+    .expect("filter");
+    for z in &p.z {
+        a.step(z, None).expect("step");
+        b.step(z, None).expect("step");
+        // Same numbers in, same kernels: bit-identical.
+        assert!(
+            a.state()
+                .iter()
+                .zip(b.state())
+                .all(|(x, y)| (x - y).abs() <= 0.0)
+        );
+    }
+    // A wrongly shaped nalgebra matrix is a typed error naming it.
+    let bad = nalgebra::DMatrix::<f64>::zeros(3, 4);
+    let e = Model::new(
+        Dyn::new(4, 2, 0).expect("dims"),
+        &F,
+        &bad,
+        &to_na(&p.Q),
+        &to_na(&p.R),
+    )
+    .err();
+    assert!(
+        matches!(e, Some(kalman::Error::Shape { name: "H", .. })),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn time_varying_models_step_by_step() {
+    let p = FilterProblem::generate(3, 2, ProblemOptions::default(), 22);
+    let q = FilterProblem::generate(3, 2, ProblemOptions::default(), 23);
+    let dims = Dyn::new(3, 2, 0).expect("dims");
+    let m0 = p.model(dims).expect("model");
+    let m1 = q.model(dims).expect("model");
+    // Alternating models: step k uses models[k] for its update (H) and prediction (F, Q).
+    let models: Vec<Model<Dyn>> = (0..p.z.len())
+        .map(|k| if k % 2 == 0 { m0.clone() } else { m1.clone() })
+        .collect();
+    let mut by_source =
+        Filter::new(m0.clone(), &p.x0, &p.P0, CovarianceForm::Joseph).expect("filter");
+    let mut by_hand = by_source.clone();
+    let mut constant = by_source.clone();
+    for (k, z) in p.z.iter().enumerate() {
+        by_source.step_source(&models, z, None).expect("step");
+        by_hand
+            .step_with(if k % 2 == 0 { &m0 } else { &m1 }, z, None)
+            .expect("step");
+        constant.step(z, None).expect("step");
+        assert!(
+            by_source
+                .state()
+                .iter()
+                .zip(by_hand.state())
+                .all(|(x, y)| (x - y).abs() <= 0.0)
+        );
+    }
+    let diff = by_source
+        .state()
+        .iter()
+        .zip(constant.state())
+        .fold(0.0_f64, |s, (x, y)| s.max((x - y).abs()));
+    assert!(
+        diff > 1e-6,
+        "the time-varying run must differ from the constant one"
+    );
+    // Past the end of the list the last model is reused.
+    assert!(by_source.step_source(&models, &p.z[0], None).is_ok());
+}
+
+#[test]
+fn reset_restarts_from_a_new_prior() {
+    let p = FilterProblem::generate(3, 1, ProblemOptions::default(), 24);
+    let mut f = Filter::new(
+        p.model(Dyn::new(3, 1, 0).expect("dims")).expect("model"),
+        &p.x0,
+        &p.P0,
+        CovarianceForm::SquareRoot,
+    )
+    .expect("filter");
+    let first: Vec<f64> = {
+        f.step(&p.z[0], None).expect("step");
+        f.state().to_vec()
+    };
+    f.step(&p.z[1], None).expect("step");
+    f.reset(&p.x0, &p.P0).expect("reset");
+    assert_eq!(f.steps(), 0);
+    f.step(&p.z[0], None).expect("step");
+    assert!(
+        f.state()
+            .iter()
+            .zip(&first)
+            .all(|(x, y)| (x - y).abs() <= 0.0)
+    );
+}
