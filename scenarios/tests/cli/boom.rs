@@ -171,8 +171,34 @@ fn shards_agree_and_merge_copies() {
         ],
     );
     ok(&dir, &["merge", "a", "b", "--out", "m"]);
+    ok(
+        &dir,
+        &[
+            "boom",
+            "--config",
+            "tiny.toml",
+            "--threads",
+            "1",
+            "--out",
+            "t1",
+        ],
+    );
+    ok(
+        &dir,
+        &[
+            "boom",
+            "--config",
+            "tiny.toml",
+            "--threads",
+            "2",
+            "--out",
+            "t2",
+        ],
+    );
     let a = read(&dir.join("a/summary.json"));
     assert_eq!(a, read(&dir.join("m/summary.json")));
+    assert_eq!(a, read(&dir.join("t1/summary.json")));
+    assert_eq!(a, read(&dir.join("t2/summary.json")));
     assert_eq!(
         read(&dir.join("a/report.md")),
         read(&dir.join("m/report.md"))
