@@ -603,6 +603,7 @@ fn filter_memory_does_not_grow_with_the_csv() {
         smooth >= big + 20_000,
         "smoothing should store the pass: {big} kB vs {smooth} kB"
     );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Reads a JSON file written by the program.
@@ -981,6 +982,55 @@ proptest! {
             let _ = model_file::parse_continuous(Path::new(name), &model);
         }
         let _ = data::parse_data(Path::new("z.csv"), csv.as_bytes());
+    }
+
+    // Any well-shaped model written as JSON or TOML reads back to the same matrices.
+    #[test]
+    fn model_files_round_trip(
+        (n, m, p) in (1usize..=5, 1usize..=3, 0usize..=2),
+        seed in any::<u64>(),
+        toml_format in any::<bool>(),
+    ) {
+        use scenarios::userdata::model_file::{parse_discrete, DiscreteFile};
+        let mut state = seed | 1;
+        let mut next = move || {
+            // xorshift64: a seeded stream of values in [-10, 10) with up to 17 digits.
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 20.0 - 10.0
+        };
+        let mut rows = |r: usize, c: usize| -> Vec<Vec<f64>> {
+            (0..r).map(|_| (0..c).map(|_| next()).collect()).collect()
+        };
+        let file = DiscreteFile {
+            dt: 0.25,
+            F: rows(n, n),
+            B: (p > 0).then(|| rows(n, p)),
+            H: rows(m, n),
+            D: (p > 0).then(|| rows(m, p)),
+            Q: rows(n, n),
+            R: Some(rows(m, m)),
+            S: Some(rows(n, m)),
+            x0: Some(rows(1, n).remove(0)),
+            P0: Some(rows(n, n)),
+        };
+        let (name, text) = if toml_format {
+            ("m.toml", toml::to_string(&file).expect("toml"))
+        } else {
+            ("m.json", serde_json::to_string(&file).expect("json"))
+        };
+        let parsed = parse_discrete(Path::new(name), &text).expect("a well-shaped model parses");
+        let back = |m: &DMatrix<f64>| -> Vec<Vec<f64>> {
+            m.row_iter().map(|r| r.iter().copied().collect()).collect()
+        };
+        prop_assert_eq!(back(&parsed.F), file.F.clone());
+        prop_assert_eq!(back(&parsed.H), file.H.clone());
+        prop_assert_eq!(Some(back(&parsed.R)), file.R.clone());
+        prop_assert_eq!(parsed.S.as_ref().map(back), file.S.clone());
+        prop_assert_eq!(parsed.P0.as_ref().map(back), file.P0.clone());
+        prop_assert_eq!(parsed.x0.as_slice(), file.x0.as_deref().unwrap_or_default());
+        prop_assert_eq!((parsed.p(), back(&parsed.D).concat()), (p, file.D.clone().unwrap_or_default().concat()));
     }
 
     // The whole `filter` command in process, on a valid model and arbitrary CSV rows
