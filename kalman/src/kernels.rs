@@ -46,6 +46,9 @@ pub fn gemm(g: Gemm<'_>, c: &mut [f64]) {
         ldc,
         lower,
     } = g;
+    // Small outputs: full columns vectorise better than the shrinking lower-triangle ones
+    // (every `lower` product is mirrored by its caller, so the extra upper part is harmless).
+    let lower = lower && rows > 16;
     for j in 0..cols {
         let i0 = if lower { j } else { 0 };
         let ccol = &mut c[j * ldc + i0..j * ldc + rows];
