@@ -170,6 +170,9 @@ fn threads_and_shards_give_the_same_summary() {
     let out = run(&dir, &["merge", "s1", "--out", "bad"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("shard is missing"));
+    let out = run(&dir, &["merge", "s1", "other", "--out", "bad"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("another campaign"));
     assert!(!dir.join("bad").exists(), "a failed merge writes nothing");
     let _ = std::fs::remove_dir_all(&dir);
 }
