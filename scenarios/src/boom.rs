@@ -570,6 +570,9 @@ pub struct BoomSummary {
     pub turn_duration_s: f64,
     /// Cruise rate, rad/s.
     pub cruise_rate_rad_s: f64,
+    /// The sensor's range clips the "+" variant's a_y (g·cos α + ε·r + Δa > range) up to this
+    /// nominal α, degrees (γ = 0); null if it never does.
+    pub saturated_until_alpha_deg: Option<f64>,
     /// Direct, linear3 and WLS at each case γ under "+" and "−".
     pub cases: Vec<CaseSummary>,
     /// The γ sweep of WLS.
@@ -813,6 +816,16 @@ fn compute_all(
 
     let last = points.last().map_or(0.0, |p| p.t);
     let cruise = points.iter().map(|p| p.omega).fold(0.0, f64::max);
+    let saturated_until_alpha_deg = points
+        .iter()
+        .filter(|p| {
+            params.gravity_mps2 * p.alpha.cos()
+                + p.epsilon * params.sensor_radius_m
+                + params.limiting_error_mps2
+                > params.range_mps2
+        })
+        .map(|p| p.alpha.to_degrees())
+        .reduce(f64::max);
     Ok(Computed {
         summary: BoomSummary {
             scenario: "boom".into(),
@@ -823,6 +836,7 @@ fn compute_all(
             deceleration_deg_s2: trajectory.deceleration_deg_s2,
             turn_duration_s: last,
             cruise_rate_rad_s: cruise,
+            saturated_until_alpha_deg,
             cases,
             gamma_sweep,
             feasible_gamma_deg,
@@ -1339,6 +1353,16 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         s.turn_duration_s,
         s.cruise_rate_rad_s
     );
+    if let Some(a) = s.saturated_until_alpha_deg {
+        let _ = writeln!(
+            r,
+            "The sensor's ±{} m/s² range clips the \"+\" variant's a_y = g·cos α + ε·r + Δa by \
+             up to Δa while α < {a:.2}° (the paper ignores the range); the effect on ε is at \
+             most Δa/r = {:.3} °/s².\n",
+            s.params.range_mps2,
+            (s.params.limiting_error_mps2 / s.params.sensor_radius_m).to_degrees()
+        );
+    }
     let _ = writeln!(
         r,
         "WLS options of the main cases: {}.\n",
