@@ -9,6 +9,9 @@ use crate::kernels::{Gemm, RANK_TOL, cholesky, jacobi_eigen, lq_rows, mirror_low
 use crate::model::{MatrixInput, Model, ModelSource, load, load_vec, psd_factor, symmetrise};
 use crate::storage::{Buf, Dims, Dyn};
 
+/// ln(2π), for the Gaussian log-likelihood.
+const LN_2PI: f64 = 1.837_877_066_409_345_5;
+
 /// How the covariance update is computed. All three give the same P in exact arithmetic.
 #[derive(
     Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
@@ -544,11 +547,17 @@ fn step_dense<D: Dims>(
                 }
                 y[i] = s / fact[i + i * m];
             }
-            let mut ld = 0.0;
+            // log det Σ = 2 ln Π L_ii: one logarithm unless the product leaves the normal
+            // range (then one per pivot).
+            let mut prod = 1.0;
             for i in 0..m {
-                ld += 2.0 * fact[i + i * m].ln();
+                prod *= fact[i + i * m];
             }
-            logdet = ld;
+            logdet = if prod.is_normal() && prod.is_finite() {
+                2.0 * prod.ln()
+            } else {
+                (0..m).map(|i| 2.0 * fact[i + i * m].ln()).sum()
+            };
             rank = observed;
         } else {
             // Rank-revealing fallback: Σ = V Λ Vᵀ, Z = V Λ₊^{-1/2} (dropped columns zero),
@@ -606,8 +615,7 @@ fn step_dense<D: Dims>(
         let nis: f64 = y[..m].iter().map(|v| v * v).sum();
         info.rank = rank;
         info.nis = nis;
-        info.log_likelihood =
-            -0.5 * (nis + logdet + rank as f64 * (2.0 * core::f64::consts::PI).ln());
+        info.log_likelihood = -0.5 * (nis + logdet + rank as f64 * LN_2PI);
         // x⁺ = x⁻ + K e.
         let xf = st.xf.as_mut_slice();
         xf[..n].copy_from_slice(&xp[..n]);
@@ -884,7 +892,7 @@ fn step_sqrt<D: Dims>(
         rank: r,
         nis,
         log_likelihood: if r > 0 {
-            -0.5 * (nis + logdet + r as f64 * (2.0 * core::f64::consts::PI).ln())
+            -0.5 * (nis + logdet + r as f64 * LN_2PI)
         } else {
             0.0
         },
