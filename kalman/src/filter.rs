@@ -23,7 +23,9 @@ pub enum CovarianceForm {
     /// `P⁺ = P − K Σ Kᵀ` (one triangle computed, then mirrored): cheapest, least robust.
     Standard,
     /// A square factor `L` with `P = L Lᵀ` propagated by orthogonal (Householder LQ)
-    /// triangularisation of a pre-array: P is PSD by construction.
+    /// triangularisation of a pre-array: P is PSD by construction. The triangularisation
+    /// runs in the crate's own loops at O((m + 2n)³) with an (m + 2n)² workspace: meant for
+    /// small and medium n (use Joseph for n in the hundreds).
     SquareRoot,
 }
 

@@ -56,9 +56,9 @@
 #![deny(missing_docs)]
 
 mod consistency;
+pub mod continuous;
 mod error;
 mod filter;
-pub mod continuous;
 #[doc(hidden)]
 pub mod kernels;
 mod model;
