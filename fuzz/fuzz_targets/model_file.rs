@@ -14,7 +14,11 @@ fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(rest) else {
         return;
     };
-    let path = Path::new(if selector & 1 == 0 { "m.json" } else { "m.toml" });
+    let path = Path::new(if selector & 1 == 0 {
+        "m.json"
+    } else {
+        "m.toml"
+    });
     if selector & 2 == 0 {
         let _ = parse_discrete(path, text);
     } else {
