@@ -180,7 +180,11 @@ fn deserialize<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Resul
             let at = e
                 .span()
                 .map(|span| {
-                    let start = span.start.min(text.len());
+                    // The span is in bytes; step back to a character boundary.
+                    let mut start = span.start.min(text.len());
+                    while !text.is_char_boundary(start) {
+                        start -= 1;
+                    }
                     let before = text.get(..start).unwrap_or("");
                     let line = before.matches('\n').count() + 1;
                     let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
