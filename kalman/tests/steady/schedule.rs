@@ -8,8 +8,8 @@ use kalman::schedule::{GainSchedule, ScheduleOptions};
 use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed, Model};
 use rand::Rng;
 
-use super::alloc::allocations;
 use super::common::{joint_noise, randn, rng, spd, with_radius};
+use crate::common::counting::allocations;
 
 struct Problem {
     F: Mat<f64>,

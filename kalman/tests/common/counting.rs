@@ -1,4 +1,5 @@
-//! A counting global allocator (thread-local counts, so parallel tests do not interfere).
+//! The counting global allocator of this test binary (thread-local counts, so parallel tests
+//! do not interfere): the zero-allocation tests of the engine and of the schedule read it.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;

@@ -1,0 +1,28 @@
+//! Integration tests of the `kalman` crate, one binary: the filter engine (issue "kalman 1")
+//! in `engine/`, steady state, continuous time, smoothing and the Monte Carlo mode in
+//! `steady/`, and the counting global allocator both use in `common/`.
+#![allow(non_snake_case)]
+
+mod common {
+    pub mod counting;
+}
+
+mod engine {
+    pub mod agreement;
+    pub mod alloc;
+    pub mod correlated;
+    pub mod errors;
+    pub mod fuel;
+    pub mod misc;
+    pub mod nis;
+    pub mod props;
+    pub mod reference;
+}
+
+mod steady {
+    pub mod common;
+    pub mod continuous;
+    pub mod riccati;
+    pub mod schedule;
+    pub mod smoother;
+}
