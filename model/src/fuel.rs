@@ -126,6 +126,22 @@ pub enum Realisation {
     /// (`2z⁻¹(1+z⁻¹)`) and the quantization filter (`2(n₀+n₁z⁻¹)`). Reproduces SPEC F's A–D.
     Paper,
     /// Exact Tustin per block (feed-through of the rolling noise appears in B and D).
+    ///
+    /// **Not for a filter that uses the cross-covariance S against real data.** The bilinear
+    /// map sends s = ∞ to z = −1, so every exact-Tustin block of relative degree ≥ 1 (all
+    /// five here, the quantization filter included) carries a numerator factor (1 + z⁻¹).
+    /// With the same u_k driving z_k (through D) and x_{k+1} (through B), the model's
+    /// measurements therefore have **no power at the Nyquist frequency** on either channel
+    /// ([`FuelModel::nyquist_measurement_power`] is 0 up to round-off): the model claims the
+    /// alternating component of z is exactly predictable. The Kalman filter with S is
+    /// optimal and consistent for that model, but its steady predictor `A − K_p C` then has
+    /// an eigenvalue at −1, so it integrates any alternating content of real data undamped.
+    /// A floor quantizer's steps have plenty; in the fuelling scenario the level estimate
+    /// swings, the stop fires on a swing and the fuelling error goes from ≈ 5 ± 2 mm to
+    /// ≈ −18 ± 18 mm. A filter that ignores S (R then acts as a white floor) and the other
+    /// realisations are unaffected: the paper's quantization numerator `2(n₀ + n₁z⁻¹)` and
+    /// zero-order hold keep power at Nyquist. This is a property of the model, not of the
+    /// filter engine.
     ExactTustin,
     /// The continuous 7-state cascade discretised as a whole by zero-order hold, the noise
     /// held over the step (variance N/Δt, the paper's convention). States differ in scale
@@ -168,7 +184,10 @@ pub struct FuelModel {
     pub q: DMatrix<f64>,
     /// Measurement noise covariance R = D Q Dᵀ (+ R²·gyro_noise_var in R₁₁).
     pub r: DMatrix<f64>,
-    /// Cross-covariance S = B Q Dᵀ (7×m) of process and measurement noise.
+    /// Cross-covariance S = B Q Dᵀ (7×m) of process and measurement noise, in the filter
+    /// engine's convention `E[w_k v_kᵀ]` with `x_{k+1} = A x_k + w_k`, `z_k = C x_k + v_k`,
+    /// `w_k = B u_k`, `v_k = D u_k`. Exact for the model in every realisation; see
+    /// [`Realisation::ExactTustin`] for why using it there fails against real data.
     pub s: DMatrix<f64>,
     /// Process noise covariance B Q Bᵀ (7×7).
     pub process_covariance: DMatrix<f64>,
@@ -452,6 +471,37 @@ impl FuelModel {
         self.c.nrows()
     }
 
+    /// Spectral density of each measurement's random part at the Nyquist frequency
+    /// (ω = π per sample, z = −1), in units of variance: `Φ(ω)` normalised so that
+    /// `var = (1/2π)∫_{−π}^{π} Φ(ω) dω`, i.e. a white sequence of variance σ² has `Φ ≡ σ²`.
+    /// It is the diagonal of `T Q Tᵀ` with `T = C(−I − A)⁻¹B + D` (real at z = −1), plus the
+    /// gyro noise `R²·gyro_noise_var` on the tilt channel.
+    ///
+    /// A zero entry means the model holds that channel's alternating component exactly
+    /// predictable, which makes a filter that uses [`FuelModel::s`] marginally stable at
+    /// Nyquist (see [`Realisation::ExactTustin`]).
+    ///
+    /// # Errors
+    /// [`crate::Error::Singular`] if A has an eigenvalue at −1 (no realisation built here
+    /// has: all poles are those of the stable blocks and the integrator's +1).
+    pub fn nyquist_measurement_power(&self) -> Result<DVector<f64>> {
+        let n = self.a.nrows();
+        let z_minus_a = -DMatrix::<f64>::identity(n, n) - &self.a;
+        let x = z_minus_a
+            .lu()
+            .solve(&self.b)
+            .ok_or(crate::Error::Singular {
+                name: "−I − A",
+                context: "transfer from the noise u to z at z = −1 (A has an eigenvalue −1)",
+            })?;
+        let t = &self.c * x + &self.d;
+        let mut power = (&t * &self.q * t.transpose()).diagonal();
+        if self.channels == Channels::LevelAndTilt {
+            power[0] += self.params.sensor_radius.powi(2) * self.params.gyro_noise_var;
+        }
+        Ok(power)
+    }
+
     /// The model as a [`DiscreteSs`]: `F = A`, one control input `u ≡ 1` through
     /// `B = known_input`, `H = C`, noise `G = B`, `J = D`, `Q = Q`. (The gyro noise part of R
     /// has no slot there.)
@@ -497,6 +547,52 @@ mod tests {
         assert!((p.beta() - 2.0 * PI / 10.0).abs() < 1e-15);
         assert!((p.t_c() - 1.0).abs() < 1e-15, "T_c = δ/V_c = 1 s");
         assert!((p.sigma_alpha() - 1f64.to_radians() / 3.0).abs() < 1e-18);
+    }
+
+    #[test]
+    fn only_exact_tustin_has_no_measurement_power_at_nyquist() {
+        // The reported failure of the two-channel filter with S in the exact-Tustin
+        // realisation: its z spectrum vanishes at z = −1 on both channels. The scale is the
+        // quantization noise variance δ²/12 (≈ 8e-6 m²); the paper's z2 has ≈ 2e-8 m² at
+        // Nyquist (ratio ≈ 2.5e-3), ZOH about the same, exact Tustin ≈ 1e-44 m² (round-off).
+        // 1e-9 of the scale separates the two by six orders of magnitude either way.
+        for amplitude_deg in [0.0, 1.0] {
+            let p = FuelParams {
+                max_tilt_amplitude: f64::to_radians(amplitude_deg),
+                ..FuelParams::default()
+            };
+            let scale = p.delta.powi(2) / 12.0;
+            let z2 = |r: Realisation| {
+                let m = p.build(Channels::LevelAndTilt, r).expect("model");
+                let power = m.nyquist_measurement_power().expect("A has no pole at −1");
+                assert!(power.iter().all(|v| *v >= 0.0), "{r:?}: {power}");
+                (power[0] / scale, power[1] / scale)
+            };
+            let (tilt, level) = z2(Realisation::ExactTustin);
+            assert!(
+                tilt < 1e-9 && level < 1e-9,
+                "exact Tustin: {tilt:e}, {level:e}"
+            );
+            for r in [Realisation::Paper, Realisation::Zoh] {
+                let (_, level) = z2(r);
+                assert!(level > 1e-4, "{r:?} level channel at Nyquist: {level:e}");
+            }
+        }
+        // The gyro noise is white: it puts R²·var back on the tilt channel.
+        let noisy = FuelParams {
+            gyro_noise_var: 1e-8,
+            ..FuelParams::default()
+        };
+        let m = noisy
+            .build(Channels::LevelAndTilt, Realisation::ExactTustin)
+            .expect("model");
+        let power = m.nyquist_measurement_power().expect("power");
+        // Only round-off (≈ 1e-30 m² from the model part) separates it from 2.25e-8.
+        assert!(
+            (power[0] - 1.5f64.powi(2) * 1e-8).abs() < 1e-20,
+            "{}",
+            power[0]
+        );
     }
 
     #[test]
