@@ -31,8 +31,10 @@ pub(crate) fn bench(args: &[String]) -> Result<()> {
             .with_context(|| format!("clearing {}", criterion_dir.display()))?;
     }
     let mut cmd = cargo();
-    cmd.args(["bench", "--workspace", "--all-features"]);
+    // `--bench *`: only the criterion targets (libs and bins would reject criterion's flags).
+    cmd.args(["bench", "--workspace", "--all-features", "--bench", "*"]);
     if let Some(i) = args.iter().position(|a| a == "--bench") {
+        // One bench target instead of all (the last `--bench` wins).
         cmd.arg("--bench").arg(&args[i + 1]);
     }
     cmd.arg("--");
