@@ -4,13 +4,21 @@
 //!
 //! | module | what it owns |
 //! |---|---|
-//! | [`output`] | whole-or-nothing file writing (temporary name, then rename), CSV/JSON/Markdown |
+//! | [`fueling`] | paper F: Monte Carlo of the fuelling stop command (relay logic against one- and two-channel Kalman filters), sweeps, fits, report |
+//! | [`uav`] | paper U: the UAV channel's closed loop (LQR + discrete Kalman filter), Welch spectra at four nodes, whiteness test, Kalman–Bucy check |
+//! | [`boom`] | paper B: the erector-boom estimators over the turn, ±Δa variants, γ sweep, units/weights study |
+//! | [`userdata`] | `filter`, `discretize`, `steady-state` on users' own model files and CSV logs |
+//! | [`output`] | whole-or-nothing file writing (temporary name, then rename), CSV/JSON |
+//! | [`plot`] | the one SVG line-plot function every report uses |
 //! | [`montecarlo`] | per-run seeds, `--shard K/N` slices, parallel runs with a progress bar |
 //! | [`config`] | TOML parameter overrides that reject unknown keys by name |
 //! | [`error`] | the CLI's typed error; exit code 2 for anything the user can fix |
 //!
-//! Every random stream derives from `(seed, run index)` alone, so results do not depend on
-//! the number of threads.
+//! The scenarios compute nothing the libraries own: models come from `model`, filtering and
+//! Riccati equations from `kalman`, least squares from `wls`, the simulated world from
+//! `sensors`. Every random stream derives from `(seed, run index)` alone, so results do not
+//! depend on the number of threads, and summaries are recomputed from per-run records, so a
+//! sharded campaign merges into the same bytes.
 #![deny(missing_docs)]
 
 pub mod boom;
