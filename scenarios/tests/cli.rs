@@ -4,6 +4,8 @@
 
 #[path = "cli/boom.rs"]
 mod boom;
+#[path = "cli/common.rs"]
+mod common;
 #[path = "cli/fueling.rs"]
 mod fueling;
 #[path = "cli/uav.rs"]

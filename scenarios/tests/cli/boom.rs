@@ -4,36 +4,7 @@
 //! units/weights verdict in the report, deterministic shards and `merge`, and errors that
 //! name the key.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("scenarios-boom-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir
-}
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scenarios"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run scenarios")
-}
-
-fn ok(dir: &Path, args: &[&str]) {
-    let out = run(dir, args);
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
+use crate::common::{ok, read, run, scratch};
 
 /// The full turn and all cases, with a coarse γ sweep (0, 5, …, 20°) to keep it fast.
 const SMALL: &str = "[sweep]\nstep_deg = 5.0\n";
@@ -58,7 +29,7 @@ fn case<'a>(
 
 #[test]
 fn the_papers_conclusions_hold() {
-    let dir = scratch("accept");
+    let dir = scratch("boom", "accept");
     std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
     ok(&dir, &["boom", "--config", "small.toml", "--out", "out"]);
     let out = dir.join("out");
@@ -139,7 +110,7 @@ fn the_papers_conclusions_hold() {
 
 #[test]
 fn shards_agree_and_merge_copies() {
-    let dir = scratch("merge");
+    let dir = scratch("boom", "merge");
     // The smallest useful campaign: one γ sweep point beyond 0 and no extras.
     std::fs::write(
         dir.join("tiny.toml"),
@@ -213,7 +184,7 @@ fn shards_agree_and_merge_copies() {
 
 #[test]
 fn bad_configuration_is_named() {
-    let dir = scratch("errors");
+    let dir = scratch("boom", "errors");
     std::fs::write(dir.join("bad.toml"), "[limits]\nalpha_deg = 0.0\n").expect("write");
     let out = run(&dir, &["boom", "--config", "bad.toml", "--out", "o"]);
     assert_eq!(out.status.code(), Some(2));

@@ -2,37 +2,7 @@
 //! byte-identical summaries for any `--threads` and for `--shard` + `merge`, and errors that
 //! name the offending configuration key.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-/// A fresh, empty scratch directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("scenarios-fu-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir
-}
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scenarios"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run scenarios")
-}
-
-fn ok(dir: &Path, args: &[&str]) {
-    let out = run(dir, args);
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
+use crate::common::{ok, read, run, scratch, summary};
 
 /// One amplitude sweep of three points and one point for each other sweep: the smallest
 /// campaign that exercises every output.
@@ -46,13 +16,9 @@ invariance_periods_s = [6.0, 14.0]
 steps_mm = [10.0]
 ";
 
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&read(&dir.join("summary.json"))).expect("summary is JSON")
-}
-
 #[test]
 fn one_degree_reproduces_the_papers_orderings() {
-    let dir = scratch("orderings");
+    let dir = scratch("fu", "orderings");
     // 300 runs at 0.5° and 1°: the std of a std estimate is ≈ 4 % at this size, far inside
     // the margins checked below (two-channel ≈ 0.3 of relay against the 0.45 bound). The
     // other sweeps get the minimum of 2 runs: here they only have to be written.
@@ -131,7 +97,7 @@ fn exact_tustin_report_explains_the_filter_with_s() {
     // With `realisation = "exact_tustin"` the model's level reading has no power at Nyquist
     // once S is used, so the filter with S integrates the quantizer's alternating content
     // undamped (model::Realisation::ExactTustin). The report must say so, with the figures.
-    let dir = scratch("exact-tustin");
+    let dir = scratch("fu", "exact-tustin");
     let config = format!(
         "{SMALL}realisation = \"exact_tustin\"\nruns_per_point = 40\nsweep_runs_per_point = 2\n"
     )
@@ -164,7 +130,7 @@ fn exact_tustin_report_explains_the_filter_with_s() {
 
 #[test]
 fn threads_and_shards_give_the_same_summary() {
-    let dir = scratch("shards");
+    let dir = scratch("fu", "shards");
     std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
     let with = |extra: &[&str]| {
         let mut a = vec!["fueling", "--config", "small.toml", "--runs", "24"];
@@ -217,7 +183,7 @@ fn threads_and_shards_give_the_same_summary() {
 
 #[test]
 fn bad_configuration_exits_2_naming_the_key() {
-    let dir = scratch("badkey");
+    let dir = scratch("fu", "badkey");
     for (text, key) in [
         ("stepp_mm = 5.0\n", "stepp_mm"),
         ("step_mm = -1.0\n", "step_mm"),

@@ -3,47 +3,14 @@
 //! Kalman–Bucy and discrete gains), byte-identical summaries for any `--threads` and for
 //! `--shard` + `merge`, and configuration errors that name the key.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("scenarios-uav-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir
-}
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scenarios"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run scenarios")
-}
-
-fn ok(dir: &Path, args: &[&str]) {
-    let out = run(dir, args);
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&read(&dir.join("summary.json"))).expect("summary is JSON")
-}
+use crate::common::{ok, read, run, scratch, summary};
 
 /// 1024 steps per run (256 s: 25 Welch segments of 64), the SPEC's plant, noise and gains.
 const SMALL: &str = "steps = 1024\nwelch_segment = 64\n";
 
 #[test]
 fn closed_loop_is_stable_white_and_better_than_the_sensor() {
-    let dir = scratch("accept");
+    let dir = scratch("uav", "accept");
     std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
     ok(
         &dir,
@@ -101,7 +68,7 @@ fn closed_loop_is_stable_white_and_better_than_the_sensor() {
 
 #[test]
 fn threads_and_shards_give_the_same_summary() {
-    let dir = scratch("shards");
+    let dir = scratch("uav", "shards");
     std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
     let base = [
         "uav",
@@ -142,7 +109,7 @@ fn threads_and_shards_give_the_same_summary() {
 
 #[test]
 fn bad_configuration_is_named() {
-    let dir = scratch("errors");
+    let dir = scratch("uav", "errors");
     std::fs::write(dir.join("bad.toml"), "dt_s = -0.25\n").expect("write");
     let out = run(&dir, &["uav", "--config", "bad.toml", "--out", "o"]);
     assert_eq!(out.status.code(), Some(2));

@@ -4,40 +4,17 @@
 #![allow(non_snake_case)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 
-/// A fresh, empty scratch directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("scenarios-ud-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir
-}
+use crate::common::{ok, run, scratch};
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).expect("write input");
     p
-}
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_scenarios"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run scenarios")
-}
-
-fn ok(dir: &Path, args: &[&str]) {
-    let out = run(dir, args);
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 /// Runs a command that must fail with exit code 2 and exactly one line on stderr containing
@@ -82,7 +59,7 @@ fn filter_scalar_by_hand() {
     // k=0: Σ = 2, K = 1/2, x = 1/2, P = 1/2, NIS = 1/2. Predict: P = 3/2.
     // k=1: missing: x = 1/2, P = 3/2, NIS = NaN. Predict: P = 5/2.
     // k=2: Σ = 7/2, K = 5/7, e = 3/2, x = 1/2 + 15/14, P = 5/7, NIS = (9/4)/(7/2) = 9/14.
-    let dir = scratch("scalar");
+    let dir = scratch("ud", "scalar");
     write(
         &dir,
         "m.toml",
@@ -188,7 +165,7 @@ fn rows_json(m: &DMatrix<f64>) -> String {
 
 #[test]
 fn filter_two_state_with_control_feedthrough_cross_covariance_and_gaps() {
-    let dir = scratch("twostate");
+    let dir = scratch("ud", "twostate");
     let F = DMatrix::from_row_slice(2, 2, &[1.0, 0.1, -0.2, 0.9]);
     let B = DMatrix::from_row_slice(2, 1, &[0.0, 0.1]);
     let H = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.5, 1.0]);
@@ -293,7 +270,7 @@ fn filter_streams_a_long_csv() {
     // 20 000 rows through the binary: the estimates file has one row per data row and the
     // last covariance equals the scalar steady state P_post = P⁻R/(P⁻+R), P⁻ = (Q + √(Q²+4QR))/2
     // for F = H = 1 (Q = 1, R = 1: P⁻ = (1+√5)/2).
-    let dir = scratch("long");
+    let dir = scratch("ud", "long");
     write(
         &dir,
         "m.json",
@@ -322,7 +299,7 @@ fn smooth_against_textbook_rts() {
     // The 2-state model of `filter_two_state…` without S or D, with gaps and a control:
     // the reference runs the filter above, then J_k = P_{k|k} Fᵀ P_{k+1|k}⁻¹,
     // x_{k|N} = x_{k|k} + J_k (x_{k+1|N} − x_{k+1|k}), P_{k|N} = P_{k|k} + J_k (P_{k+1|N} − P_{k+1|k}) J_kᵀ.
-    let dir = scratch("smooth");
+    let dir = scratch("ud", "smooth");
     let F = DMatrix::from_row_slice(2, 2, &[1.0, 0.1, -0.2, 0.9]);
     let B = DMatrix::from_row_slice(2, 1, &[0.0, 0.1]);
     let H = DMatrix::from_row_slice(1, 2, &[1.0, 0.0]);
@@ -440,7 +417,7 @@ fn smooth_against_textbook_rts() {
 
 #[test]
 fn steady_state_against_iterated_riccati() {
-    let dir = scratch("steady");
+    let dir = scratch("ud", "steady");
     // Scalar random walk, q = r = 1: P = (1 + √5)/2, K = P/(P + 1), P_post = P/(P + 1).
     write(
         &dir,
@@ -580,7 +557,7 @@ fn filter_memory_does_not_grow_with_the_csv() {
     // 20 000 against 100 000 rows: streaming keeps the peak at the program's own few MB; `--smooth`, which
     // must keep the pass (≥ 100 bytes a row for n = 2), shows what growth looks like — so
     // the first assertion is known to be able to fail.
-    let dir = scratch("memory");
+    let dir = scratch("ud", "memory");
     write(
         &dir,
         "m.json",
@@ -646,7 +623,7 @@ fn mat(v: &serde_json::Value) -> Vec<Vec<f64>> {
 
 #[test]
 fn discretize_against_closed_forms() {
-    let dir = scratch("discretize");
+    let dir = scratch("ud", "discretize");
     // Double integrator with white acceleration of intensity q = 2 (Van Loan, ZOH):
     // F = [[1, Δt], [0, 1]], Q = q·[[Δt³/3, Δt²/2], [Δt²/2, Δt]].
     write(
@@ -761,7 +738,7 @@ fn discretize_against_closed_forms() {
 
 #[test]
 fn csv_errors_name_file_line_and_column() {
-    let dir = scratch("csverr");
+    let dir = scratch("ud", "csverr");
     write(
         &dir,
         "m.json",
@@ -835,7 +812,7 @@ fn csv_errors_name_file_line_and_column() {
 
 #[test]
 fn model_errors_name_matrix_and_rule() {
-    let dir = scratch("modelerr");
+    let dir = scratch("ud", "modelerr");
     write(&dir, "z.csv", "t,z1\n0,1\n");
     let inputs = 2;
     let filter = [
