@@ -5,8 +5,10 @@
 //!   filter iterated from P0 = I until P_{k+1|k} settles (`baseline_iterated_filter`; the
 //!   number of steps it needs is printed once per size).
 //!
-//! Deterministic problem, the same construction as `benches/step.rs`.
+//! Deterministic problem: `benches/common/mod.rs`, shared with `benches/step.rs`.
 #![allow(non_snake_case, missing_docs, clippy::unwrap_used)]
+
+mod common;
 
 use std::hint::black_box;
 use std::time::Duration;
@@ -15,49 +17,9 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use faer::Mat;
 use kalman::riccati::dare;
 use kalman::schedule::{GainSchedule, ScheduleOptions};
-use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed, Model};
+use kalman::{CovarianceForm, Dyn, Filter, Fixed};
 
-struct Problem {
-    F: Mat<f64>,
-    H: Mat<f64>,
-    Q: Mat<f64>,
-    R: Mat<f64>,
-    z: Vec<Vec<f64>>,
-}
-
-fn problem(n: usize, m: usize) -> Problem {
-    let s = 1.0 / (n as f64).sqrt();
-    let F = Mat::from_fn(n, n, |i, j| {
-        (if i == j { 0.95 } else { 0.0 }) + 0.05 * s * (1.0 + i as f64 + 3.0 * j as f64).sin()
-    });
-    let H = Mat::from_fn(m, n, |i, j| (1.0 + 2.0 * i as f64 + j as f64).cos());
-    let Q = Mat::from_fn(n, n, |i, j| {
-        if i == j {
-            0.01 * (1.0 + 0.1 * i as f64)
-        } else {
-            0.0
-        }
-    });
-    let R = Mat::from_fn(m, m, |i, j| {
-        if i == j {
-            0.1 * (1.0 + 0.1 * i as f64)
-        } else {
-            0.0
-        }
-    });
-    let z = (0..64)
-        .map(|k| {
-            (0..m)
-                .map(|i| (0.37 * k as f64 + 1.3 * i as f64).sin())
-                .collect()
-        })
-        .collect();
-    Problem { F, H, Q, R, z }
-}
-
-fn model<D: Dims>(p: &Problem, dims: D) -> Model<D> {
-    Model::new(dims, &p.F, &p.H, &p.Q, &p.R).unwrap()
-}
+use common::{Problem, model, problem};
 
 fn gain_schedule(c: &mut Criterion) {
     let p = problem(7, 2);

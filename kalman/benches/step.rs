@@ -6,58 +6,22 @@
 //! to the one `benches/filterpy_step.py` builds, so the FilterPy timing is comparable.
 #![allow(non_snake_case, missing_docs, clippy::unwrap_used)]
 
+mod common;
+
 use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use faer::Mat;
-use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed, Model};
+use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
-/// The bench problem: a contractive F, dense H, diagonal Q, R; z_k[i] = sin(0.37 k + 1.3 i).
-struct Problem {
-    F: Mat<f64>,
-    H: Mat<f64>,
-    Q: Mat<f64>,
-    R: Mat<f64>,
-    z: Vec<Vec<f64>>,
-}
-
-fn problem(n: usize, m: usize) -> Problem {
-    let s = 1.0 / (n as f64).sqrt();
-    let F = Mat::from_fn(n, n, |i, j| {
-        (if i == j { 0.95 } else { 0.0 }) + 0.05 * s * (1.0 + i as f64 + 3.0 * j as f64).sin()
-    });
-    let H = Mat::from_fn(m, n, |i, j| (1.0 + 2.0 * i as f64 + j as f64).cos());
-    let Q = Mat::from_fn(n, n, |i, j| {
-        if i == j {
-            0.01 * (1.0 + 0.1 * i as f64)
-        } else {
-            0.0
-        }
-    });
-    let R = Mat::from_fn(m, m, |i, j| {
-        if i == j {
-            0.1 * (1.0 + 0.1 * i as f64)
-        } else {
-            0.0
-        }
-    });
-    let z = (0..64)
-        .map(|k| {
-            (0..m)
-                .map(|i| (0.37 * k as f64 + 1.3 * i as f64).sin())
-                .collect()
-        })
-        .collect();
-    Problem { F, H, Q, R, z }
-}
+use common::{Problem, model, problem};
 
 fn engine<D: Dims>(p: &Problem, dims: D) -> Filter<D> {
     let n = dims.n();
-    let model = Model::new(dims, &p.F, &p.H, &p.Q, &p.R).unwrap();
     Filter::new(
-        model,
+        model(p, dims),
         &vec![0.0; n],
         &Mat::<f64>::identity(n, n),
         CovarianceForm::Joseph,
