@@ -12,7 +12,8 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
 
 use crate::Error;
-use crate::riccati::{check, symmetrise};
+use crate::model::check;
+use crate::riccati::symmetrise;
 
 /// The Kalman–Bucy filter's covariance equation for a time-invariant continuous model.
 #[derive(Debug, Clone)]

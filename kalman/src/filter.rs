@@ -6,7 +6,9 @@ use faer::MatRef;
 
 use crate::Error;
 use crate::kernels::{Gemm, RANK_TOL, cholesky, jacobi_eigen, lq_rows, mirror_lower};
-use crate::model::{MatrixInput, Model, ModelSource, load, load_vec, psd_factor, symmetrise};
+use crate::model::{
+    MatrixInput, Model, ModelSource, check_vec, load, load_vec, psd_factor, symmetrise,
+};
 use crate::storage::{Buf, Dims, Dyn};
 
 /// ln(2π), for the Gaussian log-likelihood.
@@ -329,14 +331,17 @@ fn mm<D: Dims>(
     );
 }
 
+/// The validation of one step's inputs, shared by [`Filter::step`] and
+/// [`crate::schedule::ScheduledFilter::step`]: `z` of length `m` with no infinite entry (NaN
+/// marks a missing entry), `u` (if any) of length `p` and finite. [`Error::Shape`] or
+/// [`Error::NonFinite`] naming `z` or `u`.
 #[inline(always)]
-fn check_inputs<D: Dims>(
-    d: &D,
-    st: &mut State<D>,
+pub(crate) fn check_step_inputs(
+    m: usize,
+    p: usize,
     z: &[f64],
     u: Option<&[f64]>,
-) -> Result<usize, Error> {
-    let (m, p) = (d.m(), d.p());
+) -> Result<(), Error> {
     if z.len() != m {
         return Err(Error::Shape {
             name: "z",
@@ -347,24 +352,7 @@ fn check_inputs<D: Dims>(
         });
     }
     if let Some(u) = u {
-        if u.len() != p {
-            return Err(Error::Shape {
-                name: "u",
-                rows: u.len(),
-                cols: 1,
-                expected_rows: p,
-                expected_cols: 1,
-            });
-        }
-        if let Some(i) = u.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                name: "u",
-                rows: p,
-                cols: 1,
-                row: i,
-                col: 0,
-            });
-        }
+        check_vec("u", u, p)?;
     }
     if let Some(i) = z.iter().position(|v| v.is_infinite()) {
         return Err(Error::NonFinite {
@@ -375,6 +363,19 @@ fn check_inputs<D: Dims>(
             col: 0,
         });
     }
+    Ok(())
+}
+
+/// Validates the step inputs and sets the observation mask; returns the number of observed
+/// entries.
+#[inline(always)]
+fn check_inputs<D: Dims>(
+    d: &D,
+    st: &mut State<D>,
+    z: &[f64],
+    u: Option<&[f64]>,
+) -> Result<usize, Error> {
+    check_step_inputs(d.m(), d.p(), z, u)?;
     let mask = st.mask.as_mut_slice();
     let mut observed = 0;
     for (mi, zi) in mask.iter_mut().zip(z) {
@@ -423,9 +424,19 @@ fn innovation(m: usize, n: usize, H: &[f64], x: &[f64], z: &[f64], mask: &[f64],
     }
 }
 
-/// `x_out = F x + B u`.
+/// `out += A v` for the column-major `rows`×`v.len()` matrix `A` (column by column).
 #[inline(always)]
-fn propagate_mean(
+pub(crate) fn add_mat_vec(rows: usize, A: &[f64], v: &[f64], out: &mut [f64]) {
+    for (j, vj) in v.iter().enumerate() {
+        for (o, a) in out[..rows].iter_mut().zip(&A[j * rows..j * rows + rows]) {
+            *o += a * vj;
+        }
+    }
+}
+
+/// `x_out = F x + B u` (`x`, `u` of lengths n, p).
+#[inline(always)]
+pub(crate) fn propagate_mean(
     n: usize,
     p: usize,
     F: &[f64],
@@ -435,19 +446,9 @@ fn propagate_mean(
     out: &mut [f64],
 ) {
     out[..n].fill(0.0);
-    for j in 0..n {
-        let xj = x[j];
-        for (o, f) in out[..n].iter_mut().zip(&F[j * n..j * n + n]) {
-            *o += f * xj;
-        }
-    }
+    add_mat_vec(n, F, &x[..n], out);
     if let Some(u) = u {
-        for l in 0..p {
-            let ul = u[l];
-            for (o, b) in out[..n].iter_mut().zip(&B[l * n..l * n + n]) {
-                *o += b * ul;
-            }
-        }
+        add_mat_vec(n, B, &u[..p], out);
     }
 }
 
@@ -621,12 +622,7 @@ fn step_dense<D: Dims>(
         // x⁺ = x⁻ + K e.
         let xf = st.xf.as_mut_slice();
         xf[..n].copy_from_slice(&xp[..n]);
-        for j in 0..m {
-            let ej = e[j];
-            for (xi, kij) in xf[..n].iter_mut().zip(&K[j * n..j * n + n]) {
-                *xi += kij * ej;
-            }
-        }
+        add_mat_vec(n, K, &e[..m], xf);
         let pf = st.pf.as_mut_slice();
         match st.form {
             CovarianceForm::Standard => {
@@ -704,13 +700,7 @@ fn step_dense<D: Dims>(
                     false,
                 );
             }
-            let y = st.y.as_slice();
-            for l in 0..m {
-                let yl = y[l];
-                for (xi, g) in xp[..n].iter_mut().zip(&gbar[l * n..l * n + n]) {
-                    *xi += g * yl;
-                }
-            }
+            add_mat_vec(n, gbar, &st.y.as_slice()[..m], xp);
             let fk = st.tnm.as_mut_slice();
             mm(
                 &d,

@@ -90,13 +90,14 @@ impl<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>> Mat
     }
 }
 
-/// Checks the shape and finiteness of `a` and copies it column-major into `dst`.
-pub(crate) fn load(
+/// Checks that `a` is `rows`×`cols` with finite entries: [`Error::Shape`] or
+/// [`Error::NonFinite`] (the first bad entry in column-major order) naming `name`. The one
+/// shape/finiteness check of matrix inputs in the crate.
+pub(crate) fn check(
     name: &'static str,
-    a: &impl MatrixInput,
+    a: impl MatrixInput,
     rows: usize,
     cols: usize,
-    dst: &mut [f64],
 ) -> Result<(), Error> {
     if a.nrows() != rows || a.ncols() != cols {
         return Err(Error::Shape {
@@ -109,8 +110,7 @@ pub(crate) fn load(
     }
     for j in 0..cols {
         for i in 0..rows {
-            let v = a.at(i, j);
-            if !v.is_finite() {
+            if !a.at(i, j).is_finite() {
                 return Err(Error::NonFinite {
                     name,
                     rows,
@@ -119,19 +119,33 @@ pub(crate) fn load(
                     col: j,
                 });
             }
-            dst[i + j * rows] = v;
         }
     }
     Ok(())
 }
 
-/// Checks the length and finiteness of a vector and copies it.
-pub(crate) fn load_vec(
+/// Checks the shape and finiteness of `a` ([`check`]) and copies it column-major into
+/// `dst` (untouched on error).
+pub(crate) fn load(
     name: &'static str,
-    v: &[f64],
-    n: usize,
+    a: &impl MatrixInput,
+    rows: usize,
+    cols: usize,
     dst: &mut [f64],
 ) -> Result<(), Error> {
+    check(name, a, rows, cols)?;
+    for j in 0..cols {
+        for i in 0..rows {
+            dst[i + j * rows] = a.at(i, j);
+        }
+    }
+    Ok(())
+}
+
+/// Checks that the vector `v` has length `n` and finite entries: [`Error::Shape`] or
+/// [`Error::NonFinite`] naming `name`.
+#[inline(always)]
+pub(crate) fn check_vec(name: &'static str, v: &[f64], n: usize) -> Result<(), Error> {
     if v.len() != n {
         return Err(Error::Shape {
             name,
@@ -150,6 +164,18 @@ pub(crate) fn load_vec(
             col: 0,
         });
     }
+    Ok(())
+}
+
+/// Checks the length and finiteness of a vector ([`check_vec`]) and copies it (`dst`
+/// untouched on error).
+pub(crate) fn load_vec(
+    name: &'static str,
+    v: &[f64],
+    n: usize,
+    dst: &mut [f64],
+) -> Result<(), Error> {
+    check_vec(name, v, n)?;
     dst[..n].copy_from_slice(v);
     Ok(())
 }

@@ -29,6 +29,7 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
 
+use crate::model::check;
 use crate::storage::Dims;
 use crate::{Error, Model};
 
@@ -536,37 +537,6 @@ fn relative(num: f64, den: f64) -> f64 {
     } else {
         f64::INFINITY
     }
-}
-
-pub(crate) fn check(
-    name: &'static str,
-    M: MatRef<'_, f64>,
-    rows: usize,
-    cols: usize,
-) -> Result<(), Error> {
-    if M.nrows() != rows || M.ncols() != cols {
-        return Err(Error::Shape {
-            name,
-            rows: M.nrows(),
-            cols: M.ncols(),
-            expected_rows: rows,
-            expected_cols: cols,
-        });
-    }
-    for j in 0..cols {
-        for i in 0..rows {
-            if !M[(i, j)].is_finite() {
-                return Err(Error::NonFinite {
-                    name,
-                    rows,
-                    cols,
-                    row: i,
-                    col: j,
-                });
-            }
-        }
-    }
-    Ok(())
 }
 
 pub(crate) fn all_finite(M: MatRef<'_, f64>) -> bool {

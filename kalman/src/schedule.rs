@@ -19,6 +19,8 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
 
+use crate::filter::{add_mat_vec, check_step_inputs, propagate_mean};
+use crate::model::load_vec;
 use crate::riccati::SteadyState;
 use crate::storage::{Buf, Dims};
 use crate::{CovarianceForm, Error, Filter, MatrixInput, Model};
@@ -232,25 +234,7 @@ impl<D: Dims> ScheduledFilter<'_, D> {
     /// [`Error::Shape`] / [`Error::NonFinite`] naming `x0`.
     pub fn reset(&mut self, x0: &[f64]) -> Result<(), Error> {
         let n = self.s.model.dims().n();
-        if x0.len() != n {
-            return Err(Error::Shape {
-                name: "x0",
-                rows: x0.len(),
-                cols: 1,
-                expected_rows: n,
-                expected_cols: 1,
-            });
-        }
-        if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                name: "x0",
-                rows: n,
-                cols: 1,
-                row: i,
-                col: 0,
-            });
-        }
-        self.xp.as_mut_slice()[..n].copy_from_slice(x0);
+        load_vec("x0", x0, n, self.xp.as_mut_slice())?;
         self.xf.as_mut_slice()[..n].copy_from_slice(x0);
         self.k = 0;
         self.in_full = false;
@@ -268,49 +252,8 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         let s = self.s;
         let d = s.model.dims();
         let (n, m, p) = (d.n(), d.m(), d.p());
-        if z.len() != m {
-            return Err(Error::Shape {
-                name: "z",
-                rows: z.len(),
-                cols: 1,
-                expected_rows: m,
-                expected_cols: 1,
-            });
-        }
-        let mut missing = false;
-        for (i, &v) in z.iter().enumerate() {
-            if v.is_nan() {
-                missing = true;
-            } else if !v.is_finite() {
-                return Err(Error::NonFinite {
-                    name: "z",
-                    rows: m,
-                    cols: 1,
-                    row: i,
-                    col: 0,
-                });
-            }
-        }
-        if let Some(u) = u {
-            if u.len() != p {
-                return Err(Error::Shape {
-                    name: "u",
-                    rows: u.len(),
-                    cols: 1,
-                    expected_rows: p,
-                    expected_cols: 1,
-                });
-            }
-            if let Some(i) = u.iter().position(|v| !v.is_finite()) {
-                return Err(Error::NonFinite {
-                    name: "u",
-                    rows: p,
-                    cols: 1,
-                    row: i,
-                    col: 0,
-                });
-            }
-        }
+        check_step_inputs(m, p, z, u)?;
+        let missing = z.iter().any(|v| v.is_nan());
         if missing || self.in_full {
             return self.full_step(z, u);
         }
@@ -331,35 +274,11 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         }
         // x_{k|k} = x_{k|k−1} + K e
         xf.copy_from_slice(xp);
-        for j in 0..m {
-            let ej = e[j];
-            for i in 0..n {
-                xf[i] += K[i + j * n] * ej;
-            }
-        }
+        add_mat_vec(n, K, e, xf);
         // x_{k+1|k} = F x_{k|k} + B u (+ S Σ⁻¹ e)
-        xp.fill(0.0);
-        for j in 0..n {
-            let xj = xf[j];
-            for i in 0..n {
-                xp[i] += F[i + j * n] * xj;
-            }
-        }
-        if let Some(u) = u {
-            let B = &s.model.B.as_slice()[..n * p];
-            for j in 0..p {
-                for i in 0..n {
-                    xp[i] += B[i + j * n] * u[j];
-                }
-            }
-        }
+        propagate_mean(n, p, F, &s.model.B.as_slice()[..n * p], xf, u, xp);
         if !s.cross.is_empty() {
-            let M = &s.cross[idx].as_slice()[..n * m];
-            for j in 0..m {
-                for i in 0..n {
-                    xp[i] += M[i + j * n] * e[j];
-                }
-            }
+            add_mat_vec(n, &s.cross[idx].as_slice()[..n * m], e, xp);
         }
         self.k += 1;
         Ok(())
