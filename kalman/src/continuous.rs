@@ -9,11 +9,11 @@
 #![allow(non_snake_case)]
 
 use faer::linalg::solvers::Solve;
-use faer::{Mat, MatRef, Side};
+use faer::{Mat, MatRef};
 
 use crate::Error;
 use crate::model::check;
-use crate::riccati::symmetrise;
+use crate::riccati::{factor_r, symmetrise};
 
 /// The Kalman–Bucy filter's covariance equation for a time-invariant continuous model.
 #[derive(Debug, Clone)]
@@ -77,11 +77,7 @@ impl KalmanBucy {
         check("H", H, m, n)?;
         check("Q", Q, n, n)?;
         check("R", R, m, m)?;
-        let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
-            name: "R",
-            n: m,
-            rule: "the Kalman-Bucy gain needs R^-1",
-        })?;
+        let llt = factor_r(R, "the Kalman-Bucy gain needs R^-1")?;
         let mut G = H.transpose() * llt.solve(H);
         symmetrise(&mut G);
         let mut Qs = Q.to_owned();
@@ -110,14 +106,7 @@ impl KalmanBucy {
     pub fn gain(&self, P: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
         let n = self.A.nrows();
         check("P", P, n, n)?;
-        let llt = self
-            .R
-            .llt(Side::Lower)
-            .map_err(|_| Error::NotPositiveDefinite {
-                name: "R",
-                n: self.R.nrows(),
-                rule: "the Kalman-Bucy gain needs R^-1",
-            })?;
+        let llt = factor_r(self.R.as_ref(), "the Kalman-Bucy gain needs R^-1")?;
         Ok(llt.solve(&self.H * P).transpose().to_owned())
     }
 

@@ -26,7 +26,7 @@
 //! [`Error::NotPositiveDefinite`].
 #![allow(non_snake_case)]
 
-use faer::linalg::solvers::Solve;
+use faer::linalg::solvers::{Llt, Solve};
 use faer::{Mat, MatRef, Side};
 
 use crate::model::check;
@@ -346,11 +346,7 @@ pub fn care_with(
     };
     let sol = continuous_dual(A, H, Q, R, opts, &names)?;
     let P = sol.x;
-    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
-        name: "R",
-        n: R.nrows(),
-        rule: "the Riccati solvers need R^-1",
-    })?;
+    let llt = factor_r(R, "the Riccati solvers need R^-1")?;
     let gain = llt.solve(H * &P).transpose().to_owned();
     Ok(ContinuousSteadyState {
         covariance: P,
@@ -384,11 +380,7 @@ pub fn clqr(
     };
     let opts = RiccatiOptions::default();
     let sol = continuous_dual(A.transpose(), B.transpose(), Q, R, &opts, &names)?;
-    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
-        name: "R",
-        n: R.nrows(),
-        rule: "the Riccati solvers need R^-1",
-    })?;
+    let llt = factor_r(R, "the Riccati solvers need R^-1")?;
     let gain = llt.solve(B.transpose() * &sol.x);
     Ok(Lqr {
         gain,
@@ -539,6 +531,16 @@ fn relative(num: f64, den: f64) -> f64 {
     }
 }
 
+/// The Cholesky factor of the positive definite `R`, or [`Error::NotPositiveDefinite`]
+/// naming R with `rule` (what needs R⁻¹).
+pub(crate) fn factor_r(R: MatRef<'_, f64>, rule: &'static str) -> Result<Llt<f64>, Error> {
+    R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
+        name: "R",
+        n: R.nrows(),
+        rule,
+    })
+}
+
 pub(crate) fn all_finite(M: MatRef<'_, f64>) -> bool {
     (0..M.ncols()).all(|j| (0..M.nrows()).all(|i| M[(i, j)].is_finite()))
 }
@@ -681,11 +683,7 @@ fn discrete_dual(
     opts: &RiccatiOptions,
     names: &Names,
 ) -> Result<Solved, Error> {
-    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
-        name: "R",
-        n: R.nrows(),
-        rule: "the Riccati solvers need R^-1",
-    })?;
+    let llt = factor_r(R, "the Riccati solvers need R^-1")?;
     // F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ.
     let (Ft, Qt) = match S {
         Some(S) => {
@@ -776,11 +774,7 @@ fn continuous_dual(
     names: &Names,
 ) -> Result<Solved, Error> {
     let n = A.nrows();
-    let llt = R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
-        name: "R",
-        n: R.nrows(),
-        rule: "the Riccati solvers need R^-1",
-    })?;
+    let llt = factor_r(R, "the Riccati solvers need R^-1")?;
     let modes = marginal_modes(A, true, opts)?;
     if let Some((re, im)) = pbh(A, H, &modes, opts)? {
         return Err(names.detect.error(re, im));
