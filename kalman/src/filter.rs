@@ -333,15 +333,15 @@ fn mm<D: Dims>(
 
 /// The validation of one step's inputs, shared by [`Filter::step`] and
 /// [`crate::schedule::ScheduledFilter::step`]: `z` of length `m` with no infinite entry (NaN
-/// marks a missing entry), `u` (if any) of length `p` and finite. [`Error::Shape`] or
-/// [`Error::NonFinite`] naming `z` or `u`.
+/// marks a missing entry), `u` (if any) of length `p` and finite. Returns whether `z` has a
+/// missing entry; [`Error::Shape`] or [`Error::NonFinite`] naming `z` or `u`.
 #[inline(always)]
 pub(crate) fn check_step_inputs(
     m: usize,
     p: usize,
     z: &[f64],
     u: Option<&[f64]>,
-) -> Result<(), Error> {
+) -> Result<bool, Error> {
     if z.len() != m {
         return Err(Error::Shape {
             name: "z",
@@ -354,16 +354,21 @@ pub(crate) fn check_step_inputs(
     if let Some(u) = u {
         check_vec("u", u, p)?;
     }
-    if let Some(i) = z.iter().position(|v| v.is_infinite()) {
-        return Err(Error::NonFinite {
-            name: "z",
-            rows: m,
-            cols: 1,
-            row: i,
-            col: 0,
-        });
+    let mut missing = false;
+    for (i, v) in z.iter().enumerate() {
+        if v.is_nan() {
+            missing = true;
+        } else if v.is_infinite() {
+            return Err(Error::NonFinite {
+                name: "z",
+                rows: m,
+                cols: 1,
+                row: i,
+                col: 0,
+            });
+        }
     }
-    Ok(())
+    Ok(missing)
 }
 
 /// Validates the step inputs and sets the observation mask; returns the number of observed

@@ -252,8 +252,7 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         let s = self.s;
         let d = s.model.dims();
         let (n, m, p) = (d.n(), d.m(), d.p());
-        check_step_inputs(m, p, z, u)?;
-        let missing = z.iter().any(|v| v.is_nan());
+        let missing = check_step_inputs(m, p, z, u)?;
         if missing || self.in_full {
             return self.full_step(z, u);
         }
