@@ -25,6 +25,15 @@
 //! feature). [`Filter<Fixed<N, M, P>>`](Filter) keeps everything inline for n, m ≤ 16.
 //! Both run the same kernels on slices, so they share validation, semantics and tests.
 //!
+//! # Beyond the step
+//! - [`riccati`]: steady state — DARE by structured doubling (with the cross term S), the
+//!   discrete LQR gain as its dual, CARE; undetectable or unstabilisable pairs are typed errors.
+//! - [`continuous`]: the Kalman–Bucy Riccati ODE, matrix exponential and Van Loan sampling.
+//! - [`smoother`]: the Rauch–Tung–Striebel smoother over a recorded forward pass.
+//! - [`schedule`]: the Monte Carlo mode — the data-independent gain sequence computed once
+//!   ([`schedule::GainSchedule`]) and many measurement streams run at the cost of the state
+//!   update alone; also the fixed-gain filter.
+//!
 //! # Robustness
 //! Σ is factored by Cholesky with a relative pivot tolerance ([`RANK_TOL`]), falling back to
 //! a Jacobi eigen-decomposition and the pseudo-inverse when it is (numerically) singular —
