@@ -199,6 +199,46 @@ fn deserialize<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Resul
     }
 }
 
+/// The optional control-input matrices `B` (n×p) and `D` (m×p) of a model file, p taken from
+/// `B` (zero columns when absent); `names` are the matrices n and m come from, for messages.
+fn control_matrices(
+    path: &Path,
+    b: Option<&Rows>,
+    d: Option<&Rows>,
+    n: usize,
+    m: usize,
+    names: [&str; 2],
+) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+    let [state, output] = names;
+    let B = match b {
+        Some(b) => {
+            let p = b.first().map_or(0, Vec::len);
+            matrix(
+                path,
+                "B",
+                b,
+                Some(n),
+                Some(p),
+                &format!("B must be n×p, n from {state}"),
+            )?
+        }
+        None => DMatrix::zeros(n, 0),
+    };
+    let p = B.ncols();
+    let D = match d {
+        Some(d) => matrix(
+            path,
+            "D",
+            d,
+            Some(m),
+            Some(p),
+            &format!("D must be m×p, m from {output}, p from B"),
+        )?,
+        None => DMatrix::zeros(m, p),
+    };
+    Ok((B, D))
+}
+
 /// A matrix from nested rows with `rows`×`cols` required where given (`None`: taken from
 /// the data). `why` says where the required dimension comes from.
 fn matrix(
@@ -318,25 +358,7 @@ pub fn discrete_from_file(path: &Path, file: &DiscreteFile) -> Result<DiscreteMo
             ));
         }
     };
-    let B = match &file.B {
-        Some(b) => {
-            let p = b.first().map_or(0, Vec::len);
-            matrix(path, "B", b, Some(n), Some(p), "B must be n×p, n from F")?
-        }
-        None => DMatrix::zeros(n, 0),
-    };
-    let p = B.ncols();
-    let D = match &file.D {
-        Some(d) => matrix(
-            path,
-            "D",
-            d,
-            Some(m),
-            Some(p),
-            "D must be m×p, m from H, p from B",
-        )?,
-        None => DMatrix::zeros(m, p),
-    };
+    let (B, D) = control_matrices(path, file.B.as_ref(), file.D.as_ref(), n, m, ["F", "H"])?;
     let S = file
         .S
         .as_ref()
@@ -403,25 +425,7 @@ pub fn parse_continuous(path: &Path, text: &str) -> Result<ContinuousModel> {
     }
     let C = matrix(path, "C", &file.C, None, Some(n), "C must be m×n, n from A")?;
     let m = C.nrows();
-    let B = match &file.B {
-        Some(b) => {
-            let p = b.first().map_or(0, Vec::len);
-            matrix(path, "B", b, Some(n), Some(p), "B must be n×p, n from A")?
-        }
-        None => DMatrix::zeros(n, 0),
-    };
-    let p = B.ncols();
-    let D = match &file.D {
-        Some(d) => matrix(
-            path,
-            "D",
-            d,
-            Some(m),
-            Some(p),
-            "D must be m×p, m from C, p from B",
-        )?,
-        None => DMatrix::zeros(m, p),
-    };
+    let (B, D) = control_matrices(path, file.B.as_ref(), file.D.as_ref(), n, m, ["A", "C"])?;
     let G = match &file.G {
         Some(g) => {
             let q = g.first().map_or(0, Vec::len);
