@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
+use scenarios::fueling::Fueling;
 use scenarios::montecarlo::Shard;
 use scenarios::{Campaign, Error};
 
@@ -88,11 +89,11 @@ impl CampaignArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome: Result<(), Error> = match cli.command {
-        Command::Fueling(a) => scenarios::fueling::run(&a.campaign()),
+        Command::Fueling(a) => scenarios::campaign::run::<Fueling>(&a.campaign()),
         Command::Uav(a) => scenarios::uav::run(&a.campaign()),
         Command::Boom(a) => scenarios::boom::run(&a.campaign()),
-        Command::All(a) => scenarios::run_all(&a.campaign()),
-        Command::Merge { dirs, out } => scenarios::merge(&dirs, &out),
+        Command::All(a) => scenarios::papers::all(&a.campaign()),
+        Command::Merge { dirs, out } => scenarios::papers::merge(&dirs, &out),
         Command::Filter(a) => scenarios::userdata::filter(&a),
         Command::Discretize(a) => scenarios::userdata::discretize(&a),
         Command::SteadyState(a) => scenarios::userdata::steady_state(&a),

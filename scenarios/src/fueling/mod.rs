@@ -4,445 +4,40 @@
 //! Fig. 1), rolling period, fill rate and damper time constant, and an amplitude × period
 //! invariance table, give each strategy's systematic (mean) and random (std) fuelling error.
 //!
-//! Layout: [`sim`] is one run (truth world + strategies); this module holds the parameters and
-//! the campaign (sweeps, shards, merge); [`report`] turns per-run records into
-//! `summary.json`, CSV, SVG and `report.md`. Per-run records (`runs_<sweep>.csv`, full-precision
-//! `f64`) are the ground truth of a campaign: the summary is always recomputed from them in run
-//! order, which is what makes `--threads` and `--shard` + `merge` give byte-identical summaries.
+//! Layout (the same in every scenario): [`parameters`] (the TOML-overridable defaults and the
+//! sweeps they define), [`simulation`] (one run: truth world + strategies; the campaign's
+//! slice of runs), [`records`] (per-run outcomes, `runs_<sweep>.csv`, full-precision `f64`:
+//! the ground truth), [`summary`] (every number, from the records alone) and [`report`]
+//! (CSV, SVG and `report.md`, formatting only). [`Fueling`] ties them to the campaign.
 
+pub mod parameters;
+pub mod records;
 pub mod report;
-pub mod sim;
+pub mod simulation;
+pub mod summary;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use serde::{Deserialize, Serialize};
-
-use crate::Campaign;
-use crate::config;
+use crate::campaign::Scenario;
+use crate::campaign::records::RecordFile;
 use crate::error::{Error, Result};
-use crate::montecarlo::{Shard, par_runs, run_rng};
-use sim::{Outcome, Point, World};
+use crate::montecarlo::Shard;
+use parameters::FuelingParams;
+use records::SweepRecords;
+use summary::Summary;
 
-/// How the filters' model is discretised (`model::Realisation`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum RealisationName {
-    /// The paper's Tustin variant (SPEC F's A–D).
-    Paper,
-    /// Exact Tustin per block.
-    ExactTustin,
-    /// Zero-order hold of the continuous cascade.
-    Zoh,
-}
+/// The fueling scenario, as the campaign runs it.
+#[derive(Debug, Clone, Copy)]
+pub struct Fueling;
 
-impl RealisationName {
-    fn to_model(self) -> model::Realisation {
-        match self {
-            RealisationName::Paper => model::Realisation::Paper,
-            RealisationName::ExactTustin => model::Realisation::ExactTustin,
-            RealisationName::Zoh => model::Realisation::Zoh,
-        }
-    }
-}
+impl Scenario for Fueling {
+    const NAME: &'static str = "fueling";
+    type Params = FuelingParams;
+    type Records = Vec<SweepRecords>;
+    type Summary = Summary;
+    type Json = Summary;
 
-/// Parameters of the scenario (TOML keys = field names). Defaults: SPEC F's assumed values
-/// (the paper's own data set is unavailable) and the campaign sizes that fit
-/// `cargo xtask reproduce` in its time budget.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct FuelingParams {
-    /// Monte Carlo runs per point of the amplitude sweep (the paper's Fig. 1). `--runs`
-    /// overrides this and `sweep_runs_per_point` alike.
-    pub runs_per_point: usize,
-    /// Runs per point of the period, fill-rate and damper sweeps and the invariance table.
-    pub sweep_runs_per_point: usize,
-    /// Sampling interval Δt, s.
-    pub dt_s: f64,
-    /// Correlation time T_a of the fill-velocity fluctuation, s.
-    pub velocity_time_s: f64,
-    /// Standard deviation √D_c of the fill-velocity fluctuation, mm/s.
-    pub velocity_std_mm_s: f64,
-    /// Mean fill rate V_c, mm/s.
-    pub fill_rate_mm_s: f64,
-    /// Quantization step δ of the level sensor, mm.
-    pub step_mm: f64,
-    /// Hydro-damper time constant T_y, s.
-    pub damper_time_s: f64,
-    /// Distance R of the sensor from the tank axis, m.
-    pub sensor_radius_m: f64,
-    /// Angle φ from the stern direction to the sensor, degrees.
-    pub sensor_angle_deg: f64,
-    /// Dominant rolling period 2π/β, s.
-    pub rolling_period_s: f64,
-    /// Irregularity μ of rolling, 1/s.
-    pub irregularity_per_s: f64,
-    /// Maximum tilt amplitude A_max of the sweeps other than the amplitude sweep, degrees
-    /// (σ = A_max/3 per axis).
-    pub max_amplitude_deg: f64,
-    /// Gyro noise per axis, degrees (0 = the paper's noise-free tilt channel).
-    pub gyro_noise_deg: f64,
-    /// Valve-closing delay: the error is the level this long after the stop command, s.
-    pub valve_delay_s: f64,
-    /// Target level H*, m (put on a sensor mark so relay logic is not penalised by δ).
-    pub target_level_m: f64,
-    /// Put H* at a uniformly random height within the quantization step above
-    /// `target_level_m` in each run (true: the dose sets H*, so relay logic also pays the
-    /// sensor's discreteness, as in the paper's error budget) or on the mark itself (false).
-    pub random_target_phase: bool,
-    /// Filling time before the nominal crossing of H*, s (start level = H* − V_c·warm-up):
-    /// how long the filters have to converge.
-    pub warmup_s: f64,
-    /// Prior standard deviation of the level given to the filters, mm.
-    pub initial_level_std_mm: f64,
-    /// Discretisation of the filters' model: "paper", "exact_tustin" or "zoh".
-    pub realisation: RealisationName,
-    /// Amplitude sweep (the paper's Fig. 1), degrees.
-    pub amplitudes_deg: Vec<f64>,
-    /// Rolling-period sweep, s.
-    pub periods_s: Vec<f64>,
-    /// Fill-rate sweep, mm/s.
-    pub fill_rates_mm_s: Vec<f64>,
-    /// Damper time-constant sweep, s.
-    pub damper_times_s: Vec<f64>,
-    /// Quantization-step sweep, mm (explains the gap to the paper: the two-channel gain over
-    /// relay logic grows as δ shrinks against the tilt swing).
-    pub steps_mm: Vec<f64>,
-    /// Amplitudes of the invariance table, degrees.
-    pub invariance_amplitudes_deg: Vec<f64>,
-    /// Periods of the invariance table, s.
-    pub invariance_periods_s: Vec<f64>,
-}
-
-impl Default for FuelingParams {
-    fn default() -> Self {
-        Self {
-            runs_per_point: 1000,
-            sweep_runs_per_point: 1000,
-            dt_s: 0.1,
-            velocity_time_s: 20.0,
-            velocity_std_mm_s: 1.0,
-            fill_rate_mm_s: 10.0,
-            step_mm: 10.0,
-            damper_time_s: 2.0,
-            sensor_radius_m: 1.5,
-            sensor_angle_deg: 30.0,
-            rolling_period_s: 10.0,
-            irregularity_per_s: 0.08,
-            max_amplitude_deg: 1.0,
-            gyro_noise_deg: 0.0,
-            valve_delay_s: 0.0,
-            target_level_m: 10.0,
-            random_target_phase: true,
-            warmup_s: 60.0,
-            initial_level_std_mm: 50.0,
-            realisation: RealisationName::Paper,
-            amplitudes_deg: (0..=10).map(|i| f64::from(i) / 10.0).collect(),
-            periods_s: vec![6.0, 8.0, 10.0, 12.0, 14.0],
-            fill_rates_mm_s: vec![5.0, 10.0, 15.0, 20.0],
-            damper_times_s: vec![0.5, 1.0, 2.0, 4.0],
-            steps_mm: vec![1.0, 2.5, 5.0, 10.0, 20.0],
-            invariance_amplitudes_deg: vec![0.25, 0.5, 0.75, 1.0],
-            invariance_periods_s: vec![6.0, 10.0, 14.0],
-        }
-    }
-}
-
-impl FuelingParams {
-    /// Checks every value, naming the key (`source` names the file in the error).
-    ///
-    /// # Errors
-    /// [`Error::Invalid`] naming the key and the rule broken.
-    pub fn validate(&self, source: &Path) -> Result<()> {
-        let bad = |key: &str, rule: &str, value: String| {
-            Err(Error::invalid(
-                source,
-                format!("key `{key}` = {value}: {rule}"),
-            ))
-        };
-        for (key, v) in [
-            ("runs_per_point", self.runs_per_point),
-            ("sweep_runs_per_point", self.sweep_runs_per_point),
-        ] {
-            if v < 2 {
-                return bad(
-                    key,
-                    "needs at least 2 runs (a standard deviation)",
-                    v.to_string(),
-                );
-            }
-        }
-        let positive = [
-            ("dt_s", self.dt_s),
-            ("velocity_time_s", self.velocity_time_s),
-            ("velocity_std_mm_s", self.velocity_std_mm_s),
-            ("fill_rate_mm_s", self.fill_rate_mm_s),
-            ("step_mm", self.step_mm),
-            ("damper_time_s", self.damper_time_s),
-            ("sensor_radius_m", self.sensor_radius_m),
-            ("rolling_period_s", self.rolling_period_s),
-            ("irregularity_per_s", self.irregularity_per_s),
-            ("warmup_s", self.warmup_s),
-            ("initial_level_std_mm", self.initial_level_std_mm),
-        ];
-        for (key, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(key, "must be finite and > 0", v.to_string());
-            }
-        }
-        let non_negative = [
-            ("max_amplitude_deg", self.max_amplitude_deg),
-            ("gyro_noise_deg", self.gyro_noise_deg),
-            ("valve_delay_s", self.valve_delay_s),
-        ];
-        for (key, v) in non_negative {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(key, "must be finite and ≥ 0", v.to_string());
-            }
-        }
-        for (key, v) in [
-            ("sensor_angle_deg", self.sensor_angle_deg),
-            ("target_level_m", self.target_level_m),
-        ] {
-            if !v.is_finite() {
-                return bad(key, "must be finite", v.to_string());
-            }
-        }
-        if self.warmup_s < 10.0 * self.dt_s {
-            return bad(
-                "warmup_s",
-                "must be at least 10 sampling intervals dt_s",
-                self.warmup_s.to_string(),
-            );
-        }
-        let lists: [(&str, &[f64], bool); 7] = [
-            ("amplitudes_deg", &self.amplitudes_deg, true),
-            ("periods_s", &self.periods_s, false),
-            ("fill_rates_mm_s", &self.fill_rates_mm_s, false),
-            ("damper_times_s", &self.damper_times_s, false),
-            ("steps_mm", &self.steps_mm, false),
-            (
-                "invariance_amplitudes_deg",
-                &self.invariance_amplitudes_deg,
-                true,
-            ),
-            ("invariance_periods_s", &self.invariance_periods_s, false),
-        ];
-        for (key, list, zero_ok) in lists {
-            if list.is_empty() {
-                return bad(key, "must list at least one value", "[]".into());
-            }
-            for v in list {
-                let ok = v.is_finite() && (*v > 0.0 || (zero_ok && *v >= 0.0));
-                if !ok {
-                    let rule = if zero_ok {
-                        "every entry must be finite and ≥ 0"
-                    } else {
-                        "every entry must be finite and > 0"
-                    };
-                    return bad(key, rule, format!("{list:?}"));
-                }
-            }
-        }
-        if self.amplitudes_deg.len() < 2 {
-            return bad(
-                "amplitudes_deg",
-                "needs at least two amplitudes for the straight-line fits",
-                format!("{:?}", self.amplitudes_deg),
-            );
-        }
-        // Let the model check the combination (e.g. an overflowing discretisation).
-        let world = self.world(self.max_amplitude_deg, Swept::Nothing);
-        world
-            .fuel
-            .build(model::Channels::LevelAndTilt, world.realisation)
-            .map_err(|e| {
-                Error::invalid(
-                    source,
-                    format!("the fuel model rejects these parameters: {e}"),
-                )
-            })?;
-        Ok(())
-    }
-
-    /// The world at amplitude `amplitude_deg`, with one swept value overriding its base.
-    pub fn world(&self, amplitude_deg: f64, swept: Swept) -> World {
-        let (mut period_s, mut fill_rate_mm_s, mut damper_time_s, mut step_mm) =
-            (None, None, None, None);
-        match swept {
-            Swept::Nothing => {}
-            Swept::Period(x) => period_s = Some(x),
-            Swept::FillRate(x) => fill_rate_mm_s = Some(x),
-            Swept::Damper(x) => damper_time_s = Some(x),
-            Swept::Step(x) => step_mm = Some(x),
-            Swept::RandomTargetPhase(_) => {}
-        }
-        let random_target_phase = match swept {
-            Swept::RandomTargetPhase(on) => on,
-            _ => self.random_target_phase,
-        };
-        let fuel = model::FuelParams {
-            dt: self.dt_s,
-            t_a: self.velocity_time_s,
-            d_c: (self.velocity_std_mm_s * 1e-3).powi(2),
-            v_c: fill_rate_mm_s.unwrap_or(self.fill_rate_mm_s) * 1e-3,
-            delta: step_mm.unwrap_or(self.step_mm) * 1e-3,
-            t_y: damper_time_s.unwrap_or(self.damper_time_s),
-            sensor_radius: self.sensor_radius_m,
-            phi: self.sensor_angle_deg.to_radians(),
-            rolling_period: period_s.unwrap_or(self.rolling_period_s),
-            mu: self.irregularity_per_s,
-            max_tilt_amplitude: amplitude_deg.to_radians(),
-            gyro_noise_var: 0.0,
-        };
-        World {
-            fuel,
-            target: self.target_level_m,
-            random_target_phase,
-            warmup: self.warmup_s,
-            initial_level_std: self.initial_level_std_mm * 1e-3,
-            valve_delay: self.valve_delay_s,
-            gyro_noise: self.gyro_noise_deg.to_radians(),
-            realisation: self.realisation.to_model(),
-        }
-    }
-
-    /// The campaign's sweeps, in output order.
-    pub fn sweeps(&self) -> Vec<Sweep> {
-        let a = self.max_amplitude_deg;
-        let one = |id, key, label, runs, xs: &[f64], f: &dyn Fn(f64) -> World| Sweep {
-            id,
-            keys: vec![key],
-            label,
-            runs,
-            points: xs.iter().map(|&x| (vec![x], f(x))).collect(),
-        };
-        let mut invariance = Vec::new();
-        for &amp in &self.invariance_amplitudes_deg {
-            for &period in &self.invariance_periods_s {
-                invariance.push((vec![amp, period], self.world(amp, Swept::Period(period))));
-            }
-        }
-        vec![
-            one(
-                "amplitude",
-                "amplitude_deg",
-                "maximum tilt amplitude A_max [°]",
-                self.runs_per_point,
-                &self.amplitudes_deg,
-                &|x| self.world(x, Swept::Nothing),
-            ),
-            one(
-                "period",
-                "rolling_period_s",
-                "dominant rolling period 2π/β [s]",
-                self.sweep_runs_per_point,
-                &self.periods_s,
-                &|x| self.world(a, Swept::Period(x)),
-            ),
-            one(
-                "fill_rate",
-                "fill_rate_mm_s",
-                "mean fill rate V_c [mm/s]",
-                self.sweep_runs_per_point,
-                &self.fill_rates_mm_s,
-                &|x| self.world(a, Swept::FillRate(x)),
-            ),
-            one(
-                "damper",
-                "damper_time_s",
-                "hydro-damper time constant T_y [s]",
-                self.sweep_runs_per_point,
-                &self.damper_times_s,
-                &|x| self.world(a, Swept::Damper(x)),
-            ),
-            one(
-                "step",
-                "step_mm",
-                "quantization step δ [mm]",
-                self.sweep_runs_per_point,
-                &self.steps_mm,
-                &|x| self.world(a, Swept::Step(x)),
-            ),
-            one(
-                "target",
-                "random_target_phase",
-                "H* within a step (1) or on a mark (0)",
-                self.sweep_runs_per_point,
-                &[0.0, 1.0],
-                &|x| self.world(a, Swept::RandomTargetPhase(x > 0.5)),
-            ),
-            Sweep {
-                id: "invariance",
-                keys: vec!["amplitude_deg", "rolling_period_s"],
-                label: "amplitude × period",
-                runs: self.sweep_runs_per_point,
-                points: invariance,
-            },
-        ]
-    }
-}
-
-/// Which parameter a sweep point moves away from its base value.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Swept {
-    /// None (the amplitude sweep moves only the amplitude).
-    Nothing,
-    /// Rolling period, s.
-    Period(f64),
-    /// Fill rate, mm/s.
-    FillRate(f64),
-    /// Damper time constant, s.
-    Damper(f64),
-    /// Quantization step, mm.
-    Step(f64),
-    /// Whether H* is drawn within a step (true) or put on a mark (false).
-    RandomTargetPhase(bool),
-}
-
-/// One sweep: its points (coordinates and world) and runs per point.
-#[derive(Debug, Clone)]
-pub struct Sweep {
-    /// Identifier (file names, JSON keys).
-    pub id: &'static str,
-    /// JSON keys of the point coordinates.
-    pub keys: Vec<&'static str>,
-    /// Axis label.
-    pub label: &'static str,
-    /// Monte Carlo runs per point.
-    pub runs: usize,
-    /// Coordinates and world of each point.
-    pub points: Vec<(Vec<f64>, World)>,
-}
-
-/// Per-run outcomes of one sweep: `records[point]` holds `(run index, outcome)` in run order.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SweepRecords {
-    /// The sweep's identifier.
-    pub id: String,
-    /// Outcomes per point.
-    pub records: Vec<Vec<(usize, Outcome)>>,
-}
-
-/// A campaign's identity and results: everything the summary is computed from.
-#[derive(Debug, Clone)]
-pub struct Results {
-    /// The effective parameters.
-    pub params: FuelingParams,
-    /// Campaign seed.
-    pub seed: u64,
-    /// The slice run (`Shard::ALL` for a whole or merged campaign).
-    pub shard: Shard,
-    /// Records per sweep, in [`FuelingParams::sweeps`] order.
-    pub sweeps: Vec<SweepRecords>,
-}
-
-/// Loads, overrides and validates the parameters of `campaign`.
-///
-/// # Errors
-/// [`Error::Invalid`] naming the file and key; [`Error::Usage`] for `--runs` below 2.
-pub fn params_for(campaign: &Campaign) -> Result<FuelingParams> {
-    let mut params: FuelingParams = config::load_or_default(campaign.config.as_deref())?;
-    if let Some(runs) = campaign.runs {
+    fn set_runs(params: &mut FuelingParams, runs: usize) -> Result<()> {
         if runs < 2 {
             return Err(Error::Usage(format!(
                 "--runs {runs}: the fueling scenario needs at least 2 runs per point"
@@ -450,87 +45,52 @@ pub fn params_for(campaign: &Campaign) -> Result<FuelingParams> {
         }
         params.runs_per_point = runs;
         params.sweep_runs_per_point = runs;
+        Ok(())
     }
-    let source = campaign
-        .config
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("<defaults>"));
-    params.validate(&source)?;
-    Ok(params)
-}
 
-/// Runs the campaign's slice of every sweep.
-///
-/// # Errors
-/// [`Error::Compute`] if a filter or sensor rejects a point (never for validated parameters)
-/// or the worker pool cannot start.
-pub fn simulate(
-    params: &FuelingParams,
-    seed: u64,
-    shard: Shard,
-    threads: Option<usize>,
-) -> Result<Results> {
-    let sweeps = params.sweeps();
-    let mut points: Vec<Point> = Vec::new();
-    // (point index into `points`, run index), in output order.
-    let mut jobs: Vec<(usize, usize)> = Vec::new();
-    let mut layout: Vec<Vec<std::ops::Range<usize>>> = Vec::new();
-    for sweep in &sweeps {
-        let mut ranges = Vec::new();
-        for (_, world) in &sweep.points {
-            let p = points.len();
-            points.push(Point::new(*world).map_err(Error::Compute)?);
-            let start = jobs.len();
-            jobs.extend(shard.runs(sweep.runs).map(|r| (p, r)));
-            ranges.push(start..jobs.len());
-        }
-        layout.push(ranges);
+    fn validate(params: &FuelingParams, source: &Path) -> Result<()> {
+        params.validate(source)
     }
-    // Every point of every sweep reuses run i's stream (common random numbers): differences
-    // between points are then due to the parameters, not to sampling luck.
-    let outcomes = par_runs(0..jobs.len(), threads, "fueling", |j| {
-        let (p, run) = jobs[j];
-        points[p].run(&mut run_rng(seed, run as u64))
-    })?;
-    let mut flat = Vec::with_capacity(outcomes.len());
-    for o in outcomes {
-        flat.push(o.map_err(Error::Compute)?);
+
+    fn record_files(params: &FuelingParams) -> Vec<RecordFile> {
+        records::record_files(params)
     }
-    let sweeps = sweeps
-        .iter()
-        .zip(layout)
-        .map(|(sweep, ranges)| SweepRecords {
-            id: sweep.id.to_string(),
-            records: ranges
-                .into_iter()
-                .map(|r| r.map(|j| (jobs[j].1, flat[j])).collect())
-                .collect(),
-        })
-        .collect();
-    Ok(Results {
-        params: params.clone(),
-        seed,
-        shard,
-        sweeps,
-    })
-}
 
-/// Runs the scenario into `campaign.out_dir("fueling")`.
-///
-/// # Errors
-/// As [`params_for`], [`simulate`] and the output writers.
-pub fn run(campaign: &Campaign) -> Result<()> {
-    let params = params_for(campaign)?;
-    let results = simulate(&params, campaign.seed, campaign.shard, campaign.threads)?;
-    report::write_all(&results, &campaign.out_dir("fueling"))
-}
+    fn simulate(
+        params: &FuelingParams,
+        seed: u64,
+        shard: Shard,
+        threads: Option<usize>,
+    ) -> Result<Vec<SweepRecords>> {
+        simulation::simulate(params, seed, shard, threads)
+    }
 
-/// Merges shard directories of this scenario into `out`.
-///
-/// # Errors
-/// [`Error::Invalid`] naming the directory if shards disagree on parameters or seed, overlap,
-/// or leave runs missing; read and write errors.
-pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<()> {
-    let merged = report::read_and_merge(dirs)?;
-    report::write_all(&merged, out)
+    fn to_tables(records: &Vec<SweepRecords>) -> Vec<Vec<Vec<f64>>> {
+        records::to_tables(records)
+    }
+
+    fn from_tables(
+        params: &FuelingParams,
+        tables: Vec<Vec<Vec<f64>>>,
+    ) -> Result<Vec<SweepRecords>> {
+        records::from_tables(params, tables)
+    }
+
+    fn summarise(
+        params: &FuelingParams,
+        seed: u64,
+        shard: Shard,
+        records: &Vec<SweepRecords>,
+        _threads: Option<usize>,
+    ) -> Result<Summary> {
+        summary::summarise(params, seed, shard, records)
+    }
+
+    fn json(summary: &Summary) -> &Summary {
+        summary
+    }
+
+    fn write_outputs(summary: &Summary, dir: &Path) -> Result<()> {
+        report::write_outputs(summary, dir)
+    }
 }

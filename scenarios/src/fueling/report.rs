@@ -1,362 +1,22 @@
-//! Outputs of the fueling scenario, all recomputed from the per-run records: statistics and
-//! straight-line fits, `summary.json`, a CSV per curve, SVG plots, `report.md`, and the
-//! per-run files `runs_<sweep>.csv` that `merge` reads back.
+//! The fueling scenario's outputs, formatted from its summary: a CSV per curve, the
+//! straight-line fits, SVG plots and `report.md`.
 
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use serde::{Deserialize, Serialize};
-
-use super::sim::{Outcome, STRATEGIES, STRATEGY_LABELS};
-use super::{FuelingParams, Results, Sweep, SweepRecords, Swept};
-use crate::config;
-use crate::error::{Error, Result};
-use crate::montecarlo::Shard;
+use super::parameters::FuelingParams;
+use super::records::{STRATEGIES, STRATEGY_LABELS};
+use super::summary::{Entry, NyquistNull, PAPER_KF1_RATIO, PerStrategy, Stat, Summary};
+use crate::error::Result;
 use crate::output;
 use crate::plot::{Figure, Scale, Series, line_plot};
 
-/// The paper's figures at 1°: random error of the one- and two-channel filters as a fraction
-/// of relay logic's.
-pub const PAPER_KF1_RATIO: f64 = 0.40;
-/// See [`PAPER_KF1_RATIO`].
-pub const PAPER_KF2_RATIO: f64 = 0.25;
-
-/// Systematic and random error of one strategy at one point, mm.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Stat {
-    /// Mean fuelling error (systematic part), mm.
-    pub mean_mm: f64,
-    /// Sample standard deviation (random part), mm.
-    pub std_mm: f64,
-}
-
-/// One value per strategy, serialised under the strategy names.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct PerStrategy<T> {
-    /// Relay logic: stop when the raw sensor reading reaches H*.
-    pub relay: T,
-    /// One-channel KF (level sensor only).
-    pub kf1: T,
-    /// Two-channel KF ignoring the cross-covariance (the paper).
-    pub kf2: T,
-    /// Two-channel KF with the cross-covariance S.
-    pub kf2_cross: T,
-    /// Two-channel KF (no S) fed the mid-step-compensated reading.
-    pub kf2_midstep: T,
-}
-
-impl<T> PerStrategy<T> {
-    fn from_fn(mut f: impl FnMut(usize) -> T) -> Self {
-        PerStrategy {
-            relay: f(0),
-            kf1: f(1),
-            kf2: f(2),
-            kf2_cross: f(3),
-            kf2_midstep: f(4),
-        }
-    }
-    fn get(&self, i: usize) -> &T {
-        match i {
-            0 => &self.relay,
-            1 => &self.kf1,
-            2 => &self.kf2,
-            3 => &self.kf2_cross,
-            _ => &self.kf2_midstep,
-        }
-    }
-}
-
-/// One sweep point: its coordinates and every strategy's statistics.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Entry {
-    /// Coordinates under their keys (e.g. `amplitude_deg`).
-    #[serde(flatten)]
-    pub at: BTreeMap<String, f64>,
-    /// Statistics per strategy.
-    #[serde(flatten)]
-    pub stats: PerStrategy<Stat>,
-}
-
-/// A straight line `y = intercept + slope·A`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Line {
-    /// Slope, mm per degree.
-    pub slope_mm_per_deg: f64,
-    /// Value at A = 0, mm.
-    pub intercept_mm: f64,
-}
-
-/// Fits of one strategy's mean and std against amplitude.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Fits {
-    /// Systematic error.
-    pub mean: Line,
-    /// Random error.
-    pub std: Line,
-}
-
-/// Ratios of random errors to relay logic's at the largest amplitude, with the paper's.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Ratios {
-    /// The amplitude, degrees.
-    pub amplitude_deg: f64,
-    /// std(strategy)/std(relay).
-    pub std_over_relay: PerStrategy<f64>,
-    /// The paper's one-channel ratio.
-    pub paper_kf1: f64,
-    /// The paper's two-channel ratio.
-    pub paper_kf2: f64,
-}
-
-/// The invariance table: random error over amplitude × period.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Invariance {
-    /// Rows, degrees.
-    pub amplitudes_deg: Vec<f64>,
-    /// Columns, s.
-    pub periods_s: Vec<f64>,
-    /// Random error per strategy, `[amplitude][period]`, mm.
-    pub std_mm: PerStrategy<Vec<Vec<f64>>>,
-    /// max − min of each strategy's table, mm (0 = perfectly invariant).
-    pub std_spread_mm: PerStrategy<f64>,
-}
-
-/// `summary.json`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Summary {
-    /// Always "fueling".
-    pub scenario: &'static str,
-    /// Runs per point of the amplitude sweep.
-    pub runs_per_point: usize,
-    /// Runs per point of the other sweeps.
-    pub sweep_runs_per_point: usize,
-    /// Campaign seed.
-    pub seed: u64,
-    /// The slice this summary covers, `K/N` (absent for a whole or merged campaign).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub shard: Option<String>,
-    /// Effective parameters.
-    pub params: FuelingParams,
-    /// The paper's Fig. 1.
-    pub amplitude_sweep: Vec<Entry>,
-    /// Straight-line fits of the amplitude sweep.
-    pub amplitude_fits: PerStrategy<Fits>,
-    /// Random-error ratios at the largest amplitude.
-    pub at_max_amplitude: Ratios,
-    /// Rolling-period sweep.
-    pub period_sweep: Vec<Entry>,
-    /// Fill-rate sweep.
-    pub fill_rate_sweep: Vec<Entry>,
-    /// Damper time-constant sweep.
-    pub damper_sweep: Vec<Entry>,
-    /// Quantization-step sweep.
-    pub step_sweep: Vec<Entry>,
-    /// H* on a mark (`random_target_phase` 0) against H* anywhere within a step (1).
-    pub target_sweep: Vec<Entry>,
-    /// Amplitude × period.
-    pub invariance: Invariance,
-    /// Runs in which a strategy never stopped within the simulated time (excluded from its
-    /// statistics), over all sweeps.
-    pub runs_without_stop: PerStrategy<usize>,
-}
-
-fn stat(values: impl Iterator<Item = f64>) -> Stat {
-    let v: Vec<f64> = values.filter(|x| x.is_finite()).map(|x| x * 1e3).collect();
-    let n = v.len() as f64;
-    if v.is_empty() {
-        return Stat {
-            mean_mm: f64::NAN,
-            std_mm: f64::NAN,
-        };
-    }
-    let mean = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    Stat {
-        mean_mm: mean,
-        std_mm: var.sqrt(),
-    }
-}
-
-/// Least-squares straight line through the finite points.
-pub fn fit_line(points: &[(f64, f64)]) -> Line {
-    let p: Vec<(f64, f64)> = points
-        .iter()
-        .copied()
-        .filter(|(x, y)| x.is_finite() && y.is_finite())
-        .collect();
-    let n = p.len() as f64;
-    let mx = p.iter().map(|q| q.0).sum::<f64>() / n;
-    let my = p.iter().map(|q| q.1).sum::<f64>() / n;
-    let sxx: f64 = p.iter().map(|q| (q.0 - mx).powi(2)).sum();
-    let sxy: f64 = p.iter().map(|q| (q.0 - mx) * (q.1 - my)).sum();
-    let slope = if sxx > 0.0 { sxy / sxx } else { f64::NAN };
-    Line {
-        slope_mm_per_deg: slope,
-        intercept_mm: my - slope * mx,
-    }
-}
-
-fn entries(sweep: &Sweep, rec: &SweepRecords) -> Vec<Entry> {
-    sweep
-        .points
-        .iter()
-        .zip(&rec.records)
-        .map(|((xs, _), runs)| Entry {
-            at: sweep
-                .keys
-                .iter()
-                .zip(xs)
-                .map(|(k, x)| ((*k).to_string(), *x))
-                .collect(),
-            stats: PerStrategy::from_fn(|i| stat(runs.iter().map(|(_, o)| o[i]))),
-        })
-        .collect()
-}
-
-/// Computes the summary from the records.
+/// Writes the curve CSVs, the straight-line fits, the plots and `report.md` of `summary`
+/// into `dir`.
 ///
 /// # Errors
-/// [`Error::Compute`] if the records do not match the parameters' sweeps.
-pub fn summarise(results: &Results) -> Result<Summary> {
-    let sweeps = results.params.sweeps();
-    if sweeps.len() != results.sweeps.len()
-        || sweeps
-            .iter()
-            .zip(&results.sweeps)
-            .any(|(s, r)| s.id != r.id || s.points.len() != r.records.len())
-    {
-        return Err(Error::Compute(
-            "fueling: per-run records do not match the parameters' sweeps".into(),
-        ));
-    }
-    let all: Vec<Vec<Entry>> = sweeps
-        .iter()
-        .zip(&results.sweeps)
-        .map(|(s, r)| entries(s, r))
-        .collect();
-    let amp = &all[0];
-    let xs: Vec<f64> = amp.iter().map(|e| e.at["amplitude_deg"]).collect();
-    let fits = PerStrategy::from_fn(|i| {
-        let mean: Vec<(f64, f64)> = xs
-            .iter()
-            .zip(amp)
-            .map(|(x, e)| (*x, e.stats.get(i).mean_mm))
-            .collect();
-        let std: Vec<(f64, f64)> = xs
-            .iter()
-            .zip(amp)
-            .map(|(x, e)| (*x, e.stats.get(i).std_mm))
-            .collect();
-        Fits {
-            mean: fit_line(&mean),
-            std: fit_line(&std),
-        }
-    });
-    let (top_i, top_x) =
-        xs.iter().enumerate().fold(
-            (0, f64::NEG_INFINITY),
-            |b, (i, &x)| if x > b.1 { (i, x) } else { b },
-        );
-    let top = &amp[top_i].stats;
-    let at_max_amplitude = Ratios {
-        amplitude_deg: top_x,
-        std_over_relay: PerStrategy::from_fn(|i| top.get(i).std_mm / top.relay.std_mm),
-        paper_kf1: PAPER_KF1_RATIO,
-        paper_kf2: PAPER_KF2_RATIO,
-    };
-    let p = &results.params;
-    let inv = &all[6];
-    let np = p.invariance_periods_s.len();
-    let std_mm = PerStrategy::from_fn(|i| {
-        inv.chunks(np)
-            .map(|row| row.iter().map(|e| e.stats.get(i).std_mm).collect())
-            .collect::<Vec<Vec<f64>>>()
-    });
-    let std_spread_mm = PerStrategy::from_fn(|i| {
-        let v = std_mm.get(i).iter().flatten().copied();
-        let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-            (lo.min(x), hi.max(x))
-        });
-        hi - lo
-    });
-    let runs_without_stop = PerStrategy::from_fn(|i| {
-        results
-            .sweeps
-            .iter()
-            .flat_map(|s| s.records.iter().flatten())
-            .filter(|(_, o)| !o[i].is_finite())
-            .count()
-    });
-    let mut it = all.into_iter();
-    let mut next = || it.next().unwrap_or_default();
-    let amplitude_sweep = next();
-    let period_sweep = next();
-    let fill_rate_sweep = next();
-    let damper_sweep = next();
-    let step_sweep = next();
-    let target_sweep = next();
-    Ok(Summary {
-        scenario: "fueling",
-        runs_per_point: p.runs_per_point,
-        sweep_runs_per_point: p.sweep_runs_per_point,
-        seed: results.seed,
-        shard: (results.shard != Shard::ALL).then(|| results.shard.to_string()),
-        params: p.clone(),
-        amplitude_sweep,
-        amplitude_fits: fits,
-        at_max_amplitude,
-        period_sweep,
-        fill_rate_sweep,
-        damper_sweep,
-        step_sweep,
-        target_sweep,
-        invariance: Invariance {
-            amplitudes_deg: p.invariance_amplitudes_deg.clone(),
-            periods_s: p.invariance_periods_s.clone(),
-            std_mm,
-            std_spread_mm,
-        },
-        runs_without_stop,
-    })
-}
-
-const RUNS_HEADER: [&str; 7] = [
-    "point",
-    "run",
-    "relay_m",
-    "kf1_m",
-    "kf2_m",
-    "kf2_cross_m",
-    "kf2_midstep_m",
-];
-
-fn runs_file(id: &str) -> String {
-    format!("runs_{id}.csv")
-}
-
-/// Writes every output of `results` into `dir`: the per-run records, the summary, the curve
-/// CSVs, the plots and `report.md`.
-///
-/// # Errors
-/// As [`summarise`]; [`Error::Write`] naming the file.
-pub fn write_all(results: &Results, dir: &Path) -> Result<()> {
-    let summary = summarise(results)?;
-    for rec in &results.sweeps {
-        let rows: Vec<Vec<f64>> = rec
-            .records
-            .iter()
-            .enumerate()
-            .flat_map(|(p, runs)| {
-                runs.iter().map(move |(run, o)| {
-                    let mut row = vec![p as f64, *run as f64];
-                    row.extend_from_slice(o);
-                    row
-                })
-            })
-            .collect();
-        output::write_csv(&dir.join(runs_file(&rec.id)), &RUNS_HEADER, &rows)?;
-    }
+/// [`crate::Error::Write`] naming the file.
+pub fn write_outputs(summary: &Summary, dir: &Path) -> Result<()> {
     let sweeps = [
         ("amplitude", &summary.amplitude_sweep),
         ("period", &summary.period_sweep),
@@ -368,10 +28,7 @@ pub fn write_all(results: &Results, dir: &Path) -> Result<()> {
     for (id, entries) in sweeps {
         write_entries_csv(&dir.join(format!("{id}_sweep.csv")), entries)?;
     }
-    write_entries_csv(
-        &dir.join("invariance.csv"),
-        &entries_of_invariance(results, &summary),
-    )?;
+    write_entries_csv(&dir.join("invariance.csv"), &summary.invariance_entries)?;
     let mut fits = String::from("strategy,statistic,slope_mm_per_deg,intercept_mm\n");
     for (i, name) in STRATEGIES.iter().enumerate() {
         let f = summary.amplitude_fits.get(i);
@@ -384,14 +41,8 @@ pub fn write_all(results: &Results, dir: &Path) -> Result<()> {
         }
     }
     output::write_atomic(&dir.join("amplitude_fits.csv"), fits.as_bytes())?;
-    write_plots(&summary, dir)?;
-    output::write_atomic(&dir.join("report.md"), report_md(&summary).as_bytes())?;
-    output::write_json(&dir.join("summary.json"), &summary)
-}
-
-fn entries_of_invariance(results: &Results, _summary: &Summary) -> Vec<Entry> {
-    let sweeps = results.params.sweeps();
-    entries(&sweeps[6], &results.sweeps[6])
+    write_plots(summary, dir)?;
+    output::write_atomic(&dir.join("report.md"), report_md(summary).as_bytes())
 }
 
 fn write_entries_csv(path: &Path, entries: &[Entry]) -> Result<()> {
@@ -560,31 +211,6 @@ fn entries_table(s: &mut String, key: &str, head: &str, entries: &[Entry]) {
     }
 }
 
-/// Nyquist power of a measurement channel of the filters' model, relative to the
-/// quantization noise variance δ²/12, below which the channel counts as having none. Exact
-/// Tustin gives ≈ 1e-39 (round-off), the paper's and the ZOH realisations ≈ 2.5e-3.
-const NYQUIST_NULL: f64 = 1e-9;
-
-/// Nyquist power of the level channel z2 of the two-channel model (`model::FuelModel::
-/// nyquist_measurement_power`) over δ²/12, for the world of `p` at `amplitude_deg` built with
-/// `realisation` (`None` if the model cannot be built).
-fn level_nyquist_power(
-    p: &FuelingParams,
-    amplitude_deg: f64,
-    realisation: model::Realisation,
-) -> Option<f64> {
-    let world = p.world(amplitude_deg, Swept::Nothing);
-    let fuel = model::FuelParams {
-        gyro_noise_var: world.gyro_noise.powi(2),
-        ..world.fuel
-    };
-    let m = fuel
-        .build(model::Channels::LevelAndTilt, realisation)
-        .ok()?;
-    let power = m.nyquist_measurement_power().ok()?;
-    Some(power[1] / (fuel.delta.powi(2) / 12.0))
-}
-
 /// The paragraph explaining the two-channel filter with S when the filters' model says the
 /// level reading has no power at the Nyquist frequency (the exact-Tustin realisation; see
 /// `model::Realisation::ExactTustin`), with the errors `at` amplitude `amplitude_deg`;
@@ -593,13 +219,9 @@ fn nyquist_note(
     p: &FuelingParams,
     amplitude_deg: f64,
     at: Option<&PerStrategy<Stat>>,
+    null: Option<NyquistNull>,
 ) -> Option<String> {
-    let ours = level_nyquist_power(p, amplitude_deg, p.realisation.to_model())?;
-    if ours >= NYQUIST_NULL {
-        return None;
-    }
-    let paper =
-        level_nyquist_power(p, amplitude_deg, model::Realisation::Paper).unwrap_or(f64::NAN);
+    let NyquistNull { ours, paper } = null?;
     let figures = at.map_or_else(String::new, |st| {
         format!(
             " Here, at {amplitude_deg}°: two-channel KF with S {} ± {} mm, without S {} ± {} mm.",
@@ -899,7 +521,7 @@ pub fn report_md(sm: &Summary) -> String {
         f2(amp.first().map_or(f64::NAN, |e| e.stats.kf2.std_mm)),
         amp.first().map_or(f64::NAN, |e| e.at["amplitude_deg"]),
     );
-    if let Some(note) = nyquist_note(p, r.amplitude_deg, top.as_ref()) {
+    if let Some(note) = nyquist_note(p, r.amplitude_deg, top.as_ref(), sm.nyquist_null) {
         let _ = writeln!(s, "{note}");
     }
 
@@ -1018,199 +640,4 @@ pub fn report_md(sm: &Summary) -> String {
          # afterwards, once: scenarios merge shards/* --out reports/fueling\n```\n",
     );
     s
-}
-
-/// What a shard directory's `summary.json` says about the campaign it belongs to.
-#[derive(Debug, Deserialize)]
-struct ShardHeader {
-    scenario: String,
-    seed: u64,
-    params: FuelingParams,
-}
-
-fn parse_runs(path: &Path, text: &str) -> Result<Vec<(usize, usize, Outcome)>> {
-    let mut lines = text.lines();
-    let header = lines.next().unwrap_or_default();
-    if header != RUNS_HEADER.join(",") {
-        return Err(Error::invalid(
-            path,
-            format!(
-                "line 1: header is `{header}`, expected `{}`",
-                RUNS_HEADER.join(",")
-            ),
-        ));
-    }
-    let mut out = Vec::new();
-    for (n, line) in lines.enumerate() {
-        let bad = |what: &str| Error::invalid(path, format!("line {}: {what}", n + 2));
-        let v: Vec<f64> = line
-            .split(',')
-            .map(str::parse::<f64>)
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|e| bad(&format!("not a number: {e}")))?;
-        if v.len() != RUNS_HEADER.len() {
-            return Err(bad(&format!(
-                "{} fields, expected {}",
-                v.len(),
-                RUNS_HEADER.len()
-            )));
-        }
-        let index = |x: f64, what: &str| {
-            if x >= 0.0 && x.fract() == 0.0 && x < 1e15 {
-                Ok(x as usize)
-            } else {
-                Err(bad(&format!("{what} {x} is not a run index")))
-            }
-        };
-        out.push((
-            index(v[0], "point")?,
-            index(v[1], "run")?,
-            std::array::from_fn(|i| v[2 + i]),
-        ));
-    }
-    Ok(out)
-}
-
-/// Reads shard directories and combines their per-run records into one campaign.
-///
-/// # Errors
-/// [`Error::Invalid`] naming the directory or file: not a fueling shard, a different seed or
-/// parameters, a run present twice, or runs missing.
-pub fn read_and_merge(dirs: &[PathBuf]) -> Result<Results> {
-    let mut first: Option<ShardHeader> = None;
-    // [sweep][point] → run → outcome
-    let mut merged: Vec<Vec<BTreeMap<usize, Outcome>>> = Vec::new();
-    let mut sweeps: Vec<Sweep> = Vec::new();
-    for dir in dirs {
-        let path = dir.join("summary.json");
-        let text = config::read_text(&path)?;
-        let h: ShardHeader = serde_json::from_str(&text)
-            .map_err(|e| Error::invalid(&path, format!("not a fueling summary: {e}")))?;
-        if h.scenario != "fueling" {
-            return Err(Error::invalid(
-                &path,
-                format!("`scenario` is {:?}, expected \"fueling\"", h.scenario),
-            ));
-        }
-        match &first {
-            None => {
-                h.params.validate(&path)?;
-                sweeps = h.params.sweeps();
-                merged = sweeps
-                    .iter()
-                    .map(|s| vec![BTreeMap::new(); s.points.len()])
-                    .collect();
-                first = Some(h);
-            }
-            Some(f) => {
-                if f.seed != h.seed || f.params != h.params {
-                    return Err(Error::invalid(
-                        &path,
-                        format!(
-                            "belongs to another campaign: seed or `params` differ from {}",
-                            dirs[0].join("summary.json").display()
-                        ),
-                    ));
-                }
-            }
-        }
-        for (s, sweep) in sweeps.iter().enumerate() {
-            let file = dir.join(runs_file(sweep.id));
-            let text = config::read_text(&file)?;
-            for (point, run, o) in parse_runs(&file, &text)? {
-                let slot = merged[s]
-                    .get_mut(point)
-                    .filter(|_| run < sweep.runs)
-                    .ok_or_else(|| {
-                        Error::invalid(
-                            &file,
-                            format!("point {point}, run {run} is outside the campaign"),
-                        )
-                    })?;
-                if slot.insert(run, o).is_some() {
-                    return Err(Error::invalid(
-                        &file,
-                        format!("point {point}, run {run} appears in more than one shard"),
-                    ));
-                }
-            }
-        }
-    }
-    let Some(head) = first else {
-        return Err(Error::Usage(
-            "merge needs at least one shard directory".into(),
-        ));
-    };
-    for (sweep, points) in sweeps.iter().zip(&merged) {
-        for (p, runs) in points.iter().enumerate() {
-            if runs.len() != sweep.runs {
-                return Err(Error::invalid(
-                    dirs.last().cloned().unwrap_or_default(),
-                    format!(
-                        "sweep `{}` point {p} has {} of its {} runs: a shard is missing",
-                        sweep.id,
-                        runs.len(),
-                        sweep.runs
-                    ),
-                ));
-            }
-        }
-    }
-    Ok(Results {
-        params: head.params,
-        seed: head.seed,
-        shard: Shard::ALL,
-        sweeps: sweeps
-            .iter()
-            .zip(merged)
-            .map(|(s, points)| SweepRecords {
-                id: s.id.to_string(),
-                records: points
-                    .into_iter()
-                    .map(|m| m.into_iter().collect())
-                    .collect(),
-            })
-            .collect(),
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn line_fit_recovers_a_line() {
-        let pts: Vec<(f64, f64)> = (0..5)
-            .map(|i| (f64::from(i), 2.0 + 3.0 * f64::from(i)))
-            .collect();
-        let l = fit_line(&pts);
-        // Exact data: only round-off separates the fit from (3, 2).
-        assert!((l.slope_mm_per_deg - 3.0).abs() < 1e-12);
-        assert!((l.intercept_mm - 2.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn stat_skips_runs_without_a_stop() {
-        let s = stat([0.001, f64::NAN, 0.003].into_iter());
-        assert!((s.mean_mm - 2.0).abs() < 1e-12);
-        assert!((s.std_mm - 2f64.sqrt()).abs() < 1e-12);
-    }
-
-    #[test]
-    fn runs_files_round_trip_exactly() {
-        let o: Outcome = [0.1 + 0.2, -1e-3 / 3.0, f64::NAN, 1e-17, -0.0];
-        let text = format!(
-            "{}\n3,7,{}\n",
-            RUNS_HEADER.join(","),
-            o.iter().map(f64::to_string).collect::<Vec<_>>().join(",")
-        );
-        let back = parse_runs(Path::new("r.csv"), &text).expect("parses");
-        assert_eq!(back.len(), 1);
-        assert_eq!((back[0].0, back[0].1), (3, 7));
-        for (a, b) in o.iter().zip(back[0].2) {
-            assert_eq!(a.to_bits(), b.to_bits());
-        }
-        let err = parse_runs(Path::new("r.csv"), "point,run\n").expect_err("bad header");
-        assert!(err.to_string().contains("line 1"));
-    }
 }

@@ -43,3 +43,45 @@ pub fn read(path: &Path) -> String {
 pub fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&read(&dir.join("summary.json"))).expect("summary is JSON")
 }
+
+/// Asserts that directories `a` and `b` hold the same file names with the same bytes.
+pub fn assert_same_files(a: &Path, b: &Path) {
+    let names = |d: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap_or_else(|e| panic!("{}: {e}", d.display()))
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let (na, nb) = (names(a), names(b));
+    assert_eq!(
+        na,
+        nb,
+        "{} and {} hold different files",
+        a.display(),
+        b.display()
+    );
+    for n in &na {
+        let (x, y) = (std::fs::read(a.join(n)), std::fs::read(b.join(n)));
+        assert!(
+            x.expect("read") == y.expect("read"),
+            "{n} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
+    }
+}
+
+/// Runs `args` in `dir`, expecting exit code 2 and one line on stderr; returns the line.
+pub fn fails(dir: &Path, args: &[&str]) -> String {
+    let out = run(dir, args);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(
+        err.trim_end().lines().count(),
+        1,
+        "{args:?}: not one line: {err}"
+    );
+    err
+}

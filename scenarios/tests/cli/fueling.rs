@@ -1,8 +1,10 @@
 //! `scenarios fueling` at reduced size through the built binary: the paper's orderings at 1°,
-//! byte-identical summaries for any `--threads` and for `--shard` + `merge`, and errors that
-//! name the offending configuration key.
+//! byte-identical files for any `--threads` and for `--shard` + `merge`, damaged or missing
+//! shards refused by name, and errors that name the offending configuration key.
 
-use crate::common::{ok, read, run, scratch, summary};
+use std::path::Path;
+
+use crate::common::{assert_same_files, fails, ok, read, run, scratch, summary};
 
 /// One amplitude sweep of three points and one point for each other sweep: the smallest
 /// campaign that exercises every output.
@@ -129,7 +131,7 @@ fn exact_tustin_report_explains_the_filter_with_s() {
 }
 
 #[test]
-fn threads_and_shards_give_the_same_summary() {
+fn threads_and_shards_give_the_same_files() {
     let dir = scratch("fu", "shards");
     std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
     let with = |extra: &[&str]| {
@@ -142,42 +144,101 @@ fn threads_and_shards_give_the_same_summary() {
     };
     with(&["--threads", "1", "--out", "t1"]);
     with(&["--threads", "2", "--out", "t2"]);
-    let whole = read(&dir.join("t1/summary.json"));
-    assert_eq!(
-        whole,
-        read(&dir.join("t2/summary.json")),
-        "--threads changed the summary"
-    );
+    assert_same_files(&dir.join("t1"), &dir.join("t2"));
     with(&["--shard", "1/2", "--out", "s1"]);
     with(&["--shard", "2/2", "--out", "s2"]);
+    let whole = read(&dir.join("t1/summary.json"));
     let half = read(&dir.join("s1/summary.json"));
     assert!(half.contains("\"shard\": \"1/2\""), "a shard says so");
     assert_ne!(half, whole);
     ok(&dir, &["merge", "s1", "s2", "--out", "merged"]);
-    assert_eq!(
-        whole,
-        read(&dir.join("merged/summary.json")),
-        "merge differs from one run"
-    );
-    assert_eq!(
-        read(&dir.join("t1/runs_amplitude.csv")),
-        read(&dir.join("merged/runs_amplitude.csv"))
-    );
+    // Every file of the merge, not only the summary, equals the single run's.
+    assert_same_files(&dir.join("t1"), &dir.join("merged"));
     // A different seed changes the result (the check above could not pass vacuously).
     with(&["--seed", "8", "--out", "other"]);
     assert_ne!(whole, read(&dir.join("other/summary.json")));
 
-    // A shard given twice or a missing shard is an error naming the problem.
-    let out = run(&dir, &["merge", "s1", "s1", "--out", "bad"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("more than one shard"));
-    let out = run(&dir, &["merge", "s1", "--out", "bad"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("shard is missing"));
-    let out = run(&dir, &["merge", "s1", "other", "--out", "bad"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("another campaign"));
+    // A shard given twice, a missing shard, or a shard of another campaign is an error
+    // naming the problem, and a failed merge writes nothing.
+    let err = fails(&dir, &["merge", "s1", "s1", "--out", "bad"]);
+    assert!(err.contains("more than one shard"), "{err}");
+    let err = fails(&dir, &["merge", "s1", "--out", "bad"]);
+    // The directories given and the runs no directory holds (12–23 of 24 in shard 2/2).
+    assert!(
+        err.contains("shard is missing") && err.contains("s1") && err.contains("12–23"),
+        "{err}"
+    );
+    let err = fails(&dir, &["merge", "s1", "other", "--out", "bad"]);
+    assert!(err.contains("another campaign"), "{err}");
     assert!(!dir.join("bad").exists(), "a failed merge writes nothing");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Copies shard directory `from` to `to` (flat: shards hold files only).
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("mkdir");
+    for e in std::fs::read_dir(from).expect("read dir") {
+        let e = e.expect("entry");
+        std::fs::copy(e.path(), to.join(e.file_name())).expect("copy");
+    }
+}
+
+#[test]
+fn a_damaged_record_is_refused_naming_the_file_and_line() {
+    let dir = scratch("fu", "damaged");
+    std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
+    for k in ["1", "2"] {
+        let shard = format!("{k}/2");
+        ok(
+            &dir,
+            &[
+                "fueling",
+                "--config",
+                "small.toml",
+                "--runs",
+                "6",
+                "--seed",
+                "5",
+                "--shard",
+                &shard,
+                "--out",
+                k,
+            ],
+        );
+    }
+    let file = "runs_amplitude.csv";
+    let text = read(&dir.join("2").join(file));
+    let lines = text.lines().count();
+    // Cut inside the last number (no final newline): the values that remain still parse.
+    copy_dir(&dir.join("2"), &dir.join("cut"));
+    std::fs::write(dir.join("cut").join(file), &text[..text.len() - 4]).expect("write");
+    let err = fails(&dir, &["merge", "1", "cut", "--out", "bad"]);
+    assert!(
+        err.contains(file) && err.contains(&format!("line {lines}")),
+        "{err}"
+    );
+    // Cut after a whole line: one run short, every line well formed.
+    copy_dir(&dir.join("2"), &dir.join("short"));
+    let short: String = text
+        .lines()
+        .take(lines - 1)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.join("short").join(file), short).expect("write");
+    let err = fails(&dir, &["merge", "1", "short", "--out", "bad"]);
+    assert!(err.contains(file) && err.contains("rows"), "{err}");
+    // One digit changed: same length, same lines.
+    copy_dir(&dir.join("2"), &dir.join("flip"));
+    let at = text
+        .rfind(|c: char| c.is_ascii_digit() && c != '9')
+        .expect("a digit");
+    let mut bytes = text.into_bytes();
+    bytes[at] += 1;
+    std::fs::write(dir.join("flip").join(file), bytes).expect("write");
+    let err = fails(&dir, &["merge", "1", "flip", "--out", "bad"]);
+    assert!(err.contains(file) && err.contains("checksum"), "{err}");
+    assert!(!dir.join("bad").exists(), "a failed merge writes nothing");
+    ok(&dir, &["merge", "1", "2", "--out", "good"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -12,51 +12,19 @@ use kalman::{Fixed, FixedModel};
 use model::nalgebra::{DMatrix, DVector};
 use model::{Channels, FuelModel, FuelParams, Realisation};
 use rand::Rng;
+
+use super::parameters::{FuelingParams, World};
+use super::records::{Outcome, SweepRecords};
+use crate::error::{Error, Result};
+use crate::montecarlo::{Shard, par_runs, run_rng};
 use sensors::{
     ExpCorrelated, ExpCorrelatedConfig, Gyro, GyroConfig, LevelSensor, LevelSensorConfig,
     PlatformMotion, PlatformMotionConfig, Process, RollingAxisConfig,
 };
 
-/// The strategies, in the order of every per-run record and table.
-pub const STRATEGIES: [&str; 5] = ["relay", "kf1", "kf2", "kf2_cross", "kf2_midstep"];
-
 /// Relative gain change at which a filter's gain schedule is taken as settled (see
 /// `filter_setup`).
 pub const SCHEDULE_TOLERANCE: f64 = 1e-7;
-
-/// Human names of [`STRATEGIES`], for reports and legends.
-pub const STRATEGY_LABELS: [&str; 5] = [
-    "relay logic",
-    "one-channel KF",
-    "two-channel KF (paper)",
-    "two-channel KF + cross-cov. S",
-    "two-channel KF + mid-step",
-];
-
-/// Fuelling errors of one run, metres, in [`STRATEGIES`] order (NaN: never stopped).
-pub type Outcome = [f64; 5];
-
-/// Everything that defines one sweep point's world, in SI units.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct World {
-    /// The model parameters (also the truth's: the filter knows the world's statistics).
-    pub fuel: FuelParams,
-    /// Target level H*, m.
-    pub target: f64,
-    /// Draw H* uniformly within the quantization step above `target` for each run (the dose
-    /// sets the target, not the sensor's marks); `false` puts H* on a mark.
-    pub random_target_phase: bool,
-    /// Simulated time before the nominal crossing of H*, s (start level H* − V_c·warm-up).
-    pub warmup: f64,
-    /// Prior standard deviation of the tank level given to the filters, m.
-    pub initial_level_std: f64,
-    /// Valve-closing delay after the stop command, s.
-    pub valve_delay: f64,
-    /// Gyro noise per axis, rad.
-    pub gyro_noise: f64,
-    /// How the filters' model is discretised.
-    pub realisation: Realisation,
-}
 
 /// A filter's fixed part for one sweep point: its gain schedule (the covariance recursion
 /// from P0 does not depend on the data, so it is computed once per point and every run pays
@@ -196,8 +164,7 @@ impl Point {
     /// # Errors
     /// A message naming the model or filter that rejected the parameters.
     pub fn new(world: World) -> Result<Self, String> {
-        let mut fuel = world.fuel;
-        fuel.gyro_noise_var = world.gyro_noise.powi(2);
+        let fuel = world.fuel;
         let (r, s) = (world.realisation, world.initial_level_std);
         let kf1 = filter_setup::<1>(&fuel, Channels::LevelOnly, r, false, s)?;
         let kf2 = filter_setup::<2>(&fuel, Channels::LevelAndTilt, r, false, s)?;
@@ -270,7 +237,7 @@ impl Point {
         let mut gyro = Gyro::new(
             &GyroConfig {
                 sample_period_s: dt,
-                noise_std_deg: w.gyro_noise.to_degrees(),
+                noise_std_deg: p.gyro_noise_var.sqrt().to_degrees(),
                 ..GyroConfig::default()
             },
             dt,
@@ -396,11 +363,60 @@ fn step_level<const M: usize>(
     Ok(f.state().iter().zip(&s.level_row).map(|(x, g)| x * g).sum())
 }
 
+/// Runs the campaign's slice of every sweep.
+///
+/// # Errors
+/// [`Error::Compute`] if a filter or sensor rejects a point (never for validated parameters)
+/// or the worker pool cannot start.
+pub fn simulate(
+    params: &FuelingParams,
+    seed: u64,
+    shard: Shard,
+    threads: Option<usize>,
+) -> Result<Vec<SweepRecords>> {
+    let sweeps = params.sweeps();
+    let mut points: Vec<Point> = Vec::new();
+    // (point index into `points`, run index), in output order.
+    let mut jobs: Vec<(usize, usize)> = Vec::new();
+    let mut layout: Vec<Vec<std::ops::Range<usize>>> = Vec::new();
+    for sweep in &sweeps {
+        let mut ranges = Vec::new();
+        for (_, world) in &sweep.points {
+            let p = points.len();
+            points.push(Point::new(*world).map_err(Error::Compute)?);
+            let start = jobs.len();
+            jobs.extend(shard.runs(sweep.runs).map(|r| (p, r)));
+            ranges.push(start..jobs.len());
+        }
+        layout.push(ranges);
+    }
+    // Every point of every sweep reuses run i's stream (common random numbers): differences
+    // between points are then due to the parameters, not to sampling luck.
+    let outcomes = par_runs(0..jobs.len(), threads, "fueling", |j| {
+        let (p, run) = jobs[j];
+        points[p].run(&mut run_rng(seed, run as u64))
+    })?;
+    let mut flat = Vec::with_capacity(outcomes.len());
+    for o in outcomes {
+        flat.push(o.map_err(Error::Compute)?);
+    }
+    Ok(sweeps
+        .iter()
+        .zip(layout)
+        .map(|(sweep, ranges)| SweepRecords {
+            id: sweep.id.to_string(),
+            records: ranges
+                .into_iter()
+                .map(|r| r.map(|j| (jobs[j].1, flat[j])).collect())
+                .collect(),
+        })
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fueling::{FuelingParams, Swept};
-    use crate::montecarlo::run_rng;
+    use crate::fueling::parameters::Swept;
 
     fn world(amplitude_deg: f64) -> World {
         FuelingParams {

@@ -1,0 +1,125 @@
+//! Per-run records of the fueling scenario: each run's fuelling error per strategy, one
+//! `runs_<sweep>.csv` per sweep (`point, run`, then one column per strategy, metres at full
+//! precision). They are the campaign's ground truth: everything else is recomputed from them.
+
+use crate::campaign::records::RecordFile;
+use crate::error::{Error, Result};
+
+use super::parameters::FuelingParams;
+
+/// The strategies, in the order of every per-run record and table.
+pub const STRATEGIES: [&str; 5] = ["relay", "kf1", "kf2", "kf2_cross", "kf2_midstep"];
+
+/// Human names of [`STRATEGIES`], for reports and legends.
+pub const STRATEGY_LABELS: [&str; 5] = [
+    "relay logic",
+    "one-channel KF",
+    "two-channel KF (paper)",
+    "two-channel KF + cross-cov. S",
+    "two-channel KF + mid-step",
+];
+
+/// Fuelling errors of one run, metres, in [`STRATEGIES`] order (NaN: never stopped).
+pub type Outcome = [f64; 5];
+
+/// Per-run outcomes of one sweep: `records[point]` holds `(run index, outcome)` in run order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepRecords {
+    /// The sweep's identifier.
+    pub id: String,
+    /// Outcomes per point.
+    pub records: Vec<Vec<(usize, Outcome)>>,
+}
+
+/// Columns of a `runs_<sweep>.csv` file.
+const RUNS_HEADER: [&str; 7] = [
+    "point",
+    "run",
+    "relay_m",
+    "kf1_m",
+    "kf2_m",
+    "kf2_cross_m",
+    "kf2_midstep_m",
+];
+
+/// One record file per sweep, in [`FuelingParams::sweeps`] order: keys (point, run).
+pub fn record_files(params: &FuelingParams) -> Vec<RecordFile> {
+    params
+        .sweeps()
+        .iter()
+        .map(|sweep| RecordFile {
+            name: format!("runs_{}.csv", sweep.id),
+            header: RUNS_HEADER.to_vec(),
+            grid: vec![sweep.points.len(), sweep.runs],
+        })
+        .collect()
+}
+
+/// The rows of each sweep's record file: `point, run`, then the outcome.
+pub fn to_tables(records: &[SweepRecords]) -> Vec<Vec<Vec<f64>>> {
+    records
+        .iter()
+        .map(|rec| {
+            rec.records
+                .iter()
+                .enumerate()
+                .flat_map(|(p, runs)| {
+                    runs.iter().map(move |(run, o)| {
+                        let mut row = vec![p as f64, *run as f64];
+                        row.extend_from_slice(o);
+                        row
+                    })
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The records of every sweep from the rows of its file (keys checked by the campaign).
+///
+/// # Errors
+/// [`Error::Invalid`] if the number of tables or a row's width does not fit the sweeps.
+pub fn from_tables(
+    params: &FuelingParams,
+    tables: Vec<Vec<Vec<f64>>>,
+) -> Result<Vec<SweepRecords>> {
+    let sweeps = params.sweeps();
+    if tables.len() != sweeps.len() {
+        return Err(Error::invalid(
+            "runs_*.csv",
+            format!("{} record files for {} sweeps", tables.len(), sweeps.len()),
+        ));
+    }
+    sweeps
+        .iter()
+        .zip(tables)
+        .map(|(sweep, rows)| {
+            let mut records = vec![Vec::new(); sweep.points.len()];
+            for row in rows {
+                let [p, run, o @ ..] = row.as_slice() else {
+                    return Err(Error::invalid(
+                        format!("runs_{}.csv", sweep.id),
+                        format!("a row of {} fields", row.len()),
+                    ));
+                };
+                let outcome: Outcome = o.try_into().map_err(|_| {
+                    Error::invalid(
+                        format!("runs_{}.csv", sweep.id),
+                        format!("a row of {} fields, expected 7", row.len()),
+                    )
+                })?;
+                let slot = records.get_mut(*p as usize).ok_or_else(|| {
+                    Error::invalid(
+                        format!("runs_{}.csv", sweep.id),
+                        format!("point {p} outside the sweep"),
+                    )
+                })?;
+                slot.push((*run as usize, outcome));
+            }
+            Ok(SweepRecords {
+                id: sweep.id.to_string(),
+                records,
+            })
+        })
+        .collect()
+}
