@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use scenarios::fueling::Fueling;
 use scenarios::montecarlo::Shard;
+use scenarios::uav::Uav;
 use scenarios::{Campaign, Error};
 
 /// Stochastic estimation for launch and flight-test measurement: the papers' scenarios and
@@ -90,7 +91,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome: Result<(), Error> = match cli.command {
         Command::Fueling(a) => scenarios::campaign::run::<Fueling>(&a.campaign()),
-        Command::Uav(a) => scenarios::uav::run(&a.campaign()),
+        Command::Uav(a) => scenarios::campaign::run::<Uav>(&a.campaign()),
         Command::Boom(a) => scenarios::boom::run(&a.campaign()),
         Command::All(a) => scenarios::papers::all(&a.campaign()),
         Command::Merge { dirs, out } => scenarios::papers::merge(&dirs, &out),

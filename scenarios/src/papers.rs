@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use crate::campaign::{self, Campaign, Entry};
 use crate::error::{Error, Result};
 use crate::fueling::Fueling;
+use crate::uav::Uav;
 
 /// Every scenario: name (subcommand and folder), title for `reports/README.md`, runner.
 pub const SCENARIOS: [Entry; 3] = [
@@ -18,7 +19,7 @@ pub const SCENARIOS: [Entry; 3] = [
     (
         "uav",
         "U — UAV control channel with a Kalman filter in the loop",
-        crate::uav::run,
+        campaign::run::<Uav>,
     ),
     (
         "boom",
@@ -47,7 +48,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<()> {
         .ok_or_else(|| Error::Usage("merge needs at least one shard directory".into()))?;
     match campaign::scenario_of(first)?.as_str() {
         "fueling" => campaign::merge::<Fueling>(dirs, out),
-        "uav" => crate::uav::merge(dirs, out),
+        "uav" => campaign::merge::<Uav>(dirs, out),
         "boom" => crate::boom::merge(dirs, out),
         other => Err(Error::invalid(
             first.join("summary.json"),

@@ -1,9 +1,10 @@
-//! `scenarios uav` at reduced size through the built binary: the acceptance checks of issue 8
-//! (stable loop and filter, white innovations, estimation RMS below measurement RMS, consistent
-//! Kalman–Bucy and discrete gains), byte-identical summaries for any `--threads` and for
-//! `--shard` + `merge`, and configuration errors that name the key.
+//! `scenarios uav` at reduced size through the built binary: the paper's claims (stable loop
+//! and filter, white innovations, estimation RMS below measurement RMS, consistent
+//! Kalman–Bucy and discrete gains), byte-identical files for any `--threads` and for
+//! `--shard` + `merge`, duplicated or missing shards refused by name, and configuration
+//! errors that name the key.
 
-use crate::common::{ok, read, run, scratch, summary};
+use crate::common::{assert_same_files, fails, ok, read, run, scratch, summary};
 
 /// 1024 steps per run (256 s: 25 Welch segments of 64), the SPEC's plant, noise and gains.
 const SMALL: &str = "steps = 1024\nwelch_segment = 64\n";
@@ -67,7 +68,7 @@ fn closed_loop_is_stable_white_and_better_than_the_sensor() {
 }
 
 #[test]
-fn threads_and_shards_give_the_same_summary() {
+fn threads_and_shards_give_the_same_files() {
     let dir = scratch("uav", "shards");
     std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
     let base = [
@@ -93,18 +94,25 @@ fn threads_and_shards_give_the_same_summary() {
     go(&["--shard", "2/2", "--out", "s2"]);
     ok(&dir, &["merge", "s1", "s2", "--out", "merged"]);
     let one = read(&dir.join("t1/summary.json"));
-    assert_eq!(one, read(&dir.join("t2/summary.json")));
-    assert_eq!(one, read(&dir.join("merged/summary.json")));
-    assert_eq!(
-        read(&dir.join("t1/report.md")),
-        read(&dir.join("merged/report.md"))
-    );
+    assert_same_files(&dir.join("t1"), &dir.join("t2"));
+    // Every file of the merge equals the single run's, `runs.csv` with all six runs included.
+    assert_same_files(&dir.join("t1"), &dir.join("merged"));
+    assert_eq!(read(&dir.join("merged/runs.csv")).lines().count(), 1 + 6);
     // A shard alone is not the whole campaign.
     assert_ne!(one, read(&dir.join("s1/summary.json")));
-    // Merging one shard twice is refused (run duplicated, others missing).
-    let out = run(&dir, &["merge", "s1", "s1", "--out", "bad"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("run"));
+    // Merging one shard twice is refused (run duplicated).
+    let err = fails(&dir, &["merge", "s1", "s1", "--out", "bad"]);
+    assert!(
+        err.contains("run 0") && err.contains("more than one shard"),
+        "{err}"
+    );
+    // A missing shard: the directories given and the runs none of them holds.
+    let err = fails(&dir, &["merge", "s1", "--out", "bad"]);
+    assert!(
+        err.contains("s1") && err.contains("runs 3–5 of the 6") && err.contains("runs.csv"),
+        "{err}"
+    );
+    assert!(!dir.join("bad").exists(), "a failed merge writes nothing");
 }
 
 #[test]
