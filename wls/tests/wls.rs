@@ -7,3 +7,5 @@
 mod boom;
 #[path = "wls/solver.rs"]
 mod solver;
+#[path = "wls/solver_paths.rs"]
+mod solver_paths;
