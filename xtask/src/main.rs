@@ -4,6 +4,7 @@
 //! `CARGO_MANIFEST_DIR`, so it behaves the same from any working directory.
 
 mod bench;
+mod mutants;
 mod tidy;
 
 use std::path::{Path, PathBuf};
@@ -37,6 +38,11 @@ const TASKS: &[(&str, &str)] = &[
         "fuzz",
         "run the cargo-fuzz targets for the model and CSV parsers [--seconds N]",
     ),
+    (
+        "mutants",
+        "sampled mutation testing of the library crates (cargo-mutants; not in CI) \
+         [--crate C] [--file F] [--shard K/N] [--timeout S] [--list]",
+    ),
 ];
 
 fn main() -> ExitCode {
@@ -57,6 +63,7 @@ fn main() -> ExitCode {
         "ci" => ci(rest),
         "tidy" => tidy_task(),
         "fuzz" => fuzz(rest),
+        "mutants" => mutants::mutants(rest),
         other => {
             eprintln!("xtask: unknown subcommand `{other}`\n");
             print_help();

@@ -1,0 +1,207 @@
+//! `cargo xtask mutants`: sampled mutation testing of the library crates with `cargo-mutants`.
+//!
+//! Each mutant (one operator or return value changed on purpose) is built in a copy of the
+//! tree and the mutated crate's unit and integration tests run against it; a mutant the tests
+//! do not fail on is *missed* and names a place the tests are blind to. The run is sequential
+//! (`-j 1`) with a per-mutant timeout, its build artifacts go to `target/mutants/build` (kept
+//! warm between runs) and its report to `target/mutants/<label>/mutants.out`.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Command;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+
+use crate::{cargo, known, option, root};
+
+/// The crates whose sources are mutated: the libraries (not the program or the xtask).
+const LIBRARY_CRATES: &[&str] = &["model", "kalman", "wls", "sensors"];
+
+/// Seconds a mutant's tests may run before it counts as a timeout (the whole unit and
+/// integration suite of one crate takes well under a minute here when unmutated).
+const DEFAULT_TIMEOUT: &str = "300";
+
+/// The outcome files cargo-mutants writes, in the order they are reported.
+const OUTCOMES: &[&str] = &["caught", "missed", "timeout", "unviable"];
+
+pub(crate) fn mutants(args: &[String]) -> Result<()> {
+    known(
+        args,
+        &["--list"],
+        &["--crate", "--file", "--shard", "--timeout"],
+    )?;
+    let file = option(args, "--file")?;
+    let krate = match (option(args, "--crate")?, file) {
+        (Some(c), _) => c.to_owned(),
+        // A file names its crate by its first path component.
+        (None, Some(f)) => f.split('/').next().unwrap_or_default().to_owned(),
+        (None, None) => String::new(),
+    };
+    if !krate.is_empty() && !LIBRARY_CRATES.contains(&krate.as_str()) {
+        bail!(
+            "`{krate}` is not a library crate; mutants runs on {}",
+            LIBRARY_CRATES.join(", ")
+        );
+    }
+    let shard = option(args, "--shard")?;
+    if let Some(s) = shard {
+        let valid = s.split_once('/').is_some_and(|(k, n)| {
+            matches!((k.parse::<u32>(), n.parse::<u32>()), (Ok(k), Ok(n)) if k < n)
+        });
+        if !valid {
+            bail!("--shard takes K/N with 0 ≤ K < N, not `{s}`");
+        }
+    }
+    let timeout = option(args, "--timeout")?.unwrap_or(DEFAULT_TIMEOUT);
+    timeout
+        .parse::<u32>()
+        .with_context(|| format!("--timeout takes whole seconds, not `{timeout}`"))?;
+    ensure_installed()?;
+
+    let crates: Vec<&str> = if krate.is_empty() {
+        LIBRARY_CRATES.to_vec()
+    } else {
+        vec![krate.as_str()]
+    };
+    let mut cmd = cargo();
+    cmd.args(["mutants", "--all-features"]);
+    for c in &crates {
+        cmd.args(["--package", c]);
+    }
+    if let Some(f) = file {
+        cmd.args(["--file", f]);
+    }
+    if args.iter().any(|a| a == "--list") {
+        cmd.arg("--list");
+        return crate::run(cmd);
+    }
+    let label = [
+        krate.as_str(),
+        file.unwrap_or(""),
+        shard.unwrap_or(""),
+    ]
+    .iter()
+    .filter(|s| !s.is_empty())
+    .map(|s| s.replace(['/', '*', '.', '{', '}', ','], "_"))
+    .collect::<Vec<_>>()
+    .join("-");
+    let label = if label.is_empty() { "all".into() } else { label };
+    let out = root().join("target").join("mutants").join(&label);
+    if let Some(s) = shard {
+        // Round-robin: shard K takes every N-th mutant, a sample spread over the whole file.
+        cmd.args(["--shard", s, "--sharding", "round-robin"]);
+    }
+    // One mutant at a time (the machine is shared); only the mutated crate's unit and
+    // integration tests judge a mutant (doc tests are examples, and slow to build).
+    cmd.args(["--jobs", "1", "--timeout", timeout, "--output"])
+        .arg(&out)
+        .args(["--", "--lib", "--tests"])
+        .env("CARGO_TARGET_DIR", root().join("target").join("mutants").join("build"));
+    let shown = format!("{cmd:?}");
+    eprintln!("$ {shown}");
+    let started = Instant::now();
+    let status = cmd
+        .status()
+        .with_context(|| format!("could not start {shown}"))?;
+    let elapsed = started.elapsed().as_secs();
+    // cargo-mutants exits 2 when a mutant was missed and 3 on a timeout: those are results.
+    if !matches!(status.code(), Some(0 | 2 | 3)) {
+        bail!("{shown} failed with {status}");
+    }
+    let report = Report::read(&out.join("mutants.out"))?;
+    report.print();
+    println!(
+        "wall time {} min {} s; full report in {}",
+        elapsed / 60,
+        elapsed % 60,
+        out.display()
+    );
+    if report.count("missed") > 0 {
+        bail!("{} mutant(s) missed", report.count("missed"));
+    }
+    Ok(())
+}
+
+/// Installs cargo-mutants from the Rust package registry if `cargo mutants` does not run.
+fn ensure_installed() -> Result<()> {
+    let present = cargo()
+        .args(["mutants", "--version"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if present {
+        return Ok(());
+    }
+    eprintln!("cargo-mutants is not installed; installing it");
+    let mut cmd = cargo();
+    cmd.args(["install", "--locked", "cargo-mutants"]);
+    crate::run(cmd).context("installing cargo-mutants")?;
+    let mut check = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
+    check.args(["mutants", "--version"]);
+    crate::run(check).context("cargo-mutants still does not run after installing it")
+}
+
+/// The mutants of one run by outcome, each line `file:line:col: description`.
+#[derive(Debug)]
+struct Report {
+    lines: BTreeMap<&'static str, Vec<String>>,
+}
+
+impl Report {
+    fn read(dir: &Path) -> Result<Self> {
+        let mut lines = BTreeMap::new();
+        for &outcome in OUTCOMES {
+            let path = dir.join(format!("{outcome}.txt"));
+            let text = std::fs::read_to_string(&path).unwrap_or_default();
+            lines.insert(
+                outcome,
+                text.lines()
+                    .filter(|l| !l.trim().is_empty())
+                    .map(str::to_owned)
+                    .collect(),
+            );
+        }
+        Ok(Self { lines })
+    }
+
+    fn count(&self, outcome: &str) -> usize {
+        self.lines.get(outcome).map_or(0, Vec::len)
+    }
+
+    fn print(&self) {
+        let mut per_file: BTreeMap<&str, [usize; 4]> = BTreeMap::new();
+        for (i, &outcome) in OUTCOMES.iter().enumerate() {
+            for line in &self.lines[outcome] {
+                let file = line.split(':').next().unwrap_or(line);
+                per_file.entry(file).or_default()[i] += 1;
+            }
+        }
+        println!(
+            "\n{:<32} {:>7} {:>7} {:>7} {:>8} {:>9}",
+            "file", "caught", "missed", "timeout", "unviable", "caught %"
+        );
+        for (file, [caught, missed, timeout, unviable]) in &per_file {
+            // A timeout fails the run, so it counts as caught among the viable mutants.
+            let viable = caught + missed + timeout;
+            let pct = if viable == 0 {
+                "-".to_owned()
+            } else {
+                format!("{:.0}", 100.0 * (caught + timeout) as f64 / viable as f64)
+            };
+            println!("{file:<32} {caught:>7} {missed:>7} {timeout:>7} {unviable:>8} {pct:>9}");
+        }
+        println!(
+            "total: {} caught, {} missed, {} timeout, {} unviable",
+            self.count("caught"),
+            self.count("missed"),
+            self.count("timeout"),
+            self.count("unviable")
+        );
+        if self.count("missed") > 0 {
+            println!("\nmissed:");
+            for line in &self.lines["missed"] {
+                println!("  {line}");
+            }
+        }
+    }
+}
