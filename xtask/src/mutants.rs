@@ -29,7 +29,7 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     known(
         args,
         &["--list"],
-        &["--crate", "--file", "--shard", "--timeout"],
+        &["--crate", "--file", "--shard", "--timeout", "--re"],
     )?;
     let file = option(args, "--file")?;
     let krate = match (option(args, "--crate")?, file) {
@@ -72,6 +72,12 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     if let Some(f) = file {
         cmd.args(["--file", f]);
     }
+    // Only the mutants whose names (as `--list` shows them) match, e.g. to re-check the
+    // missed ones after adding tests.
+    let re = option(args, "--re")?;
+    if let Some(re) = re {
+        cmd.args(["--re", re]);
+    }
     if args.iter().any(|a| a == "--list") {
         cmd.arg("--list");
         return crate::run(cmd);
@@ -80,6 +86,7 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
         krate.as_str(),
         file.unwrap_or(""),
         shard.unwrap_or(""),
+        re.map_or("", |_| "re"),
     ]
     .iter()
     .filter(|s| !s.is_empty())

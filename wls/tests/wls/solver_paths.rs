@@ -5,6 +5,7 @@
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use wls::Error;
 use wls::solver::{SolveOptions, Tikhonov, Weights, sensitivity, solve, worst_case_bounds};
 
 fn uniform(rng: &mut ChaCha8Rng, m: usize, n: usize) -> DMatrix<f64> {
@@ -32,7 +33,12 @@ fn tikhonov(lambda: f64) -> SolveOptions {
 #[test]
 fn sensitivity_under_a_full_weight_is_the_weighted_pseudo_inverse() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
-    for (m, n, lambda) in [(6, 3, None), (4, 4, None), (5, 2, Some(0.4)), (3, 3, Some(2.0))] {
+    for (m, n, lambda) in [
+        (6, 3, None),
+        (4, 4, None),
+        (5, 2, Some(0.4)),
+        (3, 3, Some(2.0)),
+    ] {
         let mut h = uniform(&mut rng, m, n);
         for i in 0..n {
             h[(i, i)] += 3.0;
@@ -43,8 +49,7 @@ fn sensitivity_under_a_full_weight_is_the_weighted_pseudo_inverse() {
         let options = lambda.map_or_else(SolveOptions::default, tikhonov);
         let s = sensitivity(&h, &weights, &options).expect("SPD weight, full rank");
         assert_eq!(s.shape(), (n, m));
-        let normal =
-            h.transpose() * &v * &h + DMatrix::identity(n, n) * lambda.unwrap_or(0.0);
+        let normal = h.transpose() * &v * &h + DMatrix::identity(n, n) * lambda.unwrap_or(0.0);
         let reference = normal
             .cholesky()
             .expect("SPD normal matrix")
@@ -80,7 +85,11 @@ fn underdetermined_designs_report_infinite_weighted_conditioning() {
         let s = solve(&h, &z, &Weights::Identity, &tikhonov(lambda)).expect("regularised");
         assert_eq!(s.singular_values.len(), m);
         assert_eq!(s.rank, m, "a random {m}×{n} design has full row rank");
-        assert!(s.condition_weighted.is_infinite(), "{}", s.condition_weighted);
+        assert!(
+            s.condition_weighted.is_infinite(),
+            "{}",
+            s.condition_weighted
+        );
         assert!(s.condition_solved.is_finite());
         let gram = &h * h.transpose() + DMatrix::identity(m, m) * lambda;
         let x_ref = h.transpose() * gram.cholesky().expect("SPD").solve(&z);
@@ -105,9 +114,26 @@ fn an_all_zero_design_has_infinite_conditioning() {
     };
     let s = solve(&h, &z, &Weights::Identity, &options).expect("regularised");
     assert_eq!(s.rank, 0);
-    assert!(s.condition_weighted.is_infinite(), "{}", s.condition_weighted);
+    assert!(
+        s.condition_weighted.is_infinite(),
+        "{}",
+        s.condition_weighted
+    );
     assert!(s.condition_normal.is_infinite(), "{}", s.condition_normal);
     // The solved system is √λ·I stacked under zeros: κ = 1, up to the SVD's rounding.
     assert!((s.condition_solved - 1.0).abs() <= 1e-12);
     assert!((&s.x - &xp).norm() <= 1e-12 * xp.norm());
+    // Without regularisation, or with λ = 0 (rows of zeros), nothing pins x down: rank 0.
+    // The default tolerance is 0 here (σ_max = 0), so "rank" must count σ > tol, not ≥.
+    let rank_deficient = |options: &SolveOptions| match solve(&h, &z, &Weights::Identity, options) {
+        Err(Error::RankDeficient {
+            name, rank, cols, ..
+        }) => (name, rank, cols),
+        other => panic!("expected RankDeficient, got {other:?}"),
+    };
+    assert_eq!(
+        rank_deficient(&SolveOptions::default()),
+        ("V^(1/2) H", 0, 2)
+    );
+    assert_eq!(rank_deficient(&tikhonov(0.0)), ("regularised system", 0, 2));
 }
