@@ -46,9 +46,9 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     }
     let shard = option(args, "--shard")?;
     if let Some(s) = shard {
-        let valid = s.split_once('/').is_some_and(|(k, n)| {
-            matches!((k.parse::<u32>(), n.parse::<u32>()), (Ok(k), Ok(n)) if k < n)
-        });
+        let valid = s.split_once('/').is_some_and(
+            |(k, n)| matches!((k.parse::<u32>(), n.parse::<u32>()), (Ok(k), Ok(n)) if k < n),
+        );
         if !valid {
             bail!("--shard takes K/N with 0 ≤ K < N, not `{s}`");
         }
@@ -93,7 +93,11 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     .map(|s| s.replace(['/', '*', '.', '{', '}', ','], "_"))
     .collect::<Vec<_>>()
     .join("-");
-    let label = if label.is_empty() { "all".into() } else { label };
+    let label = if label.is_empty() {
+        "all".into()
+    } else {
+        label
+    };
     let out = root().join("target").join("mutants").join(&label);
     if let Some(s) = shard {
         // Round-robin: shard K takes every N-th mutant, a sample spread over the whole file.
@@ -104,7 +108,10 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     cmd.args(["--jobs", "1", "--timeout", timeout, "--output"])
         .arg(&out)
         .args(["--", "--lib", "--tests"])
-        .env("CARGO_TARGET_DIR", root().join("target").join("mutants").join("build"));
+        .env(
+            "CARGO_TARGET_DIR",
+            root().join("target").join("mutants").join("build"),
+        );
     let shown = format!("{cmd:?}");
     eprintln!("$ {shown}");
     let started = Instant::now();

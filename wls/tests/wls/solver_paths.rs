@@ -1,12 +1,14 @@
 //! Tests of `wls::solver` paths the main solver tests do not reach: the sensitivity under a
-//! full (non-diagonal) weight, and the conditioning of an underdetermined or all-zero design
-//! that only regularisation makes solvable.
+//! full (non-diagonal) weight, the conditioning of an underdetermined or all-zero design
+//! that only regularisation makes solvable, and the units-free IRLS stopping rule.
 
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use wls::Error;
-use wls::solver::{SolveOptions, Tikhonov, Weights, sensitivity, solve, worst_case_bounds};
+use wls::solver::{
+    IrlsOptions, SolveOptions, Tikhonov, Weights, sensitivity, solve, solve_irls, worst_case_bounds,
+};
 
 fn uniform(rng: &mut ChaCha8Rng, m: usize, n: usize) -> DMatrix<f64> {
     DMatrix::from_fn(m, n, |_, _| rng.random_range(-1.0..1.0))
@@ -136,4 +138,36 @@ fn an_all_zero_design_has_infinite_conditioning() {
         ("V^(1/2) H", 0, 2)
     );
     assert_eq!(rank_deficient(&tikhonov(0.0)), ("regularised system", 0, 2));
+}
+
+/// The IRLS stopping rule ‖x_{k+1} − x_k‖ ≤ tol·(1 + ‖x_{k+1}‖) is relative once ‖x‖ ≫ 1, so
+/// the verdict cannot depend on the units. The same robust line fit in two units 2²⁰ apart
+/// (a power of two: every iterate scales exactly, Huber threshold included) must converge
+/// after the same number of iterations.
+#[test]
+fn irls_convergence_does_not_depend_on_the_units() {
+    let t: Vec<f64> = (0..10).map(f64::from).collect();
+    let h = DMatrix::from_fn(10, 2, |i, j| if j == 0 { 1.0 } else { t[i] });
+    let run = |scale: f64| {
+        let mut z = DVector::from_fn(10, |i, _| (1.0 + 0.5 * t[i]) * scale);
+        z[7] += 20.0 * scale;
+        let (hc, zc) = (h.clone(), z.clone());
+        let huber = move |x: &DVector<f64>| {
+            let r = &zc - &hc * x;
+            Weights::Diagonal(r.map(|ri| 1.0 / (ri.abs() / (0.1 * scale)).max(1.0)))
+        };
+        let irls = IrlsOptions {
+            tolerance: 1e-10,
+            max_iterations: 500,
+        };
+        let start = DVector::zeros(2);
+        solve_irls(&h, &z, &start, huber, &SolveOptions::default(), &irls).expect("ok")
+    };
+    let (small, large) = (run(2f64.powi(20)), run(2f64.powi(40)));
+    assert!(small.converged && large.converged, "{small:?}\n{large:?}");
+    assert_eq!(small.iterations, large.iterations);
+    assert!(
+        (&large.solution.x / 2f64.powi(20) - &small.solution.x).norm()
+            <= 1e-9 * small.solution.x.norm()
+    );
 }
