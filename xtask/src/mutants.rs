@@ -82,11 +82,21 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
         cmd.arg("--list");
         return crate::run(cmd);
     }
+    // The report directory is named after the selection, so runs of different shards or
+    // filters keep their own reports.
+    let re_label = re.map(|r| {
+        let kept: String = r
+            .chars()
+            .filter(char::is_ascii_alphanumeric)
+            .take(24)
+            .collect();
+        format!("re{kept}")
+    });
     let label = [
         krate.as_str(),
         file.unwrap_or(""),
         shard.unwrap_or(""),
-        re.map_or("", |_| "re"),
+        re_label.as_deref().unwrap_or(""),
     ]
     .iter()
     .filter(|s| !s.is_empty())
