@@ -64,11 +64,37 @@ pub fn expm(m: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     Ok(e)
 }
 
+/// `e^{M}` for the exponential of one step of `A` (`what` names it): an overflow is the step's
+/// fault, reported as [`Error::StepTooLarge`] naming `dt`.
+fn expm_step(
+    m: &DMatrix<f64>,
+    a: &DMatrix<f64>,
+    dt: f64,
+    what: &'static str,
+) -> Result<DMatrix<f64>> {
+    if m.nrows() == 0 {
+        return Ok(DMatrix::zeros(0, 0));
+    }
+    let e = m.exp();
+    if e.iter().all(|v| v.is_finite()) {
+        return Ok(e);
+    }
+    let norm1 = (0..a.ncols())
+        .map(|j| a.column(j).iter().map(|v| v.abs()).sum::<f64>())
+        .fold(0.0, f64::max);
+    Err(Error::StepTooLarge {
+        dt,
+        what,
+        growth: norm1 * dt,
+    })
+}
+
 /// Zero-order hold of `(A, B)` over `dt`: returns `(e^{A·dt}, ∫₀^dt e^{Aτ}dτ·B)`, from one
 /// exponential of `[[A, B], [0, 0]]·dt`.
 ///
 /// # Errors
-/// [`Error::InvalidParameter`] for `dt` ≤ 0; shape and finiteness errors for `A`, `B`.
+/// [`Error::InvalidParameter`] for `dt` ≤ 0; shape and finiteness errors for `A`, `B`;
+/// [`Error::StepTooLarge`] when the exponential overflows.
 pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt: f64) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
     validate::positive("dt", dt)?;
     let n = validate::square("A", a)?;
@@ -77,7 +103,7 @@ pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt: f64) -> Result<(DMatrix<f64>,
     let mut m = DMatrix::zeros(n + l, n + l);
     m.view_mut((0, 0), (n, n)).copy_from(&(a * dt));
     m.view_mut((0, n), (n, l)).copy_from(&(b * dt));
-    let e = expm(&m)?;
+    let e = expm_step(&m, a, dt, "e^{[[A, B], [0, 0]]·dt}")?;
     Ok((
         e.view((0, 0), (n, n)).into_owned(),
         e.view((0, n), (n, l)).into_owned(),
@@ -87,7 +113,9 @@ pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt: f64) -> Result<(DMatrix<f64>,
 /// Van Loan: returns `(e^{A·dt}, Q_d)` with `Q_d = ∫₀^dt e^{Aτ}GWGᵀe^{Aᵀτ}dτ` (symmetrised).
 ///
 /// # Errors
-/// [`Error::InvalidParameter`] for `dt` ≤ 0; shape, finiteness and PSD errors for the inputs.
+/// [`Error::InvalidParameter`] for `dt` ≤ 0; shape, finiteness and PSD errors for the inputs;
+/// [`Error::StepTooLarge`] when the exponential overflows. A zero `G W Gᵀ` gives `Q_d = 0`
+/// without the `2n × 2n` exponential.
 pub fn van_loan(
     a: &DMatrix<f64>,
     g: &DMatrix<f64>,
@@ -99,11 +127,21 @@ pub fn van_loan(
     validate::shape("G", g, n, g.ncols(), "G must have as many rows as A")?;
     validate::covariance("W", w, g.ncols(), "W must be p×p with p = columns of G")?;
     let gwg = g * w * g.transpose();
+    if !gwg.iter().any(|v| v.abs() > 0.0) {
+        // No noise enters: Q_d = 0 exactly, and only e^{A·dt} is needed.
+        let phi = expm_step(&(a * dt), a, dt, "e^{A·dt}")?;
+        return Ok((phi, DMatrix::zeros(n, n)));
+    }
     let mut m = DMatrix::zeros(2 * n, 2 * n);
     m.view_mut((0, 0), (n, n)).copy_from(&(-a * dt));
     m.view_mut((0, n), (n, n)).copy_from(&(gwg * dt));
     m.view_mut((n, n), (n, n)).copy_from(&(a.transpose() * dt));
-    let e = expm(&m)?;
+    let e = expm_step(
+        &m,
+        a,
+        dt,
+        "the Van Loan exponential e^{[[−A, GWGᵀ], [0, Aᵀ]]·dt}",
+    )?;
     let phi = e.view((n, n), (n, n)).transpose();
     let q = &phi * e.view((0, n), (n, n));
     Ok((phi, validate::symmetrize(&q)))
@@ -141,7 +179,7 @@ impl Mapped {
         let eye = DMatrix::<f64>::identity(n, n);
         match method {
             Method::Zoh => {
-                let f = expm(&(a * dt))?;
+                let f = expm_step(&(a * dt), a, dt, "e^{A·dt}")?;
                 Ok(Self {
                     f,
                     h: sys.c().clone(),
@@ -241,7 +279,10 @@ impl ContinuousSs {
 /// # Errors
 /// [`Error::InvalidParameter`] for `dt` ≤ 0 or a bad pre-warp frequency,
 /// [`Error::Singular`] when an implicit method meets `I − Aτ` singular,
-/// [`Error::NonFiniteMatrix`] when the result overflows.
+/// [`Error::StepTooLarge`] when an exponential over the step overflows,
+/// [`Error::NonFiniteMatrix`] when the result overflows. Only what the request needs is
+/// computed: no exponential for Euler or Tustin dynamics, and no Van Loan exponential when
+/// no noise enters (`G W Gᵀ = 0`, then `Q = 0`).
 pub fn discretize(
     sys: &ContinuousSs,
     dt: f64,
@@ -257,7 +298,13 @@ pub fn discretize(
     let m = sys.n_outputs();
     match noise {
         NoiseConvention::VanLoan => {
-            let (_, q) = van_loan(sys.a(), sys.g(), sys.w(), dt)?;
+            let gwg = sys.g() * sys.w() * sys.g().transpose();
+            let q = if !gwg.iter().any(|v| v.abs() > 0.0) {
+                // No noise enters: Q = 0 exactly, with no exponential to compute.
+                DMatrix::zeros(n, n)
+            } else {
+                van_loan(sys.a(), sys.g(), sys.w(), dt)?.1
+            };
             base.with_noise(DMatrix::identity(n, n), DMatrix::zeros(m, n), q)
         }
         NoiseConvention::IntensityOverDt => {
@@ -285,6 +332,67 @@ mod tests {
         assert!((phi[(0, 0)] - (a * dt).exp()).abs() < 1e-15);
         let want = w * ((2.0 * a * dt).exp() - 1.0) / (2.0 * a);
         assert!((q[(0, 0)] - want).abs() < 1e-14 * want);
+    }
+
+    /// A scalar `ẋ = 1000 x`: `e^{1000·dt}` overflows `f64` for dt = 1 (e^{1000} > 1.8e308).
+    fn fast_scalar(w: f64) -> ContinuousSs {
+        ContinuousSs::new(
+            DMatrix::from_element(1, 1, 1000.0),
+            DMatrix::zeros(1, 0),
+            DMatrix::from_element(1, 1, 1.0),
+            DMatrix::zeros(1, 0),
+        )
+        .and_then(|s| {
+            s.with_noise(
+                DMatrix::from_element(1, 1, 1.0),
+                DMatrix::from_element(1, 1, w),
+            )
+        })
+        .expect("valid")
+    }
+
+    #[test]
+    fn euler_without_noise_computes_no_exponential() {
+        // Forward Euler: F = 1 + A·dt = 1001 exactly; no noise, so Q = 0 without Van Loan.
+        let d = discretize(
+            &fast_scalar(0.0),
+            1.0,
+            Method::ForwardEuler,
+            NoiseConvention::VanLoan,
+        )
+        .expect("Euler needs no exponential");
+        assert!((d.f()[(0, 0)] - 1001.0).abs() < 1e-12);
+        assert!(d.process_covariance()[(0, 0)].abs() < f64::MIN_POSITIVE);
+    }
+
+    #[test]
+    fn overflowing_exponential_names_the_step() {
+        for (method, w) in [
+            (Method::Zoh, 0.0),
+            (Method::ForwardEuler, 1.0),
+            (Method::Zoh, 1.0),
+        ] {
+            let e = discretize(&fast_scalar(w), 1.0, method, NoiseConvention::VanLoan);
+            match e {
+                Err(Error::StepTooLarge { dt, growth, .. }) => {
+                    assert!((dt - 1.0).abs() < f64::EPSILON);
+                    assert!((growth - 1000.0).abs() < 1e-9, "{growth}");
+                }
+                other => panic!("{method:?}, W = {w}: expected StepTooLarge, got {other:?}"),
+            }
+        }
+        // A step 100 times smaller is fine: e^{10} for ZOH, e^{20}-scale Van Loan.
+        let d = discretize(
+            &fast_scalar(1.0),
+            0.01,
+            Method::Zoh,
+            NoiseConvention::VanLoan,
+        )
+        .expect("small step");
+        assert!((d.f()[(0, 0)] / 10f64.exp() - 1.0).abs() < 1e-12);
+        // Q = W (e^{2aΔt} − 1)/(2a).
+        let want = (20f64.exp() - 1.0) / 2000.0;
+        assert!((d.process_covariance()[(0, 0)] / want - 1.0).abs() < 1e-9);
     }
 
     #[test]

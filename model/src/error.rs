@@ -129,6 +129,19 @@ pub enum Error {
         /// How many there are.
         len: usize,
     },
+    /// A matrix exponential over one step overflowed: the step is too large for the dynamics
+    /// (`e^{A·dt}` grows like `e^{λ_max·dt}`, past `f64`'s range near `λ·dt ≈ 709`).
+    #[error(
+        "dt = {dt} is too large for this A: {what} overflows (‖A‖·dt = {growth:e}); use a smaller dt"
+    )]
+    StepTooLarge {
+        /// The step size Δt.
+        dt: f64,
+        /// The exponential that overflowed (for example `"e^{A·dt}"`).
+        what: &'static str,
+        /// `‖A‖₁·dt` (the 1-norm of the scaled state matrix), for scale.
+        growth: f64,
+    },
     /// An iterative algorithm did not converge.
     #[error("{algorithm} did not converge within {iterations} iterations")]
     NoConvergence {
