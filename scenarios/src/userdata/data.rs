@@ -5,8 +5,11 @@
 //! m ≥ 1, then `u1…up`); every row has as many fields as the header; `t` is finite and
 //! strictly increasing; a `z` cell that is empty or `NaN` (any case) is a missing value;
 //! `u` cells must be present and finite. Blank lines are skipped; fields may be quoted and
-//! padded with spaces; a UTF-8 byte-order mark is ignored. Each error names the file, the
-//! line and the column (1-based, with the column's name).
+//! padded with spaces; a UTF-8 byte-order mark is ignored. The file must end with a newline:
+//! a last line without one is an error, since it usually means the file was cut short or is
+//! still being written (`4,5.` of `4,5.25`). A quoted field that runs over a line break (an
+//! unbalanced `"`) is an error. Each error is one line naming the file, the line and the
+//! column (1-based, with the column's name).
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -24,12 +27,40 @@ pub struct Row {
     pub u: Vec<f64>,
 }
 
+/// A reader that remembers the last byte it passed on (to tell a file that ends with a
+/// newline from one cut short).
+#[derive(Debug)]
+struct LastByte<R> {
+    inner: R,
+    last: Option<u8>,
+}
+
+impl<R: Read> Read for LastByte<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if let Some(&b) = buf[..n].last() {
+            self.last = Some(b);
+        }
+        Ok(n)
+    }
+}
+
+/// A short, one-line rendering of a cell's text for messages.
+fn shown(text: &str) -> String {
+    let escaped: String = text.escape_debug().collect();
+    match escaped.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &escaped[..i]),
+        None => escaped,
+    }
+}
+
 /// A streaming reader of a data CSV: the header is read by [`DataReader::new`], then one
 /// row per [`DataReader::read_row`], reusing the caller's buffers.
 #[derive(Debug)]
 pub struct DataReader<R: Read> {
     path: PathBuf,
-    csv: csv::Reader<R>,
+    csv: csv::Reader<LastByte<R>>,
+    last_line: u64,
     record: csv::ByteRecord,
     m: usize,
     p: usize,
@@ -56,10 +87,14 @@ impl<R: Read> DataReader<R> {
             .has_headers(false)
             .flexible(true)
             .trim(csv::Trim::All)
-            .from_reader(reader);
+            .from_reader(LastByte {
+                inner: reader,
+                last: None,
+            });
         let mut this = DataReader {
             path: path.to_path_buf(),
             csv,
+            last_line: 0,
             record: csv::ByteRecord::new(),
             m: 0,
             p: 0,
@@ -81,7 +116,7 @@ impl<R: Read> DataReader<R> {
             } else {
                 field
             };
-            let name = String::from_utf8_lossy(field);
+            let name = shown(&String::from_utf8_lossy(field));
             let ok = match j {
                 0 => name == "t",
                 _ if p == 0 && name == format!("z{}", m + 1) => {
@@ -152,16 +187,44 @@ impl<R: Read> DataReader<R> {
         Error::invalid(&self.path, format!("{place}: {what}"))
     }
 
+    /// Reads the next record; at the end, checks that the file ended with a newline.
     fn next_record(&mut self) -> Result<bool> {
-        self.csv
-            .read_byte_record(&mut self.record)
-            .map_err(|e| match e.into_kind() {
-                csv::ErrorKind::Io(source) => Error::Read {
-                    path: self.path.clone(),
-                    source,
-                },
-                other => Error::invalid(&self.path, format!("malformed CSV: {other:?}")),
-            })
+        let more =
+            self.csv
+                .read_byte_record(&mut self.record)
+                .map_err(|e| match e.into_kind() {
+                    csv::ErrorKind::Io(source) => Error::Read {
+                        path: self.path.clone(),
+                        source,
+                    },
+                    other => Error::invalid(&self.path, format!("malformed CSV: {other:?}")),
+                })?;
+        if !more {
+            let last = self.csv.get_ref().last;
+            if last.is_some_and(|b| b != b'\n' && b != b'\r') {
+                return Err(self.at(
+                    self.last_line,
+                    None,
+                    "the last line has no final newline: the file looks cut short (or is \
+                     still being written); if it is whole, end it with a newline",
+                ));
+            }
+            return Ok(false);
+        }
+        let line = self.line();
+        self.last_line = line;
+        if let Some(j) = self
+            .record
+            .iter()
+            .position(|f| f.contains(&b'\n') || f.contains(&b'\r'))
+        {
+            return Err(self.at(
+                line,
+                Some(j),
+                "unbalanced quote: a quoted field runs over the end of the line",
+            ));
+        }
+        Ok(true)
     }
 
     /// Reads the next row into `row` (resized to m and p). Returns `false` at the end.
@@ -211,11 +274,11 @@ impl<R: Read> DataReader<R> {
                     "missing value (only z cells may be empty or NaN)",
                 ));
             }
-            let v: f64 = text
-                .parse()
-                .map_err(|_| self.at(line, Some(j), &format!("`{text}` is not a number")))?;
+            let v: f64 = text.parse().map_err(|_| {
+                self.at(line, Some(j), &format!("`{}` is not a number", shown(text)))
+            })?;
             if !v.is_finite() {
-                return Err(self.at(line, Some(j), &format!("`{text}` is not finite")));
+                return Err(self.at(line, Some(j), &format!("`{}` is not finite", shown(text))));
             }
             match j {
                 0 => {
@@ -281,7 +344,7 @@ pub fn estimates_header(n: usize, full: bool) -> String {
 /// # Errors
 /// [`Error::Write`] naming `path` on an I/O error.
 pub fn write_estimate(
-    out: &mut impl Write,
+    out: &mut (impl Write + ?Sized),
     path: &Path,
     t: f64,
     x: &[f64],

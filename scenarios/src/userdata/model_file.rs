@@ -169,13 +169,72 @@ fn format_of(path: &Path) -> Result<Format> {
     }
 }
 
-/// Deserialises `text` as JSON or TOML (by `path`'s extension), naming line and column.
+/// The non-number token (`NaN`, `Infinity`, …) at 1-based `line`/`column` of `text`, if
+/// that is what a JSON syntax error there is about.
+fn non_json_number(text: &str, line: usize, column: usize) -> Option<&'static str> {
+    const TOKENS: [&str; 8] = [
+        "-Infinity",
+        "+Infinity",
+        "Infinity",
+        "-NaN",
+        "NaN",
+        "-inf",
+        "inf",
+        "+inf",
+    ];
+    let l = text.lines().nth(line.checked_sub(1)?)?;
+    // The parser reports the column of the offending byte or the one after it.
+    (column.saturating_sub(2)..=column).find_map(|start| {
+        let rest = l.get(start..)?;
+        TOKENS
+            .iter()
+            .find(|t| {
+                rest.get(..t.len())
+                    .is_some_and(|head| head.eq_ignore_ascii_case(t))
+            })
+            .copied()
+    })
+}
+
+/// Deserialises JSON `text`, naming the key path of the place (`Q[0][0]`) in errors and
+/// saying that NaN and Infinity are not JSON numbers.
+fn deserialize_json<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
+    let describe = |key: &str, inner: &serde_json::Error| {
+        let at = format!("line {} column {}", inner.line(), inner.column());
+        let place = if key == "." || key.is_empty() {
+            at
+        } else {
+            format!("key {key} at {at}")
+        };
+        let what = match non_json_number(text, inner.line(), inner.column()) {
+            Some(token) if inner.is_syntax() => format!(
+                "{token} is not a JSON number (JSON has no NaN or Infinity; write finite \
+                 numbers, e.g. json.dump(..., allow_nan=False) in Python)"
+            ),
+            // serde_json's message ends in its own "at line L column C": said above.
+            _ => {
+                let m = inner.to_string();
+                match m.rfind(" at line ") {
+                    Some(i) => m[..i].to_string(),
+                    None => m,
+                }
+            }
+        };
+        Error::invalid(path, format!("invalid JSON model, {place}: {what}"))
+    };
+    let mut de = serde_json::Deserializer::from_str(text);
+    let value = serde_path_to_error::deserialize(&mut de)
+        .map_err(|e| describe(&e.path().to_string(), e.inner()))?;
+    de.end().map_err(|e| describe("", &e))?;
+    Ok(value)
+}
+
+/// Deserialises `text` as JSON or TOML (by `path`'s extension), naming line and column (and
+/// for JSON the key path); a leading UTF-8 byte-order mark is ignored.
 fn deserialize<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     match format_of(path)? {
-        Format::Json => serde_json::from_str(text).map_err(|e| {
-            // serde_json's Display already ends in "at line L column C".
-            Error::invalid(path, format!("invalid JSON model: {e}"))
-        }),
+        Format::Json => deserialize_json(path, text),
         Format::Toml => toml::from_str(text).map_err(|e| {
             let at = e
                 .span()
