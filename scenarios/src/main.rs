@@ -1,10 +1,13 @@
 //! The `scenarios` command-line program: reproduces the papers (`fueling`, `uav`, `boom`,
 //! `all`, `merge`) and runs users' own models and data (`filter`, `discretize`,
-//! `steady-state`). Exit code 0 on success, 2 for input the user can fix, 1 otherwise.
+//! `steady-state`). Exit code 0 on success, 2 for input the user can fix (arguments, input
+//! files, an output path that is refused), 1 for I/O and computation failures, 130 after
+//! SIGINT/SIGTERM. Every error is one line on stderr naming the culprit.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{Args, Parser, Subcommand};
 use scenarios::fueling::Fueling;
 use scenarios::montecarlo::Shard;
@@ -30,21 +33,39 @@ struct CampaignArgs {
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// Campaign seed; run i draws from a stream derived from (seed, i) alone.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = parse_whole::<u64>)]
     seed: u64,
     /// Monte Carlo runs per point (default: the scenario's own).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count)]
     runs: Option<usize>,
     /// Worker threads (default: all cores). Results do not depend on it.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_count)]
     threads: Option<usize>,
     /// Run only slice K of N of the Monte Carlo runs; combine slices with `merge`.
-    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    #[arg(long, value_name = "K/N", allow_hyphen_values = true, value_parser = parse_shard)]
     shard: Option<Shard>,
 }
 
 fn parse_shard(s: &str) -> Result<Shard, String> {
     s.parse::<Shard>().map_err(|e| e.to_string())
+}
+
+/// A whole number (the message says what is wrong with the text).
+fn parse_whole<T: std::str::FromStr>(s: &str) -> Result<T, String> {
+    let digits = !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    if !digits {
+        return Err("expected a whole number".into());
+    }
+    s.parse::<T>()
+        .map_err(|_| "too large for a whole number here".into())
+}
+
+/// A count ≥ 1.
+fn parse_count(s: &str) -> Result<usize, String> {
+    match parse_whole::<usize>(s)? {
+        0 => Err("must be at least 1".into()),
+        n => Ok(n),
+    }
 }
 
 #[derive(Debug, Subcommand)]
@@ -87,8 +108,137 @@ impl CampaignArgs {
     }
 }
 
+/// Checks the output directory of the commands that write one: `--out -` is refused (standard
+/// output takes one file), and `merge --out` must not be one of the shard directories.
+fn check_directory_out(command: &Command) -> Result<(), Error> {
+    let (name, out) = match command {
+        Command::Fueling(a) => ("fueling", a.out.as_ref()),
+        Command::Uav(a) => ("uav", a.out.as_ref()),
+        Command::Boom(a) => ("boom", a.out.as_ref()),
+        Command::All(a) => ("all", a.out.as_ref()),
+        Command::Merge { out, .. } => ("merge", Some(out)),
+        Command::Filter(_) | Command::Discretize(_) | Command::SteadyState(_) => return Ok(()),
+    };
+    let Some(out) = out else { return Ok(()) };
+    if out.as_os_str() == "-" {
+        return Err(Error::Usage(format!(
+            "--out -: {name} writes a directory of files; standard output (-) is only for \
+             filter, discretize and steady-state"
+        )));
+    }
+    if let Command::Merge { dirs, .. } = command
+        && let Some(dir) = dirs
+            .iter()
+            .find(|d| scenarios::output::same_file(d.as_path(), out.as_path()))
+    {
+        return Err(Error::Usage(format!(
+            "--out {}: is the shard directory {}; refusing to overwrite an input",
+            out.display(),
+            dir.display()
+        )));
+    }
+    Ok(())
+}
+
+/// The option name of a clap argument as it renders (`--shard <K/N>` → `--shard`).
+fn option_name(rendered: &str) -> String {
+    rendered
+        .split_once(' ')
+        .map_or(rendered, |(name, _)| name)
+        .to_string()
+}
+
+fn context_strings(e: &clap::Error, kind: ContextKind) -> Vec<String> {
+    match e.get(kind) {
+        Some(ContextValue::String(s)) => vec![s.clone()],
+        Some(ContextValue::Strings(v)) => v.clone(),
+        _ => Vec::new(),
+    }
+}
+
+/// `a`, `a or b`, `a, b or c` (with `and` for `conjunction = "and"`).
+fn list(items: &[String], conjunction: &str) -> String {
+    match items {
+        [] => String::new(),
+        [one] => one.clone(),
+        [init @ .., last] => format!("{} {conjunction} {last}", init.join(", ")),
+    }
+}
+
+fn either(items: &[String]) -> String {
+    list(items, "or")
+}
+
+/// The parser's error as one line naming the argument (clap's own is error, usage and hint
+/// on several lines).
+fn one_line(e: &clap::Error) -> String {
+    let arg = context_strings(e, ContextKind::InvalidArg)
+        .iter()
+        .map(|a| option_name(a))
+        .collect::<Vec<_>>();
+    let args = list(&arg, "and");
+    let arg = either(&arg);
+    let value = context_strings(e, ContextKind::InvalidValue).join(" ");
+    let valid = either(&context_strings(e, ContextKind::ValidValue));
+    let suggestion = {
+        let mut s = context_strings(e, ContextKind::SuggestedArg);
+        s.extend(context_strings(e, ContextKind::SuggestedSubcommand));
+        s.extend(context_strings(e, ContextKind::SuggestedValue));
+        if s.is_empty() {
+            String::new()
+        } else {
+            format!(" (did you mean {}?)", either(&s))
+        }
+    };
+    let commands = "fueling, uav, boom, all, merge, filter, discretize or steady-state";
+    match e.kind() {
+        ErrorKind::ValueValidation => {
+            let why = std::error::Error::source(e).map_or_else(String::new, ToString::to_string);
+            format!("{arg} {value}: {why}")
+        }
+        ErrorKind::InvalidValue if value.is_empty() => format!("{arg}: a value is required"),
+        ErrorKind::InvalidValue => format!("{arg} {value}: expected {valid}{suggestion}"),
+        ErrorKind::UnknownArgument => format!("unknown argument {arg}{suggestion}"),
+        ErrorKind::InvalidSubcommand => {
+            let cmd = context_strings(e, ContextKind::InvalidSubcommand).join(" ");
+            format!("unknown command {cmd}: expected {commands}{suggestion}")
+        }
+        ErrorKind::MissingRequiredArgument => format!("{args}: required but not given"),
+        ErrorKind::MissingSubcommand | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            format!("a command is required: {commands} (see scenarios --help)")
+        }
+        ErrorKind::ArgumentConflict => {
+            let prior = either(&context_strings(e, ContextKind::PriorArg));
+            format!("{arg}: cannot be used with {prior}")
+        }
+        _ => {
+            // Any other kind: clap's first line, without its `error: ` prefix.
+            let text = e.render().to_string();
+            let first = text.lines().next().unwrap_or("invalid arguments");
+            first.strip_prefix("error: ").unwrap_or(first).to_string()
+        }
+    }
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) => {
+            e.exit()
+        }
+        Err(e) => {
+            eprintln!("scenarios: {}", one_line(&e));
+            return ExitCode::from(2);
+        }
+    };
+    if let Err(err) = scenarios::output::remove_partial_files_on_interrupt() {
+        eprintln!("scenarios: {err}");
+        return ExitCode::from(err.exit_code());
+    }
+    if let Err(err) = check_directory_out(&cli.command) {
+        eprintln!("scenarios: {err}");
+        return ExitCode::from(err.exit_code());
+    }
     let outcome: Result<(), Error> = match cli.command {
         Command::Fueling(a) => scenarios::campaign::run::<Fueling>(&a.campaign()),
         Command::Uav(a) => scenarios::campaign::run::<Uav>(&a.campaign()),
@@ -102,7 +252,9 @@ fn main() -> ExitCode {
     match outcome {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("scenarios: {err}");
+            // One line whatever a message holds (a path or a library's text may not).
+            let text = err.to_string().replace(['\n', '\r'], " ");
+            eprintln!("scenarios: {text}");
             ExitCode::from(err.exit_code())
         }
     }

@@ -54,13 +54,31 @@ impl Shard {
 impl FromStr for Shard {
     type Err = Error;
 
+    /// Parses `K/N` with 1 ≤ K ≤ N ≤ 10⁶; the message says which part is wrong (the caller
+    /// names the option).
     fn from_str(s: &str) -> Result<Self> {
-        let bad = || Error::Usage(format!("--shard takes K/N with 1 ≤ K ≤ N, not `{s}`"));
-        let (k, n) = s.split_once('/').ok_or_else(bad)?;
-        let index: usize = k.trim().parse().map_err(|_| bad())?;
-        let count: usize = n.trim().parse().map_err(|_| bad())?;
-        if index == 0 || count == 0 || index > count {
-            return Err(bad());
+        // Far more slices than any job array, and small enough that `runs` cannot overflow
+        // for any campaign that fits in memory.
+        const MAX_COUNT: usize = 1_000_000;
+        let usage = |why: &str| Error::Usage(why.to_string());
+        let (k, n) = s
+            .split_once('/')
+            .ok_or_else(|| usage("expected K/N, slice K of N (for example 2/8)"))?;
+        let whole = |part: &str, name: &str| -> Result<usize> {
+            let part = part.trim();
+            if part.is_empty() || !part.bytes().all(|b| b.is_ascii_digit()) {
+                return Err(usage(&format!("{name} must be a whole number")));
+            }
+            // Too many digits for usize is past the limit below anyway.
+            Ok(part.parse::<usize>().unwrap_or(usize::MAX))
+        };
+        let index = whole(k, "K")?;
+        let count = whole(n, "N")?;
+        if count == 0 || count > MAX_COUNT {
+            return Err(usage(&format!("N must be between 1 and {}", MAX_COUNT)));
+        }
+        if index == 0 || index > count {
+            return Err(usage("K must be between 1 and N"));
         }
         Ok(Shard { index, count })
     }

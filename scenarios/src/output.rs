@@ -1,13 +1,202 @@
 //! Whole-or-nothing output: every file is written to a temporary name beside its destination
 //! and renamed into place only once it is complete, so an interrupted or failed run never
 //! leaves a half-written report, CSV or model behind.
+//!
+//! The rules for a destination (checked before anything is written):
+//! - a new name, or an existing regular file (replaced whole, keeping its permissions);
+//! - a symbolic link to a regular file: the file it points to is replaced, the link stays;
+//! - anything else — a directory, a device such as `/dev/null`, a FIFO, a socket, a dangling
+//!   link — is refused, never replaced by a regular file;
+//! - a command's `--out` that is the same file as one of its inputs (compared by device and
+//!   inode, so `./x`, links and hard links are caught) is refused; see [`destination`];
+//! - `--out -` means standard output for the commands that write one file ([`Destination`]).
+//!
+//! Directories on the way to a destination are created only when the file is written, and
+//! removed again if the write fails. [`remove_partial_files_on_interrupt`] makes SIGINT and
+//! SIGTERM remove the temporary files and directories of writes in progress.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
 
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+
+/// Exit code after SIGINT or SIGTERM (128 + SIGINT, the shell's convention for Ctrl-C).
+pub const INTERRUPTED_EXIT_CODE: i32 = 130;
+
+/// Temporary files and freshly created directories of the writes in progress, removed by
+/// the interrupt handler. Held while a write creates or renames, so an interrupt sees either
+/// the temporary file or the finished destination, never neither.
+static IN_PROGRESS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn in_progress() -> MutexGuard<'static, Vec<PathBuf>> {
+    IN_PROGRESS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Removes `paths` (files, then directories only if empty), last first.
+fn remove_all(paths: &[PathBuf]) {
+    for p in paths.iter().rev() {
+        if std::fs::remove_file(p).is_err() {
+            let _ = std::fs::remove_dir(p);
+        }
+    }
+}
+
+/// Installs a SIGINT/SIGTERM handler that removes the temporary files (and directories
+/// created for them) of the writes in progress and exits with [`INTERRUPTED_EXIT_CODE`].
+/// Call it once, from the program's `main`.
+///
+/// # Errors
+/// [`Error::Compute`] if a handler cannot be installed (one is already set).
+pub fn remove_partial_files_on_interrupt() -> Result<()> {
+    ctrlc::set_handler(|| {
+        let open = in_progress();
+        remove_all(&open);
+        // Exit while still holding the lock: no write can rename into place after this.
+        std::process::exit(INTERRUPTED_EXIT_CODE);
+    })
+    .map_err(|e| Error::Compute(format!("cannot install the interrupt handler: {e}")))
+}
+
+/// Where a command that writes one file sends it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Destination {
+    /// Standard output (`--out -`). A streaming command may have written part of its output
+    /// when it fails; its exit code says so.
+    Stdout,
+    /// A file, written whole or not at all.
+    File(PathBuf),
+}
+
+impl std::fmt::Display for Destination {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Destination::Stdout => f.write_str("standard output"),
+            Destination::File(p) => write!(f, "{}", p.display()),
+        }
+    }
+}
+
+/// Whether two existing paths are the same file (same device and inode on Unix; the same
+/// canonical path elsewhere).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (std::fs::metadata(a), std::fs::metadata(b)) {
+            (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        }
+    }
+}
+
+/// What an existing path is, for messages.
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = meta.file_type();
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+        if t.is_fifo() {
+            return "a FIFO";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if meta.is_dir() {
+        "a directory"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// The regular file to replace when writing `path`, by the rules in the module docs: `path`
+/// itself, or the file a symbolic link points to. `Err` says why `path` is refused.
+fn resolve(path: &Path) -> std::result::Result<PathBuf, String> {
+    if path.as_os_str().is_empty() {
+        return Err("an empty file name".into());
+    }
+    let Ok(meta) = std::fs::symlink_metadata(path) else {
+        // A new file: every existing ancestor must be a directory.
+        for dir in path.ancestors().skip(1) {
+            if let Ok(m) = std::fs::metadata(dir) {
+                if !m.is_dir() {
+                    return Err(format!(
+                        "{} is {}, not a directory",
+                        dir.display(),
+                        kind_of(&m)
+                    ));
+                }
+                break;
+            }
+        }
+        return Ok(path.to_path_buf());
+    };
+    if meta.file_type().is_symlink() {
+        return match std::fs::metadata(path) {
+            Ok(target) if target.is_file() => std::fs::canonicalize(path)
+                .map_err(|e| format!("cannot resolve the symbolic link: {e}")),
+            Ok(target) => Err(format!(
+                "a symbolic link to {}; refusing to replace it (only regular files are written)",
+                kind_of(&target)
+            )),
+            Err(_) => Err("a symbolic link to a missing file; refusing to follow it".into()),
+        };
+    }
+    if meta.is_file() {
+        return Ok(path.to_path_buf());
+    }
+    let hint = if meta.is_dir() {
+        ""
+    } else {
+        "; use --out - for standard output"
+    };
+    Err(format!(
+        "is {}; refusing to replace it: only regular files are written{hint}",
+        kind_of(&meta)
+    ))
+}
+
+/// Checks a command's single output `out` before any work: `-` is standard output;
+/// otherwise the file must follow the rules in the module docs and must not be the same
+/// file as any of `inputs` (`(option, path)` pairs, for the message).
+///
+/// # Errors
+/// [`Error::Usage`] (exit code 2) naming `--out` and, for a clash, the input.
+pub fn destination(out: &Path, inputs: &[(&str, &Path)]) -> Result<Destination> {
+    if out.as_os_str() == "-" {
+        return Ok(Destination::Stdout);
+    }
+    let target =
+        resolve(out).map_err(|why| Error::Usage(format!("--out {}: {why}", out.display())))?;
+    for (option, input) in inputs {
+        if same_file(&target, input) {
+            return Err(Error::Usage(format!(
+                "--out {}: is the same file as {option} {}; refusing to overwrite an input",
+                out.display(),
+                input.display()
+            )));
+        }
+    }
+    Ok(Destination::File(target))
+}
 
 /// The temporary sibling of `path` used while writing it.
 fn temporary(path: &Path) -> PathBuf {
@@ -18,37 +207,125 @@ fn temporary(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.partial", std::process::id()))
 }
 
+/// Creates the missing directories above `path`; returns those it created, outermost first.
+fn create_parents(path: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut missing: Vec<PathBuf> = path
+        .ancestors()
+        .skip(1)
+        .filter(|d| !d.as_os_str().is_empty())
+        .take_while(|d| std::fs::symlink_metadata(d).is_err())
+        .map(Path::to_path_buf)
+        .collect();
+    missing.reverse();
+    let mut created = Vec::new();
+    for d in missing {
+        match std::fs::create_dir(&d) {
+            Ok(()) => created.push(d),
+            // Another writer of the same run made it in the meantime.
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+            Err(e) => {
+                remove_all(&created);
+                return Err(e);
+            }
+        }
+    }
+    Ok(created)
+}
+
 /// Writes a file through a streaming writer; the destination appears only if `fill` succeeds
-/// and the data reached the disk. On any error the temporary file is removed.
-pub fn write_with<T>(
-    path: &Path,
-    fill: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> Result<T>,
-) -> Result<T> {
+/// and the data reached the disk. On any error (or SIGINT/SIGTERM, see
+/// [`remove_partial_files_on_interrupt`]) the temporary file and any directory created for it
+/// are removed.
+///
+/// # Errors
+/// [`Error::Usage`] if `path` is refused by the rules in the module docs, [`Error::Write`]
+/// for I/O, or `fill`'s error.
+pub fn write_with<T>(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<T>) -> Result<T> {
+    let target = resolve(path).map_err(|why| Error::Usage(format!("{}: {why}", path.display())))?;
     let write_err = |source| Error::Write {
         path: path.to_path_buf(),
         source,
     };
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(write_err)?;
-    }
-    let tmp = temporary(path);
+    let tmp = temporary(&target);
+    let (file, created) = {
+        let mut open = in_progress();
+        let created = create_parents(&target).map_err(write_err)?;
+        let file = match std::fs::File::create(&tmp) {
+            Ok(f) => f,
+            Err(e) => {
+                remove_all(&created);
+                return Err(write_err(e));
+            }
+        };
+        open.extend(created.iter().cloned());
+        open.push(tmp.clone());
+        (file, created)
+    };
+    let forget = |open: &mut Vec<PathBuf>| {
+        open.retain(|p| *p != tmp && !created.contains(p));
+    };
     let result = (|| {
-        let file = std::fs::File::create(&tmp).map_err(write_err)?;
+        if let Ok(old) = std::fs::metadata(&target) {
+            file.set_permissions(old.permissions()).map_err(write_err)?;
+        }
         let mut out = std::io::BufWriter::new(file);
         let value = fill(&mut out)?;
         out.flush().map_err(write_err)?;
         out.get_ref().sync_all().map_err(write_err)?;
         drop(out);
-        std::fs::rename(&tmp, path).map_err(write_err)?;
+        let mut open = in_progress();
+        std::fs::rename(&tmp, &target).map_err(write_err)?;
+        forget(&mut open);
         Ok(value)
     })();
     if result.is_err() {
+        let mut open = in_progress();
         let _ = std::fs::remove_file(&tmp);
+        remove_all(&created);
+        forget(&mut open);
     }
     result
 }
 
+/// Writes to `dest` through a streaming writer: a file whole or not at all
+/// ([`write_with`]), or standard output.
+///
+/// # Errors
+/// As [`write_with`]; [`Error::Write`] naming standard output for a failed write there.
+pub fn write_to<T>(
+    dest: &Destination,
+    fill: impl FnOnce(&mut dyn Write) -> Result<T>,
+) -> Result<T> {
+    match dest {
+        Destination::File(p) => write_with(p, fill),
+        Destination::Stdout => {
+            let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+            let value = fill(&mut out)?;
+            out.flush().map_err(|source| Error::Write {
+                path: PathBuf::from("standard output"),
+                source,
+            })?;
+            Ok(value)
+        }
+    }
+}
+
+/// Writes `bytes` to `dest` whole or not at all.
+///
+/// # Errors
+/// As [`write_to`].
+pub fn write_bytes_to(dest: &Destination, bytes: &[u8]) -> Result<()> {
+    let name = PathBuf::from(dest.to_string());
+    write_to(dest, |out| {
+        out.write_all(bytes)
+            .map_err(|source| Error::Write { path: name, source })
+    })
+}
+
 /// Writes `bytes` to `path` whole or not at all.
+///
+/// # Errors
+/// As [`write_with`].
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_with(path, |out| {
         out.write_all(bytes).map_err(|source| Error::Write {
@@ -59,6 +336,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// Writes `value` as pretty JSON (with a final newline) whole or not at all.
+///
+/// # Errors
+/// As [`write_with`]; [`Error::Compute`] if `value` cannot be serialised.
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
     let mut text = serde_json::to_string_pretty(value)
         .map_err(|e| Error::Compute(format!("{}: cannot serialise: {e}", path.display())))?;
@@ -68,6 +348,9 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 
 /// Writes a CSV file with a header and numeric rows, whole or not at all. Numbers use Rust's
 /// shortest round-trip formatting, so the file reads back to the same `f64` values.
+///
+/// # Errors
+/// As [`write_with`].
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> {
     let mut text = header.join(",");
     text.push('\n');
@@ -85,6 +368,9 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
 
 /// Copies every regular, non-hidden file of directory `from` into `to` (each written whole or
 /// not at all); used by `merge` to carry over the files every shard writes identically.
+///
+/// # Errors
+/// [`Error::Read`] naming the file or directory that cannot be read; as [`write_with`].
 pub fn copy_files(from: &Path, to: &Path) -> Result<()> {
     let read_err = |source| Error::Read {
         path: from.to_path_buf(),
@@ -112,9 +398,17 @@ pub fn copy_files(from: &Path, to: &Path) -> Result<()> {
 mod tests {
     use super::*;
 
+    fn scratch(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("scenarios-output-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch dir");
+        dir
+    }
+
     #[test]
     fn failed_write_leaves_nothing() {
-        let dir = std::env::temp_dir().join(format!("scenarios-output-{}", std::process::id()));
+        let dir = scratch("failed");
         let path = dir.join("x.csv");
         let r: Result<()> = write_with(&path, |out| {
             out.write_all(b"half")
@@ -129,6 +423,70 @@ mod tests {
         assert_eq!(
             std::fs::read_to_string(&path).expect("read"),
             "a,b\n1,0.1\n"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn failed_write_removes_the_directories_it_created() {
+        let dir = scratch("dirs");
+        let path = dir.join("new").join("deeper").join("x.csv");
+        let r: Result<()> = write_with(&path, |_| Err(Error::Compute("stopped".into())));
+        assert!(r.is_err());
+        assert!(!dir.join("new").exists(), "created directories must go");
+        assert!(dir.exists(), "an existing directory must stay");
+        write_atomic(&path, b"x").expect("write");
+        assert_eq!(std::fs::read(&path).expect("read"), b"x");
+        assert!(in_progress().is_empty());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn links_are_followed_and_devices_refused() {
+        let dir = scratch("links");
+        let real = dir.join("real.csv");
+        std::fs::write(&real, "old").expect("write");
+        let link = dir.join("link.csv");
+        std::os::unix::fs::symlink(&real, &link).expect("symlink");
+        write_atomic(&link, b"new").expect("write through the link");
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .expect("link")
+                .file_type()
+                .is_symlink(),
+            "the link must stay a link"
+        );
+        assert_eq!(std::fs::read(&real).expect("read"), b"new");
+        let e = write_atomic(Path::new("/dev/null"), b"x").expect_err("a device is refused");
+        assert!(e.to_string().contains("character device"), "{e}");
+        let e = write_atomic(&dir, b"x").expect_err("a directory is refused");
+        assert!(e.to_string().contains("a directory"), "{e}");
+        let dangling = dir.join("dangling.csv");
+        std::os::unix::fs::symlink(dir.join("missing"), &dangling).expect("symlink");
+        let e = write_atomic(&dangling, b"x").expect_err("a dangling link is refused");
+        assert!(e.to_string().contains("missing file"), "{e}");
+        let e = write_atomic(&real.join("x.csv"), b"x").expect_err("a file as a directory");
+        assert!(e.to_string().contains("not a directory"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn destination_refuses_an_input() {
+        let dir = scratch("same");
+        let input = dir.join("m.json");
+        std::fs::write(&input, "{}").expect("write");
+        let dotted = dir.join(".").join("m.json");
+        let e = destination(&dotted, &[("--model", &input)]).expect_err("same file");
+        assert!(e.to_string().contains("same file as --model"), "{e}");
+        assert_eq!(
+            destination(Path::new("-"), &[]).expect("stdout"),
+            Destination::Stdout
+        );
+        let other = dir.join("o.json");
+        assert_eq!(
+            destination(&other, &[("--model", &input)]).expect("new file"),
+            Destination::File(other)
         );
         let _ = std::fs::remove_dir_all(&dir);
     }

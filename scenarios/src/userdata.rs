@@ -30,7 +30,6 @@
 pub mod data;
 pub mod model_file;
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use faer::Mat;
@@ -60,7 +59,7 @@ pub struct FilterArgs {
     /// Data CSV: header t,z1,…,zm[,u1,…,up]; an empty or NaN z cell is a missing value.
     #[arg(long, value_name = "Z.csv")]
     pub data: PathBuf,
-    /// Estimates CSV to write: t,x1,…,xn,P1_1,…,Pn_n,nis.
+    /// Estimates CSV to write: t,x1,…,xn,P1_1,…,Pn_n,nis (`-`: standard output).
     #[arg(long, value_name = "EST.csv")]
     pub out: PathBuf,
     /// Covariance-update form.
@@ -131,7 +130,7 @@ pub struct DiscretizeArgs {
     #[arg(long, value_name = "CONT")]
     pub model: PathBuf,
     /// Sampling interval in seconds.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_dt)]
     pub dt: f64,
     /// zoh, tustin, tustin-prewarp:W (W in rad/s), euler (forward) or backward-euler.
     #[arg(long, value_parser = parse_method)]
@@ -139,9 +138,18 @@ pub struct DiscretizeArgs {
     /// How the noise intensity Qc becomes the discrete Q.
     #[arg(long, value_enum, default_value_t = NoiseArg::VanLoan)]
     pub noise: NoiseArg,
-    /// Discrete model to write (.json, or .toml).
+    /// Discrete model to write (.json, or .toml; `-`: JSON on standard output).
     #[arg(long, value_name = "DISC.json")]
     pub out: PathBuf,
+}
+
+/// A sampling interval: a finite number > 0 (seconds).
+fn parse_dt(s: &str) -> std::result::Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(dt) if dt.is_finite() && dt > 0.0 => Ok(dt),
+        Ok(_) => Err("must be finite and > 0 (seconds)".into()),
+        Err(_) => Err("not a number (seconds, finite and > 0)".into()),
+    }
 }
 
 fn parse_method(s: &str) -> std::result::Result<MethodArg, String> {
@@ -154,7 +162,7 @@ pub struct SteadyStateArgs {
     /// Discrete model (.json or .toml): F, H, Q, R and optional S are used.
     #[arg(long, value_name = "MODEL")]
     pub model: PathBuf,
-    /// JSON file to write: {"P", "P_post", "K", "residual"}.
+    /// JSON file to write: {"P", "P_post", "K", "residual", …} (`-`: standard output).
     #[arg(long, value_name = "SS.json")]
     pub out: PathBuf,
 }
@@ -266,6 +274,10 @@ fn engine_filter(
 /// [`Error::Invalid`] for a bad model or data file (nothing is written), [`Error::Read`] /
 /// [`Error::Write`] for I/O.
 pub fn filter(args: &FilterArgs) -> Result<()> {
+    let dest = crate::output::destination(
+        &args.out,
+        &[("--model", &args.model), ("--data", &args.data)],
+    )?;
     let model = model_file::load_discrete(&args.model)?;
     let mut kf = engine_filter(&args.model, &model, args.form)?;
     let file = std::fs::File::open(&args.data).map_err(|source| Error::Read {
@@ -275,11 +287,12 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
     let mut reader = DataReader::new(&args.data, std::io::BufReader::with_capacity(1 << 16, file))?;
     check_columns(&args.model, &model, &reader)?;
     if args.smooth {
-        return smooth(args, &model, &mut kf, &mut reader);
+        return smooth(args, &dest, &model, &mut kf, &mut reader);
     }
     let n = model.n();
-    let out = args.out.as_path();
-    crate::output::write_with(out, |w| {
+    let out_name = PathBuf::from(dest.to_string());
+    let out = out_name.as_path();
+    crate::output::write_to(&dest, |w| {
         writeln!(w, "{}", data::estimates_header(n, args.full_covariance)).map_err(|source| {
             Error::Write {
                 path: out.to_path_buf(),
@@ -333,6 +346,7 @@ fn copy_col_major(m: faer::MatRef<'_, f64>, out: &mut [f64]) {
 /// forward pass's.
 fn smooth<R: std::io::Read>(
     args: &FilterArgs,
+    dest: &crate::output::Destination,
     model: &DiscreteModel,
     kf: &mut kalman::Filter<kalman::Dyn>,
     reader: &mut DataReader<R>,
@@ -363,8 +377,9 @@ fn smooth<R: std::io::Read>(
         )
     };
     drop(rts);
-    let out = args.out.as_path();
-    crate::output::write_with(out, |w| {
+    let out_name = PathBuf::from(dest.to_string());
+    let out = out_name.as_path();
+    crate::output::write_to(dest, |w| {
         writeln!(w, "{}", data::estimates_header(n, args.full_covariance)).map_err(|source| {
             Error::Write {
                 path: out.to_path_buf(),
@@ -401,6 +416,7 @@ pub fn discretize(args: &DiscretizeArgs) -> Result<()> {
         )));
     }
     let path = args.model.as_path();
+    let dest = crate::output::destination(&args.out, &[("--model", path)])?;
     let c = model_file::load_continuous(path)?;
     // The model crate calls the noise intensity W; the file calls it Qc.
     let err = |e: model::Error| model_error(path, e.to_string().replace("matrix W", "matrix Qc"));
@@ -420,10 +436,13 @@ pub fn discretize(args: &DiscretizeArgs) -> Result<()> {
     };
     let d = model::discretize(&sys, args.dt, method, noise).map_err(|e| match e {
         model::Error::InvalidParameter { .. } => Error::Usage(e.to_string()),
+        model::Error::StepTooLarge { .. } => {
+            Error::Usage(format!("--dt {}: {e} (A from {})", args.dt, path.display()))
+        }
         e => err(e),
     })?;
     let file = discrete_file(&d, c.R.as_ref());
-    write_model(&args.out, &file)
+    write_model(&dest, &file)
 }
 
 /// The discrete model file of a discretised system: `Q = G Q Gᵀ`, `S = G Q Jᵀ` (written
@@ -452,18 +471,21 @@ fn discrete_file(d: &model::DiscreteSs, R: Option<&DMatrix<f64>>) -> DiscreteFil
     }
 }
 
-/// Writes a discrete model as JSON, or TOML when `path` ends in `.toml`.
-fn write_model(path: &Path, file: &DiscreteFile) -> Result<()> {
-    let is_toml = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+/// Writes a discrete model as JSON, or TOML when the destination's name ends in `.toml`.
+fn write_model(dest: &crate::output::Destination, file: &DiscreteFile) -> Result<()> {
+    let is_toml = match dest {
+        crate::output::Destination::File(path) => path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml")),
+        crate::output::Destination::Stdout => false,
+    };
     if is_toml {
         let text = toml::to_string(file)
-            .map_err(|e| Error::Compute(format!("{}: cannot serialise: {e}", path.display())))?;
-        crate::output::write_atomic(path, text.as_bytes())
+            .map_err(|e| Error::Compute(format!("{dest}: cannot serialise: {e}")))?;
+        crate::output::write_bytes_to(dest, text.as_bytes())
     } else {
-        crate::output::write_atomic(path, model_json(file).as_bytes())
+        crate::output::write_bytes_to(dest, model_json(file).as_bytes())
     }
 }
 
@@ -521,6 +543,7 @@ fn faer_rows(m: faer::MatRef<'_, f64>) -> model_file::Rows {
 /// or its residual check fails; [`Error::Write`].
 pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
     let path = args.model.as_path();
+    let dest = crate::output::destination(&args.out, &[("--model", path)])?;
     let model = model_file::load_discrete(path)?;
     // The engine's model checks symmetry and PSD of Q, R and the joint noise covariance.
     engine_model(path, &model)?;
@@ -554,5 +577,5 @@ pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
         ("innovation_covariance", m(&ss.innovation_cov)),
         ("iterations", Some(serde_json::json!(ss.iterations))),
     ]);
-    crate::output::write_atomic(&args.out, text.as_bytes())
+    crate::output::write_bytes_to(&dest, text.as_bytes())
 }

@@ -1065,3 +1065,582 @@ proptest! {
         }
     }
 }
+
+/// Every file in `dir` (following links) with its bytes, to show a failed run touched none.
+fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .expect("list dir")
+        .map(|e| {
+            let e = e.expect("entry");
+            let bytes = std::fs::read(e.path()).unwrap_or_default();
+            (e.file_name().to_string_lossy().into_owned(), bytes)
+        })
+        .collect()
+}
+
+/// A scalar random walk with a prior, and a discrete JSON and a continuous model beside it.
+const WALK_TOML: &str =
+    "dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\nx0 = [0]\nP0 = [[1]]\n";
+const WALK_JSON: &str =
+    r#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "x0": [0], "P0": [[1]]}"#;
+const CONT_JSON: &str = r#"{"A": [[-1]], "C": [[1]], "Qc": [[2]], "R": [[1]]}"#;
+
+#[test]
+fn out_that_is_an_input_is_refused() {
+    let dir = scratch("ud", "out-is-input");
+    write(&dir, "m.toml", WALK_TOML);
+    write(&dir, "m.json", WALK_JSON);
+    write(&dir, "c.json", CONT_JSON);
+    write(&dir, "track.csv", "t,z1\n0,1\n1,2\n");
+    std::os::unix::fs::symlink("track.csv", dir.join("link.csv")).expect("symlink");
+    std::fs::hard_link(dir.join("track.csv"), dir.join("hard.csv")).expect("hard link");
+    let before = snapshot(&dir);
+    let filter = |out: &'static str, smooth: bool| {
+        let mut a = vec![
+            "filter",
+            "--model",
+            "m.toml",
+            "--data",
+            "track.csv",
+            "--out",
+            out,
+        ];
+        if smooth {
+            a.push("--smooth");
+        }
+        a
+    };
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (filter("track.csv", false), "--data track.csv"),
+        (filter("track.csv", true), "--data track.csv"),
+        (filter("./track.csv", false), "--data track.csv"),
+        (filter("link.csv", true), "--data track.csv"),
+        (filter("hard.csv", false), "--data track.csv"),
+        (filter("m.toml", false), "--model m.toml"),
+        (
+            vec!["steady-state", "--model", "m.json", "--out", "m.json"],
+            "--model m.json",
+        ),
+        (
+            vec![
+                "discretize",
+                "--model",
+                "c.json",
+                "--dt",
+                "0.1",
+                "--method",
+                "zoh",
+                "--out",
+                "./c.json",
+            ],
+            "--model c.json",
+        ),
+    ];
+    for (args, input) in cases {
+        fails(
+            &dir,
+            &args,
+            &["--out ", "is the same file as", input, "refusing"],
+            before.len(),
+        );
+        assert_eq!(snapshot(&dir), before, "{args:?} changed an input");
+    }
+}
+
+#[test]
+fn device_nodes_links_and_standard_output_as_out() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = scratch("ud", "out-devices");
+    write(&dir, "m.toml", WALK_TOML);
+    write(&dir, "c.json", CONT_JSON);
+    write(&dir, "z.csv", "t,z1\n0,1\n1,2\n");
+    let filter = |out: &str| {
+        run(
+            &dir,
+            &[
+                "filter", "--model", "m.toml", "--data", "z.csv", "--out", out,
+            ],
+        )
+    };
+    // Devices (and a link to one, /dev/stdout → a pipe here) are refused, never replaced.
+    for (dev, what) in [
+        ("/dev/null", "character device"),
+        ("/dev/full", "character device"),
+        ("/dev/stdout", "symbolic link to"),
+    ] {
+        let out = filter(dev);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{dev}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.contains(&format!("--out {dev}")) && err.contains(what),
+            "{err}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+    for dev in ["/dev/null", "/dev/full"] {
+        let t = std::fs::symlink_metadata(dev).expect("device").file_type();
+        assert!(t.is_char_device(), "{dev} must stay a device");
+    }
+    let status = Command::new("mkfifo")
+        .arg(dir.join("fifo"))
+        .status()
+        .expect("mkfifo");
+    assert!(status.success());
+    let out = filter("fifo");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("a FIFO"));
+    std::fs::remove_file(dir.join("fifo")).expect("remove fifo");
+    // The reference output, to a plain new file.
+    ok(
+        &dir,
+        &[
+            "filter",
+            "--model",
+            "m.toml",
+            "--data",
+            "z.csv",
+            "--out",
+            "plain.csv",
+        ],
+    );
+    let plain = std::fs::read(dir.join("plain.csv")).expect("plain");
+    // A link to a regular file: the file is replaced whole, the link stays a link.
+    write(&dir, "real.csv", "old contents\n");
+    std::os::unix::fs::symlink("real.csv", dir.join("link.csv")).expect("symlink");
+    let out = filter("link.csv");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let link = std::fs::symlink_metadata(dir.join("link.csv")).expect("link");
+    assert!(link.file_type().is_symlink(), "the link must stay a link");
+    assert_eq!(std::fs::read(dir.join("real.csv")).expect("real"), plain);
+    // `-` is standard output: the same bytes, and no file named `-`.
+    let out = filter("-");
+    assert!(out.status.success());
+    assert_eq!(out.stdout, plain);
+    for args in [
+        vec!["steady-state", "--model", "m.toml", "--out"],
+        vec![
+            "discretize",
+            "--model",
+            "c.json",
+            "--dt",
+            "0.1",
+            "--method",
+            "zoh",
+            "--out",
+        ],
+    ] {
+        let mut to_file = args.clone();
+        to_file.push("file.json");
+        ok(&dir, &to_file);
+        let mut to_stdout = args.clone();
+        to_stdout.push("-");
+        let out = run(&dir, &to_stdout);
+        assert!(out.status.success(), "{to_stdout:?}");
+        assert_eq!(
+            out.stdout,
+            std::fs::read(dir.join("file.json")).expect("file"),
+            "{to_stdout:?}"
+        );
+    }
+    assert!(
+        !dir.join("-").exists(),
+        "`--out -` must not create a file named -"
+    );
+}
+
+/// Starts `filter` reading its data from a FIFO that the test holds open after a few rows,
+/// so the run is certainly mid-write; sends `signal`; checks that nothing is left.
+fn interrupt_mid_write(signal: &str) {
+    use std::io::Write as _;
+    let dir = scratch("ud", &format!("interrupt-{signal}"));
+    write(&dir, "m.toml", WALK_TOML);
+    let status = Command::new("mkfifo")
+        .arg(dir.join("z.csv"))
+        .status()
+        .expect("mkfifo");
+    assert!(status.success());
+    let child = Command::new(env!("CARGO_BIN_EXE_scenarios"))
+        .current_dir(&dir)
+        .args([
+            "filter",
+            "--model",
+            "m.toml",
+            "--data",
+            "z.csv",
+            "--out",
+            "sub/est.csv",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    // Opening the FIFO for writing waits for the program to open it for reading.
+    let mut fifo = std::fs::OpenOptions::new()
+        .write(true)
+        .open(dir.join("z.csv"))
+        .expect("open fifo");
+    fifo.write_all(b"t,z1\n0,1\n1,2\n").expect("rows");
+    fifo.flush().expect("flush");
+    // Wait for the temporary file to appear (the program then blocks on the next row).
+    let partial = || {
+        std::fs::read_dir(dir.join("sub"))
+            .map(|d| d.count())
+            .unwrap_or(0)
+    };
+    let start = std::time::Instant::now();
+    while partial() == 0 {
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(60),
+            "no temporary file appeared"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let pid = child.id().to_string();
+    let status = Command::new("kill")
+        .args([&format!("-{signal}"), &pid])
+        .status()
+        .expect("kill");
+    assert!(status.success());
+    let out = child.wait_with_output().expect("wait");
+    drop(fifo);
+    assert_eq!(out.status.code(), Some(130), "{signal}: {out:?}");
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    assert_eq!(
+        left.len(),
+        2,
+        "{signal}: only the inputs may remain (no partial file, no created directory): {left:?}"
+    );
+}
+
+#[test]
+fn interrupt_removes_the_partial_file() {
+    interrupt_mid_write("INT");
+    interrupt_mid_write("TERM");
+}
+
+#[test]
+fn failing_run_leaves_no_directory() {
+    let dir = scratch("ud", "no-dir");
+    write(&dir, "m.toml", WALK_TOML);
+    // Fails after rows were streamed into the temporary file in new/sub/.
+    write(&dir, "bad.csv", "t,z1\n0,1\n1,2\n2,x\n");
+    for out in ["new/sub/est.csv", "new/est.csv"] {
+        fails(
+            &dir,
+            &[
+                "filter", "--model", "m.toml", "--data", "bad.csv", "--out", out,
+            ],
+            &["bad.csv: line 4"],
+            2,
+        );
+    }
+    // Fails before writing (a bad model): no directory either.
+    write(&dir, "good.csv", "t,z1\n0,1\n");
+    write(&dir, "bad.toml", "dt = 1\n");
+    fails(
+        &dir,
+        &[
+            "filter",
+            "--model",
+            "bad.toml",
+            "--data",
+            "good.csv",
+            "--out",
+            "new/est.csv",
+        ],
+        &["bad.toml"],
+        4,
+    );
+    // A successful run creates it.
+    ok(
+        &dir,
+        &[
+            "filter",
+            "--model",
+            "m.toml",
+            "--data",
+            "good.csv",
+            "--out",
+            "new/sub/est.csv",
+        ],
+    );
+    assert!(dir.join("new/sub/est.csv").is_file());
+}
+
+/// Runs `args` expecting exit code 2, nothing on stdout and exactly `expect` as stderr.
+fn usage_error(dir: &Path, args: &[&str], expect: &str) {
+    let out = run(dir, args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert!(out.stdout.is_empty(), "{args:?}");
+    assert_eq!(err, format!("scenarios: {expect}\n"), "{args:?}");
+}
+
+#[test]
+fn argument_errors_are_one_line_naming_the_argument() {
+    let dir = scratch("ud", "args");
+    write(&dir, "c.json", CONT_JSON);
+    let disc = |dt: &'static str| {
+        [
+            "discretize",
+            "--model",
+            "c.json",
+            "--dt",
+            dt,
+            "--method",
+            "zoh",
+            "--out",
+            "d.json",
+        ]
+    };
+    usage_error(
+        &dir,
+        &["fueling", "--shard", "5/4", "--out", "r"],
+        "--shard 5/4: K must be between 1 and N",
+    );
+    usage_error(
+        &dir,
+        &disc("-1"),
+        "--dt -1: must be finite and > 0 (seconds)",
+    );
+    usage_error(&dir, &disc("0"), "--dt 0: must be finite and > 0 (seconds)");
+    usage_error(
+        &dir,
+        &disc("1e400"),
+        "--dt 1e400: must be finite and > 0 (seconds)",
+    );
+    usage_error(
+        &dir,
+        &disc("abc"),
+        "--dt abc: not a number (seconds, finite and > 0)",
+    );
+    usage_error(
+        &dir,
+        &["fueling", "--runs", "-3", "--out", "r"],
+        "--runs -3: expected a whole number",
+    );
+    usage_error(
+        &dir,
+        &["fueling", "--threads", "0", "--out", "r"],
+        "--threads 0: must be at least 1",
+    );
+    usage_error(
+        &dir,
+        &[
+            "filter", "--model", "m.json", "--data", "z.csv", "--out", "e.csv", "--form", "bad",
+        ],
+        "--form bad: expected joseph, standard or sqrt",
+    );
+    usage_error(
+        &dir,
+        &["filter", "--frm", "sqrt"],
+        "unknown argument --frm (did you mean --form?)",
+    );
+    usage_error(
+        &dir,
+        &["filter", "--model", "m.json"],
+        "--data and --out: required but not given",
+    );
+    usage_error(
+        &dir,
+        &["filtr"],
+        "unknown command filtr: expected fueling, uav, boom, all, merge, filter, discretize or \
+         steady-state (did you mean filter?)",
+    );
+    usage_error(
+        &dir,
+        &[],
+        "a command is required: fueling, uav, boom, all, merge, filter, discretize or \
+         steady-state (see scenarios --help)",
+    );
+    usage_error(
+        &dir,
+        &["uav", "--out", "-"],
+        "--out -: uav writes a directory of files; standard output (-) is only for filter, \
+         discretize and steady-state",
+    );
+    // Help still goes to stdout with exit code 0.
+    let out = run(&dir, &["filter", "--help"]);
+    assert!(out.status.success() && String::from_utf8_lossy(&out.stdout).contains("--model"));
+    assert_eq!(
+        std::fs::read_dir(&dir).expect("dir").count(),
+        1,
+        "nothing written"
+    );
+}
+
+#[test]
+fn shard_out_of_range_is_refused() {
+    let dir = scratch("ud", "shard");
+    for (shard, why) in [
+        (
+            "18446744073709551615/18446744073709551615",
+            "N must be between 1 and 1000000",
+        ),
+        ("1/18446744073709551616", "N must be between 1 and 1000000"),
+        ("1/1000001", "N must be between 1 and 1000000"),
+        ("18446744073709551616/2", "K must be between 1 and N"),
+        ("0/4", "K must be between 1 and N"),
+        ("1/0", "N must be between 1 and 1000000"),
+        ("-1/2", "K must be a whole number"),
+        ("1/two", "N must be a whole number"),
+        ("3", "expected K/N, slice K of N (for example 2/8)"),
+    ] {
+        usage_error(
+            &dir,
+            &["fueling", "--shard", shard, "--out", "r"],
+            &format!("--shard {shard}: {why}"),
+        );
+    }
+    assert!(!dir.join("r").exists(), "no output directory");
+}
+
+#[test]
+fn json_model_errors_name_the_key_path_and_a_bom_is_accepted() {
+    let dir = scratch("ud", "json");
+    write(&dir, "z.csv", "t,z1\n0,1\n1,2\n");
+    let filter = [
+        "filter", "--model", "m.json", "--data", "z.csv", "--out", "est.csv",
+    ];
+    // As Python's json.dump writes non-finite floats.
+    for (bad, key, token) in [
+        (r#""Q": [[NaN]]"#, "key Q[0][0]", "NaN"),
+        (r#""R": [[Infinity]]"#, "key R[0][0]", "Infinity"),
+        (r#""P0": [[-Infinity]]"#, "key P0[0][0]", "-Infinity"),
+    ] {
+        let name = bad.split('"').nth(1).expect("key");
+        let text = WALK_JSON.replace(&format!(r#""{name}": [[1]]"#), bad);
+        assert_ne!(text, WALK_JSON, "{bad}");
+        write(&dir, "m.json", &text);
+        fails(
+            &dir,
+            &filter,
+            &[
+                "m.json: invalid JSON model",
+                key,
+                &format!("{token} is not a JSON number"),
+            ],
+            2,
+        );
+    }
+    write(
+        &dir,
+        "m.json",
+        &WALK_JSON.replace(r#""H": [[1]]"#, r#""H": [["1"]]"#),
+    );
+    fails(&dir, &filter, &["key H[0][0]", "invalid type: string"], 2);
+    // A byte-order mark is accepted, and gives the same estimates.
+    write(&dir, "m.json", WALK_JSON);
+    ok(&dir, &filter);
+    let plain = std::fs::read(dir.join("est.csv")).expect("est");
+    std::fs::remove_file(dir.join("est.csv")).expect("remove");
+    write(&dir, "m.json", &format!("\u{feff}{WALK_JSON}"));
+    ok(&dir, &filter);
+    assert_eq!(std::fs::read(dir.join("est.csv")).expect("est"), plain);
+}
+
+#[test]
+fn discretize_computes_only_what_is_asked() {
+    // ẋ = 1000 x: e^{1000·dt} overflows f64 for dt = 1 (e^{709.8} is the largest f64).
+    let dir = scratch("ud", "disc-only");
+    write(&dir, "c.json", r#"{"A": [[1000]], "C": [[1]]}"#);
+    let disc = |dt: &'static str, method: &'static str| {
+        [
+            "discretize",
+            "--model",
+            "c.json",
+            "--dt",
+            dt,
+            "--method",
+            method,
+            "--out",
+            "d.json",
+        ]
+    };
+    // Forward Euler with no noise needs no exponential: F = 1 + A·dt, Q = 0.
+    ok(&dir, &disc("1", "euler"));
+    let d = read_json(&dir.join("d.json"));
+    assert_eq!(mat(&d["F"]), vec![vec![1001.0]]);
+    assert_eq!(mat(&d["Q"]), vec![vec![0.0]]);
+    std::fs::remove_file(dir.join("d.json")).expect("remove");
+    // ZOH does need e^{A·dt}: the message names --dt as the culprit.
+    fails(
+        &dir,
+        &disc("1", "zoh"),
+        &[
+            "--dt 1: dt = 1 is too large for this A",
+            "overflows",
+            "c.json",
+        ],
+        1,
+    );
+    // A step 1000 times smaller is fine: F = e^{1}.
+    ok(&dir, &disc("0.001", "zoh"));
+    let f = mat(&read_json(&dir.join("d.json"))["F"])[0][0];
+    assert!((f - 1f64.exp()).abs() < 4.0 * f64::EPSILON * f, "{f}");
+}
+
+#[test]
+fn csv_truncated_last_line_and_unbalanced_quote_are_one_line_errors() {
+    let dir = scratch("ud", "csv-trunc");
+    write(&dir, "m.toml", WALK_TOML);
+    let filter = [
+        "filter", "--model", "m.toml", "--data", "z.csv", "--out", "est.csv",
+    ];
+    // `4,5.25` cut to `4,5.` would read as 5: a last line with no newline is refused.
+    write(&dir, "z.csv", "t,z1\n0,1\n4,5.");
+    fails(
+        &dir,
+        &filter,
+        &["z.csv: line 3: the last line has no final newline"],
+        2,
+    );
+    write(&dir, "z.csv", "t,z1");
+    fails(
+        &dir,
+        &filter,
+        &["z.csv: line 1: the last line has no final newline"],
+        2,
+    );
+    write(&dir, "z.csv", "t,z1\n0,\"1\n1,2\n2,3\n");
+    fails(
+        &dir,
+        &filter,
+        &["z.csv: line 2, column 2 (z1): unbalanced quote"],
+        2,
+    );
+    // CRLF endings and a final blank line are whole files.
+    write(&dir, "z.csv", "t,z1\r\n0,1\r\n4,5\r\n\r\n");
+    ok(&dir, &filter);
+}
+
+#[test]
+fn io_failures_exit_with_code_one() {
+    // /proc takes no new files, even for root: an I/O failure, not the user's input.
+    let dir = scratch("ud", "io");
+    write(&dir, "m.toml", WALK_TOML);
+    write(&dir, "z.csv", "t,z1\n0,1\n");
+    let out = run(
+        &dir,
+        &[
+            "filter",
+            "--model",
+            "m.toml",
+            "--data",
+            "z.csv",
+            "--out",
+            "/proc/est.csv",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("/proc/est.csv: cannot write"), "{err}");
+}
