@@ -201,7 +201,9 @@ impl<R: Read> DataReader<R> {
                 })?;
         if !more {
             let last = self.csv.get_ref().last;
-            if last.is_some_and(|b| b != b'\n' && b != b'\r') {
+            // (No record at all — an empty file, or only a byte-order mark — is reported as
+            // an empty file by the caller.)
+            if self.last_line > 0 && last.is_some_and(|b| b != b'\n' && b != b'\r') {
                 return Err(self.at(
                     self.last_line,
                     None,
