@@ -8,6 +8,8 @@ mod boom;
 mod common;
 #[path = "cli/fueling.rs"]
 mod fueling;
+#[path = "cli/hostile.rs"]
+mod hostile;
 #[path = "cli/uav.rs"]
 mod uav;
 #[path = "cli/userdata.rs"]
