@@ -316,19 +316,41 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
     })
 }
 
-/// One filter step with data row `row` (update with z_k, then predict with u_k).
+/// One filter step with data row `row` (update with z_k, then predict with u_k). A step
+/// after which the filtered or predicted state or covariance is no longer finite is an
+/// error naming the row: nothing is written rather than `inf`/`NaN` estimates.
 fn step<R: std::io::Read>(
     kf: &mut kalman::Filter<kalman::Dyn>,
     reader: &DataReader<R>,
     row: &Row,
 ) -> Result<kalman::StepInfo> {
     let u = (!row.u.is_empty()).then_some(row.u.as_slice());
-    kf.step(&row.z, u).map_err(|e| {
+    let info = kf.step(&row.z, u).map_err(|e| {
         Error::invalid(
             reader.path(),
             format!("line {}: the filter rejected the row: {e}", reader.line()),
         )
-    })
+    })?;
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    let finite_mat = |m: faer::MatRef<'_, f64>| {
+        (0..m.ncols()).all(|j| (0..m.nrows()).all(|i| m[(i, j)].is_finite()))
+    };
+    if finite(kf.state())
+        && finite(kf.predicted_state())
+        && finite_mat(kf.covariance())
+        && finite_mat(kf.predicted_covariance())
+    {
+        return Ok(info);
+    }
+    Err(Error::invalid(
+        reader.path(),
+        format!(
+            "line {}: the filter diverged at this row: its state or covariance overflowed \
+             (F grows a direction the measurements do not observe, or the data is far from \
+             the model)",
+            reader.line()
+        ),
+    ))
 }
 
 fn copy_col_major(m: faer::MatRef<'_, f64>, out: &mut [f64]) {

@@ -1644,3 +1644,54 @@ fn io_failures_exit_with_code_one() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.contains("/proc/est.csv: cannot write"), "{err}");
 }
+
+#[test]
+fn diverging_filter_is_refused_naming_the_row() {
+    // x1 is unmeasured with F11 = 1e10: its variance grows by 1e20 a step from P0 = 1, so it
+    // overflows f64 (1.8e308) around step 16 and every estimate after it, even the measured,
+    // stable x2 (F22 = 0.5), would be inf or NaN. The run must stop at a row in that range,
+    // name it, and write nothing.
+    let dir = scratch("ud", "diverge");
+    write(
+        &dir,
+        "m.json",
+        r#"{"dt": 1, "F": [[1e10, 0], [0, 0.5]], "H": [[0, 1]], "Q": [[1, 0], [0, 1]],
+            "R": [[1]], "P0": [[1, 0], [0, 1]]}"#,
+    );
+    let mut csv = String::from("t,z1\n");
+    for k in 0..40 {
+        csv.push_str(&format!("{k},{}\n", 0.5f64.powi(k)));
+    }
+    write(&dir, "z.csv", &csv);
+    for extra in [
+        &["--form", "joseph"][..],
+        &["--form", "standard"],
+        &["--form", "sqrt"],
+        &["--smooth"],
+    ] {
+        let mut args = vec![
+            "filter", "--model", "m.json", "--data", "z.csv", "--out", "est.csv",
+        ];
+        args.extend_from_slice(extra);
+        let out = run(&dir, &args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        let line: u64 = err
+            .split("z.csv: line ")
+            .nth(1)
+            .and_then(|rest| rest.split(':').next())
+            .and_then(|l| l.parse().ok())
+            .unwrap_or_else(|| panic!("{extra:?}: no data line named: {err}"));
+        // Data row k (from 0) is on line k + 2 and ends with prediction k + 1; P11 after j
+        // predictions is about (1e10)^(2j) = 1e20^j: 1e300 after 15, past f64 after 16
+        // (row 15, line 17). A check that flags an overflow a little before the infinity
+        // may name a slightly earlier row.
+        assert!((14..=20).contains(&line), "{extra:?}: line {line}: {err}");
+        assert_eq!(
+            std::fs::read_dir(&dir).expect("dir").count(),
+            2,
+            "{extra:?}: no output file"
+        );
+    }
+}
