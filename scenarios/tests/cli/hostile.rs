@@ -291,6 +291,21 @@ fn rows() -> Vec<Row> {
             &["discretize", "--model", "bad.json", "--dt", "1", "--method", "euler", "--out", "d.json"],
             &["--dt 1", "too large for this A", "Van Loan"],
         ),
+        // --- A filter that diverges on the data: F11 = 1e10 unmeasured overflows by row 16.
+        row(
+            &[
+                (
+                    "bad.json",
+                    br#"{"dt": 1, "F": [[1e10, 0], [0, 0.5]], "H": [[0, 1]], "Q": [[1, 0], [0, 1]], "R": [[1]], "P0": [[1, 0], [0, 1]]}"#,
+                ),
+                (
+                    "long.csv",
+                    b"t,z1\n0,1\n1,1\n2,1\n3,1\n4,1\n5,1\n6,1\n7,1\n8,1\n9,1\n10,1\n11,1\n12,1\n13,1\n14,1\n15,1\n16,1\n17,1\n18,1\n19,1\n",
+                ),
+            ],
+            &["filter", "--model", "bad.json", "--data", "long.csv", "--out", "est.csv", "--form", "sqrt"],
+            &["long.csv: line ", "the filter diverged"],
+        ),
         // --- Data CSVs.
         row(&[("bad.csv", b"t,y1\n0,1\n")], FILTER_CSV, &["bad.csv", "line 1, column 2", "expected `z1`"]),
         row(&[("bad.csv", b"")], FILTER_CSV, &["bad.csv", "line 1: empty file"]),
