@@ -227,7 +227,7 @@ fn main() -> ExitCode {
             e.exit()
         }
         Err(e) => {
-            eprintln!("scenarios: {}", one_line(&e));
+            eprintln!("scenarios: {}", one_line(&e).replace(['\n', '\r'], " "));
             return ExitCode::from(2);
         }
     };

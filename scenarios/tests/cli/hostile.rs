@@ -379,6 +379,8 @@ fn rows() -> Vec<Row> {
         row(&[], &["discretize", "--model", "c.json", "--dt", "-1", "--method", "zoh", "--out", "d.json"], &["--dt -1", "must be finite and > 0"]),
         row(&[], &["discretize", "--model", "c.json", "--dt", "nan", "--method", "zoh", "--out", "d.json"], &["--dt nan", "must be finite and > 0"]),
         row(&[], &["discretize", "--model", "c.json", "--dt", "1s", "--method", "zoh", "--out", "d.json"], &["--dt 1s", "not a number"]),
+        row(&[], &["discretize", "--model", "c.json", "--dt", "1\n2", "--method", "zoh", "--out", "d.json"], &["--dt 1 2", "not a number"]),
+        row(&[], &["filter", "--model", "m.toml", "--data", "no\nsuch.csv", "--out", "est.csv"], &["no such.csv", "cannot read"]),
         row(
             &[],
             &["discretize", "--model", "c.json", "--dt", "0.1", "--method", "tustin-prewarp:-1", "--out", "d.json"],
