@@ -114,10 +114,11 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
         cmd.args(["--shard", s, "--sharding", "round-robin"]);
     }
     // One mutant at a time (the machine is shared); only the mutated crate's unit and
-    // integration tests judge a mutant (doc tests are examples, and slow to build).
+    // integration tests judge a mutant, and only they are built (examples and doc tests are
+    // usage, slow to build, and checked by `cargo xtask test`).
     cmd.args(["--jobs", "1", "--timeout", timeout, "--output"])
         .arg(&out)
-        .args(["--", "--lib", "--tests"])
+        .args(["--cargo-arg=--lib", "--cargo-arg=--tests"])
         .env(
             "CARGO_TARGET_DIR",
             root().join("target").join("mutants").join("build"),
