@@ -15,7 +15,8 @@ use anyhow::{Context, Result, bail};
 
 use crate::{cargo, known, option, root};
 
-/// The crates whose sources are mutated: the libraries (not the program or the xtask).
+/// The folders of the crates whose sources are mutated: the libraries (not the program or
+/// the xtask).
 const LIBRARY_CRATES: &[&str] = &["model", "kalman", "wls", "sensors"];
 
 /// Seconds a mutant's tests may run before it counts as a timeout (the whole unit and
@@ -67,7 +68,7 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     let mut cmd = cargo();
     cmd.args(["mutants", "--all-features"]);
     for c in &crates {
-        cmd.args(["--package", c]);
+        cmd.args(["--package", &package_name(c)?]);
     }
     if let Some(f) = file {
         cmd.args(["--file", f]);
@@ -146,6 +147,24 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
         bail!("{} mutant(s) missed", report.count("missed"));
     }
     Ok(())
+}
+
+/// The package name in the manifest of the crate in folder `dir` (it may differ from the
+/// folder's name).
+fn package_name(dir: &str) -> Result<String> {
+    let path = root().join(dir).join("Cargo.toml");
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    text.lines()
+        .find_map(|l| {
+            let value = l
+                .trim()
+                .strip_prefix("name")?
+                .trim_start()
+                .strip_prefix('=')?;
+            Some(value.trim().trim_matches('"').to_owned())
+        })
+        .with_context(|| format!("no package name in {}", path.display()))
 }
 
 /// Installs cargo-mutants from the Rust package registry if `cargo mutants` does not run.
