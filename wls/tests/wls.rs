@@ -5,6 +5,8 @@
 
 #[path = "wls/boom.rs"]
 mod boom;
+#[path = "wls/boom_paths.rs"]
+mod boom_paths;
 #[path = "wls/solver.rs"]
 mod solver;
 #[path = "wls/solver_paths.rs"]
