@@ -41,6 +41,10 @@ enum Setup {
     Fifo(&'static str),
     /// An empty directory called `name`.
     Dir(&'static str),
+    /// A character device `name` with major number 1 and the given minor (3: a copy of
+    /// /dev/null, 7: of /dev/full), made here so the system's own are never at risk; where
+    /// mknod is not permitted, a link to the system's, which such a user cannot replace.
+    Device(&'static str, &'static str),
 }
 
 /// One hostile input: extra files, the arguments, the exit code and what the one line on
@@ -353,8 +357,16 @@ fn rows() -> Vec<Row> {
             &["filter", "--model", "m.toml", "--data", "z.csv", "--out", "hard.csv"],
             &["--out hard.csv", "same file as --data z.csv"],
         ),
-        row(&[], &["filter", "--model", "m.toml", "--data", "z.csv", "--out", "/dev/null"], &["--out /dev/null", "character device"]),
-        row(&[], &["steady-state", "--model", "m.toml", "--out", "/dev/full"], &["--out /dev/full", "character device"]),
+        with(
+            Setup::Device("null", "3"),
+            &["filter", "--model", "m.toml", "--data", "z.csv", "--out", "null"],
+            &["--out null", "character device"],
+        ),
+        with(
+            Setup::Device("full", "7"),
+            &["steady-state", "--model", "m.toml", "--out", "full"],
+            &["--out full", "character device"],
+        ),
         row(&[], &["filter", "--model", "m.toml", "--data", "z.csv", "--out", "."], &["--out .", "a directory"]),
         with(
             Setup::Symlink("dangling.csv", "nowhere/x.csv"),
@@ -474,6 +486,22 @@ fn prepare(dir: &Path, r: &Row) {
             assert!(ok, "mkfifo");
         }
         Setup::Dir(name) => std::fs::create_dir(dir.join(name)).expect("dir"),
+        Setup::Device(name, minor) => {
+            let made = std::process::Command::new("mknod")
+                .arg(dir.join(name))
+                .args(["c", "1", minor])
+                .stderr(std::process::Stdio::null())
+                .status()
+                .is_ok_and(|s| s.success());
+            if !made {
+                let real = if minor == "7" {
+                    "/dev/full"
+                } else {
+                    "/dev/null"
+                };
+                std::os::unix::fs::symlink(real, dir.join(name)).expect("link");
+            }
+        }
     }
 }
 
