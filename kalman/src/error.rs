@@ -155,4 +155,61 @@ pub enum Error {
         /// Spectral radius (discrete) or spectral abscissa (continuous) of the closed loop.
         closed_loop: f64,
     },
+    // ---- nonlinear filters ----
+    /// A nonlinear model's function (`"f"`, `"h"`, a Jacobian, `"Q"`, `"R"`) returned a NaN
+    /// or infinite value.
+    #[error("step {step}: the model's {function} returned a non-finite value at entry {index}")]
+    ModelNonFinite {
+        /// The function (`"f"`, `"h"`, `"f_jacobian"`, `"h_jacobian"`, `"Q"`, `"R"`).
+        function: &'static str,
+        /// The step index k.
+        step: usize,
+        /// Column-major index of the first offending entry.
+        index: usize,
+    },
+    /// The covariance the sigma points are drawn from is not positive semidefinite (e.g. a
+    /// negative centre weight of the unscented transform made the predicted covariance
+    /// indefinite).
+    #[error(
+        "step {step}: {name} ({n}x{n}) for the sigma points is not positive semidefinite: Cholesky pivot {pivot:e} < -{tol:e}"
+    )]
+    SigmaCovariance {
+        /// The covariance (`"P_{k|k-1}"` before an update, `"P_{k|k}"` before a prediction).
+        name: &'static str,
+        /// The step index k.
+        step: usize,
+        /// Dimension.
+        n: usize,
+        /// The offending pivot.
+        pivot: f64,
+        /// The tolerance it broke (relative to the largest diagonal entry).
+        tol: f64,
+    },
+    /// The innovation covariance of a nonlinear update is singular (the nonlinear filters
+    /// have no pseudo-inverse path: the linearised gain would be arbitrary).
+    #[error(
+        "step {step}: the innovation covariance ({m}x{m}) of the {filter} update is singular: Cholesky pivot {pivot:e} <= {tol:e}"
+    )]
+    SingularInnovation {
+        /// The filter (`"EKF"`, `"iterated EKF"`, `"UKF"`).
+        filter: &'static str,
+        /// The step index k.
+        step: usize,
+        /// Observed measurement rows.
+        m: usize,
+        /// The offending pivot.
+        pivot: f64,
+        /// The tolerance (relative to the largest diagonal entry).
+        tol: f64,
+    },
+    /// An option of a filter is out of its valid range.
+    #[error("{name} = {value} is invalid: {rule}")]
+    InvalidOption {
+        /// The option (`"alpha"`, `"kappa"`, `"max_iterations"`, …).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The rule broken.
+        rule: &'static str,
+    },
 }

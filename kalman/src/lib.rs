@@ -30,6 +30,9 @@
 //!   discrete LQR gain as its dual, CARE; undetectable or unstabilisable pairs are typed errors.
 //! - [`continuous`]: the Kalman–Bucy Riccati ODE, matrix exponential and Van Loan sampling.
 //! - [`smoother`]: the Rauch–Tung–Striebel smoother over a recorded forward pass.
+//! - [`nonlinear`]: the extended (also iterated) and unscented Kalman filters and their
+//!   Rauch–Tung–Striebel smoothers, with Jacobians by hand, by automatic differentiation
+//!   (feature `autodiff`) or by central differences.
 //! - [`schedule`]: the Monte Carlo mode — the data-independent gain sequence computed once
 //!   ([`schedule::GainSchedule`]) and many measurement streams run at the cost of the state
 //!   update alone; also the fixed-gain filter.
@@ -71,6 +74,7 @@ mod filter;
 #[doc(hidden)]
 pub mod kernels;
 mod model;
+pub mod nonlinear;
 pub mod riccati;
 pub mod schedule;
 pub mod smoother;

@@ -163,7 +163,7 @@ fn push(v: &mut Vec<f64>, M: MatRef<'_, f64>) {
 
 /// Solves A X = B for symmetric PSD A: Cholesky, or the minimum-norm solution through the
 /// eigen-decomposition when A is (numerically) singular.
-fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
+pub(crate) fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
     let n = A.nrows();
     let amax = (0..n).map(|i| A[(i, i)].abs()).fold(0.0, f64::max);
     if let Ok(llt) = A.llt(Side::Lower) {

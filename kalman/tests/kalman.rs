@@ -1,6 +1,6 @@
 //! Integration tests of the `kalman` crate, one binary: the filter engine (issue "kalman 1")
 //! in `engine/`, steady state, continuous time, smoothing and the Monte Carlo mode in
-//! `steady/`, and the counting global allocator both use in `common/`.
+//! `steady/`, the nonlinear filters in `nonlinear/`, and the counting global allocator both use in `common/`.
 #![allow(non_snake_case)]
 
 mod common {
@@ -17,6 +17,16 @@ mod engine {
     pub mod nis;
     pub mod props;
     pub mod reference;
+}
+
+mod nonlinear {
+    pub mod alloc;
+    pub mod errors;
+    pub mod golden;
+    pub mod jacobians;
+    pub mod linear;
+    pub mod models;
+    pub mod nis;
 }
 
 mod steady {

@@ -1,0 +1,357 @@
+//! The extended Kalman filter and its iterated (Gauss–Newton) measurement update.
+#![allow(non_snake_case)]
+
+use faer::MatRef;
+
+use super::linalg::{joseph, mul, mul_nt, nis_logdet, pd_cholesky, right_solve, symmetrise};
+use super::{
+    Core, Jacobians, LN_2PI, NlDims, StepInfo, compact_rows, compact_square, compact_vec, finite,
+};
+use crate::storage::Buf;
+use crate::{Error, MatrixInput, RANK_TOL};
+
+/// The measurement update of an [`Ekf`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum EkfUpdate {
+    /// One linearisation of h at the prediction (the extended Kalman filter).
+    #[default]
+    Extended,
+    /// The iterated EKF: Gauss–Newton iterations `x_{i+1} = x⁻ ⊕ K_i (z − h(x_i) +
+    /// H_i (x_i ⊖ x⁻))` from `x_0 = x⁻`, at most `max_iterations` linearisations, stopping
+    /// when `‖x_{i+1} ⊖ x_i‖ ≤ tolerance·(1 + ‖x_i‖)`. The covariance uses the last
+    /// linearisation.
+    Iterated {
+        /// Cap on the linearisations per update (at least 1; 1 is the EKF).
+        max_iterations: usize,
+        /// Relative step tolerance (finite, ≥ 0).
+        tolerance: f64,
+    },
+}
+
+/// The extended Kalman filter (one or iterated measurement linearisations) on the storage
+/// path `D`, for a model with [`Jacobians`].
+///
+/// Update with z_k: `H = ∂h/∂x(x⁻)`, `e = z ⊖ h(x⁻)`, `Σ = H P⁻ Hᵀ + R`, `K = P⁻ Hᵀ Σ⁻¹`
+/// (Cholesky solve), `x = x⁻ ⊕ K e`, `P = (I − KH) P⁻ (I − KH)ᵀ + K R Kᵀ` (Joseph).
+/// Prediction: `F = ∂f/∂x(x, u)`, `x⁺ = f(x, u, k)`, `P⁺ = F P Fᵀ + Q`. A step allocates
+/// nothing.
+///
+/// ```
+/// use kalman::Fixed;
+/// use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel};
+/// # fn main() -> Result<(), kalman::Error> {
+/// let d = Fixed::<1, 1>::new();
+/// let model = FnModel::new(
+///     d,
+///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = x[0],
+///     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0] * x[0] * x[0],
+///     &[[1e-4]],
+///     &[[1e-2]],
+/// )?;
+/// let update = EkfUpdate::Iterated { max_iterations: 10, tolerance: 1e-12 };
+/// let mut iekf = Ekf::new(d, CentralDiff::new(model, d), &[1.0], &[[0.25]], update)?;
+/// let info = iekf.step(&[1.331], None)?; // 1.1³
+/// assert!(info.iterations > 1);
+/// assert!((iekf.state()[0] - 1.1).abs() < 0.02);
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct Ekf<D: NlDims, M> {
+    model: M,
+    update: EkfUpdate,
+    c: Core<D>,
+    /// ∂f/∂x at x_{k|k} of the last prediction.
+    fj: D::Nn,
+    gain: D::Nm,
+    hj: D::Mn,
+    hc: D::Mn,
+    rc: D::Mm,
+    sig: D::Mm,
+    zh: D::Mv,
+    ef: D::Mv,
+    e: D::Mv,
+    tmpm: D::Mv,
+    xi: D::Nv,
+    xn: D::Nv,
+    dx: D::Nv,
+    a: D::Nn,
+    t: D::Nn,
+    kr: D::Nm,
+}
+
+impl<D: NlDims, M: Jacobians> Ekf<D, M> {
+    /// A filter for `model` with prior mean `x0` (length n) and covariance `P0` (n×n,
+    /// symmetric PSD). All workspaces are allocated here.
+    ///
+    /// # Errors
+    /// [`Error::Shape`]/[`Error::NonFinite`]/[`Error::NotSymmetric`]/
+    /// [`Error::NotPositiveSemidefinite`] naming `x0` or `P0`; [`Error::InvalidOption`] for
+    /// an iteration cap of 0 or a negative or non-finite tolerance.
+    pub fn new(
+        dims: D,
+        model: M,
+        x0: &[f64],
+        P0: &impl MatrixInput,
+        update: EkfUpdate,
+    ) -> Result<Self, Error> {
+        if let EkfUpdate::Iterated {
+            max_iterations,
+            tolerance,
+        } = update
+        {
+            if max_iterations == 0 {
+                return Err(Error::InvalidOption {
+                    name: "max_iterations",
+                    value: 0.0,
+                    rule: "at least one linearisation",
+                });
+            }
+            if !(tolerance.is_finite() && tolerance >= 0.0) {
+                return Err(Error::InvalidOption {
+                    name: "tolerance",
+                    value: tolerance,
+                    rule: "must be finite and non-negative",
+                });
+            }
+        }
+        let c = Core::new(dims, x0, P0)?;
+        let (n, m) = (dims.n(), dims.m());
+        Ok(Self {
+            model,
+            update,
+            c,
+            fj: D::Nn::zeros(n * n),
+            gain: D::Nm::zeros(n * m),
+            hj: D::Mn::zeros(m * n),
+            hc: D::Mn::zeros(m * n),
+            rc: D::Mm::zeros(m * m),
+            sig: D::Mm::zeros(m * m),
+            zh: D::Mv::zeros(m),
+            ef: D::Mv::zeros(m),
+            e: D::Mv::zeros(m),
+            tmpm: D::Mv::zeros(m),
+            xi: D::Nv::zeros(n),
+            xn: D::Nv::zeros(n),
+            dx: D::Nv::zeros(n),
+            a: D::Nn::zeros(n * n),
+            t: D::Nn::zeros(n * n),
+            kr: D::Nm::zeros(n * m),
+        })
+    }
+
+    /// Step k: update with `z_k` (NaN entries are missing; all NaN is predict-only), then
+    /// predict to k + 1 with the control `u_k` (passed to f).
+    ///
+    /// # Errors
+    /// [`Error::Shape`] naming `z`; [`Error::ModelNonFinite`] naming the function and the
+    /// step; [`Error::SingularInnovation`]. After an error the step counter has not
+    /// advanced and the filtered estimate may be partly written: [`Ekf::reset`] the filter.
+    pub fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
+        self.c.check_z(z)?;
+        let info = self.update_with(z)?;
+        self.predict(u)?;
+        self.c.info = info;
+        self.c.k += 1;
+        Ok(info)
+    }
+
+    fn update_with(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
+        let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
+        let mo = self.c.load_r(&mut self.model, z)?;
+        let mut info = StepInfo {
+            step: k,
+            observed: mo,
+            ..StepInfo::default()
+        };
+        let xp = &self.c.xp.as_slice()[..n];
+        let pp = &self.c.pp.as_slice()[..n * n];
+        if mo == 0 {
+            self.c.xf.as_mut_slice()[..n].copy_from_slice(xp);
+            self.c.pf.as_mut_slice()[..n * n].copy_from_slice(pp);
+            return Ok(info);
+        }
+        let (max_it, tol, name) = match self.update {
+            EkfUpdate::Extended => (1, 0.0, "EKF"),
+            EkfUpdate::Iterated {
+                max_iterations,
+                tolerance,
+            } => (max_iterations, tolerance, "iterated EKF"),
+        };
+        compact_square(self.c.r.as_slice(), m, z, mo, self.rc.as_mut_slice());
+        self.xi.as_mut_slice()[..n].copy_from_slice(xp);
+        let mut nis = (0.0, 0.0);
+        for it in 1..=max_it {
+            let xi = &self.xi.as_slice()[..n];
+            let zh = &mut self.zh.as_mut_slice()[..m];
+            self.model.h(xi, k, zh);
+            finite("h", k, zh)?;
+            let hj = &mut self.hj.as_mut_slice()[..m * n];
+            self.model.h_jacobian(xi, k, hj);
+            finite("h_jacobian", k, hj)?;
+            self.model.residual(
+                z,
+                &self.zh.as_slice()[..m],
+                &mut self.ef.as_mut_slice()[..m],
+            );
+            let e = &mut self.e.as_mut_slice()[..mo];
+            compact_vec(&self.ef.as_slice()[..m], z, e);
+            let hc = &mut self.hc.as_mut_slice()[..mo * n];
+            compact_rows(&self.hj.as_slice()[..m * n], m, n, z, mo, hc);
+            if it > 1 {
+                // Gauss–Newton: e + H_i (x_i ⊖ x⁻).
+                let dx = &mut self.dx.as_mut_slice()[..n];
+                self.model.state_residual(xi, xp, dx);
+                mul(e, hc, dx, mo, n, 1, true);
+            }
+            // PHᵀ (n×mo) into the gain buffer, Σ = H PHᵀ + R.
+            let K = &mut self.gain.as_mut_slice()[..n * mo];
+            mul_nt(K, pp, hc, n, n, mo, false);
+            let sig = &mut self.sig.as_mut_slice()[..mo * mo];
+            mul(sig, hc, K, mo, n, mo, false);
+            for (s, r) in sig.iter_mut().zip(&self.rc.as_slice()[..mo * mo]) {
+                *s += r;
+            }
+            symmetrise(sig, mo);
+            if let Err(pivot) = pd_cholesky(sig, mo, RANK_TOL) {
+                return Err(Error::SingularInnovation {
+                    filter: name,
+                    step: k,
+                    m: mo,
+                    pivot,
+                    tol: RANK_TOL,
+                });
+            }
+            right_solve(sig, mo, K, n, &mut self.tmpm.as_mut_slice()[..mo]);
+            let dx = &mut self.dx.as_mut_slice()[..n];
+            mul(dx, K, e, n, mo, 1, false);
+            self.model.state_add(
+                xp,
+                &self.dx.as_slice()[..n],
+                &mut self.xn.as_mut_slice()[..n],
+            );
+            nis = nis_logdet(sig, mo, e, &mut self.tmpm.as_mut_slice()[..mo]);
+            info.iterations = it;
+            if it == max_it {
+                break;
+            }
+            let (xi, xn) = (&self.xi.as_slice()[..n], &self.xn.as_slice()[..n]);
+            let dx = &mut self.dx.as_mut_slice()[..n];
+            self.model.state_residual(xn, xi, dx);
+            let step = dx.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let size = xi.iter().map(|v| v * v).sum::<f64>().sqrt();
+            self.xi.as_mut_slice()[..n].copy_from_slice(&self.xn.as_slice()[..n]);
+            if step <= tol * (1.0 + size) {
+                break;
+            }
+        }
+        self.c.xf.as_mut_slice()[..n].copy_from_slice(&self.xn.as_slice()[..n]);
+        joseph(
+            pp,
+            &self.gain.as_slice()[..n * mo],
+            &self.hc.as_slice()[..mo * n],
+            &self.rc.as_slice()[..mo * mo],
+            n,
+            mo,
+            &mut self.c.pf.as_mut_slice()[..n * n],
+            &mut self.a.as_mut_slice()[..n * n],
+            &mut self.t.as_mut_slice()[..n * n],
+            &mut self.kr.as_mut_slice()[..n * mo],
+        );
+        info.nis = Some(nis.0);
+        info.log_likelihood = -0.5 * (nis.0 + nis.1 + mo as f64 * LN_2PI);
+        Ok(info)
+    }
+
+    fn predict(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
+        let (n, k) = (self.c.dims.n(), self.c.k);
+        self.c.load_q(&mut self.model)?;
+        let xf = &self.c.xf.as_slice()[..n];
+        let xp = &mut self.c.xp.as_mut_slice()[..n];
+        self.model.f(xf, u, k, xp);
+        finite("f", k, xp)?;
+        let F = &mut self.fj.as_mut_slice()[..n * n];
+        self.model.f_jacobian(xf, u, k, F);
+        finite("f_jacobian", k, F)?;
+        let t = &mut self.t.as_mut_slice()[..n * n];
+        mul(t, F, &self.c.pf.as_slice()[..n * n], n, n, n, false);
+        let pp = &mut self.c.pp.as_mut_slice()[..n * n];
+        pp.copy_from_slice(&self.c.q.as_slice()[..n * n]);
+        mul_nt(pp, t, F, n, n, n, true);
+        symmetrise(pp, n);
+        Ok(())
+    }
+}
+
+impl<D: NlDims, M> Ekf<D, M> {
+    /// Restarts from the prior `(x0, P0)` at step 0, keeping the model and workspaces.
+    ///
+    /// # Errors
+    /// As [`Ekf::new`] for `x0` and `P0`.
+    pub fn reset(&mut self, x0: &[f64], P0: &impl MatrixInput) -> Result<(), Error> {
+        self.c.reset(x0, P0)
+    }
+    /// The model.
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+    /// The model, mutable (e.g. to change a parameter between steps).
+    pub fn model_mut(&mut self) -> &mut M {
+        &mut self.model
+    }
+    /// Steps taken.
+    pub fn steps(&self) -> usize {
+        self.c.k
+    }
+    /// What the last step produced.
+    pub fn last_step(&self) -> StepInfo {
+        self.c.info
+    }
+    /// `x_{k|k}` after step k (before the first step: `x0`).
+    pub fn state(&self) -> &[f64] {
+        &self.c.xf.as_slice()[..self.c.dims.n()]
+    }
+    /// `P_{k|k}`.
+    pub fn covariance(&self) -> MatRef<'_, f64> {
+        let n = self.c.dims.n();
+        MatRef::from_column_major_slice(&self.c.pf.as_slice()[..n * n], n, n)
+    }
+    /// `x_{k+1|k}`.
+    pub fn predicted_state(&self) -> &[f64] {
+        &self.c.xp.as_slice()[..self.c.dims.n()]
+    }
+    /// `P_{k+1|k}`.
+    pub fn predicted_covariance(&self) -> MatRef<'_, f64> {
+        let n = self.c.dims.n();
+        MatRef::from_column_major_slice(&self.c.pp.as_slice()[..n * n], n, n)
+    }
+    /// `F_k = ∂f/∂x` at `x_{k|k}` used by the last prediction.
+    pub fn transition_jacobian(&self) -> MatRef<'_, f64> {
+        let n = self.c.dims.n();
+        MatRef::from_column_major_slice(&self.fj.as_slice()[..n * n], n, n)
+    }
+}
+
+impl<D: NlDims, M: super::NonlinearModel> super::ForwardPass for Ekf<D, M> {
+    fn filtered(&self) -> (&[f64], &[f64]) {
+        let n = self.c.dims.n();
+        (&self.c.xf.as_slice()[..n], &self.c.pf.as_slice()[..n * n])
+    }
+    fn predicted(&self) -> (&[f64], &[f64]) {
+        let n = self.c.dims.n();
+        (&self.c.xp.as_slice()[..n], &self.c.pp.as_slice()[..n * n])
+    }
+    /// `C_k = P_{k|k} F_kᵀ`.
+    fn cross_covariance(&self, out: &mut [f64]) {
+        let n = self.c.dims.n();
+        mul_nt(
+            out,
+            &self.c.pf.as_slice()[..n * n],
+            &self.fj.as_slice()[..n * n],
+            n,
+            n,
+            n,
+            false,
+        );
+    }
+}

@@ -1,0 +1,292 @@
+//! Nonlinear estimation: the extended Kalman filter (one or iterated Gauss–Newton updates),
+//! the unscented Kalman filter (Merwe's scaled and the cubature sigma-point sets), and the
+//! extended and unscented Rauch–Tung–Striebel smoothers over a recorded forward pass.
+//!
+//! # Model
+//! ```text
+//! x_{k+1} = f(x_k, u_k, k) + w_k,     z_k = h(x_k, k) + v_k,
+//! cov(w_k) = Q_k,   cov(v_k) = R_k   (both may vary with k),
+//! ```
+//! written as a [`NonlinearModel`] (or from closures with [`FnModel`]). The step semantics
+//! are the linear filter's: `(x0, P0)` is the prior of the first measurement and step `k`
+//! updates with `z_k`, then predicts to `k + 1` with `u_k`. Wrapped quantities (angles) are
+//! handled by the model's [`NonlinearModel::residual`] (z − ẑ),
+//! [`NonlinearModel::state_add`] (x ⊕ δ) and [`NonlinearModel::state_residual`] (x ⊖ y),
+//! as FilterPy's `residual_z`, `x_add` and `residual_x` do.
+//!
+//! # Jacobians (extended filters)
+//! The [`Ekf`] needs the [`Jacobians`] of f and h, from one of three sources:
+//! - written by hand: implement [`Jacobians`] for the model;
+//! - exact, by forward-mode automatic differentiation: write f and h once, generic over the
+//!   scalar, as a [`GenericModel`], and wrap it in [`AutoDiff`] (feature `autodiff`, over the
+//!   `num-dual` crate);
+//! - approximate, by central differences: wrap any model in [`CentralDiff`] (step and
+//!   truncation error documented there).
+//!
+//! # Filters
+//! - [`Ekf`] with [`EkfUpdate::Extended`]: linearise h at the prediction, Joseph-form
+//!   covariance update; f linearised at the filtered estimate for the prediction.
+//! - [`Ekf`] with [`EkfUpdate::Iterated`]: the iterated EKF, whose measurement update is the
+//!   Gauss–Newton iteration of the MAP problem
+//!   `x_{i+1} = x⁻ ⊕ K_i (z − h(x_i) + H_i (x_i ⊖ x⁻))` (Bell and Cathey, "The iterated
+//!   Kalman filter update as a Gauss–Newton method"), stopped at an iteration cap or when
+//!   the step is below a relative tolerance; [`StepInfo::iterations`] reports the count.
+//! - [`Ukf`]: the unscented filter with additive noise; the sigma points are redrawn from
+//!   the predicted mean and covariance before each update (so Q is seen by the update and a
+//!   linear model gives the linear filter exactly). The covariance update is Joseph-style
+//!   with the statistically linearised measurement matrix H̃ = Cᵀ P⁻¹ and effective noise
+//!   R̃ = Σ − Cᵀ P⁻¹ C: `P⁺ = (I − K H̃) P (I − K H̃)ᵀ + K R̃ Kᵀ`, equal to `P − K Σ Kᵀ` in
+//!   exact arithmetic but kept symmetric PSD by its form.
+//!
+//! All filters skip NaN rows of z (an all-NaN z is a predict-only step), report the
+//! normalised innovation squared and the Gaussian log-likelihood ([`StepInfo`]), run on the
+//! [`crate::Fixed`] path without allocating per step and on the [`crate::Dyn`] path with
+//! heap buffers sized once. A non-finite f, h, Jacobian, Q or R, a sigma-point covariance
+//! that is not PSD, or a singular innovation covariance is a typed [`crate::Error`] naming
+//! the step.
+//!
+//! # Example
+//! ```
+//! use kalman::Fixed;
+//! use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, Ukf};
+//! # fn main() -> Result<(), kalman::Error> {
+//! // A pendulum: x = (θ, ω), sin θ measured.
+//! let dt = 0.05;
+//! let model = FnModel::new(
+//!     Fixed::<2, 1>::new(),
+//!     move |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| {
+//!         out[0] = x[0] + dt * x[1];
+//!         out[1] = x[1] - dt * 9.81 * x[0].sin();
+//!     },
+//!     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0].sin(),
+//!     &[[1e-6, 0.0], [0.0, 1e-4]],
+//!     &[[1e-3]],
+//! )?;
+//! let mut ukf = Ukf::new(Fixed::<2, 1>::new(), model.clone(), &[0.5, 0.0],
+//!     &[[0.1, 0.0], [0.0, 0.1]], SigmaPoints::merwe(1e-3, 2.0, 0.0))?;
+//! let ekf_model = CentralDiff::new(model, Fixed::<2, 1>::new());
+//! let mut ekf = Ekf::new(Fixed::<2, 1>::new(), ekf_model, &[0.5, 0.0],
+//!     &[[0.1, 0.0], [0.0, 0.1]], EkfUpdate::Extended)?;
+//! for z in [0.45, 0.44, f64::NAN, 0.39] {
+//!     let a = ukf.step(&[z], None)?;
+//!     let b = ekf.step(&[z], None)?;
+//!     assert_eq!(a.nis.is_some(), z.is_finite());
+//!     assert!((ukf.state()[0] - ekf.state()[0]).abs() < 0.05 && b.iterations <= 1);
+//! }
+//! # Ok(())
+//! # }
+//! ```
+#![allow(non_snake_case)]
+
+#[cfg(feature = "autodiff")]
+mod autodiff;
+mod ekf;
+mod linalg;
+mod models;
+mod smoother;
+mod ukf;
+
+#[cfg(feature = "autodiff")]
+pub use autodiff::{AutoDiff, GenericModel, Scalar};
+pub use ekf::{Ekf, EkfUpdate};
+pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
+pub use smoother::{ForwardPass, NonlinearRts};
+pub use ukf::{SigmaPoints, Ukf};
+
+use crate::storage::{Arr, Buf, Dims, Dyn, Fixed};
+
+/// What one nonlinear step produced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StepInfo {
+    /// Index `k` of the step (0 for the first measurement).
+    pub step: usize,
+    /// Number of measurement entries used (entries that were not NaN).
+    pub observed: usize,
+    /// Normalised innovation squared `eᵀ Σ⁻¹ e` (χ² with `observed` degrees of freedom for
+    /// a consistent filter); `None` on a predict-only step. For the iterated EKF, e and Σ are
+    /// those of the last linearisation (`e = z − h(x_i) + H_i (x_i ⊖ x⁻)`).
+    pub nis: Option<f64>,
+    /// Gaussian log-likelihood of the innovation, `−½(eᵀΣ⁻¹e + log det Σ + observed·log 2π)`;
+    /// 0 on a predict-only step.
+    pub log_likelihood: f64,
+    /// Measurement linearisations done (1 for the EKF and the UKF, up to the cap for the
+    /// iterated EKF, 0 on a predict-only step).
+    pub iterations: usize,
+}
+
+/// Storage of the nonlinear filters: the linear engine's buffers plus the sigma-point
+/// arrays. Implemented for [`Dyn`] and [`Fixed`] (where the sigma arrays are sized for the
+/// largest fixed model, 2·16 + 1 points, and used with a leading dimension).
+pub trait NlDims: Dims {
+    /// n×(2n+1) buffers (sigma points in state space).
+    type Sig: Buf;
+    /// m×(2n+1) buffers (sigma points in measurement space).
+    type ZSig: Buf;
+    /// (2n+1)-vectors (weights).
+    type W: Buf;
+}
+
+impl NlDims for Dyn {
+    type Sig = Vec<f64>;
+    type ZSig = Vec<f64>;
+    type W = Vec<f64>;
+}
+
+impl<const N: usize, const M: usize, const P: usize> NlDims for Fixed<N, M, P> {
+    type Sig = Arr<N, 33>;
+    type ZSig = Arr<M, 33>;
+    type W = Arr<33, 1>;
+}
+
+/// ln(2π), for the Gaussian log-likelihood.
+const LN_2PI: f64 = 1.837_877_066_409_345_5;
+
+/// [`crate::Error::ModelNonFinite`] for the first non-finite entry of `v`.
+#[inline]
+fn finite(function: &'static str, step: usize, v: &[f64]) -> Result<(), crate::Error> {
+    match v.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(index) => Err(crate::Error::ModelNonFinite {
+            function,
+            step,
+            index,
+        }),
+    }
+}
+
+/// Filter state shared by the extended and unscented filters.
+#[derive(Clone, Debug)]
+struct Core<D: NlDims> {
+    dims: D,
+    k: usize,
+    /// `x_{k+1|k}`, `P_{k+1|k}` (before the first step: `x0`, `P0`).
+    xp: D::Nv,
+    pp: D::Nn,
+    /// `x_{k|k}`, `P_{k|k}`.
+    xf: D::Nv,
+    pf: D::Nn,
+    q: D::Nn,
+    r: D::Mm,
+    info: StepInfo,
+}
+
+impl<D: NlDims> Core<D> {
+    fn new(dims: D, x0: &[f64], P0: &impl crate::MatrixInput) -> Result<Self, crate::Error> {
+        let (n, m) = (dims.n(), dims.m());
+        if dims.is_fixed() && (n > crate::FIXED_MAX || m > crate::FIXED_MAX) {
+            return Err(crate::Error::Dimension {
+                name: "n",
+                value: n.max(m),
+                rule: "the fixed-size path holds n, m <= 16",
+            });
+        }
+        let mut xp = D::Nv::zeros(n);
+        let mut pp = D::Nn::zeros(n * n);
+        crate::model::load_vec("x0", x0, n, xp.as_mut_slice())?;
+        crate::model::load("P0", P0, n, n, pp.as_mut_slice())?;
+        crate::model::symmetrise("P0", pp.as_mut_slice(), n)?;
+        let mut factor = vec![0.0; n * n];
+        crate::model::psd_factor("P0", pp.as_slice(), n, &mut factor)?;
+        Ok(Self {
+            dims,
+            k: 0,
+            xf: xp.clone(),
+            pf: pp.clone(),
+            xp,
+            pp,
+            q: D::Nn::zeros(n * n),
+            r: D::Mm::zeros(m * m),
+            info: StepInfo::default(),
+        })
+    }
+
+    fn check_z(&self, z: &[f64]) -> Result<(), crate::Error> {
+        let m = self.dims.m();
+        if z.len() != m {
+            return Err(crate::Error::Shape {
+                name: "z",
+                rows: z.len(),
+                cols: 1,
+                expected_rows: m,
+                expected_cols: 1,
+            });
+        }
+        Ok(())
+    }
+
+    /// Loads `R_k` (checked finite, symmetrised) and returns the number of observed rows.
+    fn load_r<M: NonlinearModel + ?Sized>(
+        &mut self,
+        model: &mut M,
+        z: &[f64],
+    ) -> Result<usize, crate::Error> {
+        let m = self.dims.m();
+        let r = &mut self.r.as_mut_slice()[..m * m];
+        model.r(self.k, r);
+        finite("R", self.k, r)?;
+        linalg::symmetrise(r, m);
+        Ok(z.iter().filter(|v| !v.is_nan()).count())
+    }
+
+    /// Loads `Q_k` (checked finite, symmetrised).
+    fn load_q<M: NonlinearModel + ?Sized>(&mut self, model: &mut M) -> Result<(), crate::Error> {
+        let n = self.dims.n();
+        let q = &mut self.q.as_mut_slice()[..n * n];
+        model.q(self.k, q);
+        finite("Q", self.k, q)?;
+        linalg::symmetrise(q, n);
+        Ok(())
+    }
+
+    fn reset(&mut self, x0: &[f64], P0: &impl crate::MatrixInput) -> Result<(), crate::Error> {
+        let fresh = Self::new(self.dims, x0, P0)?;
+        *self = fresh;
+        Ok(())
+    }
+}
+
+/// Copies the rows `i` of the `rows`×`cols` matrix `src` where `z_i` is not NaN into the
+/// compact `mo`×`cols` matrix `dst` (`mo` = number of such rows).
+#[inline]
+fn compact_rows(src: &[f64], rows: usize, cols: usize, z: &[f64], mo: usize, dst: &mut [f64]) {
+    for j in 0..cols {
+        let mut r = 0;
+        for i in 0..rows {
+            if !z[i].is_nan() {
+                dst[r + j * mo] = src[i + j * rows];
+                r += 1;
+            }
+        }
+    }
+}
+
+/// The observed-rows-and-columns block of the `m`×`m` matrix `src` into `dst` (`mo`×`mo`).
+#[inline]
+fn compact_square(src: &[f64], m: usize, z: &[f64], mo: usize, dst: &mut [f64]) {
+    let mut c = 0;
+    for j in 0..m {
+        if z[j].is_nan() {
+            continue;
+        }
+        let mut r = 0;
+        for i in 0..m {
+            if !z[i].is_nan() {
+                dst[r + c * mo] = src[i + j * m];
+                r += 1;
+            }
+        }
+        c += 1;
+    }
+}
+
+/// The non-NaN entries of `v` (indexed by the rows of `z`), in order, into `dst`.
+#[inline]
+fn compact_vec(v: &[f64], z: &[f64], dst: &mut [f64]) {
+    let mut r = 0;
+    for (vi, zi) in v.iter().zip(z) {
+        if !zi.is_nan() {
+            dst[r] = *vi;
+            r += 1;
+        }
+    }
+}

@@ -1,0 +1,533 @@
+//! The unscented Kalman filter with Merwe's scaled and the cubature sigma-point sets.
+#![allow(non_snake_case)]
+
+use faer::{Mat, MatRef};
+
+use super::linalg::{
+    joseph, left_solve, mul, mul_tn, nis_logdet, pd_cholesky, psd_cholesky, rank1, right_solve,
+    symmetrise,
+};
+use super::{Core, LN_2PI, NlDims, NonlinearModel, StepInfo, compact_square, compact_vec, finite};
+use crate::storage::Buf;
+use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
+
+/// A sigma-point set: 2n + 1 points `χ_0 = x`, `χ_i = x ⊕ c·L_i`, `χ_{n+i} = x ⊕ (−c·L_i)`
+/// (L the lower Cholesky factor of P, `L_i` its column i; FilterPy's order), with mean
+/// weights `Wm` and covariance weights `Wc`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum SigmaPoints {
+    /// Van der Merwe's scaled set: `λ = α²(n + κ) − n`, `c = √(n + λ)`,
+    /// `Wm_0 = λ/(n + λ)`, `Wc_0 = Wm_0 + 1 − α² + β`, `Wm_i = Wc_i = 1/(2(n + λ))`
+    /// (FilterPy's `MerweScaledSigmaPoints`). β = 2 is optimal for Gaussian priors.
+    Merwe {
+        /// Spread α (0 < α ≤ 1 usually; small keeps the points close to the mean).
+        alpha: f64,
+        /// Prior-knowledge weight β.
+        beta: f64,
+        /// Secondary scaling κ (0 or 3 − n usually).
+        kappa: f64,
+    },
+    /// The third-degree spherical-radial cubature set (Arasaratnam and Haykin, "Cubature
+    /// Kalman filters"): `c = √n`, weights 1/(2n), and a zero-weight centre point (the same
+    /// as Merwe with α = 1, β = 0, κ = 0).
+    Cubature,
+}
+
+impl SigmaPoints {
+    /// Merwe's scaled set.
+    ///
+    /// ```
+    /// use kalman::nonlinear::SigmaPoints;
+    /// let s = SigmaPoints::merwe(0.1, 2.0, 1.0);
+    /// let (mut wm, mut wc) = ([0.0; 5], [0.0; 5]);
+    /// let c = s.weights(2, &mut wm, &mut wc).expect("valid");
+    /// // λ = 0.01·3 − 2: the mean weights sum to one.
+    /// assert!((wm.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    /// assert!((c * c - 0.03).abs() < 1e-15);
+    /// ```
+    pub const fn merwe(alpha: f64, beta: f64, kappa: f64) -> Self {
+        SigmaPoints::Merwe { alpha, beta, kappa }
+    }
+
+    /// Number of points for n states, 2n + 1.
+    pub const fn count(n: usize) -> usize {
+        2 * n + 1
+    }
+
+    /// Writes the 2n + 1 weights and returns the spread `c` (χ_i = x ± c·L_i).
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] if a parameter is not finite, α ≤ 0, or n + κ ≤ 0.
+    pub fn weights(&self, n: usize, wm: &mut [f64], wc: &mut [f64]) -> Result<f64, Error> {
+        let nf = n as f64;
+        let (alpha, beta, kappa) = match *self {
+            SigmaPoints::Merwe { alpha, beta, kappa } => (alpha, beta, kappa),
+            SigmaPoints::Cubature => (1.0, 0.0, 0.0),
+        };
+        for (name, v) in [("alpha", alpha), ("beta", beta), ("kappa", kappa)] {
+            if !v.is_finite() {
+                return Err(Error::InvalidOption {
+                    name,
+                    value: v,
+                    rule: "must be finite",
+                });
+            }
+        }
+        if alpha <= 0.0 {
+            return Err(Error::InvalidOption {
+                name: "alpha",
+                value: alpha,
+                rule: "must be positive",
+            });
+        }
+        if nf + kappa <= 0.0 {
+            return Err(Error::InvalidOption {
+                name: "kappa",
+                value: kappa,
+                rule: "n + kappa must be positive",
+            });
+        }
+        let lambda = alpha * alpha * (nf + kappa) - nf;
+        let w = 0.5 / (nf + lambda);
+        for i in 1..=2 * n {
+            wm[i] = w;
+            wc[i] = w;
+        }
+        wm[0] = lambda / (nf + lambda);
+        wc[0] = wm[0] + 1.0 - alpha * alpha + beta;
+        Ok((nf + lambda).sqrt())
+    }
+
+    /// The 2n + 1 sigma points of `(x, P)` as the columns of an n×(2n+1) matrix (plain
+    /// addition; for inspection and tests — the filters draw theirs without allocating).
+    ///
+    /// ```
+    /// use kalman::nonlinear::SigmaPoints;
+    /// let pts = SigmaPoints::Cubature.points(&[1.0, 2.0], &[[4.0, 0.0], [0.0, 9.0]]).expect("PSD");
+    /// assert!((pts[(0, 1)] - (1.0 + 2.0 * 2f64.sqrt())).abs() < 1e-14);
+    /// assert!((pts[(1, 4)] - (2.0 - 3.0 * 2f64.sqrt())).abs() < 1e-14);
+    /// ```
+    ///
+    /// # Errors
+    /// [`Error::Shape`]/[`Error::NonFinite`] naming `x` or `P`; [`Error::SigmaCovariance`]
+    /// if P is not PSD; as [`SigmaPoints::weights`].
+    pub fn points(&self, x: &[f64], P: &impl MatrixInput) -> Result<Mat<f64>, Error> {
+        let n = x.len();
+        crate::model::check_vec("x", x, n)?;
+        let mut p = vec![0.0; n * n];
+        crate::model::load("P", P, n, n, &mut p)?;
+        let (mut wm, mut wc) = (vec![0.0; 2 * n + 1], vec![0.0; 2 * n + 1]);
+        let c = self.weights(n, &mut wm, &mut wc)?;
+        let mut L = vec![0.0; n * n];
+        psd_cholesky(&p, n, &mut L, RANK_TOL, PSD_TOL).map_err(|pivot| Error::SigmaCovariance {
+            name: "P",
+            step: 0,
+            n,
+            pivot,
+            tol: PSD_TOL,
+        })?;
+        Ok(Mat::from_fn(n, 2 * n + 1, |i, j| match j {
+            0 => x[i],
+            j if j <= n => x[i] + c * L[i + (j - 1) * n],
+            j => x[i] - c * L[i + (j - 1 - n) * n],
+        }))
+    }
+}
+
+/// The unscented Kalman filter (additive noise) on the storage path `D`.
+///
+/// Update with z_k: sigma points `χ_i` of `(x⁻, P⁻)`, `Z_i = h(χ_i)`, `ẑ = Σ Wm_i Z_i`,
+/// (computed as `Z_0 + Σ_{i≥1} Wm_i (Z_i ⊖ Z_0)`, free of cancellation when `Wm_0` is large
+/// and negative, and averaging wrapped angles around `Z_0`),
+/// `Σ = Σ Wc_i (Z_i ⊖ ẑ)(Z_i ⊖ ẑ)ᵀ + R`, `C = Σ Wc_i (χ_i ⊖ x⁻)(Z_i ⊖ ẑ)ᵀ`,
+/// `K = C Σ⁻¹`, `x = x⁻ ⊕ K (z ⊖ ẑ)`, and the Joseph-style covariance of the module
+/// documentation. Prediction: sigma points of `(x, P)`, `x⁺ = Σ Wm_i f(χ_i)`,
+/// `P⁺ = Σ Wc_i (f(χ_i) ⊖ x⁺)(…)ᵀ + Q` (x⁺ centred on f(χ_0) likewise). A step
+/// allocates nothing.
+///
+/// ```
+/// use kalman::Dyn;
+/// use kalman::nonlinear::{FnModel, SigmaPoints, Ukf};
+/// # fn main() -> Result<(), kalman::Error> {
+/// let d = Dyn::new(2, 1, 0)?;
+/// // Constant velocity, range to a point 1 m off the track measured.
+/// let model = FnModel::new(
+///     d,
+///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| {
+///         out[0] = x[0] + 0.1 * x[1];
+///         out[1] = x[1];
+///     },
+///     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = (x[0] * x[0] + 1.0).sqrt(),
+///     &[[1e-6, 0.0], [0.0, 1e-4]],
+///     &[[1e-4]],
+/// )?;
+/// let mut ukf = Ukf::new(d, model, &[1.0, 1.0], &[[0.01, 0.0], [0.0, 0.01]], SigmaPoints::Cubature)?;
+/// for k in 0..20 {
+///     let x = 1.0 + 0.1 * k as f64;
+///     ukf.step(&[(x * x + 1.0f64).sqrt()], None)?;
+/// }
+/// assert!((ukf.state()[0] - 2.9).abs() < 0.01);
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct Ukf<D: NlDims, M> {
+    model: M,
+    points: SigmaPoints,
+    spread: f64,
+    c: Core<D>,
+    wm: D::W,
+    wc: D::W,
+    /// Sigma points (n × 2n+1), their images under f, and deviations.
+    chi: D::Sig,
+    y: D::Sig,
+    dchi: D::Sig,
+    dy: D::Sig,
+    zs: D::ZSig,
+    dz: D::ZSig,
+    l: D::Nn,
+    cross: D::Nn,
+    gain: D::Nm,
+    ht: D::Nm,
+    rc: D::Mm,
+    rt: D::Mm,
+    sig: D::Mm,
+    zbar: D::Mv,
+    e: D::Mv,
+    tmpm: D::Mv,
+    col: D::Mv,
+    dx: D::Nv,
+    a: D::Nn,
+    t: D::Nn,
+    kr: D::Nm,
+}
+
+impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
+    /// A filter for `model` with prior mean `x0` (length n), covariance `P0` (n×n,
+    /// symmetric PSD) and the sigma-point set `points`. All workspaces are allocated here.
+    ///
+    /// # Errors
+    /// As [`crate::Filter::new`] for `x0` and `P0`; [`Error::InvalidOption`] from
+    /// [`SigmaPoints::weights`].
+    pub fn new(
+        dims: D,
+        model: M,
+        x0: &[f64],
+        P0: &impl MatrixInput,
+        points: SigmaPoints,
+    ) -> Result<Self, Error> {
+        let c = Core::new(dims, x0, P0)?;
+        let (n, m) = (dims.n(), dims.m());
+        let s = 2 * n + 1;
+        let mut wm = D::W::zeros(s);
+        let mut wc = D::W::zeros(s);
+        let spread = points.weights(n, wm.as_mut_slice(), wc.as_mut_slice())?;
+        Ok(Self {
+            model,
+            points,
+            spread,
+            c,
+            wm,
+            wc,
+            chi: D::Sig::zeros(n * s),
+            y: D::Sig::zeros(n * s),
+            dchi: D::Sig::zeros(n * s),
+            dy: D::Sig::zeros(n * s),
+            zs: D::ZSig::zeros(m * s),
+            dz: D::ZSig::zeros(m * s),
+            l: D::Nn::zeros(n * n),
+            cross: D::Nn::zeros(n * n),
+            gain: D::Nm::zeros(n * m),
+            ht: D::Nm::zeros(n * m),
+            rc: D::Mm::zeros(m * m),
+            rt: D::Mm::zeros(m * m),
+            sig: D::Mm::zeros(m * m),
+            zbar: D::Mv::zeros(m),
+            e: D::Mv::zeros(m),
+            tmpm: D::Mv::zeros(m),
+            col: D::Mv::zeros(m),
+            dx: D::Nv::zeros(n),
+            a: D::Nn::zeros(n * n),
+            t: D::Nn::zeros(n * n),
+            kr: D::Nm::zeros(n * m),
+        })
+    }
+
+    /// Step k: update with `z_k` (NaN entries are missing; all NaN is predict-only), then
+    /// predict to k + 1 with the control `u_k` (passed to f).
+    ///
+    /// # Errors
+    /// [`Error::Shape`] naming `z`; [`Error::ModelNonFinite`] naming the function and the
+    /// step; [`Error::SigmaCovariance`]; [`Error::SingularInnovation`]. After an error the
+    /// step counter has not advanced and the estimates may be partly written:
+    /// [`Ukf::reset`] the filter.
+    pub fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
+        self.c.check_z(z)?;
+        let info = self.update_with(z)?;
+        self.predict(u)?;
+        self.c.info = info;
+        self.c.k += 1;
+        Ok(info)
+    }
+
+    /// Sigma points of `(x, P)` into `chi` (and the factor of P into `l`).
+    fn draw(&mut self, predicted: bool) -> Result<(), Error> {
+        let (n, k) = (self.c.dims.n(), self.c.k);
+        let (x, P, name) = if predicted {
+            (&self.c.xp, &self.c.pp, "P_{k|k-1}")
+        } else {
+            (&self.c.xf, &self.c.pf, "P_{k|k}")
+        };
+        let (x, P) = (&x.as_slice()[..n], &P.as_slice()[..n * n]);
+        let L = &mut self.l.as_mut_slice()[..n * n];
+        psd_cholesky(P, n, L, RANK_TOL, PSD_TOL).map_err(|pivot| Error::SigmaCovariance {
+            name,
+            step: k,
+            n,
+            pivot,
+            tol: PSD_TOL,
+        })?;
+        let chi = self.chi.as_mut_slice();
+        chi[..n].copy_from_slice(x);
+        let dx = &mut self.dx.as_mut_slice()[..n];
+        for j in 0..n {
+            for (sign, col) in [(1.0, 1 + j), (-1.0, 1 + n + j)] {
+                let f = sign * self.spread;
+                for i in 0..n {
+                    dx[i] = f * L[i + j * n];
+                }
+                self.model
+                    .state_add(x, dx, &mut chi[col * n..(col + 1) * n]);
+            }
+        }
+        Ok(())
+    }
+
+    fn update_with(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
+        let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
+        let s = 2 * n + 1;
+        let mo = self.c.load_r(&mut self.model, z)?;
+        let mut info = StepInfo {
+            step: k,
+            observed: mo,
+            ..StepInfo::default()
+        };
+        if mo == 0 {
+            self.c.xf.as_mut_slice()[..n].copy_from_slice(&self.c.xp.as_slice()[..n]);
+            self.c.pf.as_mut_slice()[..n * n].copy_from_slice(&self.c.pp.as_slice()[..n * n]);
+            return Ok(info);
+        }
+        self.draw(true)?;
+        let wm = &self.wm.as_slice()[..s];
+        let wc = &self.wc.as_slice()[..s];
+        let chi = &self.chi.as_slice()[..n * s];
+        let zs = &mut self.zs.as_mut_slice()[..m * s];
+        for i in 0..s {
+            let zi = &mut zs[i * m..(i + 1) * m];
+            self.model.h(&chi[i * n..(i + 1) * n], k, zi);
+            finite("h", k, zi)?;
+        }
+        // ẑ = Z_0 + Σ_{i≥1} Wm_i (Z_i ⊖ Z_0): no cancellation between a large negative
+        // Wm_0 and the other weights, and wrapped components averaged around Z_0.
+        let zbar = &mut self.zbar.as_mut_slice()[..m];
+        let col = &mut self.col.as_mut_slice()[..m];
+        zbar.fill(0.0);
+        for i in 1..s {
+            self.model.residual(&zs[i * m..(i + 1) * m], &zs[..m], col);
+            for (a, b) in zbar.iter_mut().zip(col.iter()) {
+                *a += wm[i] * b;
+            }
+        }
+        for (a, b) in zbar.iter_mut().zip(&zs[..m]) {
+            *a += b;
+        }
+        let xp = &self.c.xp.as_slice()[..n];
+        // Deviations: dz (mo × s, observed rows), dchi (n × s).
+        let dz = &mut self.dz.as_mut_slice()[..mo * s];
+        let dchi = &mut self.dchi.as_mut_slice()[..n * s];
+        for i in 0..s {
+            self.model.residual(&zs[i * m..(i + 1) * m], zbar, col);
+            compact_vec(col, z, &mut dz[i * mo..(i + 1) * mo]);
+            self.model
+                .state_residual(&chi[i * n..(i + 1) * n], xp, &mut dchi[i * n..(i + 1) * n]);
+        }
+        compact_square(self.c.r.as_slice(), m, z, mo, self.rc.as_mut_slice());
+        let sig = &mut self.sig.as_mut_slice()[..mo * mo];
+        sig.copy_from_slice(&self.rc.as_slice()[..mo * mo]);
+        let C = &mut self.gain.as_mut_slice()[..n * mo];
+        C.fill(0.0);
+        for i in 0..s {
+            let d = &dz[i * mo..(i + 1) * mo];
+            rank1(sig, wc[i], d, d, mo, mo);
+            rank1(C, wc[i], &dchi[i * n..(i + 1) * n], d, n, mo);
+        }
+        symmetrise(sig, mo);
+        // H̃ᵀ = P⁻¹ C by the factor of P (zero pivots give the minimum-norm choice), and
+        // R̃ = Σ − Cᵀ H̃ᵀ, before Σ is factored in place.
+        let L = &self.l.as_slice()[..n * n];
+        let ht = &mut self.ht.as_mut_slice()[..n * mo];
+        ht.copy_from_slice(C);
+        left_solve(L, n, ht, mo);
+        let rt = &mut self.rt.as_mut_slice()[..mo * mo];
+        rt.copy_from_slice(sig);
+        // R_c is no longer needed (copied into Σ): it holds Cᵀ H̃ᵀ.
+        let ctht = &mut self.rc.as_mut_slice()[..mo * mo];
+        mul_tn(ctht, C, ht, mo, n, mo, false);
+        for (r, v) in rt.iter_mut().zip(ctht.iter()) {
+            *r -= v;
+        }
+        symmetrise(rt, mo);
+        if let Err(pivot) = pd_cholesky(sig, mo, RANK_TOL) {
+            return Err(Error::SingularInnovation {
+                filter: "UKF",
+                step: k,
+                m: mo,
+                pivot,
+                tol: RANK_TOL,
+            });
+        }
+        let K = C;
+        right_solve(sig, mo, K, n, &mut self.tmpm.as_mut_slice()[..mo]);
+        self.model.residual(z, zbar, col);
+        let e = &mut self.e.as_mut_slice()[..mo];
+        compact_vec(col, z, e);
+        let dx = &mut self.dx.as_mut_slice()[..n];
+        mul(dx, K, e, n, mo, 1, false);
+        self.model
+            .state_add(xp, dx, &mut self.c.xf.as_mut_slice()[..n]);
+        // H̃ = (H̃ᵀ)ᵀ as an mo×n matrix for the Joseph form.
+        let hrows = &mut self.kr.as_mut_slice()[..n * mo];
+        for j in 0..n {
+            for i in 0..mo {
+                hrows[i + j * mo] = ht[j + i * n];
+            }
+        }
+        // The Joseph form needs its own K·R̃ workspace: reuse `ht` (its content is copied).
+        joseph(
+            &self.c.pp.as_slice()[..n * n],
+            K,
+            hrows,
+            rt,
+            n,
+            mo,
+            &mut self.c.pf.as_mut_slice()[..n * n],
+            &mut self.a.as_mut_slice()[..n * n],
+            &mut self.t.as_mut_slice()[..n * n],
+            ht,
+        );
+        let nl = nis_logdet(sig, mo, e, &mut self.tmpm.as_mut_slice()[..mo]);
+        info.nis = Some(nl.0);
+        info.log_likelihood = -0.5 * (nl.0 + nl.1 + mo as f64 * LN_2PI);
+        info.iterations = 1;
+        Ok(info)
+    }
+
+    fn predict(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
+        let (n, k) = (self.c.dims.n(), self.c.k);
+        let s = 2 * n + 1;
+        self.c.load_q(&mut self.model)?;
+        self.draw(false)?;
+        let wm = &self.wm.as_slice()[..s];
+        let wc = &self.wc.as_slice()[..s];
+        let chi = &self.chi.as_slice()[..n * s];
+        let y = &mut self.y.as_mut_slice()[..n * s];
+        for i in 0..s {
+            let yi = &mut y[i * n..(i + 1) * n];
+            self.model.f(&chi[i * n..(i + 1) * n], u, k, yi);
+            finite("f", k, yi)?;
+        }
+        // x⁺ = y_0 ⊕ Σ_{i≥1} Wm_i (y_i ⊖ y_0) (as ẑ in the update).
+        let dy = &mut self.dy.as_mut_slice()[..n * s];
+        let dx = &mut self.dx.as_mut_slice()[..n];
+        for i in 1..s {
+            self.model
+                .state_residual(&y[i * n..(i + 1) * n], &y[..n], &mut dy[i * n..(i + 1) * n]);
+        }
+        mul(dx, &dy[n..], &wm[1..], n, s - 1, 1, false);
+        let xp = &mut self.c.xp.as_mut_slice()[..n];
+        self.model.state_add(&y[..n], dx, xp);
+        let xf = &self.c.xf.as_slice()[..n];
+        let dchi = &mut self.dchi.as_mut_slice()[..n * s];
+        for i in 0..s {
+            self.model
+                .state_residual(&y[i * n..(i + 1) * n], xp, &mut dy[i * n..(i + 1) * n]);
+            self.model
+                .state_residual(&chi[i * n..(i + 1) * n], xf, &mut dchi[i * n..(i + 1) * n]);
+        }
+        let pp = &mut self.c.pp.as_mut_slice()[..n * n];
+        pp.copy_from_slice(&self.c.q.as_slice()[..n * n]);
+        let cross = &mut self.cross.as_mut_slice()[..n * n];
+        cross.fill(0.0);
+        for i in 0..s {
+            let d = &dy[i * n..(i + 1) * n];
+            rank1(pp, wc[i], d, d, n, n);
+            rank1(cross, wc[i], &dchi[i * n..(i + 1) * n], d, n, n);
+        }
+        symmetrise(pp, n);
+        Ok(())
+    }
+}
+
+impl<D: NlDims, M> Ukf<D, M> {
+    /// Restarts from the prior `(x0, P0)` at step 0, keeping the model and workspaces.
+    ///
+    /// # Errors
+    /// As [`Ukf::new`] for `x0` and `P0`.
+    pub fn reset(&mut self, x0: &[f64], P0: &impl MatrixInput) -> Result<(), Error> {
+        self.c.reset(x0, P0)
+    }
+    /// The sigma-point set.
+    pub fn sigma_points(&self) -> SigmaPoints {
+        self.points
+    }
+    /// The model.
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+    /// The model, mutable.
+    pub fn model_mut(&mut self) -> &mut M {
+        &mut self.model
+    }
+    /// Steps taken.
+    pub fn steps(&self) -> usize {
+        self.c.k
+    }
+    /// What the last step produced.
+    pub fn last_step(&self) -> StepInfo {
+        self.c.info
+    }
+    /// `x_{k|k}` after step k (before the first step: `x0`).
+    pub fn state(&self) -> &[f64] {
+        &self.c.xf.as_slice()[..self.c.dims.n()]
+    }
+    /// `P_{k|k}`.
+    pub fn covariance(&self) -> MatRef<'_, f64> {
+        let n = self.c.dims.n();
+        MatRef::from_column_major_slice(&self.c.pf.as_slice()[..n * n], n, n)
+    }
+    /// `x_{k+1|k}`.
+    pub fn predicted_state(&self) -> &[f64] {
+        &self.c.xp.as_slice()[..self.c.dims.n()]
+    }
+    /// `P_{k+1|k}`.
+    pub fn predicted_covariance(&self) -> MatRef<'_, f64> {
+        let n = self.c.dims.n();
+        MatRef::from_column_major_slice(&self.c.pp.as_slice()[..n * n], n, n)
+    }
+}
+
+impl<D: NlDims, M> super::ForwardPass for Ukf<D, M> {
+    fn filtered(&self) -> (&[f64], &[f64]) {
+        let n = self.c.dims.n();
+        (&self.c.xf.as_slice()[..n], &self.c.pf.as_slice()[..n * n])
+    }
+    fn predicted(&self) -> (&[f64], &[f64]) {
+        let n = self.c.dims.n();
+        (&self.c.xp.as_slice()[..n], &self.c.pp.as_slice()[..n * n])
+    }
+    /// `C_k = Σ Wc_i (χ_i ⊖ x_{k|k})(f(χ_i) ⊖ x_{k+1|k})ᵀ` of the last prediction.
+    fn cross_covariance(&self, out: &mut [f64]) {
+        let n = self.c.dims.n();
+        out[..n * n].copy_from_slice(&self.cross.as_slice()[..n * n]);
+    }
+}

@@ -1,0 +1,140 @@
+//! Zero heap allocations per nonlinear step (EKF, iterated EKF, UKF with both sigma-point
+//! sets; hand, AD and central-difference Jacobians), on the fixed and dynamic paths, with
+//! the counting global allocator (`common/counting.rs`).
+
+use kalman::nonlinear::{
+    AutoDiff, CentralDiff, Ekf, EkfUpdate, FnModel, Jacobians, NlDims, NonlinearModel, SigmaPoints,
+    Ukf,
+};
+use kalman::strategies::{FilterProblem, ProblemOptions};
+use kalman::{Dyn, Fixed};
+
+use super::models::{Linear, RangeBearing};
+use crate::common::counting::allocations;
+
+trait Stepper {
+    fn go(&mut self, z: &[f64], u: Option<&[f64]>);
+}
+
+impl<D: NlDims, M: Jacobians> Stepper for Ekf<D, M> {
+    fn go(&mut self, z: &[f64], u: Option<&[f64]>) {
+        assert!(self.step(z, u).is_ok());
+    }
+}
+
+impl<D: NlDims, M: NonlinearModel> Stepper for Ukf<D, M> {
+    fn go(&mut self, z: &[f64], u: Option<&[f64]>) {
+        assert!(self.step(z, u).is_ok());
+    }
+}
+
+/// Allocations during the steps after the first (construction and the first step are
+/// outside the count), with missing entries and an all-missing step.
+fn count(f: &mut dyn Stepper, zs: &[Vec<f64>], us: &[Vec<f64>]) -> usize {
+    f.go(&zs[0], us.first().map(Vec::as_slice));
+    let before = allocations();
+    for (k, z) in zs.iter().enumerate().skip(1) {
+        f.go(z, us.get(k).map(Vec::as_slice));
+    }
+    let nan = [f64::NAN; 16];
+    f.go(&nan[..zs[0].len()], us.first().map(Vec::as_slice));
+    allocations() - before
+}
+
+fn linear_case<D: NlDims>(p: &FilterProblem, d: D) {
+    let updates = [
+        EkfUpdate::Extended,
+        EkfUpdate::Iterated {
+            max_iterations: 4,
+            tolerance: 0.0,
+        },
+    ];
+    for u in updates {
+        let mut f = Ekf::new(d, Linear::new(p), &p.x0, &p.P0, u).expect("ekf");
+        assert_eq!(count(&mut f, &p.z, &p.u), 0, "EKF {u:?} hand");
+        let cd = CentralDiff::new(Linear::new(p), d);
+        let mut f = Ekf::new(d, cd, &p.x0, &p.P0, u).expect("ekf");
+        assert_eq!(
+            count(&mut f, &p.z, &p.u),
+            0,
+            "EKF {u:?} central differences"
+        );
+    }
+    for s in [SigmaPoints::merwe(0.5, 2.0, 0.0), SigmaPoints::Cubature] {
+        let mut f = Ukf::new(d, Linear::new(p), &p.x0, &p.P0, s).expect("ukf");
+        assert_eq!(count(&mut f, &p.z, &p.u), 0, "UKF {s:?}");
+    }
+}
+
+#[test]
+fn no_allocation_per_nonlinear_step() {
+    let opts = ProblemOptions {
+        steps: 10,
+        missing: 0.2,
+        p: 1,
+        ..ProblemOptions::default()
+    };
+    let p = FilterProblem::generate(7, 2, opts, 41);
+    linear_case(&p, Fixed::<7, 2, 1>::new());
+    linear_case(&p, Dyn::new(7, 2, 1).expect("dims"));
+    let big = FilterProblem::generate(20, 5, opts, 42);
+    linear_case(&big, Dyn::new(20, 5, 1).expect("dims"));
+
+    // AD Jacobians and closures, on the range–bearing tracker.
+    let zs: Vec<Vec<f64>> = (0..10)
+        .map(|k| {
+            vec![
+                70.0 - k as f64,
+                if k == 4 {
+                    f64::NAN
+                } else {
+                    -0.5 + 0.02 * k as f64
+                },
+            ]
+        })
+        .collect();
+    let x0 = RangeBearing::x0();
+    let p0 = RangeBearing::p0();
+    let fixed = Fixed::<4, 2>::new();
+    let dynd = Dyn::new(4, 2, 0).expect("dims");
+    let mut f = Ekf::new(
+        fixed,
+        AutoDiff::new(RangeBearing::default(), fixed),
+        &x0,
+        &p0,
+        EkfUpdate::Extended,
+    )
+    .expect("ekf");
+    assert_eq!(count(&mut f, &zs, &[]), 0, "EKF AD fixed");
+    let mut f = Ekf::new(
+        dynd,
+        AutoDiff::new(RangeBearing::default(), dynd),
+        &x0,
+        &p0,
+        EkfUpdate::Extended,
+    )
+    .expect("ekf");
+    assert_eq!(count(&mut f, &zs, &[]), 0, "EKF AD dyn");
+    let closures = FnModel::new(
+        fixed,
+        |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| {
+            out.copy_from_slice(x);
+            out[0] += x[1];
+            out[2] += x[3];
+        },
+        |x: &[f64], _k: usize, out: &mut [f64]| {
+            out[0] = x[0].hypot(x[2]);
+            out[1] = x[2].atan2(x[0]);
+        },
+        &[
+            [0.01, 0.0, 0.0, 0.0],
+            [0.0, 0.01, 0.0, 0.0],
+            [0.0, 0.0, 0.01, 0.0],
+            [0.0, 0.0, 0.0, 0.01],
+        ],
+        &[[0.25, 0.0], [0.0, 1e-4]],
+    )
+    .expect("model");
+    let mut f = Ukf::new(fixed, closures, &x0, &p0, SigmaPoints::Cubature).expect("ukf");
+    assert_eq!(count(&mut f, &zs, &[]), 0, "UKF closures fixed");
+}
