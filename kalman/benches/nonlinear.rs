@@ -131,14 +131,23 @@ fn nonlinear(c: &mut Criterion) {
     let label = "(4,2)";
     let mut k = 0;
     let mut hand = Ekf::new(d, Hand, &X0, &P0, EkfUpdate::Extended).unwrap();
-    g.bench_function(BenchmarkId::new("baseline_ekf_hand_jacobians", label), |b| {
-        b.iter(|| {
-            k = (k + 1) % zs.len();
-            black_box(hand.step(black_box(&zs[k]), None).unwrap());
-        })
-    });
-    let mut ad = Ekf::new(d, AutoDiff::new(RangeBearing, d), &X0, &P0, EkfUpdate::Extended)
-        .unwrap();
+    g.bench_function(
+        BenchmarkId::new("baseline_ekf_hand_jacobians", label),
+        |b| {
+            b.iter(|| {
+                k = (k + 1) % zs.len();
+                black_box(hand.step(black_box(&zs[k]), None).unwrap());
+            })
+        },
+    );
+    let mut ad = Ekf::new(
+        d,
+        AutoDiff::new(RangeBearing, d),
+        &X0,
+        &P0,
+        EkfUpdate::Extended,
+    )
+    .unwrap();
     g.bench_function(BenchmarkId::new("ekf_autodiff_jacobians", label), |b| {
         b.iter(|| {
             k = (k + 1) % zs.len();
