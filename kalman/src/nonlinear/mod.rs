@@ -18,7 +18,7 @@
 //! The [`Ekf`] needs the [`Jacobians`] of f and h, from one of three sources:
 //! - written by hand: implement [`Jacobians`] for the model;
 //! - exact, by forward-mode automatic differentiation: write f and h once, generic over the
-//!   scalar, as a [`GenericModel`], and wrap it in [`AutoDiff`] (feature `autodiff`, over the
+//!   scalar, as a `GenericModel`, and wrap it in `AutoDiff` (feature `autodiff`, over the
 //!   `num-dual` crate);
 //! - approximate, by central differences: wrap any model in [`CentralDiff`] (step and
 //!   truncation error documented there).

@@ -59,7 +59,7 @@ pub trait NonlinearModel {
 }
 
 /// The Jacobians of a [`NonlinearModel`], needed by the extended filters: written by hand,
-/// from [`super::AutoDiff`] (exact) or from [`CentralDiff`].
+/// from `AutoDiff` (feature `autodiff`) (exact) or from [`CentralDiff`].
 ///
 /// ```
 /// use kalman::nonlinear::{Jacobians, NonlinearModel};
