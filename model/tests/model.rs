@@ -10,5 +10,6 @@ mod model {
     pub mod fuel;
     pub mod serde_roundtrip;
     pub mod shaping;
+    pub mod shaping_default;
     pub mod support;
 }
