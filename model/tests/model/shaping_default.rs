@@ -1,6 +1,6 @@
 //! The provided `ShapingFilter::spectral_density`, N·|H(jω)|², for a filter that does not
-//! override it: every built-in filter overrides it with a closed form, so a user's filter is
-//! the only one that reaches it.
+//! override it (every built-in filter overrides it with a closed form, so a user's filter is
+//! the only one that reaches it), and the shortest time constant that sets Δt.
 
 use model::{ContinuousTf, DampedCosine, Exponential, IrregularRolling, ShapingFilter};
 
@@ -46,5 +46,26 @@ fn the_provided_spectral_density_matches_the_closed_forms() {
                 user.spectral_density(w)
             );
         }
+    }
+}
+
+/// The shortest time constant is, by its definition, the smaller of the correlation's decay
+/// time and its oscillation time (1/rate, 1/frequency). Parameters put each term on each side
+/// of the minimum once, so a wrong operand or a max shows.
+#[test]
+fn shortest_time_constant_is_the_smaller_time_scale() {
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-15 * b;
+    assert!(close(
+        Exponential::new(1.0, 0.8)
+            .expect("valid")
+            .shortest_time_constant(),
+        0.8
+    ));
+    for (rate, freq) in [(0.3_f64, 2.0_f64), (5.0, 0.25)] {
+        let expected = (1.0 / rate).min(1.0 / freq);
+        let rolling = IrregularRolling::new(1.0, rate, freq).expect("valid");
+        assert!(close(rolling.shortest_time_constant(), expected));
+        let damped = DampedCosine::new(1.0, rate, freq).expect("valid");
+        assert!(close(damped.shortest_time_constant(), expected));
     }
 }

@@ -1,5 +1,5 @@
 //! Tests of `wls::boom` paths the main boom tests do not reach: every invalid scalar of the
-//! rotation profile is rejected by name, before any integration runs.
+//! rotation profile is rejected by name, and a turn no deceleration can end is reported so.
 
 use wls::Error;
 use wls::boom::{Deceleration, RotationProfile};
@@ -49,5 +49,25 @@ fn invalid_profile_scalars_are_named() {
                 "value {bad}"
             );
         }
+    }
+}
+
+/// A final angle the boom passes within its first step from rest is passed still moving
+/// whatever the deceleration (ε_d only acts from the 77° ramp on), so no ε_d solves the turn:
+/// the error must say that no deceleration stops it, not that it stops short. (The rate at
+/// the crossing, interpolated between ω = 0 and the first step's ω > 0, is positive.)
+#[test]
+fn a_final_angle_passed_in_the_first_step_cannot_be_stopped_at() {
+    let profile = RotationProfile {
+        // One step of 0.01 s at 0.4584 °/s² from rest covers ≈ 2.3e-5°.
+        final_angle_deg: 1e-5,
+        ..RotationProfile::default()
+    };
+    match profile.solve_deceleration() {
+        Err(Error::InvalidParameter { name, rule, .. }) => {
+            assert_eq!(name, "profile");
+            assert_eq!(rule, "no deceleration stops the boom at the final angle");
+        }
+        other => panic!("expected InvalidParameter, got {other:?}"),
     }
 }
