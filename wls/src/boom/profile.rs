@@ -215,6 +215,7 @@ impl RotationProfile {
             }
             if a >= self.final_angle_deg {
                 // Interpolate ω at the crossing so the bisection target is continuous in ε_d.
+                // Only the sign is used: any positive mix of ω ≥ 0 and w > 0 gives the same ε_d.
                 let f = (self.final_angle_deg - alpha) / (a - alpha);
                 return Ok(Ok(omega + f * (w - omega)));
             }
