@@ -1,8 +1,12 @@
 //! Tests of `wls::boom` paths the main boom tests do not reach: every invalid scalar of the
-//! rotation profile is rejected by name, and a turn no deceleration can end is reported so.
+//! rotation profile is rejected by name, a turn no deceleration can end is reported so, and
+//! a turn's first violation is decided by either error alone.
 
 use wls::Error;
-use wls::boom::{Deceleration, RotationProfile};
+use wls::boom::{
+    BoomConfig, CycleError, Deceleration, ErrorVariant, Limits, RotationProfile,
+    ideal_accelerometer, run_turn,
+};
 
 /// The field an `InvalidParameter` error names, or a panic showing what came instead.
 fn invalid_name<T: std::fmt::Debug>(result: Result<T, Error>) -> &'static str {
@@ -69,5 +73,50 @@ fn a_final_angle_passed_in_the_first_step_cannot_be_stopped_at() {
             assert_eq!(rule, "no deceleration stops the boom at the final angle");
         }
         other => panic!("expected InvalidParameter, got {other:?}"),
+    }
+}
+
+/// A turn's first violation is the first cycle after start-up where *either* error exceeds
+/// its own limit: rebuilt here from the per-cycle records, with one limit out of reach
+/// (1 rad, 1 rad/s²) so that the other error alone decides.
+#[test]
+fn first_violation_is_decided_by_either_error_alone() {
+    let profile = RotationProfile::default().trajectory().expect("valid");
+    let points = &profile.points[..300];
+    let config = BoomConfig::default();
+    let measure = ideal_accelerometer(config.g, config.sensor_radius);
+    let variant = ErrorVariant::plus(0.02);
+    let tight = 1e-4;
+    for (limits, error_of) in [
+        (
+            Limits {
+                angle: 1.0,
+                angular_acceleration: tight,
+            },
+            (|c: &CycleError| c.epsilon_error) as fn(&CycleError) -> f64,
+        ),
+        (
+            Limits {
+                angle: tight,
+                angular_acceleration: 1.0,
+            },
+            |c: &CycleError| c.angle_error,
+        ),
+    ] {
+        let run = run_turn(points, &config, &measure, &variant, limits).expect("valid");
+        let expected = run.cycles[1..]
+            .iter()
+            .find(|c| error_of(c) > tight)
+            .map(|c| (c.t, c.alpha));
+        assert!(
+            expected.is_some(),
+            "a 0.02 m/s² bias must cost more than {tight}"
+        );
+        assert!(
+            run.cycles
+                .iter()
+                .all(|c| c.angle_error < 1.0 && c.epsilon_error < 1.0)
+        );
+        assert_eq!(run.first_violation, expected);
     }
 }
