@@ -9,6 +9,7 @@ use std::process::ExitCode;
 
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{Args, Parser, Subcommand};
+use scenarios::boom::Boom;
 use scenarios::fueling::Fueling;
 use scenarios::montecarlo::Shard;
 use scenarios::uav::Uav;
@@ -242,7 +243,7 @@ fn main() -> ExitCode {
     let outcome: Result<(), Error> = match cli.command {
         Command::Fueling(a) => scenarios::campaign::run::<Fueling>(&a.campaign()),
         Command::Uav(a) => scenarios::campaign::run::<Uav>(&a.campaign()),
-        Command::Boom(a) => scenarios::boom::run(&a.campaign()),
+        Command::Boom(a) => scenarios::campaign::run::<Boom>(&a.campaign()),
         Command::All(a) => scenarios::papers::all(&a.campaign()),
         Command::Merge { dirs, out } => scenarios::papers::merge(&dirs, &out),
         Command::Filter(a) => scenarios::userdata::filter(&a),

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::boom::Boom;
 use crate::campaign::{self, Campaign, Entry};
 use crate::error::{Error, Result};
 use crate::fueling::Fueling;
@@ -24,7 +25,7 @@ pub const SCENARIOS: [Entry; 3] = [
     (
         "boom",
         "B — erector-boom angular acceleration (WLS, offset angle)",
-        crate::boom::run,
+        campaign::run::<Boom>,
     ),
 ];
 
@@ -49,7 +50,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<()> {
     match campaign::scenario_of(first)?.as_str() {
         "fueling" => campaign::merge::<Fueling>(dirs, out),
         "uav" => campaign::merge::<Uav>(dirs, out),
-        "boom" => crate::boom::merge(dirs, out),
+        "boom" => campaign::merge::<Boom>(dirs, out),
         other => Err(Error::invalid(
             first.join("summary.json"),
             format!("`scenario` is {other:?}, expected \"fueling\", \"uav\" or \"boom\""),

@@ -107,7 +107,7 @@ fn main() -> Result<(), wls::Error> {
                 };
                 println!(
                     "g={gamma_deg:>4} {name:<18} {:<2} max da={:>10.4} de={:>10.4}  viol {:<20} undef {}",
-                    v.label,
+                    v.label(),
                     run.max_angle_error.to_degrees(),
                     run.max_epsilon_error.to_degrees(),
                     f(run.first_violation),

@@ -8,14 +8,51 @@ use super::estimator::{BoomConfig, BoomEstimator};
 use super::profile::TrajectoryPoint;
 use crate::error::{Error, Result};
 
-/// A constant measurement error added to every reading of a turn (the paper's "+" and "−"
-/// variants add ±Δa to a_x and a_y).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// The sign of a constant error variant (serialised as the paper writes it: "+", "-").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Sign {
+    /// The paper's "+" variant.
+    #[serde(rename = "+")]
+    Plus,
+    /// The paper's "−" variant.
+    #[serde(rename = "-")]
+    Minus,
+    /// No error.
+    #[serde(rename = "nominal")]
+    Nominal,
+}
+
+impl Sign {
+    /// The label reports use: "+", "-" or "nominal".
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            Sign::Plus => "+",
+            Sign::Minus => "-",
+            Sign::Nominal => "nominal",
+        }
+    }
+
+    /// +1, −1 or 0.
+    #[must_use]
+    pub fn factor(self) -> f64 {
+        match self {
+            Sign::Plus => 1.0,
+            Sign::Minus => -1.0,
+            Sign::Nominal => 0.0,
+        }
+    }
+}
+
+/// A constant measurement error added to every reading of a turn: the paper's "+" and "−"
+/// variants add ±Δa to a_x and a_y. The variant is its sign and its size; the bias vector
+/// is derived from them, so a measurement model can never see one without the other.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ErrorVariant {
-    /// A label for reports ("+", "−", …).
-    pub label: String,
-    /// The error added to (a_x, a_y, a_z), m/s².
-    pub bias: [f64; 3],
+    /// Which variant.
+    pub sign: Sign,
+    /// Δa, m/s² (≥ 0).
+    pub size: f64,
 }
 
 impl ErrorVariant {
@@ -23,8 +60,8 @@ impl ErrorVariant {
     #[must_use]
     pub fn plus(delta_a: f64) -> Self {
         Self {
-            label: "+".into(),
-            bias: [delta_a, delta_a, 0.0],
+            sign: Sign::Plus,
+            size: delta_a,
         }
     }
 
@@ -32,8 +69,8 @@ impl ErrorVariant {
     #[must_use]
     pub fn minus(delta_a: f64) -> Self {
         Self {
-            label: "-".into(),
-            bias: [-delta_a, -delta_a, 0.0],
+            sign: Sign::Minus,
+            size: delta_a,
         }
     }
 
@@ -41,9 +78,22 @@ impl ErrorVariant {
     #[must_use]
     pub fn nominal() -> Self {
         Self {
-            label: "nominal".into(),
-            bias: [0.0; 3],
+            sign: Sign::Nominal,
+            size: 0.0,
         }
+    }
+
+    /// The error added to (a_x, a_y, a_z), m/s².
+    #[must_use]
+    pub fn bias(&self) -> [f64; 3] {
+        let b = self.sign.factor() * self.size;
+        [b, b, 0.0]
+    }
+
+    /// The label reports use: "+", "-" or "nominal".
+    #[must_use]
+    pub fn label(&self) -> &'static str {
+        self.sign.label()
     }
 }
 
@@ -55,10 +105,11 @@ pub fn ideal_accelerometer(
 ) -> impl Fn(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3] {
     move |p, gamma, v| {
         let beta = p.alpha - gamma;
+        let bias = v.bias();
         [
-            g * beta.sin() + v.bias[0],
-            g * beta.cos() + p.epsilon * sensor_radius + v.bias[1],
-            v.bias[2],
+            g * beta.sin() + bias[0],
+            g * beta.cos() + p.epsilon * sensor_radius + bias[1],
+            bias[2],
         ]
     }
 }
@@ -103,8 +154,8 @@ pub struct CycleError {
 /// A whole turn under one error variant.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TurnRun {
-    /// The variant's label.
-    pub label: String,
+    /// The variant's sign.
+    pub sign: Sign,
     /// Per-cycle errors; the first cycle (start-up) is included here but excluded from the
     /// maxima below.
     pub cycles: Vec<CycleError>,
@@ -118,14 +169,15 @@ pub struct TurnRun {
     pub first_undefined: Option<(f64, f64)>,
 }
 
-/// Runs a fresh estimator over `trajectory` with readings from `measure(point, γ, variant)`.
+/// Runs a fresh estimator over `trajectory` with readings from `measure(point, γ, variant)`
+/// (`FnMut`: a measurement model may draw noise from its own generator).
 ///
 /// # Errors
 /// An invalid configuration or limit, or a non-finite reading from `measure`.
-pub fn run_turn<M: Fn(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3]>(
+pub fn run_turn<M: FnMut(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3]>(
     trajectory: &[TrajectoryPoint],
     config: &BoomConfig,
-    measure: &M,
+    mut measure: M,
     variant: &ErrorVariant,
     limits: Limits,
 ) -> Result<TurnRun> {
@@ -144,7 +196,7 @@ pub fn run_turn<M: Fn(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3]>(
     let mut est = BoomEstimator::new(config.clone())?;
     let gamma = config.sensor_offset_angle;
     let mut run = TurnRun {
-        label: variant.label.clone(),
+        sign: variant.sign,
         cycles: Vec::with_capacity(trajectory.len()),
         max_angle_error: 0.0,
         max_epsilon_error: 0.0,
@@ -215,10 +267,10 @@ pub struct GammaSweepReport {
 ///
 /// # Errors
 /// As [`run_turn`]; an empty or non-increasing γ list or empty variant list.
-pub fn sweep_gamma<M: Fn(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3]>(
+pub fn sweep_gamma<M: FnMut(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3]>(
     trajectory: &[TrajectoryPoint],
     base: &BoomConfig,
-    measure: &M,
+    mut measure: M,
     variants: &[ErrorVariant],
     gammas: &[f64],
     limits: Limits,
@@ -260,7 +312,7 @@ pub fn sweep_gamma<M: Fn(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3]>(
         };
         let (mut da, mut de) = (0.0_f64, 0.0_f64);
         for v in variants {
-            let run = run_turn(trajectory, &config, measure, v, limits)?;
+            let run = run_turn(trajectory, &config, &mut measure, v, limits)?;
             da = da.max(run.max_angle_error);
             de = de.max(run.max_epsilon_error);
         }

@@ -10,7 +10,7 @@ pub use estimator::{
     Estimate, RateWeight, WlsWeights,
 };
 pub use gamma::{
-    CycleError, ErrorVariant, GammaRow, GammaSweepReport, Limits, TurnRun, ideal_accelerometer,
-    run_turn, sweep_gamma,
+    CycleError, ErrorVariant, GammaRow, GammaSweepReport, Limits, Sign, TurnRun,
+    ideal_accelerometer, run_turn, sweep_gamma,
 };
 pub use profile::{Breakpoint, Deceleration, Level, RotationProfile, Trajectory, TrajectoryPoint};

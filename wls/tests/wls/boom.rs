@@ -474,7 +474,7 @@ fn full_turn_with_constant_errors_behaves_as_the_paper_describes() {
         assert!(
             r.first_violation.is_none() && r.first_undefined.is_none(),
             "{}: {:?}",
-            v.label,
+            v.label(),
             r.first_violation
         );
         assert!(r.max_angle_error.to_degrees() < 0.6 && r.max_epsilon_error.to_degrees() < 0.3);

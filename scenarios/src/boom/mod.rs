@@ -1,0 +1,163 @@
+//! The `boom` scenario (SPEC B): erector-boom angle and angular acceleration from one
+//! three-axis accelerometer — direct inversion, the linearised 3×3 solve and WLS at γ = 0° and
+//! γ = 10° under the constant "+"/"−" errors ±Δa, the γ sweep, the unit/weight alternatives of
+//! the WLS, and (beyond the paper) the centripetal term and noise on top of the constant errors.
+//!
+//! The world is `sensors::Accelerometer` (gravity projection at α − γ, ε·r, optional ω²·r,
+//! ±Δa bias, noise, ±range saturation) driven by `wls::boom::RotationProfile`'s nominal turn;
+//! the estimators and the per-turn error bookkeeping are `wls::boom`'s (`run_turn`,
+//! `sweep_gamma`).
+//!
+//! Layout (the same as every scenario's): [`parameters`], [`simulation`] (the accelerometer
+//! as the measurement model, per-turn statistics), [`summary`] (every number) and [`report`]
+//! (formatting only). There is no records file: the scenario has no Monte Carlo runs (it is
+//! deterministic; noise, where enabled, draws from streams of the campaign seed), so a shard
+//! holds no records, and `merge` checks that the shards share parameters and seed and
+//! recomputes the same outputs.
+
+pub mod parameters;
+pub mod report;
+pub mod simulation;
+pub mod summary;
+
+use std::path::Path;
+
+use crate::campaign::Scenario;
+use crate::campaign::records::RecordFile;
+use crate::error::Result;
+use crate::montecarlo::Shard;
+use parameters::BoomParams;
+use summary::{BoomSummary, Computed};
+
+/// The boom scenario, as the campaign runs it.
+#[derive(Debug, Clone, Copy)]
+pub struct Boom;
+
+impl Scenario for Boom {
+    const NAME: &'static str = "boom";
+    type Params = BoomParams;
+    type Records = ();
+    type Summary = Computed;
+    type Json = BoomSummary;
+
+    fn set_runs(_params: &mut BoomParams, _runs: usize) -> Result<()> {
+        // Deterministic: nothing to repeat.
+        Ok(())
+    }
+
+    fn validate(params: &BoomParams, source: &Path) -> Result<()> {
+        params.validate(source)
+    }
+
+    fn record_files(_params: &BoomParams) -> Vec<RecordFile> {
+        Vec::new()
+    }
+
+    fn simulate(
+        _params: &BoomParams,
+        _seed: u64,
+        _shard: Shard,
+        _threads: Option<usize>,
+    ) -> Result<()> {
+        Ok(())
+    }
+
+    fn to_tables(_records: &()) -> Vec<Vec<Vec<f64>>> {
+        Vec::new()
+    }
+
+    fn from_tables(_params: &BoomParams, _tables: Vec<Vec<Vec<f64>>>) -> Result<()> {
+        Ok(())
+    }
+
+    fn summarise(
+        params: &BoomParams,
+        seed: u64,
+        _shard: Shard,
+        _records: &(),
+        threads: Option<usize>,
+    ) -> Result<Computed> {
+        summary::summarise(params, seed, threads, Path::new("<parameters>"))
+    }
+
+    fn json(summary: &Computed) -> &BoomSummary {
+        &summary.summary
+    }
+
+    fn write_outputs(summary: &Computed, dir: &Path) -> Result<()> {
+        report::write_outputs(summary, dir)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parameters::BoomParams;
+    use super::simulation::Meter;
+    use crate::montecarlo::run_rng;
+    use std::path::Path;
+    use wls::boom::{AngleUnit, ErrorVariant, TrajectoryPoint};
+
+    #[test]
+    fn bad_values_are_named() {
+        let p = BoomParams {
+            cycle_s: -1.0,
+            ..BoomParams::default()
+        };
+        let msg = p
+            .validate(Path::new("b.toml"))
+            .expect_err("negative cycle")
+            .to_string();
+        assert!(msg.contains("cycle_s") && msg.contains("b.toml"), "{msg}");
+        let p = BoomParams {
+            case_gammas_deg: vec![60.0],
+            ..BoomParams::default()
+        };
+        let msg = p
+            .validate(Path::new("b.toml"))
+            .expect_err("γ out of range")
+            .to_string();
+        assert!(msg.contains("case_gammas_deg"), "{msg}");
+        let err = crate::config::parse_toml::<BoomParams>(
+            Path::new("b.toml"),
+            "[estimator]\nepsilon_unit = \"Degree\"\nfoo = 1\n",
+        )
+        .expect_err("unknown key");
+        assert!(err.to_string().contains("foo"), "{err}");
+        let ok = crate::config::parse_toml::<BoomParams>(
+            Path::new("b.toml"),
+            "[estimator]\nepsilon_unit = \"Degree\"\n[sweep]\nstep_deg = 2.0\n",
+        )
+        .expect("valid");
+        assert_eq!(ok.estimator.epsilon_unit, AngleUnit::Degree);
+        assert_eq!(ok.sweep_gammas_deg().len(), 11);
+    }
+
+    #[test]
+    fn meter_matches_equation_1() {
+        let p = BoomParams::default();
+        let mut m = Meter::new(&p, false, 0.0, run_rng(1, 0));
+        let pt = TrajectoryPoint {
+            t: 0.0,
+            alpha: 40f64.to_radians(),
+            omega: 0.05,
+            epsilon: 0.004,
+        };
+        let gamma = 10f64.to_radians();
+        let [ax, ay, az] = m.read(&pt, gamma, &ErrorVariant::plus(0.02));
+        let beta = pt.alpha - gamma;
+        // Exact arithmetic up to the sensor's rotation by an identity misalignment.
+        assert!((ax - (9.8 * beta.sin() + 0.02)).abs() < 1e-12);
+        assert!((ay - (9.8 * beta.cos() + 0.004 * 25.0 + 0.02)).abs() < 1e-12);
+        assert!(az.abs() < 1e-12);
+        let [ax2, ..] = m.read(&pt, gamma, &ErrorVariant::minus(0.02));
+        assert!((ax - ax2 - 0.04).abs() < 1e-12);
+        // The variant's own size reaches the sensor, not the scenario's Δa.
+        let bigger = ErrorVariant {
+            sign: wls::boom::Sign::Plus,
+            size: 0.05,
+        };
+        let [ax3, ay3, _] = m.read(&pt, gamma, &bigger);
+        assert!((ax3 - (9.8 * beta.sin() + 0.05)).abs() < 1e-12);
+        assert!((ay3 - (9.8 * beta.cos() + 0.004 * 25.0 + 0.05)).abs() < 1e-12);
+    }
+}
