@@ -1,6 +1,6 @@
 //! The error type of the `scenarios` program: every variant names the file, key or value at
-//! fault, and all of them map to exit code 2 (bad input the user can fix) except
-//! [`Error::Write`] on output and [`Error::Compute`].
+//! fault. Bad input the user can fix ([`Error::Read`], [`Error::Invalid`], [`Error::Usage`])
+//! exits with code 2; output and computation failures with code 1.
 
 use std::path::PathBuf;
 
@@ -35,16 +35,77 @@ pub enum Error {
     /// A command-line value is invalid.
     #[error("{0}")]
     Usage(String),
-    /// A computation failed on valid input (a library error surfaced as is).
+    /// A computation failed on valid input (a library error surfaced as is). Kept for the
+    /// command-line modules that still use it; the paper scenarios use the typed variants
+    /// below.
     #[error("{0}")]
     Compute(String),
+    /// The `model` crate rejected a computation on valid input.
+    #[error("{context}: {source}")]
+    Model {
+        /// What was being computed.
+        context: &'static str,
+        /// The library's error.
+        source: model::Error,
+    },
+    /// The `kalman` crate rejected a computation on valid input.
+    #[error("{context}: {source}")]
+    Kalman {
+        /// What was being computed.
+        context: &'static str,
+        /// The library's error.
+        source: kalman::Error,
+    },
+    /// The `wls` crate rejected a computation on valid input.
+    #[error("{context}: {source}")]
+    Wls {
+        /// What was being computed.
+        context: &'static str,
+        /// The library's error.
+        source: wls::Error,
+    },
+    /// The `sensors` crate rejected a configuration.
+    #[error("{context}: {source}")]
+    Sensors {
+        /// Which sensor or process.
+        context: &'static str,
+        /// The library's error.
+        source: sensors::Error,
+    },
+    /// A computed model lacks a property the scenario relies on.
+    #[error("{0}")]
+    Degenerate(&'static str),
+    /// The worker pool could not start.
+    #[error("cannot start {threads:?} worker threads: {source}")]
+    Threads {
+        /// The requested number of threads (`None`: all cores).
+        threads: Option<usize>,
+        /// Rayon's error.
+        source: rayon::ThreadPoolBuildError,
+    },
+    /// A figure could not be drawn.
+    #[error("{path}: cannot draw: {message}")]
+    Plot {
+        /// The SVG file.
+        path: PathBuf,
+        /// The plotting library's message.
+        message: String,
+    },
 }
 
 impl Error {
     /// The process exit code for this error: 2 for input the user can fix, 1 otherwise.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Error::Write { .. } | Error::Compute(_) => 1,
+            Error::Write { .. }
+            | Error::Compute(_)
+            | Error::Model { .. }
+            | Error::Kalman { .. }
+            | Error::Wls { .. }
+            | Error::Sensors { .. }
+            | Error::Degenerate(_)
+            | Error::Threads { .. }
+            | Error::Plot { .. } => 1,
             _ => 2,
         }
     }

@@ -118,7 +118,7 @@ where
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
-        .map_err(|e| Error::Compute(format!("cannot start {threads:?} worker threads: {e}")))?;
+        .map_err(|source| Error::Threads { threads, source })?;
     let out = pool.install(|| {
         runs.into_par_iter()
             .map(|i| {

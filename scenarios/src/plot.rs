@@ -86,12 +86,15 @@ const PALETTE: [RGBColor; 8] = [
 
 /// Draws `series` into an SVG file at `path` (written whole or not at all).
 pub fn line_plot(path: &Path, figure: &Figure<'_>, series: &[Series]) -> Result<()> {
-    let svg = render(figure, series)
-        .map_err(|e| Error::Compute(format!("{}: cannot draw: {e}", path.display())))?;
+    let svg = render(path, figure, series)?;
     output::write_atomic(path, svg.as_bytes())
 }
 
-fn render(figure: &Figure<'_>, series: &[Series]) -> std::result::Result<String, String> {
+fn render(path: &Path, figure: &Figure<'_>, series: &[Series]) -> Result<String> {
+    let drawn = |e: &dyn std::fmt::Display| Error::Plot {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
     let log = figure.y_scale == Scale::Log;
     let keep = |&(x, y): &(f64, f64)| x.is_finite() && y.is_finite() && (!log || y > 0.0);
     let all = series
@@ -138,7 +141,7 @@ fn render(figure: &Figure<'_>, series: &[Series]) -> std::result::Result<String,
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        root.fill(&WHITE).map_err(|e| drawn(&e))?;
         let mut builder = ChartBuilder::on(&root);
         builder
             .caption(figure.title, ("sans-serif", 22))
@@ -154,18 +157,18 @@ fn render(figure: &Figure<'_>, series: &[Series]) -> std::result::Result<String,
                     .y_desc(figure.y_label)
                     .label_style(("sans-serif", 14))
                     .draw()
-                    .map_err(|e| e.to_string())?;
+                    .map_err(|e| drawn(&e))?;
                 for (i, s) in series.iter().enumerate() {
                     let color = PALETTE[s.color.unwrap_or(i) % PALETTE.len()];
                     let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(keep).collect();
                     let anno = if s.markers {
                         chart
                             .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                            .map_err(|e| e.to_string())?
+                            .map_err(|e| drawn(&e))?
                     } else {
                         chart
                             .draw_series(LineSeries::new(pts, color.stroke_width(2)))
-                            .map_err(|e| e.to_string())?
+                            .map_err(|e| drawn(&e))?
                     };
                     // An empty label keeps the series out of the legend (e.g. the data
                     // points drawn beside their labelled fit line).
@@ -181,23 +184,23 @@ fn render(figure: &Figure<'_>, series: &[Series]) -> std::result::Result<String,
                     .border_style(BLACK)
                     .label_font(("sans-serif", 14))
                     .draw()
-                    .map_err(|e| e.to_string())?;
+                    .map_err(|e| drawn(&e))?;
             }};
         }
         if log {
             draw!(
                 builder
                     .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-                    .map_err(|e| e.to_string())?
+                    .map_err(|e| drawn(&e))?
             );
         } else {
             draw!(
                 builder
                     .build_cartesian_2d(x0..x1, y0..y1)
-                    .map_err(|e| e.to_string())?
+                    .map_err(|e| drawn(&e))?
             );
         }
-        root.present().map_err(|e| e.to_string())?;
+        root.present().map_err(|e| drawn(&e))?;
     }
     Ok(svg)
 }
@@ -223,13 +226,14 @@ mod tests {
             ),
             Series::points("b", vec![(1.0, 0.5), (2.0, f64::NAN)]),
         ];
-        let svg = render(&fig, &s).expect("renders");
+        let svg = render(Path::new("t.svg"), &fig, &s).expect("renders");
         assert!(svg.starts_with("<svg") && svg.contains("</svg>"));
         let log = Figure {
             y_scale: Scale::Log,
             ..fig
         };
         let svg = render(
+            Path::new("t.svg"),
             &log,
             &[Series::line(
                 "p",
@@ -239,6 +243,6 @@ mod tests {
         .expect("renders");
         assert!(svg.contains("</svg>"));
         // An empty figure still renders (axes only) rather than failing.
-        assert!(render(&log, &[]).is_ok());
+        assert!(render(Path::new("t.svg"), &log, &[]).is_ok());
     }
 }

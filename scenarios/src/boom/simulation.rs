@@ -45,7 +45,10 @@ impl Meter {
                 sensor_offset_angle_deg: g,
                 ..self.base
             })
-            .map_err(|e| Error::Compute(format!("boom accelerometer at γ = {g}°: {e}")))?;
+            .map_err(|source| Error::Sensors {
+                context: "boom accelerometer",
+                source,
+            })?;
         }
         Ok(())
     }
@@ -106,6 +109,6 @@ pub(super) fn stats(run: &TurnRun) -> TurnStats {
     s
 }
 
-pub(super) fn wls_err(context: &str) -> impl Fn(wls::Error) -> Error + '_ {
-    move |e| Error::Compute(format!("boom: {context}: {e}"))
+pub(super) fn wls_err(context: &'static str) -> impl Fn(wls::Error) -> Error {
+    move |source| Error::Wls { context, source }
 }

@@ -62,12 +62,12 @@ fn dm_to_rows<const R: usize, const C: usize>(m: &DMatrix<f64>) -> [[f64; C]; R]
 /// The equilibrium "level" direction of the model: the eigenvector of A for the integrator's
 /// eigenvalue 1 (velocity, rolling and quantization states zero; damper in equilibrium),
 /// scaled so that the level output y2 moves by one.
-fn level_direction(m: &FuelModel) -> Result<[f64; 7], String> {
+fn level_direction(m: &FuelModel) -> Result<[f64; 7]> {
     let shifted = &m.a - DMatrix::<f64>::identity(7, 7);
     let svd = shifted.svd(false, true);
-    let v_t = svd
-        .v_t
-        .ok_or_else(|| "SVD of A − I gave no right singular vectors".to_string())?;
+    let v_t = svd.v_t.ok_or(Error::Degenerate(
+        "fuel model: the SVD of A − I gave no right singular vectors",
+    ))?;
     let (k, _) =
         svd.singular_values
             .iter()
@@ -81,7 +81,9 @@ fn level_direction(m: &FuelModel) -> Result<[f64; 7], String> {
     let v: DVector<f64> = v_t.row(k).transpose();
     let y2 = (m.g.row(1) * &v)[(0, 0)];
     if y2.abs() < 1e-12 {
-        return Err("A has no integrator mode that moves the level output y2".into());
+        return Err(Error::Degenerate(
+            "fuel model: A has no integrator mode that moves the level output y2",
+        ));
     }
     let v = v / y2;
     Ok(std::array::from_fn(|i| v[i]))
@@ -105,7 +107,7 @@ fn prior_covariance(m: &FuelModel, dir: &[f64; 7], level_std: f64) -> DMatrix<f6
 /// The filter engine's model of `m`: `F = A`, `H = C`, process noise `BQBᵀ`, `R = DQDᵀ`, the
 /// mean fill rate as a control input (`u ≡ 1` through `known_input`), and with `cross` the
 /// cross-covariance `S = BQDᵀ` (the engine's `E[w_k v_kᵀ]`, the model's convention).
-fn kalman_model<const M: usize>(m: &FuelModel, cross: bool) -> Result<FixedModel<7, M, 1>, String> {
+fn kalman_model<const M: usize>(m: &FuelModel, cross: bool) -> Result<FixedModel<7, M, 1>> {
     let channels = m.channels;
     let F: [[f64; 7]; 7] = dm_to_rows(&m.a);
     let H: [[f64; 7]; M] = dm_to_rows(&m.c);
@@ -114,12 +116,21 @@ fn kalman_model<const M: usize>(m: &FuelModel, cross: bool) -> Result<FixedModel
     let B: [[f64; 1]; 7] = std::array::from_fn(|i| [m.known_input[i]]);
     let mut model = FixedModel::<7, M, 1>::new(Fixed::new(), &F, &H, &Q, &R)
         .and_then(|model| model.with_control(&B))
-        .map_err(|e| format!("filter model ({channels:?}): {e}"))?;
+        .map_err(|source| Error::Kalman {
+            context: match channels {
+                Channels::LevelOnly => "filter model (level only)",
+                _ => "filter model (level and tilt)",
+            },
+            source,
+        })?;
     if cross {
         let S: [[f64; M]; 7] = dm_to_rows(&m.s);
         model = model
             .with_cross_covariance(&S)
-            .map_err(|e| format!("filter model with S: {e}"))?;
+            .map_err(|source| Error::Kalman {
+                context: "filter model with S",
+                source,
+            })?;
     }
     Ok(model)
 }
@@ -130,10 +141,13 @@ fn filter_setup<const M: usize>(
     realisation: Realisation,
     cross: bool,
     level_std: f64,
-) -> Result<FilterSetup<M>, String> {
+) -> Result<FilterSetup<M>> {
     let m = fuel
         .build(channels, realisation)
-        .map_err(|e| e.to_string())?;
+        .map_err(|source| Error::Model {
+            context: "fuel model",
+            source,
+        })?;
     let model = kalman_model::<M>(&m, cross)?;
     let level_direction = level_direction(&m)?;
     let p0: [[f64; 7]; 7] = dm_to_rows(&prior_covariance(&m, &level_direction, level_std));
@@ -149,8 +163,10 @@ fn filter_setup<const M: usize>(
         max_steps: 100_000,
         ..ScheduleOptions::default()
     };
-    let schedule = GainSchedule::new(model, &p0, opts)
-        .map_err(|e| format!("gain schedule ({channels:?}, S: {cross}): {e}"))?;
+    let schedule = GainSchedule::new(model, &p0, opts).map_err(|source| Error::Kalman {
+        context: "gain schedule",
+        source,
+    })?;
     Ok(FilterSetup {
         schedule,
         level_direction,
@@ -163,7 +179,7 @@ impl Point {
     ///
     /// # Errors
     /// A message naming the model or filter that rejected the parameters.
-    pub fn new(world: World) -> Result<Self, String> {
+    pub fn new(world: World) -> Result<Self> {
         let fuel = world.fuel;
         let (r, s) = (world.realisation, world.initial_level_std);
         let kf1 = filter_setup::<1>(&fuel, Channels::LevelOnly, r, false, s)?;
@@ -193,7 +209,7 @@ impl Point {
     ///
     /// # Errors
     /// A message if a sensor or filter rejects its configuration (never for valid worlds).
-    pub fn run<R: Rng + Clone>(&self, rng: &mut R) -> Result<Outcome, String> {
+    pub fn run<R: Rng + Clone>(&self, rng: &mut R) -> Result<Outcome> {
         let w = &self.world;
         let p = &w.fuel;
         let dt = p.dt;
@@ -209,7 +225,10 @@ impl Point {
             },
             dt,
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(|source| Error::Sensors {
+            context: "platform motion",
+            source,
+        })?;
         let mut velocity = ExpCorrelated::new(
             &ExpCorrelatedConfig {
                 std_dev: p.d_c.sqrt(),
@@ -217,7 +236,10 @@ impl Point {
             },
             dt,
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(|source| Error::Sensors {
+            context: "fill-velocity fluctuation",
+            source,
+        })?;
         let sensor_cfg = LevelSensorConfig {
             step_m: p.delta,
             damper_time_constant_s: p.t_y,
@@ -225,7 +247,10 @@ impl Point {
             sensor_angle_deg: p.phi.to_degrees(),
             ..LevelSensorConfig::default()
         };
-        let mut sensor = LevelSensor::new(&sensor_cfg, dt).map_err(|e| e.to_string())?;
+        let mut sensor = LevelSensor::new(&sensor_cfg, dt).map_err(|source| Error::Sensors {
+            context: "level sensor",
+            source,
+        })?;
         let mut sensor_mid = LevelSensor::new(
             &LevelSensorConfig {
                 mid_step_compensation: true,
@@ -233,7 +258,10 @@ impl Point {
             },
             dt,
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(|source| Error::Sensors {
+            context: "compensated level sensor",
+            source,
+        })?;
         let mut gyro = Gyro::new(
             &GyroConfig {
                 sample_period_s: dt,
@@ -242,7 +270,10 @@ impl Point {
             },
             dt,
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(|source| Error::Sensors {
+            context: "gyro",
+            source,
+        })?;
 
         // Drawn first, and always, so that the rest of the stream is the same either way.
         let phase: f64 = rng.random();
@@ -343,11 +374,12 @@ fn fire(stop: &mut [Option<usize>; 5], i: usize, k: usize, signal: f64, limit: f
 fn new_filter<const M: usize>(
     s: &FilterSetup<M>,
     level: f64,
-) -> Result<ScheduledFilter<'_, Fixed<7, M, 1>>, String> {
+) -> Result<ScheduledFilter<'_, Fixed<7, M, 1>>> {
     let x0: [f64; 7] = std::array::from_fn(|i| s.level_direction[i] * level);
-    s.schedule
-        .runner(&x0)
-        .map_err(|e| format!("filter prior: {e}"))
+    s.schedule.runner(&x0).map_err(|source| Error::Kalman {
+        context: "filter prior",
+        source,
+    })
 }
 
 /// Updates with `z`, predicts, and returns the filtered tank level y2 = G₂·x̂_{k|k}.
@@ -357,9 +389,11 @@ fn step_level<const M: usize>(
     s: &FilterSetup<M>,
     z: &[f64],
     u: &[f64],
-) -> Result<f64, String> {
-    f.step(z, Some(u))
-        .map_err(|e| format!("filter step: {e}"))?;
+) -> Result<f64> {
+    f.step(z, Some(u)).map_err(|source| Error::Kalman {
+        context: "filter step",
+        source,
+    })?;
     Ok(f.state().iter().zip(&s.level_row).map(|(x, g)| x * g).sum())
 }
 
@@ -383,7 +417,7 @@ pub fn simulate(
         let mut ranges = Vec::new();
         for (_, world) in &sweep.points {
             let p = points.len();
-            points.push(Point::new(*world).map_err(Error::Compute)?);
+            points.push(Point::new(*world)?);
             let start = jobs.len();
             jobs.extend(shard.runs(sweep.runs).map(|r| (p, r)));
             ranges.push(start..jobs.len());
@@ -398,7 +432,7 @@ pub fn simulate(
     })?;
     let mut flat = Vec::with_capacity(outcomes.len());
     for o in outcomes {
-        flat.push(o.map_err(Error::Compute)?);
+        flat.push(o?);
     }
     Ok(sweeps
         .iter()

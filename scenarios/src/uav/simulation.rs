@@ -28,11 +28,11 @@ pub(super) fn arr22(m: &DMatrix<f64>) -> [[f64; 2]; 2] {
 }
 
 pub(super) fn model_err(context: &'static str) -> impl Fn(model::Error) -> Error {
-    move |e| Error::Compute(format!("uav: {context}: {e}"))
+    move |source| Error::Model { context, source }
 }
 
 pub(super) fn kalman_err(context: &'static str) -> impl Fn(kalman::Error) -> Error {
-    move |e| Error::Compute(format!("uav: {context}: {e}"))
+    move |source| Error::Kalman { context, source }
 }
 
 /// The continuous channel: ẋ = A x + B u + G w, z = H x + v with A = [[0, 1], [0, 0]],
@@ -108,11 +108,12 @@ pub(super) fn design(p: &UavParams) -> Result<Design> {
         h[(0, 1)],
         0.0,
     );
-    let n = m.lu().solve(&Vector3::new(0.0, 0.0, 1.0)).ok_or_else(|| {
-        Error::Compute(
-            "uav: [[F − I, B], [H, 0]] is singular: the plant cannot hold a constant output".into(),
-        )
-    })?;
+    let n = m
+        .lu()
+        .solve(&Vector3::new(0.0, 0.0, 1.0))
+        .ok_or(Error::Degenerate(
+            "uav: [[F − I, B], [H, 0]] is singular: the plant cannot hold a constant output",
+        ))?;
     Ok(Design {
         l: to_na(lqr.gain.as_ref()),
         k: to_na(ss.gain.as_ref()),
