@@ -4,7 +4,10 @@
 //! - no line of a source, manifest or Markdown file ends in white space;
 //! - internal path dependencies carry `version = "0.0.0"` in `[dependencies]` and no version
 //!   in `[dev-dependencies]` (STYLE.md, after rust-analyzer);
-//! - library crates depend on no sibling except as STYLE.md allows.
+//! - library crates depend on no sibling except as STYLE.md allows;
+//! - no Rust source file is longer than [`MAX_LINES`] lines;
+//! - no `Result<_, String>` in `scenarios` (errors are typed);
+//! - no import cycle between the modules of a crate.
 
 use std::path::{Path, PathBuf};
 
@@ -18,6 +21,33 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("sensors", &["model"]),
     ("scenarios", &["model", "kalman", "wls", "sensors"]),
     ("xtask", &[]),
+];
+
+/// The longest a Rust source file may be.
+const MAX_LINES: usize = 800;
+
+/// Files still over [`MAX_LINES`], each waiting to be split by the change that owns it; the
+/// list only shrinks (an entry whose file is back under the limit is itself reported).
+const OVER_LENGTH: &[&str] = &[
+    "kalman/src/filter.rs",
+    "kalman/src/riccati.rs",
+    "scenarios/tests/cli/userdata.rs",
+    "wls/src/boom/estimator.rs",
+];
+
+/// Import cycles still present, as `crate: a -> b` lines of [`cycles`]' output, each waiting
+/// for the change that owns it; the list only shrinks, like [`OVER_LENGTH`].
+const KNOWN_CYCLES: &[&str] = &[
+    "kalman: filter -> schedule -> filter",
+    "kalman: kernels -> storage -> kernels",
+];
+
+/// Files of `scenarios` that still return `Result<_, String>` (clap value parsers and
+/// helpers owned by the command-line changes); the list only shrinks, like [`OVER_LENGTH`].
+const STRING_ERRORS: &[&str] = &[
+    "scenarios/src/main.rs",
+    "scenarios/src/output.rs",
+    "scenarios/src/userdata.rs",
 ];
 
 /// Returns one human-readable line per problem found below `root`.
@@ -49,8 +79,211 @@ pub(crate) fn check(root: &Path) -> Result<Vec<String>> {
         if path.file_name().is_some_and(|n| n == "Cargo.toml") && rel != "Cargo.toml" {
             manifest(&rel, &text, &mut problems);
         }
+        if ext == "rs" {
+            let lines = text.lines().count();
+            let listed = OVER_LENGTH.contains(&rel.as_str());
+            if lines > MAX_LINES && !listed {
+                problems.push(format!(
+                    "{rel}: {lines} lines, more than {MAX_LINES}: split it by what it does"
+                ));
+            }
+            if lines <= MAX_LINES && listed {
+                problems.push(format!(
+                    "{rel}: {lines} lines, within the limit: remove it from OVER_LENGTH"
+                ));
+            }
+            if rel.starts_with("scenarios/") {
+                let listed = STRING_ERRORS.contains(&rel.as_str());
+                let mut any = false;
+                for (i, line) in text.lines().enumerate() {
+                    any |= string_result(line);
+                    if string_result(line) && !listed {
+                        problems.push(format!(
+                            "{rel}:{}: `Result<_, String>`: return a typed error",
+                            i + 1
+                        ));
+                    }
+                }
+                if listed && !any {
+                    problems.push(format!(
+                        "{rel}: no `Result<_, String>` left: remove it from STRING_ERRORS"
+                    ));
+                }
+            }
+        }
+    }
+    let mut found = Vec::new();
+    for krate in ALLOWED.iter().map(|(name, _)| *name) {
+        let src = root.join(krate).join("src");
+        if src.is_dir() {
+            found.extend(cycles(krate, &src, &files)?);
+        }
+    }
+    for c in &found {
+        if !KNOWN_CYCLES.contains(&c.as_str()) {
+            problems.push(format!("import cycle: {c}"));
+        }
+    }
+    for k in KNOWN_CYCLES {
+        if !found.iter().any(|c| c == k) {
+            problems.push(format!(
+                "import cycle `{k}` is gone: remove it from KNOWN_CYCLES"
+            ));
+        }
     }
     Ok(problems)
+}
+
+/// Whether `line` spells a `Result` whose error type is `String` (outside a comment).
+fn string_result(line: &str) -> bool {
+    let code = line.split("//").next().unwrap_or("");
+    let mut rest = code;
+    while let Some(at) = rest.find("Result<") {
+        let after = &rest[at + "Result<".len()..];
+        // Find the top-level comma and the closing `>` of this `Result<…>`.
+        let mut depth = 0usize;
+        let mut comma = None;
+        for (i, c) in after.char_indices() {
+            match c {
+                '<' | '(' | '[' => depth += 1,
+                '>' | ')' | ']' if depth == 0 => {
+                    if let Some(k) = comma
+                        && after[k + 1..i].trim() == "String"
+                    {
+                        return true;
+                    }
+                    break;
+                }
+                '>' | ')' | ']' => depth -= 1,
+                ',' if depth == 0 => comma = Some(i),
+                _ => {}
+            }
+        }
+        rest = after;
+    }
+    false
+}
+
+/// The module path of a source file below `src` (`a/b.rs` and `a/b/mod.rs` → `a::b`; the
+/// crate root → ``), or `None` for a file that is not a module of the crate (`bin/`, …).
+fn module_of(src: &Path, path: &Path) -> Option<String> {
+    let rel = path.strip_prefix(src).ok()?;
+    let mut parts: Vec<String> = rel
+        .iter()
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    let file = parts.pop()?;
+    let stem = file.strip_suffix(".rs")?;
+    if parts.first().is_some_and(|p| p == "bin") {
+        return None;
+    }
+    if !matches!(stem, "mod" | "lib" | "main") {
+        parts.push(stem.to_string());
+    } else if matches!(stem, "lib" | "main") && !parts.is_empty() {
+        return None;
+    }
+    Some(parts.join("::"))
+}
+
+/// Import cycles between the modules of crate `krate` (sources below `src`): one line per
+/// cycle, `krate: a -> b -> a`. A module's imports are the `crate::…`, `super::…` and
+/// `self::…` paths in its file before its `#[cfg(test)]` section, resolved to the longest
+/// module they name; a module's own submodules and ancestors do not count.
+fn cycles(krate: &str, src: &Path, files: &[PathBuf]) -> Result<Vec<String>> {
+    use std::collections::{BTreeMap, BTreeSet};
+    let mut modules: BTreeMap<String, PathBuf> = BTreeMap::new();
+    for f in files {
+        if f.starts_with(src)
+            && f.extension().is_some_and(|e| e == "rs")
+            && let Some(m) = module_of(src, f)
+        {
+            modules.insert(m, f.clone());
+        }
+    }
+    let join = |a: &str, b: &str| {
+        if a.is_empty() {
+            b.to_string()
+        } else {
+            format!("{a}::{b}")
+        }
+    };
+    let mut edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (m, f) in &modules {
+        let text =
+            std::fs::read_to_string(f).with_context(|| format!("reading {}", f.display()))?;
+        let body = text.split("#[cfg(test)]").next().unwrap_or("");
+        let parent = m.rsplit_once("::").map_or("", |(p, _)| p).to_string();
+        let mut out = BTreeSet::new();
+        for (prefix, base) in [
+            ("crate::", String::new()),
+            ("super::", parent.clone()),
+            ("self::", m.clone()),
+        ] {
+            let mut rest = body;
+            while let Some(at) = rest.find(prefix) {
+                let before = rest[..at].chars().last();
+                rest = &rest[at + prefix.len()..];
+                if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
+                    continue;
+                }
+                let path: String = rest
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
+                    .collect();
+                let mut target = base.clone();
+                let mut best = None;
+                for seg in path.split("::").filter(|s| !s.is_empty()) {
+                    target = join(&target, seg);
+                    if modules.contains_key(&target) {
+                        best = Some(target.clone());
+                    }
+                }
+                if let Some(t) = best {
+                    let related = t.starts_with(&format!("{m}::"))
+                        || m.starts_with(&format!("{t}::"))
+                        || t.is_empty()
+                        || *m == t;
+                    if !related {
+                        out.insert(t);
+                    }
+                }
+            }
+        }
+        edges.insert(m.clone(), out);
+    }
+    // Two modules on a cycle reach each other; report each strongly connected pair once,
+    // with the shortest path round.
+    let reach = |from: &str| -> BTreeMap<String, String> {
+        let mut prev: BTreeMap<String, String> = BTreeMap::new();
+        let mut queue = std::collections::VecDeque::from([from.to_string()]);
+        while let Some(n) = queue.pop_front() {
+            for t in edges.get(&n).into_iter().flatten() {
+                if !prev.contains_key(t) {
+                    prev.insert(t.clone(), n.clone());
+                    queue.push_back(t.clone());
+                }
+            }
+        }
+        prev
+    };
+    let mut seen = BTreeSet::new();
+    let mut found = Vec::new();
+    for m in modules.keys() {
+        let prev = reach(m);
+        if prev.contains_key(m) && !seen.contains(m) {
+            let mut path = vec![m.clone()];
+            let mut at = prev[m].clone();
+            while at != *m {
+                path.push(at.clone());
+                at = prev[&at].clone();
+            }
+            path.push(m.clone());
+            path.reverse();
+            seen.extend(path.iter().cloned());
+            found.push(format!("{krate}: {}", path.join(" -> ")));
+        }
+    }
+    Ok(found)
 }
 
 /// Checks one crate manifest's internal dependencies.
@@ -118,4 +351,57 @@ fn walk(root: &Path, dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn string_results_are_found_and_typed_ones_are_not() {
+        assert!(string_result("fn f() -> Result<u8, String> {"));
+        assert!(string_result(
+            "fn f() -> std::result::Result<Vec<(u8, u8)>, String> {"
+        ));
+        assert!(!string_result("fn f() -> Result<String, Error> {"));
+        assert!(!string_result("fn f() -> Result<String> {"));
+        assert!(!string_result("// Result<u8, String> in a comment"));
+    }
+
+    #[test]
+    fn module_paths_follow_the_file_layout() {
+        let src = Path::new("/c/src");
+        let m = |p: &str| module_of(src, Path::new(p));
+        assert_eq!(m("/c/src/lib.rs").as_deref(), Some(""));
+        assert_eq!(m("/c/src/a.rs").as_deref(), Some("a"));
+        assert_eq!(m("/c/src/a/mod.rs").as_deref(), Some("a"));
+        assert_eq!(m("/c/src/a/b.rs").as_deref(), Some("a::b"));
+        assert_eq!(m("/c/src/bin/x.rs"), None);
+    }
+
+    #[test]
+    fn a_two_module_cycle_is_found_and_a_chain_is_not() {
+        let dir = std::env::temp_dir().join(format!("tidy-cycles-{}", std::process::id()));
+        let src = dir.join("src");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&src).expect("mkdir");
+        let write = |name: &str, text: &str| {
+            std::fs::write(src.join(name), text).expect("write");
+            src.join(name)
+        };
+        let files = vec![
+            write("lib.rs", "//! r\npub mod a;\npub mod b;\npub mod c;\n"),
+            write("a.rs", "//! a\nuse crate::b::X;\n"),
+            write("b.rs", "//! b\nuse super::c::Y;\n"),
+            write(
+                "c.rs",
+                "//! c\nuse crate::a::Z;\n#[cfg(test)]\nuse crate::b::W;\n",
+            ),
+        ];
+        let found = cycles("k", &src, &files).expect("reads");
+        assert_eq!(found, vec!["k: a -> b -> c -> a".to_string()]);
+        std::fs::write(src.join("c.rs"), "//! c\n").expect("write");
+        assert!(cycles("k", &src, &files).expect("reads").is_empty());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
