@@ -419,3 +419,18 @@ pub struct World {
     /// How the filters' model is discretised.
     pub realisation: Realisation,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_world_is_the_fuel_models_default() {
+        // The scenario states SPEC F's values in the units of its TOML file (mm, degrees);
+        // converted to SI they must be `model::FuelParams::default()` exactly, so the two
+        // statements of the defaults cannot drift apart.
+        let p = FuelingParams::default();
+        let world = p.world(p.max_amplitude_deg, Swept::Nothing);
+        assert_eq!(world.fuel, FuelParams::default());
+    }
+}
