@@ -8,12 +8,17 @@
 //! sweeps they define), [`simulation`] (one run: truth world + strategies; the campaign's
 //! slice of runs), [`records`] (per-run outcomes, `runs_<sweep>.csv`, full-precision `f64`:
 //! the ground truth), [`summary`] (every number, from the records alone) and [`report`]
-//! (CSV, SVG and `report.md`, formatting only). [`Fueling`] ties them to the campaign.
+//! (CSV, SVG and `report.md`, formatting only). [`statistics`] gives every ratio its interval
+//! and every strategy its tail; [`calibration`] searches the parameters the paper does not
+//! state (its own simulations, not sharded). [`Fueling`] ties them to the campaign.
 
+pub mod calibration;
+pub mod calibration_report;
 pub mod parameters;
 pub mod records;
 pub mod report;
 pub mod simulation;
+pub mod statistics;
 pub mod summary;
 
 use std::path::Path;
@@ -81,9 +86,15 @@ impl Scenario for Fueling {
         seed: u64,
         shard: Shard,
         records: &Vec<SweepRecords>,
-        _threads: Option<usize>,
+        threads: Option<usize>,
     ) -> Result<Summary> {
-        summary::summarise(params, seed, shard, records)
+        let mut summary = summary::summarise(params, seed, shard, records)?;
+        // Not sharded: a function of (params, seed) alone, computed by a whole run and by
+        // `merge` alike, skipped by a shard (see `calibration`).
+        if shard == Shard::ALL {
+            summary.calibration = calibration::calibrate(params, seed, threads)?;
+        }
+        Ok(summary)
     }
 
     fn json(summary: &Summary) -> &Summary {

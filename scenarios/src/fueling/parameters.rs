@@ -7,6 +7,7 @@ use std::path::Path;
 use model::{FuelParams, Realisation};
 use serde::{Deserialize, Serialize};
 
+use super::calibration::CalibrationConfig;
 use crate::error::{Error, Result};
 
 /// How the filters' model is discretised (`model::Realisation`).
@@ -98,6 +99,8 @@ pub struct FuelingParams {
     pub invariance_amplitudes_deg: Vec<f64>,
     /// Periods of the invariance table, s.
     pub invariance_periods_s: Vec<f64>,
+    /// The search over the unstated parameters (`[calibration]`, see `calibration`).
+    pub calibration: CalibrationConfig,
 }
 
 impl Default for FuelingParams {
@@ -130,6 +133,7 @@ impl Default for FuelingParams {
             steps_mm: vec![1.0, 2.5, 5.0, 10.0, 20.0],
             invariance_amplitudes_deg: vec![0.25, 0.5, 0.75, 1.0],
             invariance_periods_s: vec![6.0, 10.0, 14.0],
+            calibration: CalibrationConfig::default(),
         }
     }
 }
@@ -237,6 +241,9 @@ impl FuelingParams {
                 format!("{:?}", self.amplitudes_deg),
             );
         }
+        self.calibration
+            .check()
+            .map_err(|rule| Error::invalid(source, rule))?;
         // Let the model check the combination (e.g. an overflowing discretisation).
         let world = self.world(self.max_amplitude_deg, Swept::Nothing);
         world

@@ -4,8 +4,11 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use super::calibration;
+use super::calibration_report;
 use super::parameters::FuelingParams;
 use super::records::{STRATEGIES, STRATEGY_LABELS};
+use super::statistics::RatioCi;
 use super::summary::{Entry, NyquistNull, PAPER_KF1_RATIO, PerStrategy, Stat, Summary};
 use crate::error::Result;
 use crate::output;
@@ -42,6 +45,9 @@ pub fn write_outputs(summary: &Summary, dir: &Path) -> Result<()> {
     }
     output::write_atomic(&dir.join("amplitude_fits.csv"), fits.as_bytes())?;
     write_plots(summary, dir)?;
+    if let Some(c) = &summary.calibration {
+        calibration::write_files(c, dir)?;
+    }
     output::write_atomic(&dir.join("report.md"), report_md(summary).as_bytes())
 }
 
@@ -185,6 +191,15 @@ fn f2(x: f64) -> String {
     }
 }
 
+/// A ratio with its 95 % interval: `0.72 [0.69, 0.75]`.
+fn ci(r: &RatioCi) -> String {
+    if r.ratio.is_finite() && r.lo.is_finite() {
+        format!("{:.2} [{:.2}, {:.2}]", r.ratio, r.lo, r.hi)
+    } else {
+        f2(r.ratio)
+    }
+}
+
 fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
         (lo.min(x), hi.max(x))
@@ -255,6 +270,7 @@ pub fn report_md(sm: &Summary) -> String {
     let p = &sm.params;
     let r = &sm.at_max_amplitude;
     let ratio = &r.std_over_relay;
+    let cis = &sm.margins.ratios;
     let amp = &sm.amplitude_sweep;
     let top = amp
         .iter()
@@ -317,6 +333,10 @@ pub fn report_md(sm: &Summary) -> String {
         "## The paper's results next to ours (A_max = {}°)\n",
         r.amplitude_deg
     );
+    s.push_str(
+        "Ratios of random errors are given as estimate [95 % confidence interval]: delta \
+         method over the runs (both strategies see the same runs; see *Tails and intervals*).\n\n",
+    );
     s.push_str("| quantity | paper | ours | comment |\n|---|---|---|---|\n");
     let cmp = |ours: f64, paper: f64| {
         if (ours - paper).abs() <= 0.05 {
@@ -334,27 +354,27 @@ pub fn report_md(sm: &Summary) -> String {
         s,
         "| random error, one-channel KF / relay logic | ≈ {:.2} | {} | {} |",
         r.paper_kf1,
-        f2(ratio.kf1),
+        ci(&cis.kf1),
         cmp(ratio.kf1, r.paper_kf1)
     );
     let _ = writeln!(
         s,
         "| random error, two-channel KF / relay logic | ≈ {:.2} | {} | {} |",
         r.paper_kf2,
-        f2(ratio.kf2),
+        ci(&cis.kf2),
         cmp(ratio.kf2, r.paper_kf2)
     );
     let phase = |on: bool| {
         sm.target_sweep
             .iter()
-            .find(|e| (e.at["random_target_phase"] > 0.5) == on)
-            .map(|e| {
-                let st = &e.stats;
+            .zip(&sm.margins.target)
+            .find(|(e, _)| (e.at["random_target_phase"] > 0.5) == on)
+            .map(|(e, m)| {
                 format!(
                     "{} / {} (relay {} mm)",
-                    f2(st.kf1.std_mm / st.relay.std_mm),
-                    f2(st.kf2.std_mm / st.relay.std_mm),
-                    f2(st.relay.std_mm)
+                    ci(&m.ratios.kf1),
+                    ci(&m.ratios.kf2),
+                    f2(e.stats.relay.std_mm)
                 )
             })
             .unwrap_or_default()
@@ -369,7 +389,7 @@ pub fn report_md(sm: &Summary) -> String {
     let _ = writeln!(
         s,
         "| two-channel KF with cross-covariance S / relay | — (not studied) | {} | the paper ignores S = BQDᵀ; {} |",
-        f2(ratio.kf2_cross),
+        ci(&cis.kf2_cross),
         if ratio.kf2_cross < ratio.kf2 {
             "modelling it helps"
         } else {
@@ -379,7 +399,7 @@ pub fn report_md(sm: &Summary) -> String {
     let _ = writeln!(
         s,
         "| two-channel KF with mid-step compensation / relay | — (not studied) | {} | compensation removes the −δ/2 quantizer bias from the mean; the spread {} |",
-        f2(ratio.kf2_midstep),
+        ci(&cis.kf2_midstep),
         if (ratio.kf2_midstep - ratio.kf2).abs() < 0.02 {
             "is unchanged"
         } else {
@@ -488,12 +508,13 @@ pub fn report_md(sm: &Summary) -> String {
     let steps: Vec<String> = sm
         .step_sweep
         .iter()
-        .map(|e| {
+        .zip(&sm.margins.step)
+        .map(|(e, m)| {
             format!(
                 "δ = {} mm: {} / {}",
                 e.at["step_mm"],
-                f2(e.stats.kf2.std_mm / e.stats.relay.std_mm),
-                f2(e.stats.kf1.std_mm / e.stats.relay.std_mm)
+                ci(&m.ratios.kf2),
+                ci(&m.ratios.kf1)
             )
         })
         .collect();
@@ -523,6 +544,10 @@ pub fn report_md(sm: &Summary) -> String {
     );
     if let Some(note) = nyquist_note(p, r.amplitude_deg, top.as_ref(), sm.nyquist_null) {
         let _ = writeln!(s, "{note}");
+    }
+    s.push_str(&calibration_report::tails_section(sm));
+    if let Some(c) = &sm.calibration {
+        s.push_str(&calibration_report::section(c, p));
     }
 
     // --- Fig. 1

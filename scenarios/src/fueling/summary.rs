@@ -7,8 +7,10 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use super::calibration::Calibration;
 use super::parameters::{FuelingParams, Sweep, Swept};
 use super::records::SweepRecords;
+use super::statistics::{self, Margins};
 use crate::error::{Error, Result};
 use crate::montecarlo::Shard;
 
@@ -158,6 +160,11 @@ pub struct Summary {
     /// Runs in which a strategy never stopped within the simulated time (excluded from its
     /// statistics), over all sweeps.
     pub runs_without_stop: PerStrategy<usize>,
+    /// Ratio intervals and tail quantiles (`statistics`).
+    pub margins: Margins,
+    /// The search over the unstated parameters (absent when off, and in a shard).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<Calibration>,
     /// The invariance table's points as sweep entries (`invariance.csv`).
     #[serde(skip)]
     pub invariance_entries: Vec<Entry>,
@@ -309,6 +316,7 @@ pub fn summarise(
             .count()
     });
     let invariance_entries = all[6].clone();
+    let margins = statistics::margins(&sweeps, records, top_i);
     let nyquist_null = level_nyquist_power(p, top_x, p.realisation.to_model())
         .filter(|&ours| ours < NYQUIST_NULL)
         .map(|ours| NyquistNull {
@@ -345,6 +353,8 @@ pub fn summarise(
             std_spread_mm,
         },
         runs_without_stop,
+        margins,
+        calibration: None,
         invariance_entries,
         nyquist_null,
     })

@@ -6,9 +6,10 @@ use std::path::Path;
 
 use crate::common::{assert_same_files, fails, ok, read, run, scratch, summary};
 
-/// One amplitude sweep of three points and one point for each other sweep: the smallest
-/// campaign that exercises every output.
+/// One amplitude sweep of three points and one point for each other sweep, no calibration
+/// search: the smallest campaign that exercises every output but the calibration's.
 const SMALL: &str = "\
+calibration.search = \"off\"
 amplitudes_deg = [0.0, 0.5, 1.0]
 periods_s = [10.0]
 fill_rates_mm_s = [10.0]
@@ -133,7 +134,12 @@ fn exact_tustin_report_explains_the_filter_with_s() {
 #[test]
 fn threads_and_shards_give_the_same_files() {
     let dir = scratch("fu", "shards");
-    std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
+    // A calibration of a few sets: it is not sharded, so a shard skips it and the merge must
+    // compute it exactly as the single run does.
+    let tiny = "calibration.design_sets = 3\ncalibration.runs_per_set = 6\n\
+                calibration.refine_iterations = 2\n";
+    let config = SMALL.replace("calibration.search = \"off\"\n", tiny);
+    std::fs::write(dir.join("small.toml"), config).expect("write config");
     let with = |extra: &[&str]| {
         let mut a = vec!["fueling", "--config", "small.toml", "--runs", "24"];
         a.extend_from_slice(extra);
@@ -151,9 +157,31 @@ fn threads_and_shards_give_the_same_files() {
     let half = read(&dir.join("s1/summary.json"));
     assert!(half.contains("\"shard\": \"1/2\""), "a shard says so");
     assert_ne!(half, whole);
+    assert!(whole.contains("\"calibration\"") && !half.contains("\"calibration\""));
+    assert!(
+        !dir.join("s1/calibration.toml").exists(),
+        "a shard skips the calibration"
+    );
     ok(&dir, &["merge", "s1", "s2", "--out", "merged"]);
     // Every file of the merge, not only the summary, equals the single run's.
     assert_same_files(&dir.join("t1"), &dir.join("merged"));
+    // calibration.toml is a configuration the scenario accepts, with the best set in it.
+    let best = summary(&dir.join("t1"))["calibration"]["best"]["params"]["step_mm"]
+        .as_f64()
+        .expect("best step");
+    let rerun = [
+        "fueling",
+        "--config",
+        "t1/calibration.toml",
+        "--runs",
+        "4",
+        "--out",
+        "re",
+    ];
+    ok(&dir, &rerun);
+    let params = &summary(&dir.join("re"))["params"];
+    assert_eq!(params["step_mm"].as_f64(), Some(best));
+    assert_eq!(params["calibration"]["search"], "off");
     // A different seed changes the result (the check above could not pass vacuously).
     with(&["--seed", "8", "--out", "other"]);
     assert_ne!(whole, read(&dir.join("other/summary.json")));
@@ -251,6 +279,8 @@ fn bad_configuration_exits_2_naming_the_key() {
         ("periods_s = []\n", "periods_s"),
         ("runs_per_point = 1\n", "runs_per_point"),
         ("damper_time_s = \"two\"\n", "damper_time_s"),
+        ("calibration.runs_per_set = 1\n", "calibration.runs_per_set"),
+        ("calibration.search = \"longer\"\n", "longer"),
     ] {
         std::fs::write(dir.join("bad.toml"), text).expect("write config");
         let out = run(&dir, &["fueling", "--config", "bad.toml", "--out", "out"]);
