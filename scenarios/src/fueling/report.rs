@@ -533,8 +533,9 @@ pub fn report_md(sm: &Summary) -> String {
         f2(kf2_best),
         f2(kf1_best),
         if kf1_best > PAPER_KF1_RATIO + 0.1 {
-            "so the paper's one-channel figure must rest on parameters (rolling period against \
-             T_a and T_y, fill-rate noise) that we cannot recover"
+            "so the paper's one-channel figure must rest on other values of the parameters it \
+             does not state, which no single sweep here reaches (the *Calibration* section \
+             searches them all together)"
         } else {
             "close to the paper's 0.40"
         },
@@ -659,7 +660,8 @@ pub fn report_md(sm: &Summary) -> String {
     s.push_str(
         "## Running it as a job array\n\n\
          Every run draws from a stream fixed by (seed, run index), so the campaign splits into \
-         slices that any scheduler can run, and `merge` recomputes the same `summary.json`:\n\n\
+         slices that any scheduler can run, and `merge` recomputes the same `summary.json` (the \
+         calibration, not sharded, is computed by `merge` itself):\n\n\
          ```sh\n#!/bin/sh\n#SBATCH --array=1-8\n\
          scenarios fueling --seed 1 --shard \"$SLURM_ARRAY_TASK_ID/8\" --out \"shards/$SLURM_ARRAY_TASK_ID\"\n\
          # afterwards, once: scenarios merge shards/* --out reports/fueling\n```\n",
