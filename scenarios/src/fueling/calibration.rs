@@ -26,234 +26,18 @@
 
 use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
-use std::path::Path;
 
 use argmin::core::{CostFunction, Executor};
 use argmin::solver::neldermead::NelderMead;
-use rand::seq::SliceRandom;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use super::parameters::{FuelingParams, Swept, World};
+use super::parameters::{FuelingParams, Plan, Search, Swept, World};
 use super::records::Outcome;
+use super::search::{BOX, Dim, get, latin_hypercube, params_at, unit_of};
 use super::simulation::Point;
 use super::statistics::{RatioCi, std_ratio};
-use super::summary::{PAPER_KF1_RATIO, PAPER_KF2_RATIO};
 use crate::error::{Error, Result};
 use crate::montecarlo::{par_runs, run_rng, run_seed};
-
-/// How thorough the search is; the sizes it sets can each be overridden.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Search {
-    /// No calibration (the report has no calibration section).
-    Off,
-    /// The default, sized for `cargo xtask reproduce`: 256 sets × 200 runs, one refinement.
-    Quick,
-    /// 2048 sets × 400 runs, refinement from the best four (about 30× the quick search).
-    Long,
-}
-
-/// The `[calibration]` table of the fueling configuration.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct CalibrationConfig {
-    /// "off", "quick" (default) or "long".
-    pub search: Search,
-    /// Sets in the space-filling design (default from `search`).
-    pub design_sets: Option<usize>,
-    /// Monte Carlo runs per set during the search (default from `search`).
-    pub runs_per_set: Option<usize>,
-    /// Nelder–Mead refinements, each from one of the best design sets (default from `search`).
-    pub refine_starts: Option<usize>,
-    /// Iterations of each refinement (default from `search`).
-    pub refine_iterations: Option<u64>,
-    /// Weight w of the two-channel invariance spread in the objective.
-    pub invariance_weight: f64,
-}
-
-impl Default for CalibrationConfig {
-    fn default() -> Self {
-        Self {
-            search: Search::Quick,
-            design_sets: None,
-            runs_per_set: None,
-            refine_starts: None,
-            refine_iterations: None,
-            invariance_weight: 0.1,
-        }
-    }
-}
-
-/// The sizes of one search.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Plan {
-    /// Sets in the Latin hypercube.
-    pub design_sets: usize,
-    /// Runs per set.
-    pub runs_per_set: usize,
-    /// Refinements.
-    pub refine_starts: usize,
-    /// Iterations per refinement.
-    pub refine_iterations: u64,
-}
-
-impl CalibrationConfig {
-    /// The search's sizes (`None` for `search = "off"`).
-    pub fn plan(&self) -> Option<Plan> {
-        let (d, r, s, i) = match self.search {
-            Search::Off => return None,
-            Search::Quick => (256, 200, 1, 60),
-            Search::Long => (2048, 400, 4, 200),
-        };
-        Some(Plan {
-            design_sets: self.design_sets.unwrap_or(d),
-            runs_per_set: self.runs_per_set.unwrap_or(r),
-            refine_starts: self.refine_starts.unwrap_or(s),
-            refine_iterations: self.refine_iterations.unwrap_or(i),
-        })
-    }
-
-    /// Checks the sizes and the weight; `Err` names the key and the rule broken.
-    pub fn check(&self) -> std::result::Result<(), String> {
-        if let Some(p) = self.plan() {
-            if p.design_sets < 1 {
-                return Err(format!(
-                    "`calibration.design_sets` = {}: must be ≥ 1",
-                    p.design_sets
-                ));
-            }
-            if p.runs_per_set < 2 {
-                return Err(format!(
-                    "`calibration.runs_per_set` = {}: needs at least 2 runs (a standard deviation)",
-                    p.runs_per_set
-                ));
-            }
-            if p.refine_starts > p.design_sets {
-                return Err(format!(
-                    "`calibration.refine_starts` = {}: at most `design_sets` = {}",
-                    p.refine_starts, p.design_sets
-                ));
-            }
-        }
-        let w = self.invariance_weight;
-        if !(w.is_finite() && w >= 0.0) {
-            return Err(format!(
-                "`calibration.invariance_weight` = {w}: must be finite and ≥ 0"
-            ));
-        }
-        Ok(())
-    }
-}
-
-/// How a parameter's range is mapped to the unit interval.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Scale {
-    /// Uniform in the value.
-    Linear,
-    /// Uniform in the logarithm (ranges spanning more than a decade).
-    Log,
-}
-
-/// One searched parameter: its configuration key and plausible range.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Dim {
-    /// The `FuelingParams` key.
-    pub key: &'static str,
-    /// Lower bound.
-    pub lo: f64,
-    /// Upper bound.
-    pub hi: f64,
-    /// How the range is sampled.
-    pub scale: Scale,
-}
-
-impl Dim {
-    /// The value at `u` ∈ [0, 1].
-    pub fn value(&self, u: f64) -> f64 {
-        let u = u.clamp(0.0, 1.0);
-        match self.scale {
-            Scale::Linear => self.lo + u * (self.hi - self.lo),
-            Scale::Log => (self.lo.ln() + u * (self.hi.ln() - self.lo.ln())).exp(),
-        }
-    }
-
-    /// The unit coordinate of `x` (outside [0, 1] for a value outside the range).
-    pub fn unit(&self, x: f64) -> f64 {
-        match self.scale {
-            Scale::Linear => (x - self.lo) / (self.hi - self.lo),
-            Scale::Log => (x.ln() - self.lo.ln()) / (self.hi.ln() - self.lo.ln()),
-        }
-    }
-}
-
-/// The box searched: the ranges a sea platform, a fuelling pump and a float-type level
-/// sensor plausibly span (see the report for why each bound is where it is).
-pub const BOX: [Dim; 10] = [
-    dim("rolling_period_s", 6.0, 20.0, Scale::Linear),
-    dim("irregularity_per_s", 0.02, 0.3, Scale::Log),
-    dim("velocity_std_mm_s", 0.2, 3.0, Scale::Log),
-    dim("velocity_time_s", 5.0, 100.0, Scale::Log),
-    dim("damper_time_s", 0.5, 4.0, Scale::Log),
-    dim("step_mm", 1.0, 20.0, Scale::Log),
-    dim("sensor_radius_m", 0.5, 3.0, Scale::Linear),
-    dim("sensor_angle_deg", 0.0, 90.0, Scale::Linear),
-    dim("fill_rate_mm_s", 5.0, 20.0, Scale::Linear),
-    dim("gyro_noise_deg", 0.0, 0.5, Scale::Linear),
-];
-
-const fn dim(key: &'static str, lo: f64, hi: f64, scale: Scale) -> Dim {
-    Dim { key, lo, hi, scale }
-}
-
-/// The value of searched parameter `k` (index into [`BOX`]) in `p`.
-pub fn get(p: &FuelingParams, k: usize) -> f64 {
-    match k {
-        0 => p.rolling_period_s,
-        1 => p.irregularity_per_s,
-        2 => p.velocity_std_mm_s,
-        3 => p.velocity_time_s,
-        4 => p.damper_time_s,
-        5 => p.step_mm,
-        6 => p.sensor_radius_m,
-        7 => p.sensor_angle_deg,
-        8 => p.fill_rate_mm_s,
-        _ => p.gyro_noise_deg,
-    }
-}
-
-fn set(p: &mut FuelingParams, k: usize, v: f64) {
-    let slot = match k {
-        0 => &mut p.rolling_period_s,
-        1 => &mut p.irregularity_per_s,
-        2 => &mut p.velocity_std_mm_s,
-        3 => &mut p.velocity_time_s,
-        4 => &mut p.damper_time_s,
-        5 => &mut p.step_mm,
-        6 => &mut p.sensor_radius_m,
-        7 => &mut p.sensor_angle_deg,
-        8 => &mut p.fill_rate_mm_s,
-        _ => &mut p.gyro_noise_deg,
-    };
-    *slot = v;
-}
-
-/// `base` with the searched parameters at unit coordinates `u`.
-pub fn params_at(base: &FuelingParams, u: &[f64]) -> FuelingParams {
-    let mut p = base.clone();
-    for (k, (d, x)) in BOX.iter().zip(u).enumerate() {
-        set(&mut p, k, d.value(*x));
-    }
-    p
-}
-
-/// The unit coordinates of `p`'s searched parameters.
-pub fn unit_of(p: &FuelingParams) -> Vec<f64> {
-    BOX.iter()
-        .enumerate()
-        .map(|(k, d)| d.unit(get(p, k)))
-        .collect()
-}
 
 /// One evaluated set.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -328,18 +112,22 @@ impl Evaluator<'_> {
         self.runs_used.set(self.runs_used.get() + jobs.len());
         let outcomes = par_runs(0..jobs.len(), self.threads, "calibration", |j| {
             let (w, r) = jobs[j];
-            match &points[w] {
-                Ok(p) => p.run(&mut run_rng(seed, r as u64)),
-                Err(e) => Err(e.clone()),
-            }
+            // Only points that were built have jobs.
+            points[w]
+                .as_ref()
+                .ok()
+                .map(|p| p.run(&mut run_rng(seed, r as u64)))
         })?;
         let mut by_world: Vec<Vec<Outcome>> = vec![Vec::new(); worlds.len()];
-        let mut failure: Vec<Option<String>> =
-            points.iter().map(|p| p.as_ref().err().cloned()).collect();
+        let mut failure: Vec<Option<String>> = points
+            .iter()
+            .map(|p| p.as_ref().err().map(ToString::to_string))
+            .collect();
         for ((w, _), o) in jobs.iter().zip(outcomes) {
             match o {
-                Ok(o) => by_world[*w].push(o),
-                Err(e) => failure[*w] = Some(e),
+                Some(Ok(o)) => by_world[*w].push(o),
+                Some(Err(e)) => failure[*w] = Some(e.to_string()),
+                None => {}
             }
         }
         Ok(sets
@@ -444,43 +232,6 @@ fn sample_std(v: &[f64]) -> f64 {
     let n = f.len() as f64;
     let m = f.iter().sum::<f64>() / n;
     (f.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
-}
-
-/// A maximin Latin hypercube: of `candidates` random Latin hypercubes of `n` points in
-/// `dims` dimensions (cell centres, one point per cell in every coordinate), the one whose
-/// closest pair is farthest apart.
-pub fn latin_hypercube(n: usize, dims: usize, candidates: usize, seed: u64) -> Vec<Vec<f64>> {
-    let mut rng = run_rng(seed, 0);
-    let mut best: (f64, Vec<Vec<f64>>) = (f64::NEG_INFINITY, Vec::new());
-    for _ in 0..candidates.max(1) {
-        let cols: Vec<Vec<f64>> = (0..dims)
-            .map(|_| {
-                let mut perm: Vec<usize> = (0..n).collect();
-                perm.shuffle(&mut rng);
-                perm.into_iter()
-                    .map(|k| (k as f64 + 0.5) / n as f64)
-                    .collect()
-            })
-            .collect();
-        let pts: Vec<Vec<f64>> = (0..n)
-            .map(|i| cols.iter().map(|c| c[i]).collect())
-            .collect();
-        let mut closest = f64::INFINITY;
-        for i in 0..n {
-            for j in i + 1..n {
-                let d: f64 = pts[i]
-                    .iter()
-                    .zip(&pts[j])
-                    .map(|(a, b)| (a - b).powi(2))
-                    .sum();
-                closest = closest.min(d);
-            }
-        }
-        if closest > best.0 || best.1.is_empty() {
-            best = (closest, pts);
-        }
-    }
-    best.1
 }
 
 /// Nelder–Mead's view of the objective: unit coordinates, clamped to the cube.
@@ -619,7 +370,8 @@ const SENSITIVITY_STEP: f64 = 0.1;
 /// The paper's "≈" read as ± this on its two-decimal ratios.
 pub const TOLERANCE: f64 = 0.05;
 
-/// Runs the calibration of `params` with the campaign `seed` (`None` when the search is off).
+/// Runs the calibration of `params` with the campaign `seed` towards the ratios `paper`
+/// (one-channel, two-channel; `None` when the search is off).
 ///
 /// # Errors
 /// [`Error::Compute`] if the worker pool or the optimiser fails.
@@ -627,18 +379,12 @@ pub fn calibrate(
     params: &FuelingParams,
     seed: u64,
     threads: Option<usize>,
+    paper: (f64, f64),
 ) -> Result<Option<Calibration>> {
     let Some(plan) = params.calibration.plan() else {
         return Ok(None);
     };
-    calibrate_with(
-        params,
-        seed,
-        threads,
-        plan,
-        (PAPER_KF1_RATIO, PAPER_KF2_RATIO),
-    )
-    .map(Some)
+    calibrate_with(params, seed, threads, plan, paper).map(Some)
 }
 
 /// [`calibrate`] with an explicit plan and target ratios (the planted-optimum test aims at
@@ -815,105 +561,10 @@ fn calibrate_with(
     })
 }
 
-/// Writes `calibration.toml` (the best set as a `--config` file) and `calibration_sets.csv`
-/// (every set the search evaluated) into `dir`.
-///
-/// # Errors
-/// [`Error::Write`] naming the file; [`Error::Compute`] if the parameters do not serialise.
-pub fn write_files(c: &Calibration, dir: &Path) -> Result<()> {
-    let body = toml::to_string(&c.best_params)
-        .map_err(|e| Error::Compute(format!("calibration.toml: {e}")))?;
-    let text = format!(
-        "# The calibration's best set (seed {}, {} sets searched): rerun the report under it\n\
-         # with `scenarios fueling --config calibration.toml`.\n{body}",
-        c.search_seed, c.searched
-    );
-    crate::output::write_atomic(&dir.join("calibration.toml"), text.as_bytes())?;
-    let mut header: Vec<&str> = BOX.iter().map(|d| d.key).collect();
-    header.extend([
-        "kf1_ratio",
-        "kf1_se",
-        "kf2_ratio",
-        "kf2_se",
-        "relay_std_mm",
-        "spread",
-        "no_stop",
-        "cost",
-    ]);
-    let rows: Vec<Vec<f64>> = c
-        .evaluations
-        .iter()
-        .map(|e| {
-            let mut row = e.values.clone();
-            row.extend([
-                e.kf1.ratio,
-                e.kf1.se,
-                e.kf2.ratio,
-                e.kf2.se,
-                e.relay_std_mm,
-                e.spread,
-                e.no_stop,
-                e.cost,
-            ]);
-            row
-        })
-        .collect();
-    crate::output::write_csv(&dir.join("calibration_sets.csv"), &header, &rows)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn box_maps_to_the_unit_cube_and_back() {
-        let p = FuelingParams::default();
-        let u = unit_of(&p);
-        for (k, x) in u.iter().enumerate() {
-            assert!(
-                (0.0..=1.0).contains(x),
-                "{}: default outside the box",
-                BOX[k].key
-            );
-        }
-        let back = params_at(&p, &u);
-        for k in 0..BOX.len() {
-            // exp∘ln round trip: a few ulps.
-            assert!((get(&back, k) - get(&p, k)).abs() <= 1e-12 * get(&p, k).abs().max(1.0));
-        }
-        for d in BOX {
-            assert!((d.value(0.0) - d.lo).abs() < 1e-12 * d.hi.max(1.0));
-            assert!((d.value(1.0) - d.hi).abs() < 1e-12 * d.hi.max(1.0));
-        }
-    }
-
-    #[test]
-    fn latin_hypercube_fills_every_stratum_once() {
-        let n = 16;
-        let pts = latin_hypercube(n, 4, 5, 3);
-        assert_eq!(pts.len(), n);
-        for d in 0..4 {
-            let mut cells: Vec<usize> = pts.iter().map(|p| (p[d] * n as f64) as usize).collect();
-            cells.sort_unstable();
-            assert_eq!(cells, (0..n).collect::<Vec<_>>(), "dimension {d}");
-        }
-        // Maximin over more candidates cannot make the closest pair closer.
-        let closest = |pts: &[Vec<f64>]| {
-            let mut c = f64::INFINITY;
-            for i in 0..pts.len() {
-                for j in i + 1..pts.len() {
-                    let d: f64 = pts[i]
-                        .iter()
-                        .zip(&pts[j])
-                        .map(|(a, b)| (a - b).powi(2))
-                        .sum();
-                    c = c.min(d);
-                }
-            }
-            c
-        };
-        assert!(closest(&latin_hypercube(n, 4, 30, 3)) >= closest(&latin_hypercube(n, 4, 1, 3)));
-    }
+    use crate::fueling::parameters::CalibrationConfig;
 
     #[test]
     fn search_finds_a_planted_optimum() {

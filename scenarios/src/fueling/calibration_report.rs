@@ -4,12 +4,15 @@
 //! `statistics` and `calibration`; nothing is computed here but differences for display).
 
 use std::fmt::Write as _;
+use std::path::Path;
 
-use super::calibration::{BOX, Calibration, Evaluation, Gap, Scale, get};
+use super::calibration::{Calibration, Evaluation, Gap};
 use super::parameters::FuelingParams;
 use super::records::{STRATEGIES, STRATEGY_LABELS};
+use super::search::{BOX, Scale, get};
 use super::statistics::RatioCi;
 use super::summary::Summary;
+use crate::error::{Error, Result};
 
 fn f2(x: f64) -> String {
     if x.is_finite() {
@@ -366,4 +369,50 @@ fn pct(x: f64) -> String {
     } else {
         "—".into()
     }
+}
+
+/// Writes `calibration.toml` (the best set as a `--config` file) and `calibration_sets.csv`
+/// (every set the search evaluated) into `dir`.
+///
+/// # Errors
+/// [`Error::Write`] naming the file; [`Error::Compute`] if the parameters do not serialise.
+pub fn write_files(c: &Calibration, dir: &Path) -> Result<()> {
+    let body = toml::to_string(&c.best_params)
+        .map_err(|e| Error::Compute(format!("calibration.toml: {e}")))?;
+    let text = format!(
+        "# The calibration's best set (seed {}, {} sets searched): rerun the report under it\n\
+         # with `scenarios fueling --config calibration.toml`.\n{body}",
+        c.search_seed, c.searched
+    );
+    crate::output::write_atomic(&dir.join("calibration.toml"), text.as_bytes())?;
+    let mut header: Vec<&str> = BOX.iter().map(|d| d.key).collect();
+    header.extend([
+        "kf1_ratio",
+        "kf1_se",
+        "kf2_ratio",
+        "kf2_se",
+        "relay_std_mm",
+        "spread",
+        "no_stop",
+        "cost",
+    ]);
+    let rows: Vec<Vec<f64>> = c
+        .evaluations
+        .iter()
+        .map(|e| {
+            let mut row = e.values.clone();
+            row.extend([
+                e.kf1.ratio,
+                e.kf1.se,
+                e.kf2.ratio,
+                e.kf2.se,
+                e.relay_std_mm,
+                e.spread,
+                e.no_stop,
+                e.cost,
+            ]);
+            row
+        })
+        .collect();
+    crate::output::write_csv(&dir.join("calibration_sets.csv"), &header, &rows)
 }

@@ -9,7 +9,7 @@
 //! slice of runs), [`records`] (per-run outcomes, `runs_<sweep>.csv`, full-precision `f64`:
 //! the ground truth), [`summary`] (every number, from the records alone) and [`report`]
 //! (CSV, SVG and `report.md`, formatting only). [`statistics`] gives every ratio its interval
-//! and every strategy its tail; [`calibration`] searches the parameters the paper does not
+//! and every strategy its tail; [`calibration`] searches [`search`]'s box for the parameters the paper does not
 //! state (its own simulations, not sharded). [`Fueling`] ties them to the campaign.
 
 pub mod calibration;
@@ -17,6 +17,7 @@ pub mod calibration_report;
 pub mod parameters;
 pub mod records;
 pub mod report;
+pub mod search;
 pub mod simulation;
 pub mod statistics;
 pub mod summary;
@@ -92,7 +93,12 @@ impl Scenario for Fueling {
         // Not sharded: a function of (params, seed) alone, computed by a whole run and by
         // `merge` alike, skipped by a shard (see `calibration`).
         if shard == Shard::ALL {
-            summary.calibration = calibration::calibrate(params, seed, threads)?;
+            summary.calibration = calibration::calibrate(
+                params,
+                seed,
+                threads,
+                (summary::PAPER_KF1_RATIO, summary::PAPER_KF2_RATIO),
+            )?;
         }
         Ok(summary)
     }

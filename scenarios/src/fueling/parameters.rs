@@ -7,7 +7,6 @@ use std::path::Path;
 use model::{FuelParams, Realisation};
 use serde::{Deserialize, Serialize};
 
-use super::calibration::CalibrationConfig;
 use crate::error::{Error, Result};
 
 /// How the filters' model is discretised (`model::Realisation`).
@@ -241,9 +240,7 @@ impl FuelingParams {
                 format!("{:?}", self.amplitudes_deg),
             );
         }
-        self.calibration
-            .check()
-            .map_err(|rule| Error::invalid(source, rule))?;
+        self.calibration.check(source)?;
         // Let the model check the combination (e.g. an overflowing discretisation).
         let world = self.world(self.max_amplitude_deg, Swept::Nothing);
         world
@@ -425,6 +422,114 @@ pub struct World {
     pub valve_delay: f64,
     /// How the filters' model is discretised.
     pub realisation: Realisation,
+}
+
+/// How thorough the search is; the sizes it sets can each be overridden.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Search {
+    /// No calibration (the report has no calibration section).
+    Off,
+    /// The default, sized for `cargo xtask reproduce`: 256 sets × 200 runs, one refinement.
+    Quick,
+    /// 2048 sets × 400 runs, refinement from the best four (about 30× the quick search).
+    Long,
+}
+
+/// The `[calibration]` table of the fueling configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CalibrationConfig {
+    /// "off", "quick" (default) or "long".
+    pub search: Search,
+    /// Sets in the space-filling design (default from `search`).
+    pub design_sets: Option<usize>,
+    /// Monte Carlo runs per set during the search (default from `search`).
+    pub runs_per_set: Option<usize>,
+    /// Nelder–Mead refinements, each from one of the best design sets (default from `search`).
+    pub refine_starts: Option<usize>,
+    /// Iterations of each refinement (default from `search`).
+    pub refine_iterations: Option<u64>,
+    /// Weight w of the two-channel invariance spread in the objective.
+    pub invariance_weight: f64,
+}
+
+impl Default for CalibrationConfig {
+    fn default() -> Self {
+        Self {
+            search: Search::Quick,
+            design_sets: None,
+            runs_per_set: None,
+            refine_starts: None,
+            refine_iterations: None,
+            invariance_weight: 0.1,
+        }
+    }
+}
+
+/// The sizes of one search.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Plan {
+    /// Sets in the Latin hypercube.
+    pub design_sets: usize,
+    /// Runs per set.
+    pub runs_per_set: usize,
+    /// Refinements.
+    pub refine_starts: usize,
+    /// Iterations per refinement.
+    pub refine_iterations: u64,
+}
+
+impl CalibrationConfig {
+    /// The search's sizes (`None` for `search = "off"`).
+    pub fn plan(&self) -> Option<Plan> {
+        let (d, r, s, i) = match self.search {
+            Search::Off => return None,
+            Search::Quick => (256, 200, 1, 60),
+            Search::Long => (2048, 400, 4, 200),
+        };
+        Some(Plan {
+            design_sets: self.design_sets.unwrap_or(d),
+            runs_per_set: self.runs_per_set.unwrap_or(r),
+            refine_starts: self.refine_starts.unwrap_or(s),
+            refine_iterations: self.refine_iterations.unwrap_or(i),
+        })
+    }
+
+    /// Checks the sizes and the weight (`source` names the file in the error).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] naming the key and the rule broken.
+    pub fn check(&self, source: &Path) -> Result<()> {
+        let bad = |rule: String| Err(Error::invalid(source, rule));
+        if let Some(p) = self.plan() {
+            if p.design_sets < 1 {
+                return bad(format!(
+                    "`calibration.design_sets` = {}: must be ≥ 1",
+                    p.design_sets
+                ));
+            }
+            if p.runs_per_set < 2 {
+                return bad(format!(
+                    "`calibration.runs_per_set` = {}: needs at least 2 runs (a standard deviation)",
+                    p.runs_per_set
+                ));
+            }
+            if p.refine_starts > p.design_sets {
+                return bad(format!(
+                    "`calibration.refine_starts` = {}: at most `design_sets` = {}",
+                    p.refine_starts, p.design_sets
+                ));
+            }
+        }
+        let w = self.invariance_weight;
+        if !(w.is_finite() && w >= 0.0) {
+            return bad(format!(
+                "`calibration.invariance_weight` = {w}: must be finite and ≥ 0"
+            ));
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -2,6 +2,8 @@
 //! `runs_<sweep>.csv` per sweep (`point, run`, then one column per strategy, metres at full
 //! precision). They are the campaign's ground truth: everything else is recomputed from them.
 
+use serde::{Deserialize, Serialize};
+
 use crate::campaign::records::RecordFile;
 use crate::error::{Error, Result};
 
@@ -21,6 +23,44 @@ pub const STRATEGY_LABELS: [&str; 5] = [
 
 /// Fuelling errors of one run, metres, in [`STRATEGIES`] order (NaN: never stopped).
 pub type Outcome = [f64; 5];
+
+/// One value per strategy, serialised under the strategy names.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PerStrategy<T> {
+    /// Relay logic: stop when the raw sensor reading reaches H*.
+    pub relay: T,
+    /// One-channel KF (level sensor only).
+    pub kf1: T,
+    /// Two-channel KF ignoring the cross-covariance (the paper).
+    pub kf2: T,
+    /// Two-channel KF with the cross-covariance S.
+    pub kf2_cross: T,
+    /// Two-channel KF (no S) fed the mid-step-compensated reading.
+    pub kf2_midstep: T,
+}
+
+impl<T> PerStrategy<T> {
+    /// The values `f(i)` for strategy `i` in [`STRATEGIES`] order.
+    pub fn from_fn(mut f: impl FnMut(usize) -> T) -> Self {
+        PerStrategy {
+            relay: f(0),
+            kf1: f(1),
+            kf2: f(2),
+            kf2_cross: f(3),
+            kf2_midstep: f(4),
+        }
+    }
+    /// The value of strategy `i`.
+    pub fn get(&self, i: usize) -> &T {
+        match i {
+            0 => &self.relay,
+            1 => &self.kf1,
+            2 => &self.kf2,
+            3 => &self.kf2_cross,
+            _ => &self.kf2_midstep,
+        }
+    }
+}
 
 /// Per-run outcomes of one sweep: `records[point]` holds `(run index, outcome)` in run order.
 #[derive(Debug, Clone, PartialEq)]

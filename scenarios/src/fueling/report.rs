@@ -4,7 +4,6 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::calibration;
 use super::calibration_report;
 use super::parameters::FuelingParams;
 use super::records::{STRATEGIES, STRATEGY_LABELS};
@@ -46,7 +45,7 @@ pub fn write_outputs(summary: &Summary, dir: &Path) -> Result<()> {
     output::write_atomic(&dir.join("amplitude_fits.csv"), fits.as_bytes())?;
     write_plots(summary, dir)?;
     if let Some(c) = &summary.calibration {
-        calibration::write_files(c, dir)?;
+        calibration_report::write_files(c, dir)?;
     }
     output::write_atomic(&dir.join("report.md"), report_md(summary).as_bytes())
 }

@@ -14,8 +14,7 @@
 use serde::Serialize;
 
 use super::parameters::Sweep;
-use super::records::{Outcome, SweepRecords};
-use super::summary::PerStrategy;
+use super::records::{Outcome, PerStrategy, SweepRecords};
 
 /// The standard normal's 97.5 % quantile: half-width of a 95 % interval in standard errors.
 pub const Z95: f64 = 1.959_963_984_540_054;

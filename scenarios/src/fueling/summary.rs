@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::calibration::Calibration;
 use super::parameters::{FuelingParams, Sweep, Swept};
+pub use super::records::PerStrategy;
 use super::records::SweepRecords;
 use super::statistics::{self, Margins};
 use crate::error::{Error, Result};
@@ -27,44 +28,6 @@ pub struct Stat {
     pub mean_mm: f64,
     /// Sample standard deviation (random part), mm.
     pub std_mm: f64,
-}
-
-/// One value per strategy, serialised under the strategy names.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct PerStrategy<T> {
-    /// Relay logic: stop when the raw sensor reading reaches H*.
-    pub relay: T,
-    /// One-channel KF (level sensor only).
-    pub kf1: T,
-    /// Two-channel KF ignoring the cross-covariance (the paper).
-    pub kf2: T,
-    /// Two-channel KF with the cross-covariance S.
-    pub kf2_cross: T,
-    /// Two-channel KF (no S) fed the mid-step-compensated reading.
-    pub kf2_midstep: T,
-}
-
-impl<T> PerStrategy<T> {
-    /// The values `f(i)` for strategy `i` in [`STRATEGIES`](super::records::STRATEGIES) order.
-    pub fn from_fn(mut f: impl FnMut(usize) -> T) -> Self {
-        PerStrategy {
-            relay: f(0),
-            kf1: f(1),
-            kf2: f(2),
-            kf2_cross: f(3),
-            kf2_midstep: f(4),
-        }
-    }
-    /// The value of strategy `i`.
-    pub fn get(&self, i: usize) -> &T {
-        match i {
-            0 => &self.relay,
-            1 => &self.kf1,
-            2 => &self.kf2,
-            3 => &self.kf2_cross,
-            _ => &self.kf2_midstep,
-        }
-    }
 }
 
 /// One sweep point: its coordinates and every strategy's statistics.
