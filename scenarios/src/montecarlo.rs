@@ -164,7 +164,7 @@ mod tests {
 
     #[test]
     fn results_do_not_depend_on_threads() {
-        use rand::Rng;
+        use rand::RngExt;
         let draw = |i: usize| run_rng(42, i as u64).random::<u64>();
         let one = par_runs(0..64, Some(1), "t", draw).expect("pool");
         let two = par_runs(0..64, Some(2), "t", draw).expect("pool");

@@ -9,7 +9,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use rand::Rng;
+use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
 use sensors::{
     Accelerometer, AccelerometerConfig, Attitude, BoomMotion, ChaCha8Rng, DampedCosine,

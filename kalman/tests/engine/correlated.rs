@@ -58,7 +58,7 @@ fn errors(ignore_s: bool) -> (Vec<Vec<f64>>, faer::Mat<f64>, Nees) {
 /// A measurement stream of `base`'s model with its truth, from `seed` (same joint-noise
 /// construction as the generator: [v; w] = G η with G a factor of [[R, Sᵀ], [S, Q]]).
 fn simulate(base: &FilterProblem, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
-    use rand::{Rng, SeedableRng};
+    use rand::{RngExt, SeedableRng};
     let (n, m) = (base.n(), base.m());
     let d = n + m;
     let S = base.S.as_ref().expect("correlated");

@@ -4,7 +4,7 @@
 //! its default parameters (kalman has no sibling dependencies).
 
 use kalman::{CovarianceForm, Filter, Fixed, Model};
-use rand::{Rng, SeedableRng};
+use rand::{RngExt, SeedableRng};
 
 type M7 = [[f64; 7]; 7];
 /// (F, G, H, D, diag Qu).

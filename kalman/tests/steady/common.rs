@@ -1,7 +1,7 @@
 //! Seeded random models shared by the topic modules.
 
 use faer::Mat;
-use rand::{Rng, SeedableRng};
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 

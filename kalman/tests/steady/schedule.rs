@@ -6,7 +6,7 @@ use faer::Mat;
 use kalman::riccati::dare;
 use kalman::schedule::{GainSchedule, ScheduleOptions};
 use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed, Model};
-use rand::Rng;
+use rand::RngExt;
 
 use super::common::{joint_noise, randn, rng, spd, with_radius};
 use crate::common::counting::allocations;

@@ -7,7 +7,7 @@ use faer::{Mat, Side, mat};
 use kalman::smoother::{RtsSmoother, Smoothed};
 use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed, Model};
 use proptest::prelude::*;
-use rand::Rng;
+use rand::RngExt;
 
 use super::common::{min_eig, randn, rng, spd, with_radius};
 

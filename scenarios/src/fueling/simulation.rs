@@ -11,7 +11,7 @@ use kalman::schedule::{GainSchedule, ScheduleOptions, ScheduledFilter};
 use kalman::{Fixed, FixedModel};
 use model::nalgebra::{DMatrix, DVector};
 use model::{Channels, FuelModel, FuelParams, Realisation};
-use rand::Rng;
+use rand::{Rng, RngExt};
 
 use super::parameters::{FuelingParams, World};
 use super::records::{Outcome, SweepRecords};

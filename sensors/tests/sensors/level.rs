@@ -2,7 +2,7 @@
 //! damper's exact step and ramp responses, and reproducibility with noise.
 
 use approx::assert_relative_eq;
-use rand::Rng;
+use rand::RngExt;
 use sensors::{
     Attitude, FirstOrderLag, LagInput, LevelSensor, LevelSensorConfig, PlatformMotion,
     PlatformMotionConfig, Quantizer, Rounding, seeded_rng,

@@ -3,7 +3,7 @@
 
 use nalgebra::{DMatrix, DVector, dmatrix, dvector};
 use proptest::prelude::*;
-use rand::{Rng, SeedableRng};
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use wls::Error;
 use wls::solver::{
