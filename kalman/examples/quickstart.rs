@@ -1,4 +1,5 @@
-//! The README's example of using `kalman` alone: `cargo run -p kalman --example quickstart`.
+//! The README's example of using `kalman` alone:
+//! `cargo run -p stochest-kalman --example quickstart`.
 
 use kalman::{CovarianceForm, Dyn, Filter, Model};
 

@@ -2,8 +2,8 @@
 //!
 //! - every `.rs` file starts with a `//!` line saying what it is for;
 //! - no line of a source, manifest or Markdown file ends in white space;
-//! - internal path dependencies carry `version = "0.0.0"` in `[dependencies]` and no version
-//!   in `[dev-dependencies]` (STYLE.md, after rust-analyzer);
+//! - internal path dependencies carry the workspace's version (`version = "0.1.0"`) in
+//!   `[dependencies]` and no version in `[dev-dependencies]` (after rust-analyzer);
 //! - library crates depend on no sibling except as STYLE.md allows;
 //! - no Rust source file is longer than [`MAX_LINES`] lines;
 //! - no `Result<_, String>` in `scenarios` (errors are typed);
@@ -12,6 +12,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+
+/// The version every internal path dependency carries: `[workspace.package] version`.
+const VERSION: &str = "0.1.0";
 
 /// The sibling crates each crate may depend on (the one-way dependency direction).
 const ALLOWED: &[(&str, &[&str])] = &[
@@ -130,6 +133,17 @@ pub(crate) fn check(root: &Path) -> Result<Vec<String>> {
                 "import cycle `{k}` is gone: remove it from KNOWN_CYCLES"
             ));
         }
+    }
+    let items = crate::examples::scan(root)?;
+    let share = crate::examples::share(&items);
+    if share < crate::examples::REQUIRED {
+        problems.push(format!(
+            "only {:.1} % of the library crates' {} top-level public items carry a compiled doc \
+             example (required {:.0} %; `cargo xtask doc-examples` lists the rest)",
+            100.0 * share,
+            items.len(),
+            100.0 * crate::examples::REQUIRED
+        ));
     }
     Ok(problems)
 }
@@ -305,13 +319,13 @@ fn manifest(rel: &str, text: &str, problems: &mut Vec<String>) {
         }
         let dep = line.split(['=', ' ']).next().unwrap_or("").trim();
         let at = format!("{rel}:{}", i + 1);
-        let has_version = line.contains("version = \"0.0.0\"");
+        let has_version = line.contains(&format!("version = \"{VERSION}\""));
         let any_version = line.contains("version");
         match section.as_str() {
             "dependencies" => {
                 if !has_version {
                     problems.push(format!(
-                        "{at}: internal dependency `{dep}` needs `version = \"0.0.0\"`"
+                        "{at}: internal dependency `{dep}` needs `version = \"{VERSION}\"`"
                     ));
                 }
                 if let Some(allowed) = allowed
