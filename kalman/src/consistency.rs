@@ -82,6 +82,12 @@ fn gamma_p(a: f64, x: f64) -> f64 {
 }
 
 /// CDF of the χ² distribution with `dof` degrees of freedom at `x`.
+///
+/// # Example
+/// ```
+/// // χ² with 2 degrees of freedom is exponential: F(x) = 1 − e^{−x/2}.
+/// assert!((kalman::chi2_cdf(2.0, 2) - (1.0 - (-1.0f64).exp())).abs() < 1e-12);
+/// ```
 pub fn chi2_cdf(x: f64, dof: usize) -> f64 {
     if dof == 0 {
         return 1.0;
@@ -91,6 +97,14 @@ pub fn chi2_cdf(x: f64, dof: usize) -> f64 {
 
 /// Quantile of the χ² distribution: the `x` with `chi2_cdf(x, dof) = prob` (bisection to
 /// relative precision 1e-13). `prob` is clamped to [0, 1]; `dof = 0` gives 0.
+///
+/// # Example
+/// ```
+/// // The 95 % point of χ²₁ is 1.96².
+/// assert!((kalman::chi2_quantile(0.95, 1) - 1.959_964f64.powi(2)).abs() < 1e-4);
+/// let x = kalman::chi2_quantile(0.3, 5);
+/// assert!((kalman::chi2_cdf(x, 5) - 0.3).abs() < 1e-10);
+/// ```
 pub fn chi2_quantile(prob: f64, dof: usize) -> f64 {
     if dof == 0 || prob <= 0.0 {
         return 0.0;
@@ -123,6 +137,17 @@ pub fn chi2_quantile(prob: f64, dof: usize) -> f64 {
 /// # Errors
 /// [`Error::Shape`] naming `x_est` or `P`; [`Error::NotPositiveSemidefinite`] naming `P`
 /// if it is not positive definite.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+///
+/// // Error (1, 2) against P = diag(1, 4): 1²/1 + 2²/4 = 2.
+/// let p = mat![[1.0, 0.0], [0.0, 4.0]];
+/// let e = kalman::nees(&[1.0, 2.0], &[0.0, 0.0], p.as_ref())?;
+/// assert!((e - 2.0).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 pub fn nees(x_true: &[f64], x_est: &[f64], P: MatRef<'_, f64>) -> Result<f64, Error> {
     let n = x_true.len();
     if x_est.len() != n {
@@ -167,6 +192,20 @@ pub fn nees(x_true: &[f64], x_est: &[f64], P: MatRef<'_, f64>) -> Result<f64, Er
 
 /// Running average NEES over independent runs (or steps) with its two-sided χ² band:
 /// for a consistent filter `runs·mean` is χ² with `n·runs` degrees of freedom.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+///
+/// let p = mat![[1.0]];
+/// let mut acc = kalman::Nees::new(1);
+/// for e in [-1.0, 0.5, 1.2, -0.3, 0.9, -1.1] {
+///     acc.add(&[e], &[0.0], p.as_ref())?;
+/// }
+/// let (lo, hi) = acc.band(0.95);
+/// assert!(lo < acc.mean() && acc.mean() < hi && acc.is_consistent(0.95));
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Clone, Debug, Default)]
 pub struct Nees {
     n: usize,

@@ -1,11 +1,12 @@
-//! Continuous time (SPEC U): the Kalman–Bucy Riccati ODE
+//! Continuous time: the Kalman–Bucy Riccati ODE
 //! Ṗ = A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q integrated by an adaptive Dormand–Prince 5(4) scheme
 //! that keeps P symmetric, the Kalman–Bucy gain K = P Hᵀ R⁻¹, and the continuous/discrete
 //! link: the matrix exponential and Van Loan's sampling of a continuous model.
 //!
-//! Here `Q` is the n×n intensity of the process noise as it enters the state (G Q_w Gᵀ in
-//! SPEC U) and `R` the m×m intensity of the measurement noise (positive definite). The
-//! steady state of the ODE is the stabilising solution of the CARE, [`crate::riccati::care`].
+//! Here `Q` is the n×n intensity of the process noise as it enters the state (G Q_w Gᵀ for a
+//! noise input matrix G and intensity Q_w) and `R` the m×m intensity of the measurement noise
+//! (positive definite). The steady state of the ODE is the stabilising solution of the CARE,
+//! [`crate::riccati::care`].
 #![allow(non_snake_case)]
 
 use faer::linalg::solvers::Solve;
@@ -16,6 +17,19 @@ use crate::model::check;
 use crate::riccati::{factor_r, symmetrise};
 
 /// The Kalman–Bucy filter's covariance equation for a time-invariant continuous model.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+/// use kalman::continuous::{KalmanBucy, OdeOptions};
+///
+/// // Scalar ẋ = −x + w, z = x + v, q = r = 1: Ṗ = −2P − P² + 1, steady P = √2 − 1.
+/// let (a, one) = (mat![[-1.0]], mat![[1.0]]);
+/// let kb = KalmanBucy::new(a.as_ref(), one.as_ref(), one.as_ref(), one.as_ref())?;
+/// let sol = kb.until_steady(mat![[0.0]].as_ref(), 1e-8, 100.0, &OdeOptions::default())?;
+/// assert!((sol.covariance[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-7);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct KalmanBucy {
     A: Mat<f64>,
@@ -27,6 +41,19 @@ pub struct KalmanBucy {
 }
 
 /// Tolerances of the adaptive integration.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+/// use kalman::continuous::{KalmanBucy, OdeOptions};
+///
+/// let (zero, one) = (mat![[0.0]], mat![[1.0]]);
+/// let kb = KalmanBucy::new(zero.as_ref(), one.as_ref(), one.as_ref(), one.as_ref())?;
+/// // A step budget too small to reach t = 10 is a typed error, not a hang.
+/// let tight = OdeOptions { max_steps: 2, ..OdeOptions::default() };
+/// assert!(kb.integrate(mat![[1.0]].as_ref(), 10.0, &tight).is_err());
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OdeOptions {
     /// Relative tolerance per entry. Default 1e-10.
@@ -48,6 +75,19 @@ impl Default for OdeOptions {
 }
 
 /// Result of integrating the Riccati ODE.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+/// use kalman::continuous::{KalmanBucy, OdeOptions};
+///
+/// // Ṗ = q for a random walk that is not measured informatively (H = 0): P(t) = P0 + q t.
+/// let (zero, q, r) = (mat![[0.0]], mat![[2.0]], mat![[1.0]]);
+/// let kb = KalmanBucy::new(zero.as_ref(), zero.as_ref(), q.as_ref(), r.as_ref())?;
+/// let sol = kb.integrate(mat![[1.0]].as_ref(), 3.0, &OdeOptions::default())?;
+/// assert!((sol.time - 3.0).abs() < 1e-12 && (sol.covariance[(0, 0)] - 7.0).abs() < 1e-9);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct OdeSolution {
     /// P at the final time (symmetric).
@@ -284,6 +324,15 @@ impl KalmanBucy {
 ///
 /// # Errors
 /// [`Error::Shape`] if A is not square, [`Error::NonFinite`] for a non-finite entry.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+///
+/// let e = kalman::continuous::expm(mat![[0.0, 1.0], [0.0, 0.0]].as_ref())?;
+/// assert!((e[(0, 1)] - 1.0).abs() < 1e-15 && (e[(1, 1)] - 1.0).abs() < 1e-15);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 pub fn expm(A: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
     let n = A.nrows();
     check("A", A, n, n)?;
@@ -342,6 +391,16 @@ pub fn expm(A: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
 ///
 /// # Errors
 /// Shape/finiteness errors naming `A` or `Q`; [`Error::Dimension`] for a non-positive `dt`.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+///
+/// // Random walk of intensity 3 sampled every 0.5 s: F = 1, Q_d = 1.5.
+/// let (f, qd) = kalman::continuous::van_loan(mat![[0.0]].as_ref(), mat![[3.0]].as_ref(), 0.5)?;
+/// assert!((f[(0, 0)] - 1.0).abs() < 1e-15 && (qd[(0, 0)] - 1.5).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 pub fn van_loan(
     A: MatRef<'_, f64>,
     Q: MatRef<'_, f64>,

@@ -6,6 +6,18 @@
 /// message points at the culprit. Steps return errors only for inputs of the wrong length;
 /// a numerically singular innovation covariance is *not* an error (it takes the
 /// rank-revealing path, see [`crate::StepInfo::rank`]).
+///
+/// # Example
+/// ```
+/// use kalman::{Dyn, Error, Model};
+///
+/// // A 2×2 F for a model declared with n = 3.
+/// let err = Model::new(Dyn::new(3, 1, 0)?, &[[1.0, 0.0], [0.0, 1.0]], &[[1.0, 0.0, 0.0]],
+///     &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], &[[1.0]]).unwrap_err();
+/// assert!(matches!(err, Error::Shape { name: "F", .. }));
+/// println!("{err}");
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {

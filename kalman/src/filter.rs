@@ -15,6 +15,22 @@ use crate::storage::{Buf, Dims, Dyn};
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// How the covariance update is computed. All three give the same P in exact arithmetic.
+///
+/// # Example
+/// ```
+/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+///
+/// // The three forms agree on a well-conditioned problem.
+/// let mut last = Vec::new();
+/// for form in [CovarianceForm::Joseph, CovarianceForm::Standard, CovarianceForm::SquareRoot] {
+///     let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
+///     let mut f = Filter::new(model, &[0.0], &[[1.0]], form)?;
+///     f.step(&[1.0], None)?;
+///     last.push(f.covariance()[(0, 0)]);
+/// }
+/// assert!((last[0] - last[1]).abs() < 1e-14 && (last[0] - last[2]).abs() < 1e-14);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(
     Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
 )]

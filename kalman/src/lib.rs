@@ -65,6 +65,32 @@
 //! # Ok(())
 //! # }
 //! ```
+//!
+//! # References
+//! - R. E. Kalman, *A new approach to linear filtering and prediction problems*, 1960; the
+//!   Joseph form and the correlated-noise recursion as in D. Simon, *Optimal State
+//!   Estimation*, 2006.
+//! - H. E. Rauch, F. Tung, C. T. Striebel, *Maximum likelihood estimates of linear dynamic
+//!   systems*, 1965 — [`smoother`].
+//! - Structured doubling for the DARE: E. K.-W. Chu, H.-Y. Fan, W.-W. Lin, C.-S. Wang,
+//!   *Structure-preserving algorithms for periodic discrete-time algebraic Riccati
+//!   equations*, 2004 — [`riccati`].
+//! - Yu. V. Gridnev, A. Yu. Rusetsky, S. A. Rak, *Stochastic simulation of the automatic
+//!   control systems of an unmanned aerial vehicle with an optimal Kalman filter* (in
+//!   Russian, 2013): the UAV loop in the example of [`riccati::dlqr`].
+//!
+//! # Versions of the types in this API and features
+//! Matrices are stored and returned as [`faer`] 0.24 types; inputs are anything that
+//! implements [`MatrixInput`] (row-major arrays and slices, faer matrices, and with the
+//! feature `nalgebra`, nalgebra 0.35 matrices). Both crates are re-exported
+//! (`kalman::faer`, and `kalman::nalgebra` with the feature), so a user does not need to add
+//! either dependency — or pick a matching version — to name their types.
+//!
+//! | feature | what it adds |
+//! |---|---|
+//! | `nalgebra` | nalgebra 0.35 matrices as inputs; `kalman::nalgebra` |
+//! | `proptest` | `kalman::strategies`: random consistent filter problems for property tests |
+//! | `parallel` | Rayon in faer's products above [`PARALLEL_THRESHOLD`] |
 #![deny(missing_docs)]
 
 mod consistency;
@@ -88,6 +114,12 @@ pub use filter::{CovarianceForm, Filter, StepInfo};
 pub use kernels::RANK_TOL;
 pub use model::{MatrixInput, Model, ModelSource, PSD_TOL, SYMMETRY_TOL};
 pub use storage::{Arr, Buf, Dims, Dyn, FAER_THRESHOLD, FIXED_MAX, Fixed, PARALLEL_THRESHOLD};
+
+/// Re-export of the faer version whose matrix types this API returns.
+pub use faer;
+/// Re-export of the nalgebra version whose matrices this API accepts (feature `nalgebra`).
+#[cfg(feature = "nalgebra")]
+pub use nalgebra;
 
 /// The fixed-size filter: `FixedFilter<N, M, P>` = `Filter<Fixed<N, M, P>>`.
 pub type FixedFilter<const N: usize, const M: usize, const P: usize = 0> = Filter<Fixed<N, M, P>>;

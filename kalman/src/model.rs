@@ -18,6 +18,17 @@ pub const PSD_TOL: f64 = 1e-10;
 
 /// Anything that can be read as a dense real matrix: faer `Mat`/`MatRef`, row-major nested
 /// arrays `[[f64; C]; R]`, nalgebra matrices (feature `nalgebra`).
+///
+/// # Example
+/// ```
+/// use kalman::MatrixInput;
+///
+/// let a = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]];
+/// assert_eq!((a.nrows(), a.ncols()), (2, 3));
+/// assert!((a.at(1, 0) - 4.0).abs() < 1e-15);
+/// let m = faer::mat![[1.0, 2.0], [3.0, 4.0]];
+/// assert!((m.at(0, 1) - 2.0).abs() < 1e-15);
+/// ```
 pub trait MatrixInput {
     /// Number of rows.
     fn nrows(&self) -> usize;

@@ -34,6 +34,18 @@ use crate::storage::Dims;
 use crate::{Error, Model};
 
 /// Tuning and tolerances of the Riccati solvers. `Default` is right for almost every use.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+/// use kalman::riccati::{RiccatiOptions, dare_with};
+///
+/// let opts = RiccatiOptions { max_iterations: 200, ..RiccatiOptions::default() };
+/// let one = mat![[1.0]];
+/// let ss = dare_with(one.as_ref(), one.as_ref(), one.as_ref(), one.as_ref(), None, &opts)?;
+/// assert!(ss.relative_residual < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RiccatiOptions {
     /// Maximum number of doubling steps (each squares the convergence factor). Default 100.
@@ -96,6 +108,17 @@ pub struct Lqr {
 }
 
 /// Steady state of the continuous Kalman–Bucy filter (solution of the filter CARE).
+///
+/// # Example
+/// ```
+/// use faer::mat;
+///
+/// // ẋ = −x + w, z = x + v, unit intensities: P = √2 − 1, K = P.
+/// let (a, one) = (mat![[-1.0]], mat![[1.0]]);
+/// let ss = kalman::riccati::care(a.as_ref(), one.as_ref(), one.as_ref(), one.as_ref())?;
+/// assert!((ss.gain[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct ContinuousSteadyState {
     /// P solving A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0 (n×n).
@@ -217,7 +240,8 @@ pub fn dare_with(
 /// Errors: [`Error::NotStabilisable`] for (A, B), [`Error::NotDetectable`] for (Q^{1/2}, A)
 /// (modes on or outside the unit circle), shape/finiteness/PD errors naming the matrix.
 ///
-/// The UAV loop of SPEC U (state weight diag(1, 0.1), input weight 1, Δt = 0.25):
+/// The UAV loop of Gridnev, Rusetsky and Rak (state weight diag(1, 0.1), input weight 1,
+/// Δt = 0.25):
 /// ```
 /// use faer::mat;
 /// let dt = 0.25;
@@ -297,7 +321,8 @@ pub fn dlqr_with(
 
 /// Steady state of the Kalman–Bucy filter: the stabilising P of the filter CARE
 /// A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0, where `Q` is the n×n process-noise intensity as it
-/// enters the state (G Q_w Gᵀ in SPEC U's notation), and the gain K = P Hᵀ R⁻¹.
+/// enters the state (G Q_w Gᵀ for a noise input matrix G and intensity Q_w), and the gain
+/// K = P Hᵀ R⁻¹.
 ///
 /// Method: the dual control-form CARE X A_c + A_cᵀ X − X G X + Q = 0 (A_c = Aᵀ,
 /// G = Hᵀ R⁻¹ H) has Hamiltonian ℋ = [[A_c, −G], [−Q, −A_cᵀ]]. With γ > ρ(ℋ) the Cayley
@@ -361,6 +386,17 @@ pub fn care_with(
 ///
 /// Errors: [`Error::NotStabilisable`] for (A, B), [`Error::NotDetectable`] for (Q^{1/2}, A)
 /// (modes with Re λ ≥ 0), shape/finiteness/PD errors naming the matrix.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+///
+/// // ẋ = u, cost ∫ x² + u²: X = 1, L = 1.
+/// let (a, one) = (mat![[0.0]], mat![[1.0]]);
+/// let lqr = kalman::riccati::clqr(a.as_ref(), one.as_ref(), one.as_ref(), one.as_ref())?;
+/// assert!((lqr.gain[(0, 0)] - 1.0).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 pub fn clqr(
     A: MatRef<'_, f64>,
     B: MatRef<'_, f64>,

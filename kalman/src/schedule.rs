@@ -26,6 +26,14 @@ use crate::storage::{Buf, Dims};
 use crate::{CovarianceForm, Error, Filter, MatrixInput, Model};
 
 /// Convergence settings of [`GainSchedule::new`].
+///
+/// # Example
+/// ```
+/// use kalman::schedule::ScheduleOptions;
+///
+/// let opts = ScheduleOptions { max_steps: 500, ..ScheduleOptions::default() };
+/// assert!(opts.tolerance > 0.0);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScheduleOptions {
     /// The schedule ends at the first step k with

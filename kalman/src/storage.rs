@@ -105,14 +105,14 @@ pub struct Dyn {
 }
 
 /// Products with `rows·cols·inner` below this many multiply-adds use the crate's own loops
-/// on the dynamic path. Chosen from faer's per-call overhead (20–75 ns a call, see
-/// `shared/notes/faer.md`), about the cost of this many multiply-adds in plain loops; not
+/// on the dynamic path. Chosen from faer's per-call overhead (20–75 ns a call, measured
+/// with faer 0.24), about the cost of this many multiply-adds in plain loops; not
 /// tuned further.
 pub const FAER_THRESHOLD: usize = 8 * 8 * 8;
 
 /// With the `parallel` feature, products of at least this many multiply-adds run on Rayon
 /// (faer's own default of 32 768 was 3.6× slower at n = 50 on a 2-core machine; Rayon paid
-/// off only near n = 1000 — `shared/notes/faer.md`). On a loaded machine Rayon can lose even
+/// off only near n = 1000). On a loaded machine Rayon can lose even
 /// there: the feature is off by default.
 pub const PARALLEL_THRESHOLD: usize = 400 * 400 * 400;
 

@@ -14,6 +14,17 @@ const LYAP_MAX_DOUBLINGS: usize = 64;
 
 /// Default rank tolerance used by [`rank`]: `max(rows, cols) · ε · σ_max` (as in LAPACK-based
 /// tools: singular values below it are numerically zero).
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// let m = dmatrix![1.0, 0.0; 0.0, 1e-20];
+/// // max(rows, cols)·ε·σ_max: the tiny singular value counts as zero.
+/// assert!(model::analysis::default_rank_tolerance(&m) > 1e-20);
+/// assert_eq!(model::rank(&m, None)?, 1);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn default_rank_tolerance(m: &DMatrix<f64>) -> f64 {
     if m.is_empty() {
         return 0.0;
@@ -27,6 +38,15 @@ pub fn default_rank_tolerance(m: &DMatrix<f64>) -> f64 {
 ///
 /// # Errors
 /// [`Error::NonFiniteMatrix`] for NaN/∞ entries.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// let m = dmatrix![1.0, 2.0; 2.0, 4.0]; // second row = 2 × first
+/// assert_eq!(model::rank(&m, None)?, 1);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn rank(m: &DMatrix<f64>, tol: Option<f64>) -> Result<usize> {
     validate::finite("M", m)?;
     if m.is_empty() {
@@ -41,6 +61,18 @@ pub fn rank(m: &DMatrix<f64>, tol: Option<f64>) -> Result<usize> {
 ///
 /// # Errors
 /// Shape and finiteness errors for `A`, `B`.
+///
+/// # Example
+/// ```
+/// use model::analysis::controllability_matrix;
+/// use model::nalgebra::dmatrix;
+///
+/// let a = dmatrix![0.0, 1.0; 0.0, 0.0];
+/// let b = dmatrix![0.0; 1.0];
+/// let c = controllability_matrix(&a, &b)?; // [B, AB]
+/// assert!((c - dmatrix![0.0, 1.0; 1.0, 0.0]).norm() < 1e-15);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn controllability_matrix(a: &DMatrix<f64>, b: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     let n = validate::square("A", a)?;
     validate::shape("B", b, n, b.ncols(), "B must have as many rows as A")?;
@@ -58,6 +90,18 @@ pub fn controllability_matrix(a: &DMatrix<f64>, b: &DMatrix<f64>) -> Result<DMat
 ///
 /// # Errors
 /// Shape and finiteness errors for `A`, `C`.
+///
+/// # Example
+/// ```
+/// use model::analysis::observability_matrix;
+/// use model::nalgebra::dmatrix;
+///
+/// let a = dmatrix![0.0, 1.0; 0.0, 0.0];
+/// let c = dmatrix![1.0, 0.0];
+/// let o = observability_matrix(&a, &c)?; // [C; CA]
+/// assert!((o - dmatrix![1.0, 0.0; 0.0, 1.0]).norm() < 1e-15);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn observability_matrix(a: &DMatrix<f64>, c: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     let n = validate::square("A", a)?;
     validate::shape("C", c, c.nrows(), n, "C must have as many columns as A")?;
@@ -69,6 +113,16 @@ pub fn observability_matrix(a: &DMatrix<f64>, c: &DMatrix<f64>) -> Result<DMatri
 ///
 /// # Errors
 /// Shape and finiteness errors for `A`, `B`.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// let a = dmatrix![0.0, 1.0; 0.0, 0.0]; // double integrator
+/// assert!(model::is_controllable(&a, &dmatrix![0.0; 1.0], None)?); // force on the velocity
+/// assert!(!model::is_controllable(&a, &dmatrix![1.0; 0.0], None)?); // velocity unreachable
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn is_controllable(a: &DMatrix<f64>, b: &DMatrix<f64>, tol: Option<f64>) -> Result<bool> {
     Ok(rank(&controllability_matrix(a, b)?, tol)? == a.nrows())
 }
@@ -77,6 +131,16 @@ pub fn is_controllable(a: &DMatrix<f64>, b: &DMatrix<f64>, tol: Option<f64>) -> 
 ///
 /// # Errors
 /// Shape and finiteness errors for `A`, `C`.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// let a = dmatrix![0.0, 1.0; 0.0, 0.0];
+/// assert!(model::is_observable(&a, &dmatrix![1.0, 0.0], None)?); // position measured
+/// assert!(!model::is_observable(&a, &dmatrix![0.0, 1.0], None)?); // only velocity
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn is_observable(a: &DMatrix<f64>, c: &DMatrix<f64>, tol: Option<f64>) -> Result<bool> {
     Ok(rank(&observability_matrix(a, c)?, tol)? == a.nrows())
 }
@@ -85,6 +149,17 @@ pub fn is_observable(a: &DMatrix<f64>, c: &DMatrix<f64>, tol: Option<f64>) -> Re
 ///
 /// # Errors
 /// [`Error::NotSquare`], [`Error::NonFiniteMatrix`], [`Error::NoConvergence`].
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// let a = dmatrix![0.0, 1.0; -4.0, 0.0]; // undamped oscillator, ω = 2
+/// let mut im: Vec<f64> = model::eigenvalues(&a)?.iter().map(|l| l.im).collect();
+/// im.sort_by(f64::total_cmp);
+/// assert!((im[0] + 2.0).abs() < 1e-12 && (im[1] - 2.0).abs() < 1e-12);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>> {
     let n = validate::square("A", a)?;
     if n == 0 {
@@ -102,6 +177,15 @@ pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>> {
 ///
 /// # Errors
 /// As [`eigenvalues`].
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// let f = dmatrix![0.5, 1.0; 0.0, -0.8];
+/// assert!((model::spectral_radius(&f)? - 0.8).abs() < 1e-12); // stable: < 1
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn spectral_radius(f: &DMatrix<f64>) -> Result<f64> {
     Ok(eigenvalues(f)?.iter().map(|l| l.norm()).fold(0.0, f64::max))
 }
@@ -110,6 +194,15 @@ pub fn spectral_radius(f: &DMatrix<f64>) -> Result<f64> {
 ///
 /// # Errors
 /// As [`eigenvalues`].
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// let a = dmatrix![-1.0, 5.0; 0.0, -3.0];
+/// assert!((model::spectral_abscissa(&a)? + 1.0).abs() < 1e-12); // stable: < 0
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn spectral_abscissa(a: &DMatrix<f64>) -> Result<f64> {
     Ok(eigenvalues(a)?
         .iter()
@@ -123,6 +216,16 @@ pub fn spectral_abscissa(a: &DMatrix<f64>) -> Result<f64> {
 /// # Errors
 /// [`Error::Unstable`] when the spectral radius of `F` is ≥ 1 (no stationary covariance);
 /// shape, finiteness and PSD errors for `F`, `Q`; [`Error::NoConvergence`].
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// // AR(1) x_{k+1} = 0.9 x_k + w_k, var w = 0.19: stationary variance 0.19/(1 − 0.81) = 1.
+/// let p = model::discrete_lyapunov(&dmatrix![0.9], &dmatrix![0.19])?;
+/// assert!((p[(0, 0)] - 1.0).abs() < 1e-12);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn discrete_lyapunov(f: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     let n = validate::square("F", f)?;
     validate::covariance("Q", q, n, "Q must be n×n like F")?;
@@ -159,6 +262,16 @@ pub fn discrete_lyapunov(f: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<DMatrix<f
 ///
 /// # Errors
 /// Shape, finiteness, symmetry and PSD errors for `Q`.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// let q = dmatrix![1.0, 1.0; 1.0, 1.0]; // singular: Cholesky would fail
+/// let l = model::psd_factor(&q)?;
+/// assert!((&l * l.transpose() - &q).norm() < 1e-12);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn psd_factor(q: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     validate::covariance("Q", q, q.nrows(), "Q must be square")?;
     if q.is_empty() {
@@ -174,6 +287,17 @@ pub fn psd_factor(q: &DMatrix<f64>) -> Result<DMatrix<f64>> {
 }
 
 /// Markov parameters (impulse response) `[D, H B, H F B, …]` of `(F, B, H, D)`, `len` terms.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// // y_k = x_k, x_{k+1} = 0.5 x_k + u_k: impulse response 0, 1, 0.5, 0.25.
+/// let (f, b, h, d) = (dmatrix![0.5], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0]);
+/// let h = model::markov_parameters(&f, &b, &h, &d, 4);
+/// let seq: Vec<f64> = h.iter().map(|m| m[(0, 0)]).collect();
+/// assert!(seq.iter().zip([0.0, 1.0, 0.5, 0.25]).all(|(a, b)| (a - b).abs() < 1e-15));
+/// ```
 pub fn markov_parameters(
     f: &DMatrix<f64>,
     b: &DMatrix<f64>,

@@ -143,6 +143,26 @@ fn common_dt(blocks: &[&DiscreteSs]) -> Result<f64> {
 /// # Errors
 /// [`Error::DimensionMismatch`] for wiring matrices of the wrong shape,
 /// [`Error::SampleTimeMismatch`], [`Error::Singular`] for an ill-posed algebraic loop.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::{DMatrix, dmatrix};
+/// use model::{DiscreteSs, connect};
+///
+/// // Two gains in series, y = 3·(2·u), written as a wiring: v₂ = y₁, v₁ = u, z = y₂.
+/// // A static gain y = g·u: no states, one input, one output.
+/// let gain = |g: f64| {
+///     let (f, b, h) = (DMatrix::zeros(0, 0), DMatrix::zeros(0, 1), DMatrix::zeros(1, 0));
+///     DiscreteSs::new(f, b, h, dmatrix![g], 0.1)
+/// };
+/// let (g1, g2) = (gain(2.0)?, gain(3.0)?);
+/// let k = dmatrix![0.0, 0.0; 1.0, 0.0]; // v = K y
+/// let e = dmatrix![1.0; 0.0];           //   + E u
+/// let p = dmatrix![0.0, 1.0];           // z = P y
+/// let loop_ = connect(&[&g1, &g2], &k, &e, &p, &dmatrix![0.0])?;
+/// assert!((loop_.d()[(0, 0)] - 6.0).abs() < 1e-12);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn connect(
     blocks: &[&DiscreteSs],
     k: &DMatrix<f64>,
@@ -161,6 +181,19 @@ pub fn connect(
 ///
 /// # Errors
 /// As [`connect`] (without the sampling-interval check).
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+/// use model::{ContinuousSs, connect_continuous};
+///
+/// // An integrator 1/s closed in unit negative feedback: ẋ = −x + u.
+/// let int = ContinuousSs::new(dmatrix![0.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0])?;
+/// let (k, e, p, qd) = (dmatrix![-1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0]);
+/// let closed = connect_continuous(&[&int], &k, &e, &p, &qd)?;
+/// assert!((closed.a()[(0, 0)] + 1.0).abs() < 1e-12);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn connect_continuous(
     blocks: &[&ContinuousSs],
     k: &DMatrix<f64>,
@@ -198,6 +231,21 @@ fn sel(rows: usize, cols: usize, r0: usize, c0: usize, size: usize) -> DMatrix<f
 /// # Errors
 /// [`Error::DimensionMismatch`] when `s1` has a different number of outputs than `s2` has
 /// inputs; [`Error::SampleTimeMismatch`].
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+/// use model::{DiscreteSs, series};
+///
+/// let lag = DiscreteSs::new(dmatrix![0.5], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0], 1.0)?;
+/// let both = series(&lag, &lag)?;
+/// assert_eq!(both.n_states(), 2);
+/// // DC gain of each is 1/(1 − 0.5) = 2, of the cascade 4.
+/// let i_f = model::nalgebra::DMatrix::identity(2, 2) - both.f();
+/// let dc = both.h() * i_f.lu().solve(both.b()).expect("stable");
+/// assert!((dc[(0, 0)] - 4.0).abs() < 1e-12);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn series(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
     let (l1, m1, l2, m2) = (s1.n_inputs(), s1.n_outputs(), s2.n_inputs(), s2.n_outputs());
     if m1 != l2 {
@@ -251,6 +299,21 @@ fn same_io(
 /// # Errors
 /// [`Error::DimensionMismatch`] unless both have the same numbers of inputs and outputs;
 /// [`Error::SampleTimeMismatch`].
+///
+/// # Example
+/// ```
+/// use model::nalgebra::{DMatrix, dmatrix};
+/// use model::{DiscreteSs, parallel};
+///
+/// // A static gain y = g·u: no states, one input, one output.
+/// let gain = |g: f64| {
+///     let (f, b, h) = (DMatrix::zeros(0, 0), DMatrix::zeros(0, 1), DMatrix::zeros(1, 0));
+///     DiscreteSs::new(f, b, h, dmatrix![g], 1.0)
+/// };
+/// let sum = parallel(&gain(2.0)?, &gain(3.0)?)?;
+/// assert!((sum.d()[(0, 0)] - 5.0).abs() < 1e-15);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn parallel(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
     same_io(
         s1,
@@ -273,6 +336,21 @@ pub fn parallel(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
 /// # Errors
 /// [`Error::DimensionMismatch`] unless both have the same number of inputs;
 /// [`Error::SampleTimeMismatch`].
+///
+/// # Example
+/// ```
+/// use model::nalgebra::{DMatrix, dmatrix};
+/// use model::{DiscreteSs, stack};
+///
+/// // A static gain y = g·u: no states, one input, one output.
+/// let gain = |g: f64| {
+///     let (f, b, h) = (DMatrix::zeros(0, 0), DMatrix::zeros(0, 1), DMatrix::zeros(1, 0));
+///     DiscreteSs::new(f, b, h, dmatrix![g], 1.0)
+/// };
+/// let both = stack(&gain(2.0)?, &gain(3.0)?)?;
+/// assert!((both.d() - dmatrix![2.0; 3.0]).norm() < 1e-15);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn stack(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
     same_io(
         s1,
@@ -293,6 +371,21 @@ pub fn stack(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
 ///
 /// # Errors
 /// [`Error::SampleTimeMismatch`].
+///
+/// # Example
+/// ```
+/// use model::nalgebra::{DMatrix, dmatrix};
+/// use model::{DiscreteSs, append};
+///
+/// // A static gain y = g·u: no states, one input, one output.
+/// let gain = |g: f64| {
+///     let (f, b, h) = (DMatrix::zeros(0, 0), DMatrix::zeros(0, 1), DMatrix::zeros(1, 0));
+///     DiscreteSs::new(f, b, h, dmatrix![g], 1.0)
+/// };
+/// let diag = append(&gain(2.0)?, &gain(3.0)?)?;
+/// assert!((diag.d() - dmatrix![2.0, 0.0; 0.0, 3.0]).norm() < 1e-15);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn append(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
     let (l, m) = (
         s1.n_inputs() + s2.n_inputs(),
@@ -311,6 +404,19 @@ pub fn append(s1: &DiscreteSs, s2: &DiscreteSs) -> Result<DiscreteSs> {
 ///
 /// # Errors
 /// [`Error::IndexOutOfRange`] for an index ≥ the number of outputs.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::{DMatrix, dmatrix};
+/// use model::{DiscreteSs, select_outputs};
+///
+/// let h = dmatrix![1.0; 2.0; 3.0];
+/// let s = DiscreteSs::new(dmatrix![0.5], dmatrix![1.0], h, DMatrix::zeros(3, 1), 1.0)?;
+/// let picked = select_outputs(&s, &[2, 0])?;
+/// assert!((picked.h() - dmatrix![3.0; 1.0]).norm() < 1e-15);
+/// assert!(select_outputs(&s, &[3]).is_err()); // out of range: a typed error
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn select_outputs(s: &DiscreteSs, outputs: &[usize]) -> Result<DiscreteSs> {
     let m = s.n_outputs();
     let mut p = DMatrix::zeros(outputs.len(), m);
@@ -341,6 +447,21 @@ pub fn select_outputs(s: &DiscreteSs, outputs: &[usize]) -> Result<DiscreteSs> {
 /// [`Error::DimensionMismatch`] unless `s2` maps the outputs of `s1` back to its inputs;
 /// [`Error::Singular`] when `I − sign·D1·D2` is singular (ill-posed loop);
 /// [`Error::SampleTimeMismatch`].
+///
+/// # Example
+/// ```
+/// use model::nalgebra::{DMatrix, dmatrix};
+/// use model::{DiscreteSs, feedback};
+///
+/// // Accumulator x_{k+1} = x_k + u_k in negative feedback through a gain of 0.5:
+/// // the loop x_{k+1} = 0.5 x_k + u_k is stable.
+/// let acc = DiscreteSs::new(dmatrix![1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0], 1.0)?;
+/// let (e0, e1, e2) = (DMatrix::zeros(0, 0), DMatrix::zeros(0, 1), DMatrix::zeros(1, 0));
+/// let k = DiscreteSs::new(e0, e1, e2, dmatrix![0.5], 1.0)?;
+/// let closed = feedback(&acc, &k, -1.0)?;
+/// assert!((closed.f()[(0, 0)] - 0.5).abs() < 1e-15);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn feedback(s1: &DiscreteSs, s2: &DiscreteSs, sign: f64) -> Result<DiscreteSs> {
     validate::finite_scalar("sign", sign)?;
     let (l1, m1) = (s1.n_inputs(), s1.n_outputs());

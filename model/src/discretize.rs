@@ -12,6 +12,20 @@ use crate::validate;
 /// How the deterministic part (`A`, `B`, `C`, `D`, and `G` when noise is held) is mapped.
 ///
 /// See the table in the crate docs for when to use each.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+/// use model::{ContinuousSs, Method, NoiseConvention};
+///
+/// // 1/(s + 1) at Δt = 0.1: ZOH gives F = e^{−0.1}, Tustin (1 − 0.05)/(1 + 0.05).
+/// let sys = ContinuousSs::new(dmatrix![-1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0])?;
+/// let zoh = sys.discretize(0.1, Method::Zoh, NoiseConvention::VanLoan)?;
+/// let tustin = sys.discretize(0.1, Method::Tustin, NoiseConvention::VanLoan)?;
+/// assert!((zoh.f()[(0, 0)] - (-0.1f64).exp()).abs() < 1e-14);
+/// assert!((tustin.f()[(0, 0)] - 0.95 / 1.05).abs() < 1e-14);
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub enum Method {
@@ -35,6 +49,23 @@ pub enum Method {
 }
 
 /// How continuous white noise of intensity `W` becomes discrete noise.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+/// use model::{ContinuousSs, Method, NoiseConvention};
+///
+/// // Integrated white noise of intensity 2: Van Loan gives var = 2·Δt in the state;
+/// // the paper's convention a held noise of variance 2/Δt through B_d = Δt.
+/// let sys = ContinuousSs::new(dmatrix![0.0], dmatrix![0.0], dmatrix![1.0], dmatrix![0.0])?
+///     .with_noise(dmatrix![1.0], dmatrix![2.0])?;
+/// let vl = sys.discretize(0.1, Method::Zoh, NoiseConvention::VanLoan)?;
+/// let held = sys.discretize(0.1, Method::Zoh, NoiseConvention::IntensityOverDt)?;
+/// assert!((vl.process_covariance()[(0, 0)] - 0.2).abs() < 1e-12);
+/// assert!((held.q()[(0, 0)] - 20.0).abs() < 1e-12);
+/// assert!((held.process_covariance()[(0, 0)] - 0.2).abs() < 1e-12); // Δt²·2/Δt
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub enum NoiseConvention {
@@ -44,9 +75,9 @@ pub enum NoiseConvention {
     /// (n×n). Exact with [`Method::Zoh`]; with other methods it pairs an exact noise
     /// covariance with an approximate `F`.
     VanLoan,
-    /// The paper's convention (SPEC F): the noise is held over the step as a white sequence of
-    /// variance `W/Δt` and enters through the method's input map: `G_d` and `J` are what the
-    /// method gives for an input matrix `G`, and `Q = W/Δt` (p×p).
+    /// Mazurenko's convention (fuel-level paper): the noise is held over the step as a white
+    /// sequence of variance `W/Δt` and enters through the method's input map: `G_d` and `J` are
+    /// what the method gives for an input matrix `G`, and `Q = W/Δt` (p×p).
     IntensityOverDt,
 }
 
@@ -54,6 +85,15 @@ pub enum NoiseConvention {
 ///
 /// # Errors
 /// [`Error::NotSquare`], [`Error::NonFiniteMatrix`] for a bad `M` or an overflowing result.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// let e = model::expm(&dmatrix![0.0, 1.0; 0.0, 0.0])?; // nilpotent: e^A = I + A
+/// assert!((e - dmatrix![1.0, 1.0; 0.0, 1.0]).norm() < 1e-14);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn expm(m: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     let n = validate::square("M", m)?;
     if n == 0 {
@@ -95,6 +135,17 @@ fn expm_step(
 /// # Errors
 /// [`Error::InvalidParameter`] for `dt` ≤ 0; shape and finiteness errors for `A`, `B`;
 /// [`Error::StepTooLarge`] when the exponential overflows.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// // Double integrator over Δt = 2: F = [[1, 2], [0, 1]], B_d = [Δt²/2, Δt] = [2, 2].
+/// let (f, bd) = model::zoh(&dmatrix![0.0, 1.0; 0.0, 0.0], &dmatrix![0.0; 1.0], 2.0)?;
+/// assert!((f - dmatrix![1.0, 2.0; 0.0, 1.0]).norm() < 1e-13);
+/// assert!((bd - dmatrix![2.0; 2.0]).norm() < 1e-13);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt: f64) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
     validate::positive("dt", dt)?;
     let n = validate::square("A", a)?;
@@ -116,6 +167,20 @@ pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt: f64) -> Result<(DMatrix<f64>,
 /// [`Error::InvalidParameter`] for `dt` ≤ 0; shape, finiteness and PSD errors for the inputs;
 /// [`Error::StepTooLarge`] when the exponential overflows. A zero `G W Gᵀ` gives `Q_d = 0`
 /// without the `2n × 2n` exponential.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+///
+/// // White acceleration of intensity q on a double integrator: the classic
+/// // Q_d = q·[[Δt³/3, Δt²/2], [Δt²/2, Δt]].
+/// let (q, dt) = (0.5, 0.2);
+/// let (a, g) = (dmatrix![0.0, 1.0; 0.0, 0.0], dmatrix![0.0; 1.0]);
+/// let (_, qd) = model::van_loan(&a, &g, &dmatrix![q], dt)?;
+/// let exact = dmatrix![dt.powi(3) / 3.0, dt * dt / 2.0; dt * dt / 2.0, dt] * q;
+/// assert!((qd - exact).norm() < 1e-14);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn van_loan(
     a: &DMatrix<f64>,
     g: &DMatrix<f64>,
@@ -283,6 +348,20 @@ impl ContinuousSs {
 /// [`Error::NonFiniteMatrix`] when the result overflows. Only what the request needs is
 /// computed: no exponential for Euler or Tustin dynamics, and no Van Loan exponential when
 /// no noise enters (`G W Gᵀ = 0`, then `Q = 0`).
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+/// use model::{ContinuousSs, Method, NoiseConvention, discretize};
+///
+/// let sys = ContinuousSs::new(dmatrix![-2.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0])?;
+/// let d = discretize(&sys, 0.05, Method::Zoh, NoiseConvention::VanLoan)?;
+/// // The DC gain 1/2 of the continuous model is kept by ZOH: H (1 − F)⁻¹ B_d = 1/2.
+/// let dc = d.h()[(0, 0)] * d.b()[(0, 0)] / (1.0 - d.f()[(0, 0)]);
+/// assert!((dc - 0.5).abs() < 1e-12);
+/// assert!(discretize(&sys, 0.0, Method::Zoh, NoiseConvention::VanLoan).is_err());
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn discretize(
     sys: &ContinuousSs,
     dt: f64,

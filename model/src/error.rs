@@ -4,6 +4,17 @@
 ///
 /// Each variant names the matrix or parameter at fault (for example `"A"`, `"Q"`, `"dt"`,
 /// `"time_constant"`), its shape or value, and the rule it broke.
+///
+/// # Example
+/// ```
+/// use model::nalgebra::dmatrix;
+/// use model::{ContinuousSs, Error};
+///
+/// let a = dmatrix![1.0, 2.0]; // 1×2
+/// let err = ContinuousSs::new(a, dmatrix![1.0], dmatrix![1.0], dmatrix![0.0]).unwrap_err();
+/// assert!(matches!(err, Error::NotSquare { name: "A", .. }));
+/// println!("{err}"); // matrix A must be square, but it is 1×2
+/// ```
 #[non_exhaustive]
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {

@@ -1,4 +1,4 @@
-//! The paper's 7-state fuel-level model (SPEC F), assembled from its five blocks.
+//! Mazurenko's 7-state fuel-level model, assembled from its five blocks.
 
 use std::f64::consts::PI;
 
@@ -23,11 +23,24 @@ pub const OUTPUT_NAMES: [&str; 5] = [
 
 /// Parameters of the fuel-level model, SI units (seconds, metres, radians).
 ///
-/// The paper's own parameter set is not available; [`FuelParams::default`] is the set SPEC F
-/// lists, **every value assumed**: Δt = 0.1 s, T_a = 20 s, D_c = (1 mm/s)², V_c = 10 mm/s,
-/// δ = 10 mm, T_y = 2 s, R = 1.5 m, φ = 30°, rolling period 2π/β = 10 s, μ = 0.08 s⁻¹,
-/// A_max = 1° (the top of the paper's 0…1° range; σ_α = A_max/3), gyro noise 0 (the paper's
-/// noise-free tilt channel). Missing fields in JSON/TOML take these defaults.
+/// The paper's own parameter set (its reference to an earlier study) is not available;
+/// [`FuelParams::default`] is a plausible set, **every value assumed**: Δt = 0.1 s,
+/// T_a = 20 s, D_c = (1 mm/s)², V_c = 10 mm/s, δ = 10 mm, T_y = 2 s, R = 1.5 m, φ = 30°,
+/// rolling period 2π/β = 10 s, μ = 0.08 s⁻¹, A_max = 1° (the top of the paper's 0…1° range;
+/// σ_α = A_max/3), gyro noise 0 (the paper's noise-free tilt channel). Missing fields in
+/// JSON/TOML take these defaults.
+///
+/// # Example
+/// ```
+/// use model::FuelParams;
+///
+/// let params = FuelParams { delta: 0.005, ..FuelParams::default() }; // a 5 mm sensor
+/// params.validate()?;
+/// // The quantization noise frequency γ_q = 2π V_c/δ doubles when δ halves.
+/// let base = FuelParams::default();
+/// assert!((params.gamma_q() - 2.0 * base.gamma_q()).abs() < 1e-12);
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FuelParams {
@@ -78,15 +91,34 @@ impl Default for FuelParams {
     }
 }
 
-/// The scalar coefficients of SPEC F, in the paper's names.
+/// The scalar coefficients of Mazurenko's discrete model, in the paper's names.
+///
+/// They are the Tustin (`s = (2/Δt)(1 − z⁻¹)/(1 + z⁻¹)`) images of the five blocks listed in
+/// [`FuelParams::blocks`]; see [`FuelParams::paper_coefficients`] for the formulas.
+///
+/// # Example
+/// ```
+/// use model::FuelParams;
+///
+/// let p = FuelParams::default();
+/// let k = p.paper_coefficients()?;
+/// // The Tustin pole of the velocity filter 1/(T_a s + 1).
+/// assert!((k.p_a - (p.t_a - p.dt / 2.0) / (p.t_a + p.dt / 2.0)).abs() < 1e-15);
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[allow(missing_docs)] // each field is named exactly as in SPEC F; see there.
 pub struct PaperCoefficients {
+    /// Velocity filter pole `p_a = (T_a − Δt/2)/(T_a + Δt/2)`.
     pub p_a: f64,
+    /// Velocity filter noise gain `k_a = T_aΔt/(T_a + Δt/2)²`.
     pub k_a: f64,
+    /// Velocity filter feed-through `g_a = Δt/(2(T_a + Δt/2))`.
     pub g_a: f64,
+    /// Damper pole `q_y = (T_y − Δt/2)/(T_y + Δt/2)`.
     pub q_y: f64,
+    /// Damper gain `k_y = T_yΔt/(T_y + Δt/2)²`.
     pub k_y: f64,
+    /// Damper feed-through `g_y = Δt/(2(T_y + Δt/2))`.
     pub g_y: f64,
     /// Rolling filter `a = 2μ/(μ²+β²)`.
     pub a: f64,
@@ -96,19 +128,39 @@ pub struct PaperCoefficients {
     pub c: f64,
     /// Quantization filter `d = 1/(ξ²+γ_q²)`.
     pub d: f64,
+    /// Rolling filter normaliser `n₁ = 1 + 2a/Δt + 4b/Δt²`.
     pub n1: f64,
+    /// Rolling filter denominator `a₁ = (2 − 8b/Δt²)/n₁`.
     pub a1: f64,
+    /// Rolling filter denominator `a₂ = (1 − 2a/Δt + 4b/Δt²)/n₁`.
     pub a2: f64,
+    /// Rolling filter numerator `b₁ = 2/n₁` (the paper's `2z⁻¹(1 + z⁻¹)` numerator).
     pub b1: f64,
+    /// Rolling filter numerator `b₂ = 2/n₁`.
     pub b2: f64,
+    /// Quantization filter normaliser `n₂ = 1 + 2c/Δt + 4d/Δt²`.
     pub n2: f64,
+    /// Quantization filter denominator `c₁ = (2 − 8d/Δt²)/n₂`.
     pub c1: f64,
+    /// Quantization filter denominator `c₂ = (1 − 2c/Δt + 4d/Δt²)/n₂`.
     pub c2: f64,
+    /// Quantization filter numerator `d₀ = (2 + 4√d/Δt)/n₂` (the paper's `2(n₀ + n₁z⁻¹)`).
     pub d0: f64,
+    /// Quantization filter numerator `d₁ = (2 − 4√d/Δt)/n₂`.
     pub d1: f64,
 }
 
 /// Which measurements the model has.
+///
+/// # Example
+/// ```
+/// use model::{Channels, FuelParams, Realisation};
+///
+/// let one = FuelParams::default().build(Channels::LevelOnly, Realisation::Paper)?;
+/// let two = FuelParams::default().build(Channels::LevelAndTilt, Realisation::Paper)?;
+/// assert_eq!((one.n_measurements(), two.n_measurements()), (1, 2));
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub enum Channels {
@@ -119,11 +171,22 @@ pub enum Channels {
 }
 
 /// How the blocks are discretised.
+///
+/// # Example
+/// ```
+/// use model::{Channels, FuelParams, Realisation};
+///
+/// let zoh = FuelParams::default().build(Channels::LevelAndTilt, Realisation::Zoh)?;
+/// assert_eq!(zoh.a.shape(), (7, 7));
+/// // ZOH keeps power at the Nyquist frequency on both channels.
+/// assert!(zoh.nyquist_measurement_power()?.iter().all(|&p| p > 0.0));
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub enum Realisation {
     /// The paper: Tustin per block, with the paper's numerators for the rolling filter
-    /// (`2z⁻¹(1+z⁻¹)`) and the quantization filter (`2(n₀+n₁z⁻¹)`). Reproduces SPEC F's A–D.
+    /// (`2z⁻¹(1+z⁻¹)`) and the quantization filter (`2(n₀+n₁z⁻¹)`). Reproduces the paper's A–D.
     Paper,
     /// Exact Tustin per block (feed-through of the rolling noise appears in B and D).
     ///
@@ -136,12 +199,11 @@ pub enum Realisation {
     /// alternating component of z is exactly predictable. The Kalman filter with S is
     /// optimal and consistent for that model, but its steady predictor `A − K_p C` then has
     /// an eigenvalue at −1, so it integrates any alternating content of real data undamped.
-    /// A floor quantizer's steps have plenty; in the fuelling scenario the level estimate
-    /// swings, the stop fires on a swing and the fuelling error goes from ≈ 5 ± 2 mm to
-    /// ≈ −18 ± 18 mm. A filter that ignores S (R then acts as a white floor) and the other
-    /// realisations are unaffected: the paper's quantization numerator `2(n₀ + n₁z⁻¹)` and
-    /// zero-order hold keep power at Nyquist. This is a property of the model, not of the
-    /// filter engine.
+    /// A floor quantizer's steps have plenty; in a fuelling simulation the level estimate
+    /// swings, the stop fires on a swing and the fuelling error grows several-fold. A filter that
+    /// ignores S (R then acts as a white floor) and the other realisations are unaffected: the
+    /// paper's quantization numerator `2(n₀ + n₁z⁻¹)` and zero-order hold keep power at Nyquist.
+    /// This is a property of the model, not of the filter engine.
     ExactTustin,
     /// The continuous 7-state cascade discretised as a whole by zero-order hold, the noise
     /// held over the step (variance N/Δt, the paper's convention). States differ in scale
@@ -149,7 +211,7 @@ pub enum Realisation {
     Zoh,
 }
 
-/// The discrete fuel-level model, paper convention (SPEC F):
+/// The discrete fuel-level model in Mazurenko's convention:
 ///
 /// ```text
 /// x_{k+1} = A x_k + B u_k + known_input,   z_k = C x_k + D u_k,   y_k = G x_k (+ G_ff u_k),
@@ -250,12 +312,12 @@ impl FuelParams {
     pub fn xi(&self) -> f64 {
         1.0 / self.t_a
     }
-    /// Tilt toward the sensor α = ψ·cos φ + θ·sin φ (SPEC F eq. 7–8).
+    /// Tilt toward the sensor α = ψ·cos φ + θ·sin φ (the paper's eq. 7–8).
     pub fn tilt_toward_sensor(&self, pitch_psi: f64, roll_theta: f64) -> f64 {
         pitch_psi * self.phi.cos() + roll_theta * self.phi.sin()
     }
 
-    /// The coefficients of SPEC F at these parameters.
+    /// The coefficients of the paper's discrete model at these parameters.
     ///
     /// # Errors
     /// As [`FuelParams::validate`].
@@ -375,7 +437,7 @@ impl FuelParams {
         // Column 3 of the wiring is the known mean fill rate, entering at the integrator.
         // Through a Tustin integrator that column is e2 plus the half-step feed-through
         // Δt/2 into the damper (and Δt/2·V_c into the outputs); that constant part is the
-        // same as starting x2 higher by V_c/2, so SPEC F's form `x2 += V_c` is exact up to
+        // same as starting x2 higher by V_c/2, so the paper's form `x2 += V_c` is exact up to
         // the initial state and is what we use.
         let known_input = match realisation {
             Realisation::Zoh => bfull.column(3) * self.v_c,

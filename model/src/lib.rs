@@ -18,8 +18,9 @@
 //!
 //! Transfer functions list coefficients in **ascending** powers: of s for [`ContinuousTf`]
 //! (`1/(b s² + a s + 1)` is `num = [1]`, `den = [1, a, b]`), of z⁻¹ for [`DiscreteTf`].
-//! All quantities are SI (seconds, metres, radians). The fuel model follows SPEC F of the
-//! project and keeps the paper's names (its `A`, `B`, `C`, `D`, `G`, `Q` are [`FuelModel`]'s).
+//! All quantities are SI (seconds, metres, radians). The fuel model follows Mazurenko's paper
+//! (see [References](#references)) and keeps its names (its `A`, `B`, `C`, `D`, `G`, `Q` are
+//! [`FuelModel`]'s).
 //!
 //! # Discretisation methods
 //!
@@ -28,7 +29,7 @@
 //! | method | map | use it when |
 //! |---|---|---|
 //! | [`Method::Zoh`] | `F = e^{AΔt}`, `B_d = ∫e^{Aτ}dτ·B` | inputs are held between samples (actuators, DAC), or you want the exact transition matrix of the continuous model; the default for simulation and Kalman filtering |
-//! | [`Method::Tustin`] | `s = (2/Δt)(1−z⁻¹)/(1+z⁻¹)` | you need the frequency response preserved in shape and stability guaranteed (stable ↦ stable, DC gain kept), e.g. digital filters, or to match the paper (SPEC F) |
+//! | [`Method::Tustin`] | `s = (2/Δt)(1−z⁻¹)/(1+z⁻¹)` | you need the frequency response preserved in shape and stability guaranteed (stable ↦ stable, DC gain kept), e.g. digital filters, or to match Mazurenko's fuel model |
 //! | [`Method::TustinPrewarp`] | Tustin with Δt → `2tan(ωΔt/2)/ω` | as Tustin, but one frequency ω (a resonance, a notch, a crossover) must be exact |
 //! | [`Method::ForwardEuler`] | `s = (z−1)/Δt` | Δt is far below every time constant and you want the simplest explicit update; can turn a stable model unstable |
 //! | [`Method::BackwardEuler`] | `s = (z−1)/(zΔt)` | stiff models where robustness matters more than accuracy; always stable for stable models, but damps too much |
@@ -44,7 +45,7 @@
 //! ```
 //! use model::{Channels, FuelParams, Realisation};
 //!
-//! let params = FuelParams::default(); // SPEC F's assumed defaults
+//! let params = FuelParams::default(); // assumed values: the paper's set is unavailable
 //! let fuel = params.build(Channels::LevelAndTilt, Realisation::Paper)?;
 //! println!("A = {}", fuel.a);
 //! assert_eq!(fuel.a.shape(), (7, 7));
@@ -63,6 +64,19 @@
 //!   `connect`; [`analysis`]: rank, stability, gains, responses, Lyapunov;
 //! - [`shaping`]: shaping filters; [`fuel`]: the paper's model;
 //! - `strategies` (feature `proptest`): proptest strategies for users' property tests.
+//!
+//! # References
+//! - V. B. Mazurenko, *Using information on the platform tilt angles when processing
+//!   liquid-fuel level measurements with a discrete Kalman filter* (in Russian) — the fuel
+//!   model ([`fuel`]), its Tustin variant ([`PaperVariant`]) and the `W/Δt` noise rule
+//!   ([`NoiseConvention::IntensityOverDt`]).
+//! - C. F. Van Loan, *Computing integrals involving the matrix exponential*, IEEE Trans.
+//!   Automatic Control 23(3), 1978 — [`van_loan`].
+//!
+//! # Versions of the types in this API
+//! Matrices and vectors are [`nalgebra`] 0.35 types (`DMatrix<f64>`, `DVector<f64>`),
+//! re-exported as [`model::nalgebra`](nalgebra) so a user can name exactly the version this
+//! crate is built against.
 #![deny(missing_docs)]
 #![deny(clippy::float_cmp)]
 
@@ -94,3 +108,8 @@ pub use tf::{ContinuousTf, DiscreteTf, PaperVariant};
 
 /// Re-export of the linear-algebra crate whose types appear in this API.
 pub use nalgebra;
+
+/// The README's examples, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

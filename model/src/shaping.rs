@@ -16,6 +16,20 @@ use crate::validate;
 ///
 /// Conventions: the spectral density is two-sided, `S(ω) = N·|H(jω)|²`, with
 /// `R(τ) = (1/2π)∫S(ω)e^{jωτ}dω`.
+///
+/// # Example
+/// ```
+/// use model::{Exponential, Method, NoiseConvention, ShapingFilter};
+///
+/// // A first-order Gauss–Markov process of variance 4 and correlation time 2 s.
+/// let f = Exponential::new(4.0, 2.0)?;
+/// assert!((f.intensity() - 16.0).abs() < 1e-12); // N = 2 T D
+/// let d = f.discretize(0.1, Method::Zoh, NoiseConvention::VanLoan)?;
+/// // Its stationary variance is D again: P = F P Fᵀ + Q.
+/// let p = model::discrete_lyapunov(d.f(), &d.process_covariance())?;
+/// assert!((p[(0, 0)] * d.h()[(0, 0)].powi(2) - 4.0).abs() < 1e-9);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub trait ShapingFilter {
     /// Stationary variance `D` of the output.
     fn variance(&self) -> f64;
@@ -32,7 +46,7 @@ pub trait ShapingFilter {
     /// The shortest time constant of the correlation (1/decay rate or 1/frequency): choose
     /// `Δt` well below it.
     fn shortest_time_constant(&self) -> f64;
-    /// The paper's Tustin variant for this filter (SPEC F), or `None` for exact Tustin.
+    /// Mazurenko's Tustin variant for this filter, or `None` for exact Tustin.
     fn paper_variant(&self) -> Option<PaperVariant> {
         None
     }
@@ -59,7 +73,7 @@ pub trait ShapingFilter {
         discretize(&self.continuous(), dt, method, noise)
     }
 
-    /// Discrete model by the paper's rule (SPEC F): Tustin with the paper's numerator change
+    /// Discrete model by Mazurenko's rule: Tustin with the paper's numerator change
     /// where it has one (rolling: `(1+z⁻¹) → 2z⁻¹`; quantization: `(1+z⁻¹) → 2`; exponential:
     /// exact Tustin), realised in controllable canonical form, noise `w_k` of variance `N/Δt`
     /// entering as the filter input (`G = B`, `J = D` of the realisation).
@@ -81,6 +95,20 @@ pub trait ShapingFilter {
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for a negative or non-finite `q`.
+///
+/// # Example
+/// ```
+/// use model::{DiscreteTf, noise_driven};
+///
+/// // AR(1) y_k = 0.8 y_{k−1} + w_k as 1/(1 − 0.8 z⁻¹), var w = 0.36: var y = 0.36/(1 − 0.64) = 1.
+/// let tf = DiscreteTf::new(vec![1.0], vec![1.0, -0.8], 1.0)?;
+/// let s = noise_driven(&tf, 0.36)?;
+/// let p = model::discrete_lyapunov(s.f(), &s.process_covariance())?;
+/// // y_k = H x_k + J w_k with x_k independent of w_k.
+/// let var = (s.h() * &p * s.h().transpose() + s.output_noise_covariance())[(0, 0)];
+/// assert!((var - 1.0).abs() < 1e-9);
+/// # Ok::<(), model::Error>(())
+/// ```
 pub fn noise_driven(tf: &DiscreteTf, q: f64) -> Result<DiscreteSs> {
     validate::non_negative("q", q)?;
     let r = tf.realize();
@@ -96,6 +124,16 @@ pub fn noise_driven(tf: &DiscreteTf, q: f64) -> Result<DiscreteSs> {
 }
 
 /// Exponential correlation `R(τ) = D·e^{−|τ|/T}`; filter `1/(T s + 1)`, `N = 2·T·D`.
+///
+/// # Example
+/// ```
+/// use model::{Exponential, ShapingFilter};
+///
+/// let f = Exponential::new(1.0, 0.5)?;
+/// assert!((f.correlation(0.5) - (-1.0f64).exp()).abs() < 1e-15); // R(T) = D/e
+/// assert!(Exponential::new(1.0, 0.0).is_err()); // T must be > 0
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "ExponentialRaw")]
 pub struct Exponential {
@@ -156,6 +194,19 @@ impl ShapingFilter for Exponential {
 
 /// Irregular rolling `R(τ) = D·e^{−μ|τ|}(cos βτ + (μ/β)·sin β|τ|)`; filter
 /// `1/(b s² + a s + 1)` with `a = 2μ/(μ²+β²)`, `b = 1/(μ²+β²)`; `N = 2·a·D`.
+///
+/// # Example
+/// ```
+/// use model::{IrregularRolling, ShapingFilter};
+///
+/// // Rolling with a 10 s period (β = 2π/10) and irregularity μ = 0.08 s⁻¹, σ = 1°.
+/// let beta = 2.0 * std::f64::consts::PI / 10.0;
+/// let f = IrregularRolling::new(1f64.to_radians().powi(2), 0.08, beta)?;
+/// let (a, b) = f.coefficients();
+/// assert!((b - 1.0 / (0.08f64.powi(2) + f.beta().powi(2))).abs() < 1e-12);
+/// assert!((f.intensity() - 2.0 * a * f.variance()).abs() < 1e-18);
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RollingRaw")]
 pub struct IrregularRolling {
@@ -239,6 +290,16 @@ impl ShapingFilter for IrregularRolling {
 /// Damped cosine `R(τ) = D·e^{−ξ|τ|}·cos ωτ`; filter `(1 + √d·s)/(d s² + c s + 1)` with
 /// `c = 2ξ/(ξ²+ω²)`, `d = 1/(ξ²+ω²)`; `N = c·D`. The paper's quantization-noise model
 /// (`D = δ²/12`, `ξ = 1/T_a`, `ω = γ_q`).
+///
+/// # Example
+/// ```
+/// use model::{DampedCosine, ShapingFilter};
+///
+/// let f = DampedCosine::new(1.0, 0.05, std::f64::consts::PI)?;
+/// // R(τ) = D e^{−ξτ} cos ωτ: half a period later the sign has flipped.
+/// assert!((f.correlation(1.0) + (-0.05f64).exp()).abs() < 1e-12);
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "DampedRaw")]
 pub struct DampedCosine {

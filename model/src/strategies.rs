@@ -32,6 +32,18 @@ fn orthogonal(n: usize) -> impl Strategy<Value = DMatrix<f64>> {
 /// A symmetric positive definite n×n matrix with 2-norm condition number exactly `cond`
 /// (≥ 1): `U·diag(λ)·Uᵀ`, U random orthogonal, λ from `cond` down to 1 (log-spaced ends,
 /// random interior).
+///
+/// # Example
+/// ```
+/// use model::strategies::spd_matrix;
+/// use proptest::prelude::*;
+///
+/// proptest!(|(m in spd_matrix(4, 100.0))| {
+///     let eig = m.clone().symmetric_eigen().eigenvalues;
+///     let cond = eig.max() / eig.min();
+///     prop_assert!((cond - 100.0).abs() < 1e-6 * 100.0);
+/// });
+/// ```
 pub fn spd_matrix(n: usize, cond: f64) -> impl Strategy<Value = DMatrix<f64>> {
     let cond = if cond.is_finite() { cond.max(1.0) } else { 1.0 };
     (orthogonal(n), prop::collection::vec(0.0..1.0f64, n)).prop_map(move |(u, t)| {
@@ -59,6 +71,16 @@ pub fn spd_matrix(n: usize, cond: f64) -> impl Strategy<Value = DMatrix<f64>> {
 ///
 /// `A = −(M Mᵀ/n + εI) + (K − Kᵀ)/2` with entries of M, K in [−1, 1] and ε ∈ [0.1, 1]: its
 /// symmetric part is ≤ −εI, so every eigenvalue has real part ≤ −ε, and ‖A‖ ≤ 1 + n.
+///
+/// # Example
+/// ```
+/// use model::strategies::stable_continuous;
+/// use proptest::prelude::*;
+///
+/// proptest!(|(sys in stable_continuous(4, 1, 1))| {
+///     prop_assert!(model::spectral_abscissa(sys.a()).expect("finite") < 0.0);
+/// });
+/// ```
 pub fn stable_continuous(
     max_states: usize,
     max_inputs: usize,
@@ -92,6 +114,16 @@ pub fn stable_continuous(
 /// A random stable discrete model: `F = r·M/‖M‖₂` with r ∈ [0, 0.95] (so the spectral radius
 /// is ≤ 0.95), Δt ∈ [0.01, 1], other matrices with entries in [−1, 1], noise covariance SPD
 /// (condition ≤ 10), `J = 0`.
+///
+/// # Example
+/// ```
+/// use model::strategies::stable_discrete;
+/// use proptest::prelude::*;
+///
+/// proptest!(|(sys in stable_discrete(4, 1, 1))| {
+///     prop_assert!(model::spectral_radius(sys.f()).expect("finite") < 1.0);
+/// });
+/// ```
 pub fn stable_discrete(
     max_states: usize,
     max_inputs: usize,
@@ -128,10 +160,21 @@ pub fn stable_discrete(
         })
 }
 
-/// Valid fuel-model parameter sets around SPEC F's assumed defaults: Δt ∈ [0.02, 0.5] s,
+/// Valid fuel-model parameter sets around [`FuelParams::default`]'s assumed values:
+/// Δt ∈ [0.02, 0.5] s,
 /// T_a ∈ [5, 60] s, D_c ∈ [1e-7, 1e-5] (m/s)², V_c ∈ [2, 50] mm/s, δ ∈ [2, 20] mm,
 /// T_y ∈ [0.5, 5] s, R ∈ [0.5, 3] m, φ ∈ [0, 2π), rolling period ∈ [5, 20] s,
 /// μ ∈ [0.02, 0.3] 1/s, A_max ∈ [0, 2]°, gyro noise variance ∈ [0, 1e-6] rad².
+///
+/// # Example
+/// ```
+/// use model::strategies::fuel_params;
+/// use proptest::prelude::*;
+///
+/// proptest!(|(p in fuel_params())| {
+///     prop_assert!(p.validate().is_ok());
+/// });
+/// ```
 pub fn fuel_params() -> impl Strategy<Value = FuelParams> {
     (
         (0.02..0.5f64, 5.0..60.0f64, 1e-7..1e-5f64, 0.002..0.05f64),

@@ -1,5 +1,5 @@
 //! SISO transfer functions in s and in z⁻¹, their controllable canonical realisations, and
-//! the bilinear (Tustin) map between them, including the paper's variant (SPEC F).
+//! the bilinear (Tustin) map between them, including Mazurenko's variant.
 
 use nalgebra::{Complex, DMatrix};
 use serde::{Deserialize, Serialize};
@@ -14,6 +14,20 @@ use crate::validate;
 /// `n0 + n1·s + …`, so the paper's `1/(b s² + a s + 1)` is `num = [1]`, `den = [1, a, b]`.
 /// Trailing (highest-power) zeros are trimmed; the model must be proper
 /// (deg N ≤ deg D).
+///
+/// # Example
+/// ```
+/// use model::ContinuousTf;
+/// use model::nalgebra::Complex;
+///
+/// // 1/(s² + 0.2 s + 1) (ascending powers: den = [1, 0.2, 1]).
+/// let h = ContinuousTf::new(vec![1.0], vec![1.0, 0.2, 1.0])?;
+/// assert_eq!(h.order(), 2);
+/// // At resonance ω = 1 the gain is 1/0.2 = 5.
+/// assert!((h.freq_response(1.0).norm() - 5.0).abs() < 1e-12);
+/// let _ = h.eval(Complex::new(0.0, 0.0));
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "TfRaw")]
 pub struct ContinuousTf {
@@ -92,8 +106,23 @@ fn eval_poly(p: &[f64], x: Complex<f64>) -> Complex<f64> {
     })
 }
 
-/// How the paper replaces one `(1 + z⁻¹)` factor of a Tustin numerator (SPEC F). Both keep the
-/// DC gain.
+/// How Mazurenko's fuel-level paper replaces one `(1 + z⁻¹)` factor of a Tustin numerator. Both
+/// keep the DC gain.
+///
+/// # Example
+/// ```
+/// use model::{ContinuousTf, PaperVariant};
+///
+/// let h = ContinuousTf::new(vec![1.0], vec![1.0, 0.5, 0.25])?;
+/// let exact = h.tustin(0.1, None)?;
+/// let paper = h.paper_tustin(0.1, PaperVariant::Delay)?;
+/// // Both keep the DC gain 1.
+/// for tf in [exact, paper] {
+///     let dc: f64 = tf.num().iter().sum::<f64>() / tf.den().iter().sum::<f64>();
+///     assert!((dc - 1.0).abs() < 1e-12);
+/// }
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub enum PaperVariant {
@@ -200,7 +229,7 @@ impl ContinuousTf {
         DiscreteTf::normalized(num, den, dt)
     }
 
-    /// The paper's variant of Tustin (SPEC F): exact Tustin, then one `(1 + z⁻¹)` factor of the
+    /// Mazurenko's variant of Tustin: exact Tustin, then one `(1 + z⁻¹)` factor of the
     /// numerator is replaced as `variant` says. Needs a strictly proper model (deg N < deg D),
     /// so that the factor `(1 + z⁻¹)^{deg D − deg N}` is there to replace.
     ///
@@ -272,6 +301,17 @@ pub(crate) fn tustin_kappa(dt: f64, prewarp: Option<f64>) -> Result<f64> {
 ///
 /// `num = [n0, n1, …]` means `n0 + n1·z⁻¹ + …`; `den = [d0, d1, …]` likewise with `d0 ≠ 0`
 /// (causal). The constructor normalises to `d0 = 1`.
+///
+/// # Example
+/// ```
+/// use model::DiscreteTf;
+///
+/// // A moving average (1 + z⁻¹)/2: impulse response 0.5, 0.5, 0, …
+/// let ma = DiscreteTf::new(vec![0.5, 0.5], vec![1.0], 0.1)?;
+/// let h = ma.impulse_response(3);
+/// assert!(h.iter().zip([0.5, 0.5, 0.0]).all(|(a, b)| (a - b).abs() < 1e-15));
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "DiscreteTfRaw")]
 pub struct DiscreteTf {

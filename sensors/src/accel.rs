@@ -1,6 +1,6 @@
-//! Three-axis accelerometer on a turning erector boom (SPEC B): gravity projection at the
-//! sensor's position on the arc, tangential ε·r, optional centripetal ω²·r, misalignment,
-//! constant ±Δa bias, noise, range saturation and the a_z mounting check.
+//! Three-axis accelerometer on a turning erector boom (Zavyalov and Shatov's boom paper): gravity
+//! projection at the sensor's position on the arc, tangential ε·r, optional centripetal ω²·r,
+//! misalignment, constant ±Δa bias, noise, range saturation and the a_z mounting check.
 
 use nalgebra::{Rotation3, Vector3};
 use rand::Rng;
@@ -9,7 +9,18 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, finite, in_range, non_negative, positive};
 use crate::process::normal;
 
-/// The constant-error variants of SPEC B.
+/// The constant-error variants of the boom paper (a bias of +Δa or −Δa on every axis).
+///
+/// # Example
+/// ```
+/// use sensors::{Accelerometer, AccelerometerConfig, BiasVariant, BoomMotion};
+///
+/// let cfg = AccelerometerConfig { bias: BiasVariant::Plus, ..AccelerometerConfig::default() };
+/// let reading = Accelerometer::new(&cfg)?.clean(BoomMotion::default());
+/// // Level boom at rest: a_x = 0 and a_y = g, each shifted by +Δa = 0.02 m/s².
+/// assert!((reading.x - 0.02).abs() < 1e-12 && (reading.y - 9.82).abs() < 1e-12);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum BiasVariant {
     /// No bias.
@@ -21,9 +32,24 @@ pub enum BiasVariant {
     Minus,
 }
 
-/// Accelerometer configuration (angles in degrees here, radians inside). Defaults: SPEC B's
+/// Accelerometer configuration (angles in degrees here, radians inside). Defaults: the boom paper's
 /// sensor (r = 25 m, range 10 m/s², Δa = 0.02 m/s², g = 9.8 m/s²), ideally mounted at γ = 0,
 /// no bias, no noise, centripetal term off (as in the paper).
+///
+/// # Example
+/// ```
+/// use sensors::{Accelerometer, AccelerometerConfig};
+///
+/// // Mounted 10° lower along the arc, with 0.005 m/s² noise on every axis.
+/// let cfg = AccelerometerConfig {
+///     sensor_offset_angle_deg: 10.0,
+///     noise_std_mps2: 0.005,
+///     ..AccelerometerConfig::default()
+/// };
+/// let sensor = Accelerometer::new(&cfg)?;
+/// assert!((sensor.offset_angle() - 10f64.to_radians()).abs() < 1e-15);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct AccelerometerConfig {
@@ -35,7 +61,7 @@ pub struct AccelerometerConfig {
     /// Misalignment of the sensor axes, degrees: rotations about the ideal x (radial), y
     /// (tangential) and z (pivot axis) axes, applied as R = R_z·R_y·R_x (default zeros).
     pub misalignment_deg: [f64; 3],
-    /// Gravity g, m/s² (> 0; default 9.8 as in SPEC B).
+    /// Gravity g, m/s² (> 0; default 9.8 as in the boom paper).
     pub gravity_mps2: f64,
     /// Include the centripetal term −ω²·r on the radial axis (default false, as the paper).
     pub centripetal: bool,
@@ -70,6 +96,19 @@ impl Default for AccelerometerConfig {
 }
 
 /// Boom kinematics at one instant.
+///
+/// # Example
+/// ```
+/// use sensors::{Accelerometer, AccelerometerConfig, BoomMotion};
+///
+/// let sensor = Accelerometer::new(&AccelerometerConfig::default())?;
+/// let motion = BoomMotion { angle: 30f64.to_radians(), rate: 0.0, acceleration: 0.01 };
+/// let f = sensor.clean(motion);
+/// // a_x = g sin α, a_y = g cos α + ε r (r = 25 m).
+/// assert!((f.x - 9.8 * 0.5).abs() < 1e-12);
+/// assert!((f.y - (9.8 * 30f64.to_radians().cos() + 0.25)).abs() < 1e-12);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct BoomMotion {
     /// Boom angle α from the horizontal, rad.
@@ -92,9 +131,22 @@ pub struct BoomMotion {
 ///   a_y = g·cos(α − γ) + ε·r
 ///   a_z = 0
 ///
-/// which is SPEC B's equation (1) with the offset angle. The reading is R_misᵀ·f (the sensor
-/// axes are the ideal ones rotated by R_mis), plus the bias, plus noise, each axis clipped to
-/// ±range. Three normals are drawn per measurement whether or not noise is enabled.
+/// which is the boom paper's equation (1) with the offset angle. The reading is R_misᵀ·f (the
+/// sensor axes are the ideal ones rotated by R_mis), plus the bias, plus noise, each axis clipped
+/// to ±range. Three normals are drawn per measurement whether or not noise is enabled.
+///
+/// # Example
+/// ```
+/// use sensors::{Accelerometer, AccelerometerConfig, BoomMotion, seeded_rng};
+///
+/// let cfg = AccelerometerConfig { noise_std_mps2: 0.01, ..AccelerometerConfig::default() };
+/// let sensor = Accelerometer::new(&cfg)?;
+/// let mut rng = seeded_rng(1);
+/// let reading = sensor.measure(BoomMotion::default(), &mut rng);
+/// assert!((reading.y - 9.8).abs() < 0.1); // within 10σ of g
+/// sensor.check_mounting(&reading)?; // a_z stays near 0
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Accelerometer {
     radius: f64,
@@ -183,7 +235,7 @@ impl Accelerometer {
         let r = self.range;
         (self.clean(motion) + self.noise_std * n).map(|v| v.clamp(-r, r))
     }
-    /// The mounting check of SPEC B: |a_z| must stay within the tolerance. Run it at rest
+    /// The boom paper's mounting check: |a_z| must stay within the tolerance. Run it at rest
     /// (or average several readings first when noise is on).
     ///
     /// # Errors
@@ -205,6 +257,15 @@ impl Accelerometer {
 ///
 /// # Errors
 /// [`Error::NotFinite`] naming the field.
+///
+/// # Example
+/// ```
+/// use sensors::{BoomMotion, Error, validate_motion};
+///
+/// assert!(validate_motion(&BoomMotion::default()).is_ok());
+/// let bad = BoomMotion { angle: f64::NAN, ..BoomMotion::default() };
+/// assert!(matches!(validate_motion(&bad), Err(Error::NotFinite { name: "angle", .. })));
+/// ```
 pub fn validate_motion(motion: &BoomMotion) -> Result<(), Error> {
     finite("angle", motion.angle)?;
     finite("rate", motion.rate)?;

@@ -3,6 +3,15 @@
 /// Everything that can go wrong in this crate: a configuration parameter that breaks its rule,
 /// or a failed mounting check. Each variant names the offending parameter (by its
 /// configuration field name, units included) and its value.
+///
+/// # Example
+/// ```
+/// use sensors::{Error, WhiteNoise};
+///
+/// let err = WhiteNoise::new(-1.0, 0.1).unwrap_err();
+/// assert!(matches!(err, Error::Negative { name: "std_dev", .. }));
+/// println!("{err}"); // parameter `std_dev` = -1 must be >= 0
+/// ```
 #[non_exhaustive]
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {
@@ -43,7 +52,7 @@ pub enum Error {
         max: f64,
     },
     /// The accelerometer's out-of-plane axis reads more than the mounting tolerance: the
-    /// sensor is misaligned (SPEC B: a_z ≈ 0 only checks the mounting).
+    /// sensor is misaligned (in the boom paper a_z ≈ 0 only checks the mounting).
     #[error("mounting check failed: |a_z| = {a_z} m/s² exceeds the tolerance {tolerance} m/s²")]
     MountingCheck {
         /// The out-of-plane reading a_z, m/s².

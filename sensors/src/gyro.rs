@@ -1,5 +1,5 @@
-//! The ship's gyro instrument (SPEC F): reports pitch ψ and roll θ with noise, constant bias
-//! and resolution, sampled at its own rate and held between samples.
+//! The ship's gyro instrument (Mazurenko's fuel-level paper): reports pitch ψ and roll θ with
+//! noise, constant bias and resolution, sampled at its own rate and held between samples.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -11,6 +11,21 @@ use crate::process::normal;
 
 /// Gyro configuration (angles in degrees here, radians inside). Defaults: an ideal instrument
 /// sampling every 0.1 s (the paper's tilt channel is noise-free).
+///
+/// # Example
+/// ```
+/// use sensors::{Gyro, GyroConfig};
+///
+/// // A gyro sampling at 1 Hz with 0.05° noise and a 0.1° roll bias.
+/// let cfg = GyroConfig {
+///     sample_period_s: 1.0,
+///     noise_std_deg: 0.05,
+///     roll_bias_deg: 0.1,
+///     ..GyroConfig::default()
+/// };
+/// let _gyro = Gyro::new(&cfg, 0.1)?;
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct GyroConfig {
@@ -44,6 +59,19 @@ impl Default for GyroConfig {
 /// sample period, and otherwise holds the last one (sample-and-hold). Sample = truth + bias +
 /// noise, then rounded to the resolution. Two normals are drawn every step (held or not), so
 /// the random stream does not depend on the sample period.
+///
+/// # Example
+/// ```
+/// use sensors::{Attitude, Gyro, GyroConfig, seeded_rng};
+///
+/// let cfg = GyroConfig { pitch_bias_deg: 0.5, ..GyroConfig::default() };
+/// let mut gyro = Gyro::new(&cfg, 0.1)?;
+/// let mut rng = seeded_rng(3);
+/// let seen = gyro.step(Attitude { roll: 0.01, pitch: 0.0 }, &mut rng);
+/// assert!((seen.roll - 0.01).abs() < 1e-15);
+/// assert!((seen.pitch - 0.5f64.to_radians()).abs() < 1e-15);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Gyro {
     dt: f64,

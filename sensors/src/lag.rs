@@ -6,6 +6,18 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, non_negative, positive};
 
 /// How the input of a [`FirstOrderLag`] is assumed to behave between two samples.
+///
+/// # Example
+/// ```
+/// use sensors::{FirstOrderLag, LagInput};
+///
+/// // With a zero-order hold the output at k+1 depends only on inputs up to k.
+/// let mut lag = FirstOrderLag::new(1.0, 0.1, LagInput::ZeroOrderHold)?;
+/// lag.reset_to(0.0, 0.0);
+/// assert!(lag.step(1.0).abs() < 1e-15);
+/// assert!(lag.step(1.0) > 0.0);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum LagInput {
     /// The input varies linearly between consecutive samples (first-order hold). Exact for
@@ -25,6 +37,21 @@ pub enum LagInput {
 /// - [`LagInput::ZeroOrderHold`]: y_{k+1} = a·y_k + (1 − a)·u_k.
 ///
 /// T = 0 is allowed: pass-through (piecewise-linear) or a one-sample hold (zero-order hold).
+///
+/// # Example
+/// ```
+/// use sensors::{FirstOrderLag, LagInput};
+///
+/// // A unit step through 1/(2 s + 1), sampled every 0.1 s: y(t) = 1 − e^{−t/2} exactly.
+/// let mut lag = FirstOrderLag::new(2.0, 0.1, LagInput::ZeroOrderHold)?;
+/// lag.reset_to(0.0, 1.0);
+/// let mut y = 0.0;
+/// for _ in 0..20 {
+///     y = lag.step(1.0);
+/// }
+/// assert!((y - (1.0 - (-1.0f64).exp())).abs() < 1e-12);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct FirstOrderLag {
     time: f64,
@@ -110,6 +137,17 @@ impl FirstOrderLag {
 }
 
 /// How a [`Quantizer`] rounds.
+///
+/// # Example
+/// ```
+/// use sensors::{Quantizer, Rounding};
+///
+/// let floor = Quantizer::new("step", 0.01, Rounding::Floor, 0.0)?;
+/// let nearest = Quantizer::new("step", 0.01, Rounding::Nearest, 0.0)?;
+/// assert!((floor.quantize(0.0199) - 0.01).abs() < 1e-15);
+/// assert!((nearest.quantize(0.0199) - 0.02).abs() < 1e-15);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Rounding {
     /// step·⌊x/step⌋: a point sensor that reports the last mark passed (error in [−step, 0)).
@@ -119,6 +157,16 @@ pub enum Rounding {
 }
 
 /// Uniform quantizer with step q ≥ 0 (q = 0: no quantization) and an output offset.
+///
+/// # Example
+/// ```
+/// use sensors::{Quantizer, Rounding};
+///
+/// // A 10 mm floor quantizer whose reading is shifted by half a step (mid-step compensation).
+/// let q = Quantizer::new("step_m", 0.01, Rounding::Floor, 0.005)?;
+/// assert!((q.quantize(1.234) - 1.235).abs() < 1e-12);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Quantizer {
     step: Option<f64>,

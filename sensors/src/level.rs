@@ -1,5 +1,5 @@
-//! The discrete fuel-level sensor of SPEC F: tilt at the mounting point, hydro-damper lag,
-//! point-sensor quantization, optional threshold noise, mid-step compensation and dead time.
+//! The discrete fuel-level sensor of Mazurenko's paper: tilt at the mounting point, hydro-damper
+//! lag, point-sensor quantization, optional threshold noise, mid-step compensation and dead time.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -9,8 +9,24 @@ use crate::lag::{DelayLine, FirstOrderLag, LagInput, Quantizer, Rounding, sample
 use crate::platform::Attitude;
 use crate::process::normal;
 
-/// Level-sensor configuration. Defaults are SPEC F's assumed values (δ = 10 mm, T_y = 2 s,
-/// R = 1.5 m, φ = 30°), with no compensation, noise or dead time.
+/// Level-sensor configuration. Defaults are assumed values for the fuel-level paper
+/// (δ = 10 mm, T_y = 2 s, R = 1.5 m, φ = 30°), with no compensation, noise or dead time.
+///
+/// # Example
+/// ```
+/// use sensors::{LevelSensor, LevelSensorConfig};
+///
+/// // A 5 mm sensor with mid-step compensation and no hydro-damper.
+/// let cfg = LevelSensorConfig {
+///     step_m: 0.005,
+///     damper_time_constant_s: 0.0,
+///     mid_step_compensation: true,
+///     ..LevelSensorConfig::default()
+/// };
+/// let sensor = LevelSensor::new(&cfg, 0.1)?;
+/// assert!((sensor.step_size() - 0.005).abs() < 1e-15);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct LevelSensorConfig {
@@ -49,6 +65,18 @@ impl Default for LevelSensorConfig {
 }
 
 /// The signals of one level-sensor step, m.
+///
+/// # Example
+/// ```
+/// use sensors::{Attitude, LevelSensor, LevelSensorConfig, seeded_rng};
+///
+/// let mut sensor = LevelSensor::new(&LevelSensorConfig::default(), 0.1)?;
+/// let out = sensor.step(1.234, Attitude::default(), &mut seeded_rng(0));
+/// // Level platform: the sensor sees the level itself; the damper starts in equilibrium.
+/// assert!((out.at_sensor - 1.234).abs() < 1e-15 && (out.damped - 1.234).abs() < 1e-15);
+/// assert!((out.reading - 1.23).abs() < 1e-12); // floor to the 10 mm step
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LevelReading {
     /// Liquid level at the sensor's position, h + R·tan α.
@@ -59,12 +87,26 @@ pub struct LevelReading {
     pub reading: f64,
 }
 
-/// Point level sensor in a hydro-damper sleeve on a tilting tank (SPEC F).
+/// Point level sensor in a hydro-damper sleeve on a tilting tank (Mazurenko's fuel-level paper).
 ///
 /// Each step: level at the sensor h + R·tan α with α = ψ·cos φ + θ·sin φ; damper
 /// 1/(T_y s + 1) integrated exactly ([`FirstOrderLag`]; it starts in equilibrium with the first
 /// input); threshold noise; floor quantization (mean error −δ/2, or 0 with mid-step
 /// compensation); dead time. One normal is drawn per step whether or not noise is enabled.
+///
+/// # Example
+/// ```
+/// use sensors::{Attitude, LevelSensor, LevelSensorConfig, seeded_rng};
+///
+/// let mut sensor = LevelSensor::new(&LevelSensorConfig::default(), 0.1)?;
+/// let tilt = Attitude { roll: 0.0, pitch: 0.01 };
+/// // h + R·tan α with α = ψ cos φ (R = 1.5 m, φ = 30°).
+/// let expected = 2.0 + 1.5 * (0.01 * 30f64.to_radians().cos()).tan();
+/// assert!((sensor.level_at_sensor(2.0, tilt) - expected).abs() < 1e-15);
+/// let out = sensor.step(2.0, tilt, &mut seeded_rng(0));
+/// assert!(out.reading <= out.damped);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct LevelSensor {
     radius: f64,

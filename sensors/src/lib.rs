@@ -1,17 +1,17 @@
 //! Truth-side random processes and sensor models for launch and flight-test simulation.
 //!
 //! These are the models a scenario's *world* is made of, written from the physics, not from
-//! any filter's model (SPEC F "truth simulation", B, U). SI units inside; angles are given in
-//! degrees only in configuration structs and converted once, at construction.
+//! any filter's model (the three papers listed under [References](#references)). SI units inside;
+//! angles are given in degrees only in configuration structs and converted once, at construction.
 //!
 //! # Notation
 //! - Δt: fixed sampling interval of every stepped object, s, given at construction.
 //! - σ, D = σ²: standard deviation and variance of a process; R(τ): its correlation
 //!   (auto-covariance) function at lag τ, s.
-//! - Platform (SPEC F): roll θ, pitch ψ, sensor angle φ, tilt α = ψ·cos φ + θ·sin φ; rolling
-//!   irregularity μ and dominant frequency β (period 2π/β).
+//! - Platform (fuel-level paper): roll θ, pitch ψ, sensor angle φ, tilt α = ψ·cos φ + θ·sin φ;
+//!   rolling irregularity μ and dominant frequency β (period 2π/β).
 //! - Level sensor: step δ, damper time constant T_y, sensor radius R, tank level h.
-//! - Boom (SPEC B): angle α, rate ω, angular acceleration ε, radius r, offset angle γ, g.
+//! - Boom (boom paper): angle α, rate ω, angular acceleration ε, radius r, offset angle γ, g.
 //!
 //! # Randomness
 //! Every stochastic object takes `&mut R: rand::Rng`; the crate uses
@@ -43,6 +43,23 @@
 //! assert!((rolling.variance() - 1.0).abs() < 1e-12);
 //! # Ok::<(), sensors::Error>(())
 //! ```
+//!
+//! # References
+//! - V. B. Mazurenko, *Using information on the platform tilt angles when processing
+//!   liquid-fuel level measurements with a discrete Kalman filter* (in Russian): platform
+//!   rolling, the level sensor, the fill-velocity and quantization-noise processes.
+//! - Yu. V. Gridnev, A. Yu. Rusetsky, S. A. Rak, *Stochastic simulation of the automatic
+//!   control systems of an unmanned aerial vehicle with an optimal Kalman filter* (in
+//!   Russian, 2013): the UAV channel sensors.
+//! - P. P. Zavyalov, A. A. Shatov, *Determination of the angular acceleration of rotary
+//!   elements of rocket complexes in ground tests* (in Russian): the boom accelerometer.
+//!
+//! # Versions of the types in this API
+//! Generators and the `Rng` bound come from [`rand`] 0.10 and [`rand_chacha`] 0.10
+//! ([`ChaCha8Rng`]); vectors are [`nalgebra`] 0.35 types. All three are re-exported
+//! ([`sensors::rand`](rand), [`sensors::rand_chacha`](rand_chacha),
+//! [`sensors::nalgebra`](nalgebra)), so `use sensors::rand::SeedableRng` always matches the
+//! generator this crate accepts, whatever version of `rand` the rest of a project uses.
 #![deny(missing_docs)]
 
 mod accel;
@@ -68,3 +85,15 @@ pub use uav::{ChannelSensor, ChannelSensorConfig, Quantity};
 
 /// The generator type the crate uses everywhere.
 pub use rand_chacha::ChaCha8Rng;
+
+/// Re-export of the linear-algebra crate whose vector types appear in this API.
+pub use nalgebra;
+/// Re-export of the `rand` version whose `Rng` trait this crate's `step`/`next` methods accept.
+pub use rand;
+/// Re-export of the `rand_chacha` version of [`ChaCha8Rng`].
+pub use rand_chacha;
+
+/// The README's examples, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -1,5 +1,5 @@
-//! Sea-platform motion (SPEC F): roll θ and pitch ψ as independent irregular-rolling
-//! processes, and the tilt α = ψ·cos φ + θ·sin φ toward a sensor at angle φ.
+//! Sea-platform motion (Mazurenko's fuel-level paper): roll θ and pitch ψ as independent
+//! irregular-rolling processes, and the tilt α = ψ·cos φ + θ·sin φ toward a sensor at angle φ.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -8,6 +8,15 @@ use crate::error::{Error, non_negative, positive};
 use crate::process::{IrregularRolling, IrregularRollingConfig, Process};
 
 /// Platform attitude, rad.
+///
+/// # Example
+/// ```
+/// use sensors::Attitude;
+///
+/// let a = Attitude { roll: 0.02, pitch: 0.01 };
+/// // Toward a sensor at φ = 90° only the roll is seen.
+/// assert!((a.tilt_toward(std::f64::consts::FRAC_PI_2) - 0.02).abs() < 1e-15);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Attitude {
     /// Roll θ, rad.
@@ -18,7 +27,7 @@ pub struct Attitude {
 
 impl Attitude {
     /// Tilt toward a sensor at angle `phi` (rad, from the stern direction in the tank
-    /// cross-section): α = ψ·cos φ + θ·sin φ (SPEC F eq. 7), rad.
+    /// cross-section): α = ψ·cos φ + θ·sin φ (the fuel-level paper's eq. 7), rad.
     #[inline]
     #[must_use]
     pub fn tilt_toward(&self, phi: f64) -> f64 {
@@ -27,12 +36,23 @@ impl Attitude {
     }
 }
 
-/// One rolling axis. Defaults: SPEC F's assumed values (A_max = 1°, period 10 s,
+/// One rolling axis. Defaults: assumed values for the fuel-level paper (A_max = 1°, period 10 s,
 /// μ = 0.08 s⁻¹).
+///
+/// # Example
+/// ```
+/// use sensors::RollingAxisConfig;
+///
+/// let axis = RollingAxisConfig { max_amplitude_deg: 3.0, ..RollingAxisConfig::default() };
+/// let process = axis.to_process()?;
+/// assert!((process.std_dev - 1f64.to_radians()).abs() < 1e-15); // σ = A_max/3
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RollingAxisConfig {
-    /// Maximum amplitude A_max, degrees (≥ 0; default 1). The axis has σ = A_max/3 (SPEC F).
+    /// Maximum amplitude A_max, degrees (≥ 0; default 1). The axis has σ = A_max/3 (the fuel-level
+    /// paper's rule).
     pub max_amplitude_deg: f64,
     /// Dominant period 2π/β, s (default 10).
     pub period_s: f64,
@@ -66,6 +86,22 @@ impl RollingAxisConfig {
 }
 
 /// Configuration of the platform motion: one irregular-rolling process per axis.
+///
+/// # Example
+/// ```
+/// use sensors::{PlatformMotion, PlatformMotionConfig, RollingAxisConfig};
+///
+/// // Pitch twice as strong as roll.
+/// let cfg = PlatformMotionConfig {
+///     pitch: RollingAxisConfig { max_amplitude_deg: 2.0, ..RollingAxisConfig::default() },
+///     ..PlatformMotionConfig::default()
+/// };
+/// let motion = PlatformMotion::new(&cfg, 0.1)?;
+/// // Tilt variance toward φ = 0 is the pitch variance (2°/3)².
+/// let sigma = 2f64.to_radians() / 3.0;
+/// assert!((motion.tilt_correlation(0.0, 0.0) - sigma * sigma).abs() < 1e-15);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PlatformMotionConfig {
@@ -77,6 +113,17 @@ pub struct PlatformMotionConfig {
 
 /// Roll and pitch of the platform, stepped every Δt. Each step draws roll then pitch (two
 /// normals each) from the same generator; the two processes are independent.
+///
+/// # Example
+/// ```
+/// use sensors::{PlatformMotion, PlatformMotionConfig, seeded_rng};
+///
+/// let mut motion = PlatformMotion::new(&PlatformMotionConfig::default(), 0.1)?;
+/// let mut rng = seeded_rng(5);
+/// let tilts: Vec<f64> = (0..100).map(|_| motion.next(&mut rng).tilt_toward(0.5)).collect();
+/// assert!(tilts.iter().all(|t| t.abs() < 5f64.to_radians()));
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct PlatformMotion {
     roll: IrregularRolling,

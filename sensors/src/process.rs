@@ -1,5 +1,6 @@
 //! Seeded, stationary, zero-mean Gaussian random processes with exact discretisations, each
-//! exposing its theoretical correlation function (SPEC F, "Random processes").
+//! exposing its theoretical correlation function (the correlation functions of Mazurenko's
+//! fuel-level paper).
 //!
 //! Every process is stepped at a fixed sampling interval Δt given at construction. The first
 //! call to [`Process::next`] draws the state from the stationary distribution, so the output
@@ -24,12 +25,38 @@ pub(crate) fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
 
 /// The crate's reproducible generator: ChaCha8 seeded from a `u64` (bit-identical output for a
 /// given seed on every platform).
+///
+/// # Example
+/// ```
+/// use sensors::rand::RngExt;
+/// use sensors::seeded_rng;
+///
+/// let (mut a, mut b) = (seeded_rng(42), seeded_rng(42));
+/// let x: f64 = a.random();
+/// let y: f64 = b.random();
+/// assert_eq!(x.to_bits(), y.to_bits()); // the same seed, the same stream
+/// ```
 #[must_use]
 pub fn seeded_rng(seed: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed)
 }
 
 /// A stationary zero-mean random process sampled at a fixed interval Δt.
+///
+/// # Example
+/// ```
+/// use sensors::{ExpCorrelated, ExpCorrelatedConfig, Process, seeded_rng};
+///
+/// fn mean_square<P: Process>(p: &mut P, n: usize) -> f64 {
+///     let mut rng = seeded_rng(9);
+///     (0..n).map(|_| p.next(&mut rng).powi(2)).sum::<f64>() / n as f64
+/// }
+/// let cfg = ExpCorrelatedConfig { std_dev: 1.0, correlation_time_s: 0.5 };
+/// let mut p = ExpCorrelated::new(&cfg, 0.1)?;
+/// // The sample variance approaches R(0) = σ² = 1.
+/// assert!((mean_square(&mut p, 20_000) - p.variance()).abs() < 0.1);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 pub trait Process {
     /// Returns the next sample (the first call draws from the stationary distribution).
     fn next<R: Rng + ?Sized>(&mut self, rng: &mut R) -> f64;
@@ -46,6 +73,16 @@ pub trait Process {
 }
 
 /// A process bundled with its own seeded [`ChaCha8Rng`]; also an endless iterator of samples.
+///
+/// # Example
+/// ```
+/// use sensors::{Seeded, WhiteNoise};
+///
+/// let noise = Seeded::new(WhiteNoise::new(0.1, 0.01)?, 7);
+/// let samples: Vec<f64> = noise.take(5).collect();
+/// assert_eq!(samples.len(), 5);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Seeded<P> {
     process: P,
@@ -84,7 +121,18 @@ impl<P: Process> Iterator for Seeded<P> {
 ///
 /// Correlation: R(τ) = σ² for |τ| < Δt/2, 0 otherwise (the sampled sequence is uncorrelated).
 /// [`WhiteNoise::from_intensity`] builds the discrete equivalent of continuous white noise of
-/// intensity N: σ² = N/Δt (SPEC F).
+/// intensity N: σ² = N/Δt (Mazurenko's convention).
+///
+/// # Example
+/// ```
+/// use sensors::{Process, WhiteNoise};
+///
+/// // Continuous white noise of intensity N = 0.02 sampled every 0.01 s: σ² = N/Δt = 2.
+/// let w = WhiteNoise::from_intensity(0.02, 0.01)?;
+/// assert!((w.variance() - 2.0).abs() < 1e-12);
+/// assert!(w.correlation(0.01).abs() < 1e-15); // uncorrelated between samples
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct WhiteNoise {
     std_dev: f64,
@@ -139,7 +187,17 @@ impl Process for WhiteNoise {
 // ----------------------------------------------------------------------------------------------
 
 /// Configuration of an [`ExpCorrelated`] process. Defaults: the fill-velocity fluctuation ΔV of
-/// SPEC F (σ = 1 mm/s, T_a = 20 s; assumed values, the paper's set is unavailable).
+/// the fuel-level paper (σ = 1 mm/s, T_a = 20 s; assumed values, the paper's set is unavailable).
+///
+/// # Example
+/// ```
+/// use sensors::{ExpCorrelated, ExpCorrelatedConfig, Process};
+///
+/// let cfg = ExpCorrelatedConfig { std_dev: 2.0, correlation_time_s: 10.0 };
+/// let p = ExpCorrelated::new(&cfg, 1.0)?;
+/// assert!((p.correlation(10.0) - 4.0 * (-1.0f64).exp()).abs() < 1e-12); // σ² e^{−τ/T}
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ExpCorrelatedConfig {
@@ -161,6 +219,19 @@ impl Default for ExpCorrelatedConfig {
 /// Exponentially correlated process, R(τ) = σ²·e^{−|τ|/T}, shaping filter 1/(T s + 1).
 ///
 /// Exact AR(1): x_{k+1} = ρ·x_k + σ·√(1 − ρ²)·w_k with ρ = e^{−Δt/T}, w_k ~ N(0, 1).
+///
+/// # Example
+/// ```
+/// use sensors::{ExpCorrelated, ExpCorrelatedConfig, Process, seeded_rng};
+///
+/// let mut p = ExpCorrelated::new(&ExpCorrelatedConfig::default(), 0.1)?;
+/// assert!((p.rho() - (-0.1f64 / 20.0).exp()).abs() < 1e-15);
+/// let mut rng = seeded_rng(1);
+/// let x0 = p.next(&mut rng);
+/// let x1 = p.next(&mut rng);
+/// assert!((x1 - x0).abs() < 0.01); // T = 20 s: consecutive samples barely move
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct ExpCorrelated {
     std_dev: f64,
@@ -220,8 +291,23 @@ impl Process for ExpCorrelated {
 
 // ----------------------------------------------------------------------------------------------
 
-/// Configuration of an [`IrregularRolling`] process. Defaults: SPEC F's rolling (period
-/// 2π/β = 10 s, μ = 0.08 s⁻¹; assumed) with unit σ.
+/// Configuration of an [`IrregularRolling`] process. Defaults: the fuel-level paper's rolling
+/// (period 2π/β = 10 s, μ = 0.08 s⁻¹; assumed) with unit σ.
+///
+/// # Example
+/// ```
+/// use sensors::{IrregularRolling, IrregularRollingConfig, Process};
+///
+/// // Roll of 1° standard deviation with an 8 s period.
+/// let cfg = IrregularRollingConfig {
+///     std_dev: 1f64.to_radians(),
+///     period_s: 8.0,
+///     ..IrregularRollingConfig::default()
+/// };
+/// let p = IrregularRolling::new(&cfg, 0.1)?;
+/// assert!((p.variance() - cfg.std_dev.powi(2)).abs() < 1e-18);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct IrregularRollingConfig {
@@ -254,6 +340,17 @@ impl Default for IrregularRollingConfig {
 /// stationarity identity), drawn through its 2×2 Cholesky factor: two normals and a dozen
 /// flops per sample, exact at any Δt. Q_d loses relative accuracy like ε/(ω₀Δt)³ when
 /// ω₀Δt ≪ 1 (about 1e-10 at the defaults), which is immaterial for simulation.
+///
+/// # Example
+/// ```
+/// use sensors::{IrregularRolling, IrregularRollingConfig, Process};
+///
+/// let p = IrregularRolling::new(&IrregularRollingConfig::default(), 0.1)?;
+/// // Half a period later the correlation is negative: the platform has swung back.
+/// assert!(p.correlation(5.0) < 0.0);
+/// assert!((p.correlation(0.0) - 1.0).abs() < 1e-12);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct IrregularRolling {
     std_dev: f64,
@@ -370,8 +467,18 @@ impl Process for IrregularRolling {
 
 // ----------------------------------------------------------------------------------------------
 
-/// Configuration of a [`DampedCosine`] process. Defaults: SPEC F's quantization noise at its
-/// assumed defaults (δ = 10 mm: σ = δ/√12; ξ = 1/T_a = 0.05 s⁻¹; γ_q = 2π·V_c/δ = 2π rad/s).
+/// Configuration of a [`DampedCosine`] process. Defaults: the fuel-level paper's quantization noise
+/// at its assumed defaults (δ = 10 mm: σ = δ/√12; ξ = 1/T_a = 0.05 s⁻¹; γ_q = 2π·V_c/δ = 2π rad/s).
+///
+/// # Example
+/// ```
+/// use sensors::DampedCosineConfig;
+///
+/// // A 10 mm point sensor, T_a = 20 s, filling at 10 mm/s: one mark a second, γ = 2π rad/s.
+/// let cfg = DampedCosineConfig::quantization_noise(0.01, 20.0, 0.01);
+/// assert!((cfg.frequency_rad_s - 2.0 * std::f64::consts::PI).abs() < 1e-12);
+/// assert!((cfg.std_dev - 0.01 / 12f64.sqrt()).abs() < 1e-15);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DampedCosineConfig {
@@ -394,7 +501,7 @@ impl Default for DampedCosineConfig {
 }
 
 impl DampedCosineConfig {
-    /// SPEC F's model of point-sensor quantization noise: D = δ²/12, ξ = 1/T_a,
+    /// The fuel-level paper's model of point-sensor quantization noise: D = δ²/12, ξ = 1/T_a,
     /// γ_q = 2π/T_c with T_c = δ/V_c (step δ in m, T_a in s, mean fill rate V_c in m/s).
     #[must_use]
     pub fn quantization_noise(step_m: f64, velocity_time_s: f64, fill_rate_m_s: f64) -> Self {
@@ -411,6 +518,17 @@ impl DampedCosineConfig {
 /// Generated exactly as the first component of a rotating, decaying 2-vector:
 /// z_{k+1} = e^{−ξΔt}·Rot(γΔt)·z_k + σ·√(1 − e^{−2ξΔt})·w_k with w_k ~ N(0, I₂) and
 /// z₀ ~ N(0, σ²I₂), so E[z₁(t)z₁(t+kΔt)] = σ²e^{−ξkΔt}cos(γkΔt) exactly.
+///
+/// # Example
+/// ```
+/// use sensors::{DampedCosine, DampedCosineConfig, Process};
+///
+/// let p = DampedCosine::new(&DampedCosineConfig::default(), 0.1)?;
+/// let d = p.variance();
+/// // R(τ) = σ² e^{−ξτ} cos γτ with ξ = 0.05, γ = 2π: a full period later, e^{−0.05} of R(0).
+/// assert!((p.correlation(1.0) - d * (-0.05f64).exp()).abs() < 1e-12 * d);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct DampedCosine {
     std_dev: f64,

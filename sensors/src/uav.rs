@@ -1,6 +1,6 @@
-//! UAV control-channel sensors (SPEC U): angular-rate sensor, linear accelerometer and
-//! control-surface potentiometer, each with bandwidth, bias, white noise, quantization and
-//! range.
+//! UAV control-channel sensors (Gridnev, Rusetsky and Rak's UAV paper): angular-rate sensor, linear
+//! accelerometer and control-surface potentiometer, each with bandwidth, bias, white noise,
+//! quantization and range.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -10,6 +10,15 @@ use crate::lag::{FirstOrderLag, LagInput, Quantizer, Rounding};
 use crate::process::normal;
 
 /// What a channel sensor measures; fixes the units of its configuration.
+///
+/// # Example
+/// ```
+/// use sensors::{ChannelSensor, ChannelSensorConfig, Quantity};
+///
+/// let s = ChannelSensor::new(&ChannelSensorConfig::potentiometer(), 0.01)?;
+/// assert_eq!(s.quantity(), Quantity::SurfaceDeflection); // configured in degrees, reads rad
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Quantity {
     /// Angular rate: configured in deg/s, output in rad/s.
@@ -34,6 +43,24 @@ impl Quantity {
 /// Channel-sensor configuration, in the units of its [`Quantity`] (deg/s, m/s² or deg).
 /// Defaults ([`ChannelSensorConfig::default`] = an angular-rate sensor) are assumed typical
 /// values, not the paper's (it gives none); see also the per-kind constructors.
+///
+/// # Example
+/// ```
+/// use sensors::{ChannelSensor, ChannelSensorConfig, seeded_rng};
+///
+/// // An ideal accelerometer with a 0.1 m/s² bias and no noise, bandwidth or range limit.
+/// let cfg = ChannelSensorConfig {
+///     bandwidth_hz: None,
+///     bias: 0.1,
+///     noise_std: 0.0,
+///     quantization_step: 0.0,
+///     range: None,
+///     ..ChannelSensorConfig::linear_accelerometer()
+/// };
+/// let mut s = ChannelSensor::new(&cfg, 0.01)?;
+/// assert!((s.step(2.0, &mut seeded_rng(0)) - 2.1).abs() < 1e-12);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ChannelSensorConfig {
@@ -101,6 +128,17 @@ impl ChannelSensorConfig {
 /// (exact, piecewise-linear input; starts in equilibrium) → + bias → + white noise →
 /// quantization (nearest) → saturation. Output in SI (rad/s, m/s², rad). One normal is drawn
 /// per step whether or not noise is enabled.
+///
+/// # Example
+/// ```
+/// use sensors::{ChannelSensor, ChannelSensorConfig, seeded_rng};
+///
+/// let mut gyro = ChannelSensor::new(&ChannelSensorConfig::angular_rate(), 0.01)?;
+/// let mut rng = seeded_rng(2);
+/// let readings: Vec<f64> = (0..100).map(|_| gyro.step(0.1, &mut rng)).collect();
+/// assert!(readings.iter().all(|r| r.is_finite()));
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct ChannelSensor {
     quantity: Quantity,

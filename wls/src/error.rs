@@ -2,6 +2,18 @@
 //! its shape or value, and the rule it broke.
 
 /// Everything the solver and the boom estimator can reject.
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{SolveOptions, Weights, solve};
+///
+/// let h = dmatrix![1.0, 0.0; 0.0, 1.0];
+/// let z = dvector![1.0, 2.0, 3.0]; // one value too many
+/// let err = solve(&h, &z, &Weights::Identity, &SolveOptions::default()).unwrap_err();
+/// assert!(matches!(err, wls::Error::Shape { name: "z", .. }));
+/// println!("{err}");
+/// ```
 #[non_exhaustive]
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {

@@ -1,10 +1,11 @@
 //! Ill-conditioning-aware weighted least squares with prior information, and the erector-boom
-//! angular-acceleration estimator with the sensor-offset-angle (γ) method (SPEC B).
+//! angular-acceleration estimator with the sensor-offset-angle (γ) method of Zavyalov and
+//! Shatov (see [References](#references)).
 //!
 //! # Notation
 //! n unknowns x, m measurements z, design matrix H (m×n), weight matrix V (m×m, diagonal or
 //! symmetric positive definite): the solver minimises ‖V^{1/2}(H x − z)‖². The covariance is
-//! (HᵀVH)⁻¹; κ is the 2-norm condition number (σ_max/σ_min). In the boom estimator (SPEC B)
+//! (HᵀVH)⁻¹; κ is the 2-norm condition number (σ_max/σ_min). In the boom estimator
 //! α is the boom angle, ε its angular acceleration, g gravity, r the sensor radius, γ the
 //! sensor offset angle, β = α − γ the angle the sensor sees, and the state is
 //! x = (s, c, ε) = (sin β, cos β, ε).
@@ -16,25 +17,18 @@
 //! - [`boom`]: the per-cycle estimator (direct, linearised 3×3, WLS), the rotation profile,
 //!   and the γ sweep.
 //!
-//! # Reproducing the paper
-//! The paper's WLS (9)–(10) does not say in which units ε sits in the state, nor when the
-//! ε₀ weight v₆ = 0.5/(1 + 2|ε̇|)² is evaluated. Both are configuration fields
-//! ([`boom::AngleUnit`] for ε and ε̇, [`boom::RateWeight`]); the defaults of
-//! [`boom::BoomConfig`] — ε in °/s² inside the state (H₂₃ = r·π/180), ε̇ in °/s³ in v₆, v₆
-//! made self-consistent within each cycle — are the ones under which the full turn
-//! (±Δa = 0.02 m/s², Δα = 1°, Δε = 0.5 °/s²) behaves as the paper reports:
-//! - direct inversion and the 3×3 solve exceed the limits from α ≈ 83° and the "+" variant is
-//!   undefined from α ≈ 86.3° (sin α > 1 − Δa/g; the paper says ≈ 88°);
-//! - WLS at γ = 0 keeps "−" within limits and exceeds Δε slightly for "+" (max ≈ 0.58 °/s²,
-//!   from α ≈ 79°, t ≈ 28.8 s; the paper: α > 81°, t > 29 s);
-//! - WLS at γ = 10° is within both limits over the whole turn (max ≈ 0.56°, 0.26 °/s²);
-//!   the smallest feasible γ is ≈ 4.5° (0.5° grid), 11° with Δε = 0.25 °/s².
-//!
-//! Not reproduced: at γ = 0 the "+" variant also exceeds Δα (≈ 1.4°), and s passes 1 near the
-//! end (arcsin undefined from α ≈ 88.6°; [`boom::AngleRecovery::Atan2`] keeps it defined).
+//! # The boom paper's choices
+//! The WLS (9)–(10) of Zavyalov and Shatov (see [`boom`] for the equations) does not say in
+//! which units ε sits in the state, nor when the ε₀ weight v₆ = 0.5/(1 + 2|ε̇|)² is
+//! evaluated. Both are configuration fields ([`boom::AngleUnit`] for ε and ε̇,
+//! [`boom::RateWeight`]). The defaults of [`boom::BoomConfig`] — ε in °/s² inside the state
+//! (H₂₃ = r·π/180), ε̇ in °/s³ in v₆, v₆ made self-consistent within each cycle — are the
+//! ones under which the paper's full turn behaves as the paper reports: direct inversion and
+//! the 3×3 solve exceed the limits near the end of the turn, WLS at γ = 0 stays within them
+//! except δε for the "+" error variant, and WLS at γ = 10° is within both over the whole turn.
 //! With ε in rad/s² the ε₀ prior is (180/π)² ≈ 3283 times weaker and WLS behaves like direct
-//! inversion for "−" (δα ≈ 3.7°). When v₆ is evaluated (previous cycle or fixed point)
-//! hardly matters on this profile.
+//! inversion. [`boom::AngleRecovery::Atan2`] keeps the angle defined where `arcsin` of the
+//! solved s would not be (|s| > 1 near the end of the turn).
 //!
 //! # Example
 //! ```
@@ -58,6 +52,19 @@
 //! }
 //! # Ok::<(), wls::Error>(())
 //! ```
+//!
+//! # References
+//! - P. P. Zavyalov, A. A. Shatov, *Determination of the angular acceleration of rotary
+//!   elements of rocket complexes in ground tests* (in Russian): the boom estimator, its
+//!   equations (1)–(10) and the sensor offset angle.
+//! - G. H. Golub, C. F. Van Loan, *Matrix Computations*: QR least squares, condition numbers
+//!   and numerical rank; A. N. Tikhonov, V. Y. Arsenin, *Solutions of Ill-Posed Problems*:
+//!   the regularisation.
+//!
+//! # Versions of the types in this API
+//! Matrices and vectors are [`nalgebra`] 0.35 types (`DMatrix<f64>`, `DVector<f64>`),
+//! re-exported as [`wls::nalgebra`](nalgebra) so a user can name exactly the version this
+//! crate is built against.
 #![deny(missing_docs)]
 
 pub mod boom;
@@ -65,3 +72,11 @@ mod error;
 pub mod solver;
 
 pub use error::{Error, Result};
+
+/// Re-export of the linear-algebra crate whose types appear in this API.
+pub use nalgebra;
+
+/// The README's examples, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -15,6 +15,19 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 
 /// The weight matrix V of the measurement rows.
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{SolveOptions, Weights, solve};
+///
+/// // A zero weight drops the third (outlying) row.
+/// let h = dmatrix![1.0; 1.0; 1.0];
+/// let z = dvector![1.0, 1.0, 100.0];
+/// let sol = solve(&h, &z, &Weights::Diagonal(dvector![1.0, 1.0, 0.0]), &SolveOptions::default())?;
+/// assert!((sol.x[0] - 1.0).abs() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum Weights {
     /// V = I.
@@ -26,6 +39,20 @@ pub enum Weights {
 }
 
 /// How the whitened system is solved.
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{Method, SolveOptions, Weights, solve};
+///
+/// let h = dmatrix![1.0, 1.0; 1.0, 2.0; 1.0, 3.0];
+/// let z = dvector![1.0, 2.0, 2.9];
+/// let qr = solve(&h, &z, &Weights::Identity, &SolveOptions::default())?;
+/// let ne = SolveOptions { method: Method::NormalEquations, ..SolveOptions::default() };
+/// let ne = solve(&h, &z, &Weights::Identity, &ne)?;
+/// assert!((qr.x - ne.x).norm() < 1e-10); // well conditioned: both agree
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Method {
     /// Householder QR of A = V^{1/2}H: x = R⁻¹Qᵀb, covariance R⁻¹R⁻ᵀ. Accuracy ∝ κ(A).
@@ -37,6 +64,23 @@ pub enum Method {
 }
 
 /// Tikhonov regularisation: adds λ‖L(x − x_p)‖² to the objective.
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{SolveOptions, Tikhonov, Weights, solve};
+///
+/// // One equation, two unknowns: underdetermined without regularisation.
+/// let h = dmatrix![1.0, 1.0];
+/// let z = dvector![2.0];
+/// assert!(solve(&h, &z, &Weights::Identity, &SolveOptions::default()).is_err());
+/// let tik = Tikhonov { lambda: 1e-8, prior_mean: None, operator: None };
+/// let options = SolveOptions { tikhonov: Some(tik), ..SolveOptions::default() };
+/// let sol = solve(&h, &z, &Weights::Identity, &options)?;
+/// // The minimum-norm solution (1, 1).
+/// assert!((sol.x - dvector![1.0, 1.0]).norm() < 1e-6);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Tikhonov {
     /// λ ≥ 0.
@@ -48,6 +92,26 @@ pub struct Tikhonov {
 }
 
 /// Prior information as extra weighted measurement rows: P x ≈ p with weight V_p.
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{PriorRows, SolveOptions, Weights, solve};
+///
+/// // x₂ is unobserved by H but known a priori to be 5 ± 1.
+/// let h = dmatrix![1.0, 0.0];
+/// let z = dvector![3.0];
+/// let prior = PriorRows {
+///     rows: dmatrix![0.0, 1.0],
+///     values: dvector![5.0],
+///     weights: Weights::Identity,
+/// };
+/// let options = SolveOptions { prior: Some(prior), ..SolveOptions::default() };
+/// let sol = solve(&h, &z, &Weights::Identity, &options)?;
+/// assert!((sol.x - dvector![3.0, 5.0]).norm() < 1e-12);
+/// assert!((sol.covariance[(1, 1)] - 1.0).abs() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PriorRows {
     /// P (k×n).
@@ -59,6 +123,21 @@ pub struct PriorRows {
 }
 
 /// Options of [`solve`].
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{SolveOptions, Weights, solve};
+///
+/// // Scale the covariance by the residual variance σ̂² (3 rows, 1 unknown: 2 dof).
+/// let h = dmatrix![1.0; 1.0; 1.0];
+/// let z = dvector![0.9, 1.0, 1.1];
+/// let options = SolveOptions { scale_covariance: true, ..SolveOptions::default() };
+/// let sol = solve(&h, &z, &Weights::Identity, &options)?;
+/// // σ̂² = 0.02/2 and cov = σ̂²/3.
+/// assert!((sol.covariance[(0, 0)] - 0.01 / 3.0).abs() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct SolveOptions {
     /// QR (default) or normal equations.
@@ -75,6 +154,20 @@ pub struct SolveOptions {
 }
 
 /// The result of [`solve`].
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{SolveOptions, Weights, solve};
+///
+/// let h = dmatrix![1.0, 0.0; 0.0, 1e-6];
+/// let z = dvector![1.0, 1e-6];
+/// let sol = solve(&h, &z, &Weights::Identity, &SolveOptions::default())?;
+/// assert!((sol.condition_weighted - 1e6).abs() < 1e-3);
+/// assert_eq!(sol.rank, 2);
+/// assert!(sol.residuals.norm() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Solution {
     /// The estimate x̂ (n).
@@ -106,6 +199,14 @@ pub struct Solution {
 }
 
 /// Options of the iteratively re-weighted solve [`solve_irls`].
+///
+/// # Example
+/// ```
+/// use wls::solver::IrlsOptions;
+///
+/// let tight = IrlsOptions { max_iterations: 200, ..IrlsOptions::default() };
+/// assert!(tight.tolerance > 0.0);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct IrlsOptions {
     /// Stop when ‖x_{k+1} − x_k‖ ≤ tolerance·(1 + ‖x_{k+1}‖).
@@ -124,6 +225,23 @@ impl Default for IrlsOptions {
 }
 
 /// The result of [`solve_irls`].
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{IrlsOptions, SolveOptions, Weights, solve_irls};
+///
+/// // A robust mean: weights 1/max(|r|, 1e-3) push towards the median.
+/// let h = dmatrix![1.0; 1.0; 1.0; 1.0];
+/// let z = dvector![1.0, 1.1, 0.9, 10.0];
+/// let fit = solve_irls(
+///     &h, &z, &dvector![0.0],
+///     |x| Weights::Diagonal(z.map(|zi| 1.0 / (zi - x[0]).abs().max(1e-3))),
+///     &SolveOptions::default(), &IrlsOptions::default(),
+/// )?;
+/// assert!(fit.iterations >= 2 && (fit.solution.x[0] - 1.05).abs() < 0.1);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct IrlsSolution {
     /// The last solve.
@@ -479,6 +597,22 @@ fn covariance_from_r(R: &DMatrix<f64>) -> Result<DMatrix<f64>> {
 /// Shape mismatch, non-finite entries, negative or non-SPD weights, invalid λ or tolerance,
 /// rank deficiency without regularisation, and residual-variance scaling without degrees of
 /// freedom are all typed [`Error`]s.
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{SolveOptions, Weights, solve};
+///
+/// // A straight line through three points, the last one measured four times as precisely.
+/// let h = dmatrix![1.0, 0.0; 1.0, 1.0; 1.0, 2.0];
+/// let z = dvector![0.1, 0.9, 2.0];
+/// let sol = solve(&h, &z, &Weights::Diagonal(dvector![1.0, 1.0, 4.0]), &SolveOptions::default())?;
+/// // The normal equations HᵀVH x = HᵀVz hold at the solution.
+/// let v = dmatrix![1.0, 0.0, 0.0; 0.0, 1.0, 0.0; 0.0, 0.0, 4.0];
+/// let grad = h.transpose() * &v * (&h * &sol.x - &z);
+/// assert!(grad.norm() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 pub fn solve(
     H: &DMatrix<f64>,
     z: &DVector<f64>,
@@ -556,6 +690,17 @@ pub fn solve(
 ///
 /// # Errors
 /// As [`solve`] (the measurement vector is not needed).
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::dmatrix;
+/// use wls::solver::{SolveOptions, Weights, sensitivity};
+///
+/// // Mean of two readings: each moves the estimate by half its own change.
+/// let s = sensitivity(&dmatrix![1.0; 1.0], &Weights::Identity, &SolveOptions::default())?;
+/// assert!((s[(0, 0)] - 0.5).abs() < 1e-12 && (s[(0, 1)] - 0.5).abs() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 pub fn sensitivity(
     H: &DMatrix<f64>,
     weights: &Weights,
@@ -581,6 +726,19 @@ pub fn sensitivity(
 ///
 /// # Errors
 /// As [`sensitivity`], plus `delta` of the wrong length, non-finite or negative.
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{SolveOptions, Weights, worst_case_bounds};
+///
+/// // x = z₁ − z₂ from two rows: errors of ±0.1 on each add up to ±0.2 in the worst case.
+/// let h = dmatrix![1.0, 1.0; 0.0, 1.0];
+/// let delta = dvector![0.1, 0.1];
+/// let b = worst_case_bounds(&h, &Weights::Identity, &delta, &SolveOptions::default())?;
+/// assert!((b[0] - 0.2).abs() < 1e-12 && (b[1] - 0.1).abs() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 pub fn worst_case_bounds(
     H: &DMatrix<f64>,
     weights: &Weights,
@@ -609,6 +767,22 @@ pub fn worst_case_bounds(
 ///
 /// # Errors
 /// As [`solve`] for any iterate, plus invalid `initial`, tolerance or iteration cap.
+///
+/// # Example
+/// ```
+/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::solver::{IrlsOptions, SolveOptions, Weights, solve_irls};
+///
+/// // Weights that do not depend on x converge in two solves to the plain WLS answer.
+/// let h = dmatrix![1.0; 1.0];
+/// let z = dvector![1.0, 3.0];
+/// let fit = solve_irls(
+///     &h, &z, &dvector![0.0], |_| Weights::Identity,
+///     &SolveOptions::default(), &IrlsOptions::default(),
+/// )?;
+/// assert!(fit.converged && (fit.solution.x[0] - 2.0).abs() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 pub fn solve_irls<F: FnMut(&DVector<f64>) -> Weights>(
     H: &DMatrix<f64>,
     z: &DVector<f64>,

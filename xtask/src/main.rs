@@ -5,6 +5,7 @@
 
 mod bench;
 mod mutants;
+mod examples;
 mod tidy;
 
 use std::path::{Path, PathBuf};
@@ -35,6 +36,10 @@ const TASKS: &[(&str, &str)] = &[
         "check file headers, trailing whitespace and manifest rules",
     ),
     (
+        "doc-examples",
+        "list the library items without a compiled doc example and the share with one",
+    ),
+    (
         "fuzz",
         "run the cargo-fuzz targets for the model and CSV parsers [--seconds N]",
     ),
@@ -62,6 +67,7 @@ fn main() -> ExitCode {
         "reproduce" => reproduce(rest),
         "ci" => ci(rest),
         "tidy" => tidy_task(),
+        "doc-examples" => doc_examples(),
         "fuzz" => fuzz(rest),
         "mutants" => mutants::mutants(rest),
         other => {
@@ -206,8 +212,30 @@ fn ci(args: &[String]) -> Result<()> {
     test(args)
 }
 
+fn doc_examples() -> Result<()> {
+    let items = examples::scan(&root())?;
+    for item in items.iter().filter(|i| !i.has_example) {
+        println!("no example: {} ({})", item.what, item.at);
+    }
+    let with = items.iter().filter(|i| i.has_example).count();
+    println!(
+        "doc examples: {with} of {} top-level public items of {} ({:.1} %, required {:.0} %)",
+        items.len(),
+        examples::CRATES.join(", "),
+        100.0 * examples::share(&items),
+        100.0 * examples::REQUIRED
+    );
+    Ok(())
+}
+
 fn tidy_task() -> Result<()> {
     let problems = tidy::check(&root())?;
+    let items = examples::scan(&root())?;
+    eprintln!(
+        "tidy: {:.1} % of {} library items carry a compiled doc example",
+        100.0 * examples::share(&items),
+        items.len()
+    );
     if problems.is_empty() {
         eprintln!("tidy: ok");
         return Ok(());

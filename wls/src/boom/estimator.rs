@@ -1,5 +1,5 @@
-//! The per-cycle erector-boom estimator of SPEC B: direct inversion (2)–(3), the linearised
-//! 3×3 solve (7) and the weighted least squares (9)–(10), on fixed-size matrices.
+//! The per-cycle erector-boom estimator (equations in [`crate::boom`]): direct inversion (2)–(3),
+//! the linearised 3×3 solve (7) and the weighted least squares (9)–(10), on fixed-size matrices.
 //!
 //! The estimator works in the *sensor* frame: with the sensor mounted γ lower along the arc it
 //! sees β = α − γ (a_x = g·sin β, a_y = g·cos β + ε·r), estimates β and reports α = β + γ.
@@ -12,6 +12,18 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 
 /// Which inversion the estimator uses.
+///
+/// # Example
+/// ```
+/// use wls::boom::{BoomConfig, BoomEstimator, BoomMethod};
+///
+/// // Direct inversion has no answer once a_x exceeds g (here by a +0.02 m/s² error at 90°).
+/// let cfg = BoomConfig { method: BoomMethod::Direct, ..BoomConfig::default() };
+/// let mut est = BoomEstimator::new(cfg)?;
+/// let out = est.update(9.8 + 0.02, 0.0, 0.0)?;
+/// assert!(!out.defined && out.angle.is_nan());
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum BoomMethod {
     /// Eqs. (2)–(3): α = arcsin(a_x/g), ε = (a_y − √(g² − a_x²))/r; undefined when g² < a_x².
@@ -24,6 +36,14 @@ pub enum BoomMethod {
 }
 
 /// The unit an angular quantity is carried in inside the WLS state or weight law.
+///
+/// # Example
+/// ```
+/// use wls::boom::AngleUnit;
+///
+/// assert!((AngleUnit::Degree.per_radian() - 180.0 / std::f64::consts::PI).abs() < 1e-12);
+/// assert!((AngleUnit::Radian.per_radian() - 1.0).abs() < 1e-15);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum AngleUnit {
     /// Radians.
@@ -44,6 +64,16 @@ impl AngleUnit {
 }
 
 /// How the a_x weight v₁ depends on the previous angle.
+///
+/// # Example
+/// ```
+/// use wls::boom::{AxWeightLaw, BoomConfig, BoomEstimator, WlsWeights};
+///
+/// // A constant a_x weight instead of the paper's cos α₀ law.
+/// let weights = WlsWeights { ax_law: AxWeightLaw::Constant, ..WlsWeights::default() };
+/// let _est = BoomEstimator::new(BoomConfig { weights, ..BoomConfig::default() })?;
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum AxWeightLaw {
     /// v₁ = scale·|cos β₀| (the paper: a_x is the bad row near 90°).
@@ -53,6 +83,18 @@ pub enum AxWeightLaw {
 }
 
 /// When the ε₀ weight v₆ = numerator/(1 + gain·|ε̇|)² is evaluated.
+///
+/// # Example
+/// ```
+/// use wls::boom::{BoomConfig, BoomEstimator, RateWeight};
+///
+/// // One solve per cycle, v₆ from the two previous cycles.
+/// let cfg = BoomConfig { rate_weight: RateWeight::PreviousCycle, ..BoomConfig::default() };
+/// let mut est = BoomEstimator::new(cfg)?;
+/// est.update(0.0, 9.8, 0.0)?; // start-up cycle
+/// assert_eq!(est.update(0.0, 9.8, 0.0)?.iterations, 1);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum RateWeight {
     /// ε̇ from the two previous cycles, (ε₀ − ε₋₁)/dt: one solve per cycle.
@@ -72,6 +114,20 @@ pub enum RateWeight {
 }
 
 /// How the angle is recovered from the solved (s, c) in Linear3 and WLS.
+///
+/// # Example
+/// ```
+/// use wls::boom::{AngleRecovery, BoomConfig, BoomEstimator};
+///
+/// let cfg = BoomConfig { angle_recovery: AngleRecovery::Atan2, ..BoomConfig::default() };
+/// let mut est = BoomEstimator::new(cfg)?;
+/// let a = 60f64.to_radians();
+/// for _ in 0..3 {
+///     let out = est.update(9.8 * a.sin(), 9.8 * a.cos(), 0.0)?;
+///     assert!(out.defined && (out.angle - a).abs() < 1e-9);
+/// }
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum AngleRecovery {
     /// β = arcsin s, the paper's; undefined when |s| > 1.
@@ -82,6 +138,22 @@ pub enum AngleRecovery {
 }
 
 /// Which factorisation solves the 6×3 WLS system.
+///
+/// # Example
+/// ```
+/// use wls::boom::{BoomConfig, BoomEstimator, BoomSolver};
+///
+/// // The paper's normal equations (10) instead of QR: the same answer on a well-posed cycle.
+/// let a = 45f64.to_radians();
+/// let mut answers = Vec::new();
+/// for solver in [BoomSolver::Qr, BoomSolver::NormalEquations] {
+///     let mut est = BoomEstimator::new(BoomConfig { solver, ..BoomConfig::default() })?;
+///     est.update(9.8 * a.sin(), 9.8 * a.cos(), 0.0)?;
+///     answers.push(est.update(9.8 * a.sin(), 9.8 * a.cos(), 0.0)?.angle);
+/// }
+/// assert!((answers[0] - answers[1]).abs() < 1e-9);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum BoomSolver {
     /// Householder QR of V^{1/2}H.
@@ -92,6 +164,16 @@ pub enum BoomSolver {
 }
 
 /// The WLS weights of eq. (8); defaults are the paper's.
+///
+/// # Example
+/// ```
+/// use wls::boom::{BoomConfig, BoomEstimator, WlsWeights};
+///
+/// // Trust the unit-circle row ten times more than the paper does.
+/// let weights = WlsWeights { unit_circle: 1000.0, ..WlsWeights::default() };
+/// let _est = BoomEstimator::new(BoomConfig { weights, ..BoomConfig::default() })?;
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct WlsWeights {
     /// Scale of v₁ (a_x); default 1.
@@ -129,6 +211,18 @@ impl Default for WlsWeights {
 
 /// The estimator's configuration. Angles in radians, accelerations in m/s², SI throughout
 /// except where a field says otherwise.
+///
+/// # Example
+/// ```
+/// use wls::boom::{BoomConfig, BoomEstimator};
+///
+/// // The sensor mounted 10° lower along the arc.
+/// let cfg = BoomConfig { sensor_offset_angle: 10f64.to_radians(), ..BoomConfig::default() };
+/// cfg.validate()?;
+/// let bad = BoomConfig { dt: -0.01, ..BoomConfig::default() };
+/// assert!(BoomEstimator::new(bad).is_err());
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BoomConfig {
     /// Gravity g, m/s²; default 9.8 (the paper's).
@@ -265,6 +359,18 @@ impl BoomConfig {
 }
 
 /// One cycle's output. Angles in radians, ε in rad/s².
+///
+/// # Example
+/// ```
+/// use wls::boom::{BoomConfig, BoomEstimator};
+///
+/// let mut est = BoomEstimator::new(BoomConfig::default())?;
+/// let first = est.update(0.0, 9.8, 0.0)?;
+/// assert!(first.startup && first.mounting_ok);
+/// let next = est.update(0.0, 9.8, 0.0)?;
+/// assert!(!next.startup && next.condition_number.is_finite());
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Estimate {
     /// Boom angle α = β + γ, rad (NaN when not `defined`).
@@ -303,6 +409,21 @@ struct State {
 }
 
 /// The per-cycle boom estimator.
+///
+/// # Example
+/// ```
+/// use wls::boom::{BoomConfig, BoomEstimator};
+///
+/// let cfg = BoomConfig::default();
+/// let (g, r) = (cfg.g, cfg.sensor_radius);
+/// let mut est = BoomEstimator::new(cfg)?;
+/// // α = 80°, ε = 0.005 rad/s²: exact readings a_x = g sin α, a_y = g cos α + ε r.
+/// let (a, e) = (80f64.to_radians(), 0.005);
+/// est.set_state(a, e)?;
+/// let out = est.update(g * a.sin(), g * a.cos() + e * r, 0.0)?;
+/// assert!((out.angle - a).abs() < 1e-8 && (out.angular_acceleration - e).abs() < 1e-8);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct BoomEstimator {
     config: BoomConfig,

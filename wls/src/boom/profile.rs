@@ -1,4 +1,4 @@
-//! The rotation profile of SPEC B eq. (6): α̇ = ω, ω̇ = ε(α) with ε(α) a configurable
+//! The rotation profile of the boom paper's eq. (6): α̇ = ω, ω̇ = ε(α) with ε(α) a configurable
 //! piecewise-linear table, integrated at a fixed step into a trajectory (t, α, ω, ε).
 //!
 //! The table is written in degrees (°, °/s²) as in the paper; the trajectory is in SI
@@ -10,6 +10,26 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 
 /// The angular acceleration at one breakpoint of the table.
+///
+/// # Example
+/// ```
+/// use wls::boom::{Breakpoint, Deceleration, Level, RotationProfile};
+///
+/// // Accelerate at 0.5 °/s² to 10°, then brake at ε_d, solved to stop at 20°.
+/// let profile = RotationProfile {
+///     breakpoints: vec![
+///         Breakpoint { alpha_deg: 0.0, epsilon: Level::Value(0.5) },
+///         Breakpoint { alpha_deg: 10.0, epsilon: Level::Value(0.5) },
+///         Breakpoint { alpha_deg: 10.5, epsilon: Level::MinusDeceleration },
+///     ],
+///     final_angle_deg: 20.0,
+///     dt: 0.01,
+///     deceleration: Deceleration::Auto,
+/// };
+/// let tr = profile.trajectory()?;
+/// assert!((tr.deceleration_deg_s2 - 0.5).abs() < 0.05); // symmetric turn: ε_d ≈ 0.5 °/s²
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum Level {
     /// A fixed value in °/s².
@@ -19,6 +39,16 @@ pub enum Level {
 }
 
 /// One breakpoint: ε(α) is linear between consecutive breakpoints, constant outside.
+///
+/// # Example
+/// ```
+/// use wls::boom::{Breakpoint, Level, RotationProfile};
+///
+/// let p = RotationProfile::default();
+/// let Breakpoint { alpha_deg, epsilon } = p.breakpoints[0];
+/// assert!(alpha_deg.abs() < 1e-15);
+/// assert!(matches!(epsilon, Level::Value(e) if (e - 0.4584).abs() < 1e-15));
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Breakpoint {
     /// α at the breakpoint, degrees.
@@ -28,6 +58,19 @@ pub struct Breakpoint {
 }
 
 /// How ε_d is chosen.
+///
+/// # Example
+/// ```
+/// use wls::boom::{Deceleration, RotationProfile};
+///
+/// // A fixed ε_d of 0.3 °/s² (the turn then stops wherever ω returns to 0).
+/// let p = RotationProfile {
+///     deceleration: Deceleration::Fixed(0.3),
+///     ..RotationProfile::default()
+/// };
+/// assert!((p.trajectory()?.deceleration_deg_s2 - 0.3).abs() < 1e-15);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum Deceleration {
     /// Solve for ε_d so that ω = 0 when α = `final_angle_deg` (bisection on the discrete
@@ -38,6 +81,17 @@ pub enum Deceleration {
 }
 
 /// The configurable rotation profile.
+///
+/// # Example
+/// ```
+/// use wls::boom::RotationProfile;
+///
+/// let p = RotationProfile::default(); // the paper's turn
+/// // ε(α) in °/s²: 0.4584 below 9°, 0 between 12° and 77°.
+/// assert!((p.epsilon_deg(5.0, 0.4) - 0.4584).abs() < 1e-12);
+/// assert!(p.epsilon_deg(40.0, 0.4).abs() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RotationProfile {
     /// Breakpoints with strictly increasing α.
@@ -79,6 +133,17 @@ impl Default for RotationProfile {
 }
 
 /// One sample of the nominal turn (SI units).
+///
+/// # Example
+/// ```
+/// use wls::boom::RotationProfile;
+///
+/// let tr = RotationProfile::default().trajectory()?;
+/// let last = tr.points.last().expect("a turn has samples");
+/// assert!((last.alpha.to_degrees() - 90.0).abs() < 0.1); // stops at the vertical
+/// assert!(last.omega.abs() < 1e-3);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TrajectoryPoint {
     /// Time since the start of the turn, s.
@@ -92,6 +157,16 @@ pub struct TrajectoryPoint {
 }
 
 /// A generated trajectory and the deceleration used.
+///
+/// # Example
+/// ```
+/// use wls::boom::RotationProfile;
+///
+/// let tr = RotationProfile::default().trajectory()?;
+/// // Sampled every dt = 0.01 s.
+/// assert!((tr.points[1].t - tr.points[0].t - 0.01).abs() < 1e-12);
+/// # Ok::<(), wls::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Trajectory {
     /// Samples at t = k·dt.
@@ -316,7 +391,7 @@ mod tests {
     fn default_profile_decelerates_about_0_419_and_ends_near_90() {
         let p = RotationProfile::default();
         let tr = p.trajectory().expect("default profile is valid");
-        // Continuous-time energy balance gives ε_d = 9.626/23 ≈ 0.4185 °/s² (SPEC B: ≈ 0.419).
+        // Continuous-time energy balance gives ε_d = 9.626/23 ≈ 0.4185 °/s² (the paper: ≈ 0.419).
         assert!(
             (tr.deceleration_deg_s2 - 0.4185).abs() < 2e-3,
             "{}",
