@@ -125,3 +125,8 @@ pub use nalgebra;
 pub type FixedFilter<const N: usize, const M: usize, const P: usize = 0> = Filter<Fixed<N, M, P>>;
 /// The fixed-size model.
 pub type FixedModel<const N: usize, const M: usize, const P: usize = 0> = Model<Fixed<N, M, P>>;
+
+/// The README's examples, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
