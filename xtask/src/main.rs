@@ -4,8 +4,8 @@
 //! `CARGO_MANIFEST_DIR`, so it behaves the same from any working directory.
 
 mod bench;
-mod mutants;
 mod examples;
+mod mutants;
 mod tidy;
 
 use std::path::{Path, PathBuf};

@@ -6,7 +6,7 @@
 use faer::{Mat, MatRef};
 use kalman::{CovarianceForm, Fixed, FixedFilter, Model};
 use nalgebra::{DMatrix, Matrix3, Vector3};
-use rand::Rng;
+use rand::RngExt;
 use rand_distr::StandardNormal;
 
 use super::parameters::UavParams;

@@ -3,7 +3,7 @@
 //! that only regularisation makes solvable, and the IRLS stopping rule.
 
 use nalgebra::{DMatrix, DVector};
-use rand::{Rng, SeedableRng};
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use wls::Error;
 use wls::solver::{
