@@ -114,6 +114,22 @@ struct State<D: Dims> {
 /// estimate `x_{k|k}` ([`Filter::state`], MATLAB's "current" form) and the one-step
 /// predictor `x_{k+1|k}` ([`Filter::predicted_state`], the "delayed" form) are available.
 /// A step allocates nothing.
+///
+/// # Example
+/// ```
+/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+///
+/// // A random walk observed in unit noise; one step from the prior N(0, 1).
+/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.5]], &[[1.0]])?;
+/// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
+/// let info = filter.step(&[2.0], None)?;
+/// // Gain 1/2: x = 1, P = 1/2; then the prediction adds Q.
+/// assert!((filter.state()[0] - 1.0).abs() < 1e-12);
+/// assert!((filter.covariance()[(0, 0)] - 0.5).abs() < 1e-12);
+/// assert!((filter.predicted_covariance()[(0, 0)] - 1.0).abs() < 1e-12);
+/// assert_eq!(info.observed, 1);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Filter<D: Dims = Dyn> {
     model: Model<D>,

@@ -282,6 +282,29 @@ pub(crate) fn psd_factor(
 /// Construction checks shapes, finiteness, symmetry ([`SYMMETRY_TOL`]) and PSD
 /// ([`PSD_TOL`]) of `Q`, `R` and of the joint noise covariance `[[R, Sᵀ], [S, Q]]`. It also
 /// stores a square factor of that joint covariance for the square-root form.
+///
+/// # Example
+/// ```
+/// use kalman::{Dyn, Model};
+///
+/// // Constant velocity with a known acceleration input and correlated noise.
+/// let dt = 0.1;
+/// let model = Model::new(
+///     Dyn::new(2, 1, 1)?,
+///     &[[1.0, dt], [0.0, 1.0]],
+///     &[[1.0, 0.0]],
+///     &[[1e-4, 0.0], [0.0, 1e-2]],
+///     &[[0.1]],
+/// )?
+/// .with_control(&[[dt * dt / 2.0], [dt]])?
+/// .with_cross_covariance(&[[0.0], [1e-3]])?;
+/// assert!(model.S().is_some());
+/// // An indefinite joint covariance [[R, Sᵀ], [S, Q]] is refused by name.
+/// let bad = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[1e-4]], &[[0.1]])?
+///     .with_cross_covariance(&[[1.0]]);
+/// assert!(bad.is_err());
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct Model<D: Dims> {
     pub(crate) dims: D,

@@ -74,6 +74,20 @@ impl Default for RiccatiOptions {
 }
 
 /// Steady state of the discrete Kalman filter (solution of the filter DARE).
+///
+/// # Example
+/// ```
+/// use kalman::riccati::SteadyState;
+/// use kalman::{Dyn, Model};
+///
+/// // The steady state of an engine model: random walk, q = 1, r = 1.
+/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]])?;
+/// let ss = SteadyState::of(&model)?;
+/// let p = (1.0 + 5f64.sqrt()) / 2.0; // the golden ratio
+/// assert!((ss.prior[(0, 0)] - p).abs() < 1e-12);
+/// assert!((ss.posterior[(0, 0)] - p / (p + 1.0)).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct SteadyState {
     /// Steady-state prior covariance P = lim P_{k|k−1} (n×n), the DARE solution.
@@ -94,6 +108,18 @@ pub struct SteadyState {
 }
 
 /// Discrete-time LQR solution: cost matrix X and gain L with u_k = −L x_k.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+///
+/// // x_{k+1} = x_k + u_k with cost Σ x² + u²: X = (1 + √5)/2, L = X/(1 + X).
+/// let one = mat![[1.0]];
+/// let lqr = kalman::riccati::dlqr(one.as_ref(), one.as_ref(), one.as_ref(), one.as_ref(), None)?;
+/// let x = (1.0 + 5f64.sqrt()) / 2.0;
+/// assert!((lqr.cost[(0, 0)] - x).abs() < 1e-12 && (lqr.gain[(0, 0)] - x / (1.0 + x)).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Lqr {
     /// State-feedback gain L = (R + BᵀXB)⁻¹(BᵀXA + Nᵀ) (m×n) for discrete problems, or

@@ -23,6 +23,25 @@ use crate::storage::Dims;
 use crate::{Error, Filter, Model, RANK_TOL};
 
 /// Recorder and backward pass of the RTS smoother (offline: it stores every step).
+///
+/// # Example
+/// ```
+/// use kalman::smoother::RtsSmoother;
+/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+///
+/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
+/// let mut filter = Filter::new(model, &[0.0], &[[10.0]], CovarianceForm::Joseph)?;
+/// let mut rts = RtsSmoother::new(1);
+/// for z in [1.0, 1.3, f64::NAN, 0.8] {
+///     filter.step(&[z], None)?;
+///     rts.record(&filter)?;
+/// }
+/// let s = rts.smooth()?;
+/// // Smoothing never increases the variance; at the last step it equals the filter's.
+/// assert!(s.covariances[0][(0, 0)] <= 10.0);
+/// assert!((s.covariances[3][(0, 0)] - filter.covariance()[(0, 0)]).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct RtsSmoother {
     n: usize,

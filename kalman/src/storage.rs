@@ -97,6 +97,16 @@ pub trait Dims: Copy + Debug + Send + Sync + private::Sealed + 'static {
 /// Dynamic dimensions (the default path): heap buffers allocated once at construction,
 /// products at or above [`FAER_THRESHOLD`] multiply-adds go to faer's GEMM with `Par::Seq`
 /// (or Rayon with the `parallel` feature and [`PARALLEL_THRESHOLD`]).
+///
+/// # Example
+/// ```
+/// use kalman::{Dyn, Error};
+///
+/// let dims = Dyn::new(7, 2, 0)?; // n = 7 states, m = 2 measurements, no input
+/// assert!(matches!(Dyn::new(0, 1, 0), Err(Error::Dimension { name: "n", .. })));
+/// # let _ = dims;
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Dyn {
     n: usize,
@@ -172,6 +182,18 @@ impl Dims for Dyn {
 /// Fixed dimensions known at compile time (n = `N` ≤ 16, m = `M` ≤ 16, p = `P` ≤ 16
 /// control inputs): all buffers inline, loops unrolled by the compiler. Same API and
 /// results as [`Dyn`].
+///
+/// # Example
+/// ```
+/// use kalman::{CovarianceForm, Filter, Fixed, Model};
+///
+/// // The same random walk on the fixed-size path: storage inline, n = m = 1.
+/// let model = Model::new(Fixed::<1, 1>::new(), &[[1.0]], &[[1.0]], &[[0.5]], &[[1.0]])?;
+/// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
+/// filter.step(&[2.0], None)?;
+/// assert!((filter.state()[0] - 1.0).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Fixed<const N: usize, const M: usize, const P: usize = 0>(());
 

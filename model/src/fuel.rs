@@ -221,6 +221,16 @@ pub enum Realisation {
 ///
 /// (The paper writes `x_k = A x_{k−1} + B u_{k−1}`; the same u_k enters the state at the next
 /// step and the measurement now, hence the cross-covariance S.)
+///
+/// # Example
+/// ```
+/// use model::{Channels, FuelParams, Realisation};
+///
+/// let fuel = FuelParams::default().build(Channels::LevelAndTilt, Realisation::Paper)?;
+/// let d = fuel.to_discrete_ss()?;
+/// assert_eq!((d.n_states(), d.n_outputs()), (7, 2));
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct FuelModel {

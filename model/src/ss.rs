@@ -16,6 +16,23 @@ use crate::validate;
 /// density) `W` (p×p, symmetric PSD) and m outputs. Built by [`ContinuousSs::new`] (no noise)
 /// and [`ContinuousSs::with_noise`]; every constructor checks shapes, finiteness, and that `W`
 /// is symmetric PSD. Deserialisation runs the same checks.
+///
+/// # Example
+/// ```
+/// use model::ContinuousSs;
+/// use model::nalgebra::dmatrix;
+///
+/// // A mass-spring-damper driven by a force u and by white force noise of intensity 0.1.
+/// let sys = ContinuousSs::new(
+///     dmatrix![0.0, 1.0; -4.0, -0.4], // A
+///     dmatrix![0.0; 1.0],             // B
+///     dmatrix![1.0, 0.0],             // C
+///     dmatrix![0.0],                  // D
+/// )?
+/// .with_noise(dmatrix![0.0; 1.0], dmatrix![0.1])?; // G, W
+/// assert_eq!((sys.n_states(), sys.n_inputs(), sys.n_noise(), sys.n_outputs()), (2, 1, 1, 1));
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "ContinuousSsRaw")]
 pub struct ContinuousSs {
@@ -137,6 +154,19 @@ impl ContinuousSs {
 /// symmetric PSD) and m outputs. `J` is the noise feed-through (it arises from Tustin or from
 /// the paper's shaping filters, where the same `w_k` drives the state and the output: the
 /// cross-covariance of process and output noise is then `G·Q·Jᵀ`).
+///
+/// # Example
+/// ```
+/// use model::DiscreteSs;
+/// use model::nalgebra::dmatrix;
+///
+/// // AR(1) state seen in its own noise: x_{k+1} = 0.9 x_k + w_k, y_k = x_k + 0.5 w_k.
+/// let d = DiscreteSs::new(dmatrix![0.9], dmatrix![0.0], dmatrix![1.0], dmatrix![0.0], 0.1)?
+///     .with_noise(dmatrix![1.0], dmatrix![0.5], dmatrix![0.04])?;
+/// // cov(G w, J w) = G Q Jᵀ = 0.02: process and output noise are correlated.
+/// assert!((d.cross_covariance()[(0, 0)] - 0.02).abs() < 1e-15);
+/// # Ok::<(), model::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "DiscreteSsRaw")]
 pub struct DiscreteSs {

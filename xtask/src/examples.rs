@@ -147,15 +147,13 @@ fn items_in(
         }
         // The doc block above: `///` lines, skipping attributes.
         let mut j = i;
-        let mut has_example = false;
+        let mut docs = Vec::new();
         let mut hidden = false;
         while j > 0 {
             j -= 1;
             let above = lines[j].trim_start();
             if let Some(doc) = above.strip_prefix("///") {
-                if let Some(lang) = doc.trim().strip_prefix("```") {
-                    has_example |= compiled(lang);
-                }
+                docs.push(doc.trim());
             } else if above.starts_with(")]") {
                 // The end of a multi-line attribute: skip up to its `#[`.
                 while j > 0 && !lines[j].trim_start().starts_with("#[") {
@@ -169,6 +167,17 @@ fn items_in(
         }
         if hidden {
             continue;
+        }
+        // Read the doc top-down so that only opening fences decide.
+        let mut in_code = false;
+        let mut has_example = false;
+        for doc in docs.iter().rev() {
+            if let Some(lang) = doc.strip_prefix("```") {
+                if !in_code {
+                    has_example |= compiled(lang);
+                }
+                in_code = !in_code;
+            }
         }
         out.push(Item {
             at: format!("{rel}:{}", i + 1),
