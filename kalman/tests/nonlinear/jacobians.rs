@@ -4,7 +4,7 @@
 
 use kalman::Dyn;
 use kalman::nonlinear::{AutoDiff, CentralDiff, GenericModel, Jacobians};
-use rand::{Rng, SeedableRng};
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::models::{Boom, Pendulum, PendulumHand, RangeBearing, RangeBearingHand};
