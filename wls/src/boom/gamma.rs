@@ -1,6 +1,6 @@
 //! Running the estimator over a whole turn with constant measurement errors, and choosing the
 //! sensor offset angle γ: sweep γ, record the worst errors per γ, report the feasible window
-//! and the smallest feasible γ (SPEC B, "Sensor offset angle γ" and "Error model").
+//! and the smallest feasible γ (see the equations in [`crate::boom`]).
 
 use serde::{Deserialize, Serialize};
 
