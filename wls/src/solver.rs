@@ -16,11 +16,9 @@ use crate::error::{Error, Result};
 
 /// The weight matrix V of the measurement rows.
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
 /// use wls::solver::{SolveOptions, Weights, solve};
-///
 /// // A zero weight drops the third (outlying) row.
 /// let h = dmatrix![1.0; 1.0; 1.0];
 /// let z = dvector![1.0, 1.0, 100.0];
@@ -40,11 +38,9 @@ pub enum Weights {
 
 /// How the whitened system is solved.
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
 /// use wls::solver::{Method, SolveOptions, Weights, solve};
-///
 /// let h = dmatrix![1.0, 1.0; 1.0, 2.0; 1.0, 3.0];
 /// let z = dvector![1.0, 2.0, 2.9];
 /// let qr = solve(&h, &z, &Weights::Identity, &SolveOptions::default())?;
@@ -65,11 +61,9 @@ pub enum Method {
 
 /// Tikhonov regularisation: adds λ‖L(x − x_p)‖² to the objective.
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
 /// use wls::solver::{SolveOptions, Tikhonov, Weights, solve};
-///
 /// // One equation, two unknowns: underdetermined without regularisation.
 /// let h = dmatrix![1.0, 1.0];
 /// let z = dvector![2.0];
@@ -93,19 +87,14 @@ pub struct Tikhonov {
 
 /// Prior information as extra weighted measurement rows: P x ≈ p with weight V_p.
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
 /// use wls::solver::{PriorRows, SolveOptions, Weights, solve};
-///
 /// // x₂ is unobserved by H but known a priori to be 5 ± 1.
 /// let h = dmatrix![1.0, 0.0];
 /// let z = dvector![3.0];
-/// let prior = PriorRows {
-///     rows: dmatrix![0.0, 1.0],
-///     values: dvector![5.0],
-///     weights: Weights::Identity,
-/// };
+/// let (rows, values) = (dmatrix![0.0, 1.0], dvector![5.0]);
+/// let prior = PriorRows { rows, values, weights: Weights::Identity };
 /// let options = SolveOptions { prior: Some(prior), ..SolveOptions::default() };
 /// let sol = solve(&h, &z, &Weights::Identity, &options)?;
 /// assert!((sol.x - dvector![3.0, 5.0]).norm() < 1e-12);
@@ -124,11 +113,9 @@ pub struct PriorRows {
 
 /// Options of [`solve`].
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
 /// use wls::solver::{SolveOptions, Weights, solve};
-///
 /// // Scale the covariance by the residual variance σ̂² (3 rows, 1 unknown: 2 dof).
 /// let h = dmatrix![1.0; 1.0; 1.0];
 /// let z = dvector![0.9, 1.0, 1.1];
@@ -155,11 +142,9 @@ pub struct SolveOptions {
 
 /// The result of [`solve`].
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
 /// use wls::solver::{SolveOptions, Weights, solve};
-///
 /// let h = dmatrix![1.0, 0.0; 0.0, 1e-6];
 /// let z = dvector![1.0, 1e-6];
 /// let sol = solve(&h, &z, &Weights::Identity, &SolveOptions::default())?;
@@ -200,10 +185,8 @@ pub struct Solution {
 
 /// Options of the iteratively re-weighted solve [`solve_irls`].
 ///
-/// # Example
 /// ```
 /// use wls::solver::IrlsOptions;
-///
 /// let tight = IrlsOptions { max_iterations: 200, ..IrlsOptions::default() };
 /// assert!(tight.tolerance > 0.0);
 /// ```
@@ -226,19 +209,15 @@ impl Default for IrlsOptions {
 
 /// The result of [`solve_irls`].
 ///
-/// # Example
 /// ```
-/// use wls::nalgebra::{dmatrix, dvector};
+/// use wls::nalgebra::{DVector, dmatrix, dvector};
 /// use wls::solver::{IrlsOptions, SolveOptions, Weights, solve_irls};
-///
 /// // A robust mean: weights 1/max(|r|, 1e-3) push towards the median.
 /// let h = dmatrix![1.0; 1.0; 1.0; 1.0];
 /// let z = dvector![1.0, 1.1, 0.9, 10.0];
-/// let fit = solve_irls(
-///     &h, &z, &dvector![0.0],
-///     |x| Weights::Diagonal(z.map(|zi| 1.0 / (zi - x[0]).abs().max(1e-3))),
-///     &SolveOptions::default(), &IrlsOptions::default(),
-/// )?;
+/// let weights = |x: &DVector<f64>| Weights::Diagonal(z.map(|v| 1.0 / (v - x[0]).abs().max(1e-3)));
+/// let (opts, irls) = (SolveOptions::default(), IrlsOptions::default());
+/// let fit = solve_irls(&h, &z, &dvector![0.0], weights, &opts, &irls)?;
 /// assert!(fit.iterations >= 2 && (fit.solution.x[0] - 1.05).abs() < 0.1);
 /// # Ok::<(), wls::Error>(())
 /// ```
@@ -598,11 +577,9 @@ fn covariance_from_r(R: &DMatrix<f64>) -> Result<DMatrix<f64>> {
 /// rank deficiency without regularisation, and residual-variance scaling without degrees of
 /// freedom are all typed [`Error`]s.
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
 /// use wls::solver::{SolveOptions, Weights, solve};
-///
 /// // A straight line through three points, the last one measured four times as precisely.
 /// let h = dmatrix![1.0, 0.0; 1.0, 1.0; 1.0, 2.0];
 /// let z = dvector![0.1, 0.9, 2.0];
@@ -691,11 +668,9 @@ pub fn solve(
 /// # Errors
 /// As [`solve`] (the measurement vector is not needed).
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::dmatrix;
 /// use wls::solver::{SolveOptions, Weights, sensitivity};
-///
 /// // Mean of two readings: each moves the estimate by half its own change.
 /// let s = sensitivity(&dmatrix![1.0; 1.0], &Weights::Identity, &SolveOptions::default())?;
 /// assert!((s[(0, 0)] - 0.5).abs() < 1e-12 && (s[(0, 1)] - 0.5).abs() < 1e-12);
@@ -727,11 +702,9 @@ pub fn sensitivity(
 /// # Errors
 /// As [`sensitivity`], plus `delta` of the wrong length, non-finite or negative.
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
 /// use wls::solver::{SolveOptions, Weights, worst_case_bounds};
-///
 /// // x = z₁ − z₂ from two rows: errors of ±0.1 on each add up to ±0.2 in the worst case.
 /// let h = dmatrix![1.0, 1.0; 0.0, 1.0];
 /// let delta = dvector![0.1, 0.1];
@@ -768,18 +741,14 @@ pub fn worst_case_bounds(
 /// # Errors
 /// As [`solve`] for any iterate, plus invalid `initial`, tolerance or iteration cap.
 ///
-/// # Example
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
 /// use wls::solver::{IrlsOptions, SolveOptions, Weights, solve_irls};
-///
 /// // Weights that do not depend on x converge in two solves to the plain WLS answer.
 /// let h = dmatrix![1.0; 1.0];
 /// let z = dvector![1.0, 3.0];
-/// let fit = solve_irls(
-///     &h, &z, &dvector![0.0], |_| Weights::Identity,
-///     &SolveOptions::default(), &IrlsOptions::default(),
-/// )?;
+/// let (opts, irls) = (SolveOptions::default(), IrlsOptions::default());
+/// let fit = solve_irls(&h, &z, &dvector![0.0], |_| Weights::Identity, &opts, &irls)?;
 /// assert!(fit.converged && (fit.solution.x[0] - 2.0).abs() < 1e-12);
 /// # Ok::<(), wls::Error>(())
 /// ```
