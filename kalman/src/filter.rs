@@ -1,15 +1,18 @@
 //! The filter: state, workspaces and the allocation-free step (update with `z_k`, then
-//! prediction to `k + 1`) in the Joseph, standard and square-root covariance forms.
+//! prediction to `k + 1`). The Joseph and standard forms are in `dense` (an update stage and
+//! a prediction stage), the square-root form in `sqrt` (one pre-array triangularised).
 #![allow(non_snake_case)]
 
 use faer::MatRef;
 
 use crate::Error;
-use crate::kernels::{Gemm, RANK_TOL, cholesky, jacobi_eigen, lq_rows, mirror_lower};
 use crate::model::{
     MatrixInput, Model, ModelSource, check_vec, load, load_vec, psd_factor, symmetrise,
 };
 use crate::storage::{Buf, Dims, Dyn};
+
+mod dense;
+mod sqrt;
 
 /// ln(2π), for the Gaussian log-likelihood.
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
@@ -86,10 +89,13 @@ struct State<D: Dims> {
     /// Whether the last dense update factored Σ by Cholesky (else by the eigen fallback).
     chol: bool,
     // workspaces
-    mask: D::Mv,
+    /// Which entries of `z_k` are observed (not NaN).
+    mask: D::Mb,
     y: D::Mv,
-    piv: D::Mv,
-    pivrow: D::Mv,
+    /// Square-root form: pivot column of each z row (`None` for a dependent row), and the
+    /// z row of each pivot column.
+    piv: D::Mo,
+    pivrow: D::Mi,
     hp: D::Mn,
     u: D::Nm,
     kbar: D::Nm,
@@ -102,8 +108,9 @@ struct State<D: Dims> {
     a: D::Nn,
     t: D::Nn,
     xtmp: D::Nv,
-    pivx: D::Nv,
-    arr: D::Array,
+    pivx: D::No,
+    /// The square-root form's row-major (m + 2n)² pre-array (empty for the other forms).
+    arr: Vec<f64>,
 }
 
 /// A linear Kalman filter on the storage path `D` ([`Dyn`] by default, or
@@ -190,7 +197,7 @@ impl<D: Dims> Filter<D> {
             t: Buf::zeros(n * n),
             xtmp: Buf::zeros(n),
             pivx: Buf::zeros(n),
-            arr: Buf::zeros(arr_len),
+            arr: vec![0.0; arr_len],
         };
         init_prior(&mut st, n, x0, P0)?;
         Ok(Filter { model, st })
@@ -331,38 +338,6 @@ fn init_prior<D: Dims>(
     Ok(())
 }
 
-/// `C = alpha·op(A)·op(B) (+ C)` with contiguous operands (leading dimension = rows).
-#[inline(always)]
-fn mm<D: Dims>(
-    d: &D,
-    c: &mut [f64],
-    (rows, cols, inner): (usize, usize, usize),
-    alpha: f64,
-    acc: bool,
-    (a, ta): (&[f64], bool),
-    (b, tb): (&[f64], bool),
-    lower: bool,
-) {
-    d.gemm(
-        Gemm {
-            rows,
-            cols,
-            inner,
-            alpha,
-            acc,
-            a,
-            lda: if ta { inner } else { rows },
-            ta,
-            b,
-            ldb: if tb { cols } else { inner },
-            tb,
-            ldc: rows,
-            lower,
-        },
-        c,
-    );
-}
-
 /// The validation of one step's inputs, shared by [`Filter::step`] and
 /// [`crate::schedule::ScheduledFilter::step`]: `z` of length `m` with no infinite entry (NaN
 /// marks a missing entry), `u` (if any) of length `p` and finite. Returns whether `z` has a
@@ -414,16 +389,10 @@ fn check_inputs<D: Dims>(
 ) -> Result<usize, Error> {
     check_step_inputs(d.m(), d.p(), z, u)?;
     let mask = st.mask.as_mut_slice();
-    let mut observed = 0;
     for (mi, zi) in mask.iter_mut().zip(z) {
-        if zi.is_nan() {
-            *mi = 0.0;
-        } else {
-            *mi = 1.0;
-            observed += 1;
-        }
+        *mi = !zi.is_nan();
     }
-    Ok(observed)
+    Ok(mask.iter().filter(|&&o| o).count())
 }
 
 fn step_impl<D: Dims>(
@@ -435,8 +404,8 @@ fn step_impl<D: Dims>(
     let d = model.dims;
     let observed = check_inputs(&d, st, z, u)?;
     let mut info = match st.form {
-        CovarianceForm::SquareRoot => step_sqrt(model, st, z, u),
-        _ => step_dense(model, st, z, u, observed),
+        CovarianceForm::SquareRoot => sqrt::step(model, st, z, u),
+        CovarianceForm::Joseph | CovarianceForm::Standard => dense::step(model, st, z, u, observed),
     };
     info.step = st.k;
     info.observed = observed;
@@ -447,9 +416,9 @@ fn step_impl<D: Dims>(
 
 /// `e = z − H x` in observed entries, 0 in missing ones.
 #[inline(always)]
-fn innovation(m: usize, n: usize, H: &[f64], x: &[f64], z: &[f64], mask: &[f64], e: &mut [f64]) {
+fn innovation(m: usize, n: usize, H: &[f64], x: &[f64], z: &[f64], mask: &[bool], e: &mut [f64]) {
     for i in 0..m {
-        e[i] = if mask[i] > 0.0 {
+        e[i] = if mask[i] {
             let mut s = z[i];
             for j in 0..n {
                 s -= H[i + j * m] * x[j];
@@ -489,507 +458,3 @@ pub(crate) fn propagate_mean(
     }
 }
 
-/// Joseph and standard forms.
-#[inline(always)]
-fn step_dense<D: Dims>(
-    model: &Model<D>,
-    st: &mut State<D>,
-    z: &[f64],
-    u: Option<&[f64]>,
-    observed: usize,
-) -> StepInfo {
-    let d = model.dims;
-    let (n, m, p) = (d.n(), d.m(), d.p());
-    let F = model.F.as_slice();
-    let H = model.H.as_slice();
-    let Q = model.Q.as_slice();
-    let R = model.R.as_slice();
-    let B = model.B.as_slice();
-    let mut info = StepInfo::default();
-    let has_s = model.S.is_some() && observed > 0;
-    let mut chol_used = true;
-
-    if observed == 0 {
-        st.xf.as_mut_slice()[..n].copy_from_slice(&st.xp.as_slice()[..n]);
-        st.pf.as_mut_slice()[..n * n].copy_from_slice(&st.pp.as_slice()[..n * n]);
-        st.e.as_mut_slice()[..m].fill(0.0);
-        st.sig.as_mut_slice()[..m * m].fill(0.0);
-        st.gain.as_mut_slice()[..n * m].fill(0.0);
-    } else {
-        let mask = st.mask.as_slice();
-        let xp = st.xp.as_slice();
-        let pp = st.pp.as_slice();
-        let e = st.e.as_mut_slice();
-        innovation(m, n, H, xp, z, mask, e);
-        // HP = H·P (m×n), masked rows zeroed.
-        let hp = st.hp.as_mut_slice();
-        mm(
-            &d,
-            hp,
-            (m, n, n),
-            1.0,
-            false,
-            (H, false),
-            (pp, false),
-            false,
-        );
-        for i in 0..m {
-            if mask[i] <= 0.0 {
-                for j in 0..n {
-                    hp[i + j * m] = 0.0;
-                }
-            }
-        }
-        // Σ = (HP)·Hᵀ + R over observed entries; a missing entry gets a unit diagonal
-        // (its gain column is zero, so it drops out exactly).
-        let sig = st.sig.as_mut_slice();
-        mm(&d, sig, (m, m, n), 1.0, false, (hp, false), (H, true), true);
-        let mut maxdiag = 0.0_f64;
-        for j in 0..m {
-            for i in j..m {
-                let v = if mask[i] > 0.0 && mask[j] > 0.0 {
-                    sig[i + j * m] + R[i + j * m]
-                } else if i == j {
-                    1.0
-                } else {
-                    0.0
-                };
-                sig[i + j * m] = v;
-            }
-            maxdiag = maxdiag.max(sig[j + j * m]);
-        }
-        mirror_lower(sig, m);
-        // U = P Hᵀ = (HP)ᵀ.
-        let uu = st.u.as_mut_slice();
-        for j in 0..m {
-            for i in 0..n {
-                uu[i + j * n] = hp[j + i * m];
-            }
-        }
-        let masked = (m - observed) as f64;
-        let fact = st.fact.as_mut_slice();
-        fact[..m * m].copy_from_slice(&sig[..m * m]);
-        let kbar = st.kbar.as_mut_slice();
-        let K = st.gain.as_mut_slice();
-        let y = st.y.as_mut_slice();
-        let eigv = st.eigv.as_mut_slice();
-        let chol = cholesky(fact, m, RANK_TOL * maxdiag);
-        chol_used = chol;
-        let (rank, logdet);
-        if chol {
-            // kbar = U L⁻ᵀ, K = kbar L⁻¹, y = L⁻¹ e.
-            whiten_chol(n, m, fact, uu, kbar);
-            unwhiten_chol(n, m, fact, kbar, K);
-            for i in 0..m {
-                let mut s = e[i];
-                for l in 0..i {
-                    s -= fact[i + l * m] * y[l];
-                }
-                y[i] = s / fact[i + i * m];
-            }
-            // log det Σ = 2 ln Π L_ii: one logarithm unless the product leaves the normal
-            // range (then one per pivot).
-            let mut prod = 1.0;
-            for i in 0..m {
-                prod *= fact[i + i * m];
-            }
-            logdet = if prod.is_normal() && prod.is_finite() {
-                2.0 * prod.ln()
-            } else {
-                (0..m).map(|i| 2.0 * fact[i + i * m].ln()).sum()
-            };
-            rank = observed;
-        } else {
-            // Rank-revealing fallback: Σ = V Λ Vᵀ, Z = V Λ₊^{-1/2} (dropped columns zero),
-            // Σ⁺ = Z Zᵀ.
-            let w = st.eigw.as_mut_slice();
-            // The failed Cholesky overwrote part of `fact`: start again from Σ.
-            fact[..m * m].copy_from_slice(&sig[..m * m]);
-            jacobi_eigen(fact, m, eigv, w);
-            let lmax = w[..m].iter().fold(0.0_f64, |a, b| a.max(*b));
-            let mut r = 0usize;
-            let mut ld = 0.0;
-            for j in 0..m {
-                if w[j] > RANK_TOL * lmax {
-                    r += 1;
-                    ld += w[j].ln();
-                    let s = 1.0 / w[j].sqrt();
-                    for i in 0..m {
-                        eigv[i + j * m] *= s;
-                    }
-                } else {
-                    eigv[j * m..j * m + m].fill(0.0);
-                }
-            }
-            // Missing entries contributed unit eigenvalues (ln 1 = 0) to the count.
-            rank = r.saturating_sub(masked as usize);
-            logdet = ld;
-            mm(
-                &d,
-                kbar,
-                (n, m, m),
-                1.0,
-                false,
-                (uu, false),
-                (eigv, false),
-                false,
-            );
-            mm(
-                &d,
-                K,
-                (n, m, m),
-                1.0,
-                false,
-                (kbar, false),
-                (eigv, true),
-                false,
-            );
-            for j in 0..m {
-                let mut s = 0.0;
-                for i in 0..m {
-                    s += eigv[i + j * m] * e[i];
-                }
-                y[j] = s;
-            }
-        }
-        let nis: f64 = y[..m].iter().map(|v| v * v).sum();
-        info.rank = rank;
-        info.nis = nis;
-        info.log_likelihood = -0.5 * (nis + logdet + rank as f64 * LN_2PI);
-        // x⁺ = x⁻ + K e.
-        let xf = st.xf.as_mut_slice();
-        xf[..n].copy_from_slice(&xp[..n]);
-        add_mat_vec(n, K, &e[..m], xf);
-        let pf = st.pf.as_mut_slice();
-        match st.form {
-            CovarianceForm::Standard => {
-                // P⁺ = P − K Σ Kᵀ = P − kbar kbarᵀ (lower triangle, then mirrored).
-                pf[..n * n].copy_from_slice(&pp[..n * n]);
-                mm(
-                    &d,
-                    pf,
-                    (n, n, m),
-                    -1.0,
-                    true,
-                    (kbar, false),
-                    (kbar, true),
-                    true,
-                );
-            }
-            _ => {
-                // Joseph: P⁺ = A P Aᵀ + K R Kᵀ with A = I − K H, applied as the identity
-                // minus a rank-m term from each side (O(n²m) instead of O(n³), same
-                // expression): T = A P = P − K (HP), A P Aᵀ = T − (T Hᵀ) Kᵀ.
-                let t = st.t.as_mut_slice();
-                t[..n * n].copy_from_slice(&pp[..n * n]);
-                mm(&d, t, (n, n, m), -1.0, true, (K, false), (hp, false), false);
-                let th = st.tnm.as_mut_slice();
-                mm(&d, th, (n, m, n), 1.0, false, (t, false), (H, true), false);
-                pf[..n * n].copy_from_slice(&t[..n * n]);
-                mm(&d, pf, (n, n, m), -1.0, true, (th, false), (K, true), true);
-                // K R Kᵀ: gain columns of missing entries are zero, so R needs no masking.
-                mm(&d, th, (n, m, m), 1.0, false, (K, false), (R, false), false);
-                mm(&d, pf, (n, n, m), 1.0, true, (th, false), (K, true), true);
-            }
-        }
-        mirror_lower(pf, n);
-    }
-
-    // Prediction: x_{k+1|k} = F x⁺ + B u (+ S Σ⁺ e),
-    // P_{k+1|k} = F P⁺ Fᵀ + Q (− F K Sᵀ − S Kᵀ Fᵀ − S Σ⁺ Sᵀ).
-    let xf = st.xf.as_slice();
-    let pf = st.pf.as_slice();
-    let xp = st.xp.as_mut_slice();
-    propagate_mean(n, p, F, B, xf, u, xp);
-    let t = st.t.as_mut_slice();
-    let pp = st.pp.as_mut_slice();
-    mm(&d, t, (n, n, n), 1.0, false, (F, false), (pf, false), false);
-    mm(&d, pp, (n, n, n), 1.0, false, (t, false), (F, true), true);
-    for j in 0..n {
-        for i in j..n {
-            pp[i + j * n] += Q[i + j * n];
-        }
-    }
-    if let Some(S) = model.S.as_ref().filter(|_| has_s) {
-        {
-            let S = S.as_slice();
-            let mask = st.mask.as_slice();
-            let sm = st.sm.as_mut_slice();
-            for j in 0..m {
-                let keep = mask[j] > 0.0;
-                for i in 0..n {
-                    sm[i + j * n] = if keep { S[i + j * n] } else { 0.0 };
-                }
-            }
-            // gbar = S Z (Z = L⁻ᵀ or V Λ₊^{-1/2}), so S Σ⁺ e = gbar y and S Σ⁺ Sᵀ = gbar gbarᵀ.
-            let gbar = st.gbar.as_mut_slice();
-            if chol_used {
-                whiten_chol(n, m, st.fact.as_slice(), sm, gbar);
-            } else {
-                mm(
-                    &d,
-                    gbar,
-                    (n, m, m),
-                    1.0,
-                    false,
-                    (sm, false),
-                    (st.eigv.as_slice(), false),
-                    false,
-                );
-            }
-            add_mat_vec(n, gbar, &st.y.as_slice()[..m], xp);
-            let fk = st.tnm.as_mut_slice();
-            mm(
-                &d,
-                fk,
-                (n, m, n),
-                1.0,
-                false,
-                (F, false),
-                (st.gain.as_slice(), false),
-                false,
-            );
-            mm(&d, pp, (n, n, m), -1.0, true, (fk, false), (sm, true), true);
-            mm(&d, pp, (n, n, m), -1.0, true, (sm, false), (fk, true), true);
-            mm(
-                &d,
-                pp,
-                (n, n, m),
-                -1.0,
-                true,
-                (gbar, false),
-                (gbar, true),
-                true,
-            );
-        }
-    }
-    mirror_lower(pp, n);
-    st.chol = chol_used;
-    info
-}
-
-/// `out = U L⁻ᵀ` for lower-triangular `L` (m×m), `U` n×m (column forward substitution).
-#[inline(always)]
-fn whiten_chol(n: usize, m: usize, L: &[f64], U: &[f64], out: &mut [f64]) {
-    for j in 0..m {
-        let (done, rest) = out.split_at_mut(j * n);
-        let oj = &mut rest[..n];
-        oj.copy_from_slice(&U[j * n..j * n + n]);
-        for k in 0..j {
-            let l = L[j + k * m];
-            for (o, dk) in oj.iter_mut().zip(&done[k * n..k * n + n]) {
-                *o -= l * dk;
-            }
-        }
-        let inv = 1.0 / L[j + j * m];
-        for o in oj.iter_mut() {
-            *o *= inv;
-        }
-    }
-}
-
-/// `out = W L⁻¹` for lower-triangular `L` (column back substitution).
-#[inline(always)]
-fn unwhiten_chol(n: usize, m: usize, L: &[f64], W: &[f64], out: &mut [f64]) {
-    for j in (0..m).rev() {
-        let (head, rest) = out.split_at_mut((j + 1) * n);
-        let oj = &mut head[j * n..j * n + n];
-        oj.copy_from_slice(&W[j * n..j * n + n]);
-        for k in j + 1..m {
-            let l = L[k + j * m];
-            for (o, dk) in oj.iter_mut().zip(&rest[(k - j - 1) * n..(k - j) * n]) {
-                *o -= l * dk;
-            }
-        }
-        let inv = 1.0 / L[j + j * m];
-        for o in oj.iter_mut() {
-            *o *= inv;
-        }
-    }
-}
-
-/// Square-root form. One pre-array, row-major, `m + 2n` rows by `m + 2n` columns:
-///
-/// ```text
-///   [ Gv  H L ]   z rows (m)       Gv, Gw: rows of G with G Gᵀ = [[R, Sᵀ], [S, Q]]
-///   [ 0     L ]   current rows (n)  L: factor of P_{k|k-1}
-///   [ Gw  F L ]   next rows (n)
-/// ```
-///
-/// Householder LQ of the z rows gives `Σ^{1/2}` and, in the rows below, the whitened gains
-/// `K̄ = P Hᵀ Σ^{-T/2}` and `K̄ₚ = (F P Hᵀ + S) Σ^{-T/2}`; triangularising the remaining
-/// columns of each block separately gives the factors of `P_{k|k}` and `P_{k+1|k}`. Rows of
-/// missing entries are zero and drop out as rank-deficient rows.
-#[inline(always)]
-fn step_sqrt<D: Dims>(
-    model: &Model<D>,
-    st: &mut State<D>,
-    z: &[f64],
-    u: Option<&[f64]>,
-) -> StepInfo {
-    let d = model.dims;
-    let (n, m, p) = (d.n(), d.m(), d.p());
-    let F = model.F.as_slice();
-    let H = model.H.as_slice();
-    let B = model.B.as_slice();
-    let G = model.joint.as_slice();
-    let ldg = n + m;
-    let ld = m + 2 * n;
-    let mask = st.mask.as_slice();
-    let lp = st.lp.as_slice();
-    // HL (m×n) into hp, FL (n×n) into t.
-    let hl = st.hp.as_mut_slice();
-    mm(
-        &d,
-        hl,
-        (m, n, n),
-        1.0,
-        false,
-        (H, false),
-        (lp, false),
-        false,
-    );
-    let fl = st.t.as_mut_slice();
-    mm(
-        &d,
-        fl,
-        (n, n, n),
-        1.0,
-        false,
-        (F, false),
-        (lp, false),
-        false,
-    );
-    let arr = &mut st.arr.as_mut_slice()[..ld * ld];
-    let mut maxdiag = 0.0_f64;
-    for i in 0..m {
-        let row = &mut arr[i * ld..(i + 1) * ld];
-        if mask[i] > 0.0 {
-            for j in 0..n + m {
-                row[j] = G[i + j * ldg];
-            }
-            for j in 0..n {
-                row[n + m + j] = hl[i + j * m];
-            }
-            maxdiag = maxdiag.max(row.iter().map(|v| v * v).sum());
-        } else {
-            row.fill(0.0);
-        }
-    }
-    for i in 0..n {
-        let row = &mut arr[(m + i) * ld..(m + i + 1) * ld];
-        row[..n + m].fill(0.0);
-        for j in 0..n {
-            row[n + m + j] = lp[i + j * n];
-        }
-        let row = &mut arr[(m + n + i) * ld..(m + n + i + 1) * ld];
-        for j in 0..n + m {
-            row[j] = G[m + i + j * ldg];
-        }
-        for j in 0..n {
-            row[n + m + j] = fl[i + j * n];
-        }
-    }
-    let piv = st.piv.as_mut_slice();
-    let r = lq_rows(arr, ld, 0..m, ld, 0, ld, RANK_TOL * maxdiag, piv);
-    let pivx = st.pivx.as_mut_slice();
-    lq_rows(arr, ld, m..m + n, m + n, r, ld, 0.0, pivx);
-    lq_rows(arr, ld, m + n..m + 2 * n, m + 2 * n, r, ld, 0.0, pivx);
-
-    // Innovation and its whitened form y = Σ^{-1/2} e over the pivot rows.
-    let xp = st.xp.as_mut_slice();
-    let e = st.e.as_mut_slice();
-    innovation(m, n, H, xp, z, mask, e);
-    let y = st.y.as_mut_slice();
-    let pivrow = st.pivrow.as_mut_slice();
-    let mut logdet = 0.0;
-    for i in 0..m {
-        if piv[i] >= 0.0 {
-            let c = piv[i] as usize;
-            let mut s = e[i];
-            for l in 0..c {
-                s -= arr[i * ld + l] * y[l];
-            }
-            let dgl = arr[i * ld + c];
-            y[c] = s / dgl;
-            pivrow[c] = i as f64;
-            logdet += 2.0 * dgl.abs().ln();
-        }
-    }
-    let nis: f64 = y[..r].iter().map(|v| v * v).sum();
-    let info = StepInfo {
-        rank: r,
-        nis,
-        log_likelihood: if r > 0 {
-            -0.5 * (nis + logdet + r as f64 * LN_2PI)
-        } else {
-            0.0
-        },
-        ..StepInfo::default()
-    };
-    // x_{k|k} = x⁻ + K̄ y;  x_{k+1|k} = F x⁻ + B u + K̄ₚ y.
-    let xf = st.xf.as_mut_slice();
-    let xt = st.xtmp.as_mut_slice();
-    propagate_mean(n, p, F, B, xp, u, xt);
-    for i in 0..n {
-        let mut a = xp[i];
-        let mut b = xt[i];
-        for l in 0..r {
-            a += arr[(m + i) * ld + l] * y[l];
-            b += arr[(m + n + i) * ld + l] * y[l];
-        }
-        xf[i] = a;
-        xp[i] = b;
-    }
-    // Factors and covariances.
-    let lf = st.a.as_mut_slice();
-    let lpm = st.lp.as_mut_slice();
-    for j in 0..n {
-        for i in 0..n {
-            lf[i + j * n] = arr[(m + i) * ld + r + j];
-            lpm[i + j * n] = arr[(m + n + i) * ld + r + j];
-        }
-    }
-    let pf = st.pf.as_mut_slice();
-    mm(&d, pf, (n, n, n), 1.0, false, (lf, false), (lf, true), true);
-    mirror_lower(pf, n);
-    let pp = st.pp.as_mut_slice();
-    mm(
-        &d,
-        pp,
-        (n, n, n),
-        1.0,
-        false,
-        (lpm, false),
-        (lpm, true),
-        true,
-    );
-    mirror_lower(pp, n);
-    // Σ = Σ^{1/2} Σ^{T/2} over observed entries, and the gain K from K Σ^{1/2} = K̄.
-    let sig = st.sig.as_mut_slice();
-    for j in 0..m {
-        for i in 0..m {
-            let mut s = 0.0;
-            for l in 0..r {
-                s += arr[i * ld + l] * arr[j * ld + l];
-            }
-            sig[i + j * m] = s;
-        }
-    }
-    let K = st.gain.as_mut_slice();
-    K[..n * m].fill(0.0);
-    for l in (0..r).rev() {
-        let il = pivrow[l] as usize;
-        let dgl = arr[il * ld + l];
-        for row in 0..n {
-            let mut s = arr[(m + row) * ld + l];
-            for i2 in 0..m {
-                if piv[i2] > l as f64 {
-                    s -= K[row + i2 * n] * arr[i2 * ld + l];
-                }
-            }
-            K[row + il * n] = s / dgl;
-        }
-    }
-    info
-}

@@ -1,58 +1,109 @@
-//! Slice kernels shared by both storage paths: GEMM loops (and the faer hand-off), the
-//! robust factorisation of the innovation covariance, and the row-wise LQ triangularisation
-//! of the square-root form. Column-major unless stated; nothing here allocates.
+//! Slice kernels shared by both storage paths: the matrix product (plain loops or faer's
+//! GEMM), the robust factorisation of the innovation covariance, and the row-wise LQ
+//! triangularisation of the square-root form. Column-major unless stated; nothing here
+//! allocates.
 #![allow(non_snake_case)]
 
 use faer::linalg::matmul::triangular::BlockStructure;
 use faer::{Accum, MatMut, MatRef, Par};
 
-/// One product `C = beta·C + alpha·op(A)·op(B)` (`C` is `rows`×`cols` with leading dimension
-/// `ldc`, `op(A)` is `rows`×`inner`).
-#[doc(hidden)]
+use crate::storage::Dims;
+
+/// How a stored column-major matrix enters a product: `N(a, rows, cols)` as it is,
+/// `T(a, rows, cols)` transposed. `rows`×`cols` is always the *stored* shape, so the
+/// leading dimension is `rows`.
 #[derive(Clone, Copy, Debug)]
-pub struct Gemm<'a> {
-    pub rows: usize,
-    pub cols: usize,
-    pub inner: usize,
-    pub alpha: f64,
-    /// Accumulate into `C` (`beta = 1`) instead of overwriting it (`beta = 0`).
-    pub acc: bool,
-    pub a: &'a [f64],
-    pub lda: usize,
-    pub ta: bool,
-    pub b: &'a [f64],
-    pub ldb: usize,
-    pub tb: bool,
-    pub ldc: usize,
-    /// Compute only the lower triangle of `C` (square `C`).
-    pub lower: bool,
+pub(crate) enum Op<'a> {
+    /// `A` as stored.
+    N(&'a [f64], usize, usize),
+    /// `Aᵀ`.
+    T(&'a [f64], usize, usize),
 }
 
-/// `C = alpha·op(A)·op(B) (+ C)` with plain loops (unrolled for fixed sizes).
+impl<'a> Op<'a> {
+    /// Rows and columns of `op(A)`.
+    #[inline(always)]
+    fn shape(self) -> (usize, usize) {
+        match self {
+            Op::N(_, r, c) => (r, c),
+            Op::T(_, r, c) => (c, r),
+        }
+    }
+    /// The stored entries, their leading dimension, and whether they enter transposed.
+    #[inline(always)]
+    fn parts(self) -> (&'a [f64], usize, bool) {
+        match self {
+            Op::N(a, r, _) => (a, r, false),
+            Op::T(a, r, _) => (a, r, true),
+        }
+    }
+}
+
+/// Which part of a product's output is needed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Part {
+    /// Every entry.
+    Full,
+    /// The lower triangle of a square output: a symmetric result that the caller mirrors
+    /// (the upper triangle may be written too).
+    Lower,
+}
+
+/// Products with `rows·cols·inner` below this many multiply-adds use the crate's own loops
+/// on the dynamic path (the fixed path always does). Chosen from faer's per-call overhead
+/// (20–75 ns a call), about the cost of this many multiply-adds in plain loops; not tuned
+/// further.
+pub const FAER_THRESHOLD: usize = 8 * 8 * 8;
+
+/// With the `parallel` feature, products of at least this many multiply-adds run on Rayon
+/// (faer's own default of 32 768 was 3.6× slower at n = 50 on a 2-core machine; Rayon paid
+/// off only near n = 1000). On a loaded machine Rayon can lose even there: the feature is
+/// off by default.
+pub const PARALLEL_THRESHOLD: usize = 400 * 400 * 400;
+
+/// Below this size faer's triangular-output product is slower than its full GEMM (the
+/// upper triangle is then computed too and overwritten when the caller mirrors the lower
+/// one); measured with `benches/step.rs`.
+const TRIANGULAR_MIN: usize = 128;
+
+/// `C = alpha·op(A)·op(B)`, replacing `C` or added to it (`accum`); `C` is contiguous
+/// (leading dimension = its rows). The fixed path and small products run plain loops;
+/// large products on the dynamic path go to faer's GEMM.
 #[inline(always)]
-pub fn gemm(g: Gemm<'_>, c: &mut [f64]) {
-    let Gemm {
-        rows,
-        cols,
-        inner,
-        alpha,
-        acc,
-        a,
-        lda,
-        ta,
-        b,
-        ldb,
-        tb,
-        ldc,
-        lower,
-    } = g;
+pub(crate) fn mm<D: Dims>(
+    d: &D,
+    c: &mut [f64],
+    part: Part,
+    accum: Accum,
+    alpha: f64,
+    a: Op<'_>,
+    b: Op<'_>,
+) {
+    let (rows, inner) = a.shape();
+    let (inner_b, cols) = b.shape();
+    debug_assert_eq!(inner, inner_b, "inner dimensions of a product");
+    if d.is_fixed() || rows * cols * inner < FAER_THRESHOLD {
+        gemm_loops(c, part, accum, alpha, a, b);
+    } else {
+        gemm_faer(c, part, accum, alpha, a, b);
+    }
+}
+
+/// [`mm`] in plain loops (unrolled by the compiler for fixed sizes).
+#[inline(always)]
+fn gemm_loops(c: &mut [f64], part: Part, accum: Accum, alpha: f64, a: Op<'_>, b: Op<'_>) {
+    let (rows, inner) = a.shape();
+    let cols = b.shape().1;
+    let (a, lda, ta) = a.parts();
+    let (b, ldb, tb) = b.parts();
+    let ldc = rows;
     // Small outputs: full columns vectorise better than the shrinking lower-triangle ones
-    // (every `lower` product is mirrored by its caller, so the extra upper part is harmless).
-    let lower = lower && rows > 16;
+    // (every `Lower` product is mirrored by its caller, so the extra upper part is harmless).
+    let lower = part == Part::Lower && rows > 16;
     for j in 0..cols {
         let i0 = if lower { j } else { 0 };
         let ccol = &mut c[j * ldc + i0..j * ldc + rows];
-        if !acc {
+        if matches!(accum, Accum::Replace) {
             ccol.fill(0.0);
         }
         if !ta {
@@ -83,55 +134,39 @@ pub fn gemm(g: Gemm<'_>, c: &mut [f64]) {
     }
 }
 
-/// The same product through faer's GEMM (`Par::Seq`, or Rayon above
-/// [`crate::storage::PARALLEL_THRESHOLD`] with the `parallel` feature).
-pub fn gemm_faer(g: Gemm<'_>, c: &mut [f64]) {
-    let (ar, ac) = if g.ta {
-        (g.inner, g.rows)
-    } else {
-        (g.rows, g.inner)
-    };
-    let (br, bc) = if g.tb {
-        (g.cols, g.inner)
-    } else {
-        (g.inner, g.cols)
-    };
-    let mut A = MatRef::from_column_major_slice_with_stride(g.a, ar, ac, g.lda);
-    if g.ta {
-        A = A.transpose();
+/// [`mm`] through faer's GEMM (`Par::Seq`, or Rayon above [`PARALLEL_THRESHOLD`] with the
+/// `parallel` feature).
+fn gemm_faer(c: &mut [f64], part: Part, accum: Accum, alpha: f64, a: Op<'_>, b: Op<'_>) {
+    fn view(op: Op<'_>) -> MatRef<'_, f64> {
+        match op {
+            Op::N(x, r, c) => MatRef::from_column_major_slice_with_stride(x, r, c, r),
+            Op::T(x, r, c) => MatRef::from_column_major_slice_with_stride(x, r, c, r).transpose(),
+        }
     }
-    let mut B = MatRef::from_column_major_slice_with_stride(g.b, br, bc, g.ldb);
-    if g.tb {
-        B = B.transpose();
-    }
-    let C = MatMut::from_column_major_slice_with_stride_mut(c, g.rows, g.cols, g.ldc);
-    let par = par_for(g.rows * g.cols * g.inner);
-    let beta = if g.acc { Accum::Add } else { Accum::Replace };
-    if g.lower && g.rows >= TRIANGULAR_MIN {
+    let (rows, inner) = a.shape();
+    let cols = b.shape().1;
+    let C = MatMut::from_column_major_slice_with_stride_mut(c, rows, cols, rows);
+    let par = par_for(rows * cols * inner);
+    if part == Part::Lower && rows >= TRIANGULAR_MIN {
         faer::linalg::matmul::triangular::matmul(
             C,
             BlockStructure::TriangularLower,
-            beta,
-            A,
+            accum,
+            view(a),
             BlockStructure::Rectangular,
-            B,
+            view(b),
             BlockStructure::Rectangular,
-            g.alpha,
+            alpha,
             par,
         );
     } else {
-        faer::linalg::matmul::matmul(C, beta, A, B, g.alpha, par);
+        faer::linalg::matmul::matmul(C, accum, view(a), view(b), alpha, par);
     }
 }
 
-/// Below this size faer's triangular-output product is slower than its full GEMM (the
-/// upper triangle is then computed too and overwritten when the caller mirrors the lower
-/// one); measured with `benches/step.rs`.
-pub const TRIANGULAR_MIN: usize = 128;
-
 #[cfg(feature = "parallel")]
 fn par_for(work: usize) -> Par {
-    if work >= crate::storage::PARALLEL_THRESHOLD {
+    if work >= PARALLEL_THRESHOLD {
         Par::rayon(0)
     } else {
         Par::Seq
@@ -145,7 +180,7 @@ fn par_for(_work: usize) -> Par {
 
 /// Copies the lower triangle of the square `n`×`n` matrix to the upper one.
 #[inline(always)]
-pub fn mirror_lower(a: &mut [f64], n: usize) {
+pub(crate) fn mirror_lower(a: &mut [f64], n: usize) {
     for j in 0..n {
         for i in j + 1..n {
             a[j + i * n] = a[i + j * n];
@@ -161,7 +196,7 @@ pub const RANK_TOL: f64 = 1e-12;
 /// In-place lower Cholesky of the `n`×`n` matrix `a` (only the lower triangle is read and
 /// written). Returns `false` if a pivot is at or below `tol` (the caller falls back).
 #[inline(always)]
-pub fn cholesky(a: &mut [f64], n: usize, tol: f64) -> bool {
+pub(crate) fn cholesky(a: &mut [f64], n: usize, tol: f64) -> bool {
     for j in 0..n {
         let mut d = a[j + j * n];
         for k in 0..j {
@@ -187,7 +222,7 @@ pub fn cholesky(a: &mut [f64], n: usize, tol: f64) -> bool {
 /// diagonal ends up holding the eigenvalues, copied to `w`); `v` receives the eigenvectors
 /// as columns. Converges quadratically; stops when the off-diagonal mass is below
 /// 1e-30 of the total or after 60 sweeps.
-pub fn jacobi_eigen(a: &mut [f64], n: usize, v: &mut [f64], w: &mut [f64]) {
+pub(crate) fn jacobi_eigen(a: &mut [f64], n: usize, v: &mut [f64], w: &mut [f64]) {
     v[..n * n].fill(0.0);
     for i in 0..n {
         v[i + i * n] = 1.0;
@@ -249,9 +284,9 @@ pub fn jacobi_eigen(a: &mut [f64], n: usize, v: &mut [f64], w: &mut [f64]) {
 /// Row-wise Householder LQ on a row-major array (`ld` entries per row): triangularises rows
 /// `rows` over columns `col0..ncols`, applying each reflection to rows `rows.start..apply_end`.
 /// A row whose remaining squared norm is at most `tol2` (or exactly zero) is rank-deficient:
-/// its remainder is zeroed, `piv[row] = -1`, and the pivot column does not advance.
+/// its remainder is zeroed, `piv[row] = None`, and the pivot column does not advance.
 /// Otherwise `piv[row]` is its pivot column. Returns the number of pivots.
-pub fn lq_rows(
+pub(crate) fn lq_rows(
     a: &mut [f64],
     ld: usize,
     rows: core::ops::Range<usize>,
@@ -259,20 +294,20 @@ pub fn lq_rows(
     col0: usize,
     ncols: usize,
     tol2: f64,
-    piv: &mut [f64],
+    piv: &mut [Option<usize>],
 ) -> usize {
     let mut c = col0;
     let first = rows.start;
     for i in rows {
         if c >= ncols {
-            piv[i - first] = -1.0;
+            piv[i - first] = None;
             continue;
         }
         let row = &a[i * ld..i * ld + ncols];
         let rem: f64 = row[c..].iter().map(|x| x * x).sum();
         if rem <= tol2 || rem <= f64::MIN_POSITIVE {
             a[i * ld + c..i * ld + ncols].fill(0.0);
-            piv[i - first] = -1.0;
+            piv[i - first] = None;
             continue;
         }
         let norm = rem.sqrt();
@@ -293,7 +328,7 @@ pub fn lq_rows(
         }
         a[i * ld + c] = alpha;
         a[i * ld + c + 1..i * ld + ncols].fill(0.0);
-        piv[i - first] = c as f64;
+        piv[i - first] = Some(c);
         c += 1;
     }
     c - col0

@@ -22,7 +22,8 @@
 //! # Storage paths
 //! [`Filter<Dyn>`](Filter) (the default) keeps heap buffers sized at construction and hands
 //! large products to faer's GEMM (`Par::Seq`; Rayon above a threshold with the `parallel`
-//! feature). [`Filter<Fixed<N, M, P>>`](Filter) keeps everything inline for n, m ≤ 16.
+//! feature). [`Filter<Fixed<N, M, P>>`](Filter) keeps its buffers inline, each sized by N, M
+//! and P (n, m ≤ 16).
 //! Both run the same kernels on slices, so they share validation, semantics and tests.
 //!
 //! # Beyond the step
@@ -97,8 +98,7 @@ mod consistency;
 pub mod continuous;
 mod error;
 mod filter;
-#[doc(hidden)]
-pub mod kernels;
+mod kernels;
 mod model;
 pub mod nonlinear;
 pub mod riccati;
@@ -111,9 +111,9 @@ pub mod strategies;
 pub use consistency::{Nees, chi2_cdf, chi2_quantile, nees};
 pub use error::Error;
 pub use filter::{CovarianceForm, Filter, StepInfo};
-pub use kernels::RANK_TOL;
+pub use kernels::{FAER_THRESHOLD, PARALLEL_THRESHOLD, RANK_TOL};
 pub use model::{MatrixInput, Model, ModelSource, PSD_TOL, SYMMETRY_TOL};
-pub use storage::{Arr, Buf, Dims, Dyn, FAER_THRESHOLD, FIXED_MAX, Fixed, PARALLEL_THRESHOLD};
+pub use storage::{Dims, Dyn, FIXED_MAX, Fixed};
 
 /// Re-export of the faer version whose matrix types this API returns.
 pub use faer;

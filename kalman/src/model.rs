@@ -314,8 +314,23 @@ pub struct Model<D: Dims> {
     pub(crate) R: D::Mm,
     pub(crate) S: Option<D::Nm>,
     pub(crate) B: D::Np,
-    /// `G` with `G Gᵀ = [[R, Sᵀ], [S, Q]]`, `(n+m)`×`(n+m)`, leading dimension `n+m`.
-    pub(crate) joint: D::Joint,
+    /// `G` with `G Gᵀ = [[R, Sᵀ], [S, Q]]`, in blocks.
+    pub(crate) joint: JointFactor<D>,
+}
+
+/// A square factor `G = [[G_vv, G_vw], [G_wv, G_ww]]` of the joint noise covariance
+/// `[[R, Sᵀ], [S, Q]]` (rows and columns ordered v (m) then w (n)), stored by blocks so that
+/// each is sized by n and m alone.
+#[derive(Clone, Debug)]
+pub(crate) struct JointFactor<D: Dims> {
+    /// m×m.
+    pub(crate) vv: D::Mm,
+    /// m×n.
+    pub(crate) vw: D::Mn,
+    /// n×m.
+    pub(crate) wv: D::Nm,
+    /// n×n.
+    pub(crate) ww: D::Nn,
 }
 
 impl<D: Dims> Model<D> {
@@ -342,7 +357,12 @@ impl<D: Dims> Model<D> {
             R: D::Mm::zeros(m * m),
             S: None,
             B: D::Np::zeros(n * p),
-            joint: D::Joint::zeros((n + m) * (n + m)),
+            joint: JointFactor {
+                vv: D::Mm::zeros(m * m),
+                vw: D::Mn::zeros(m * n),
+                wv: D::Nm::zeros(n * m),
+                ww: D::Nn::zeros(n * n),
+            },
         };
         load("F", F, n, n, model.F.as_mut_slice())?;
         load("H", H, m, n, model.H.as_mut_slice())?;
@@ -407,7 +427,20 @@ impl<D: Dims> Model<D> {
         }
         let mut f = vec![0.0; d * d];
         psd_factor("[[R, S^T], [S, Q]]", &w, d, &mut f)?;
-        self.joint.as_mut_slice()[..d * d].copy_from_slice(&f);
+        let J = &mut self.joint;
+        let (vv, vw) = (J.vv.as_mut_slice(), J.vw.as_mut_slice());
+        let (wv, ww) = (J.wv.as_mut_slice(), J.ww.as_mut_slice());
+        for j in 0..d {
+            for i in 0..d {
+                let g = f[i + j * d];
+                match (i < m, j < m) {
+                    (true, true) => vv[i + j * m] = g,
+                    (true, false) => vw[i + (j - m) * m] = g,
+                    (false, true) => wv[i - m + j * n] = g,
+                    (false, false) => ww[i - m + (j - m) * n] = g,
+                }
+            }
+        }
         Ok(())
     }
 

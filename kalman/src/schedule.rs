@@ -354,7 +354,7 @@ impl<D: Dims> ScheduledFilter<'_, D> {
 }
 
 /// Whether the last two entries of `seq` agree to `tol` relative (max norm).
-fn settled<B: Buf>(seq: &[B], tol: f64) -> bool {
+fn settled<B: Buf<f64>>(seq: &[B], tol: f64) -> bool {
     let (a, b) = (seq[seq.len() - 1].as_slice(), seq[seq.len() - 2].as_slice());
     let big = a.iter().fold(0.0_f64, |acc, v| acc.max(v.abs()));
     let diff = a
@@ -364,7 +364,7 @@ fn settled<B: Buf>(seq: &[B], tol: f64) -> bool {
     diff <= tol * big
 }
 
-fn to_buf<B: Buf>(M: MatRef<'_, f64>) -> B {
+fn to_buf<B: Buf<f64>>(M: MatRef<'_, f64>) -> B {
     let (r, c) = (M.nrows(), M.ncols());
     let mut b = B::zeros(r * c);
     let s = b.as_mut_slice();

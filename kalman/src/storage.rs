@@ -1,102 +1,134 @@
-//! The two storage paths: [`Dyn`] (heap buffers, faer GEMM for large products) and
-//! [`Fixed`] (const-generic inline arrays for n, m ≤ 16). Kernels see only slices.
+//! The two storage paths: [`Dyn`] (heap buffers sized at construction) and [`Fixed`]
+//! (const-generic inline arrays sized by N, M and P). Kernels see only slices.
 
 use core::fmt::Debug;
 
-use crate::kernels;
-
-/// A column-major buffer of `f64` (a `Vec` on the dynamic path, an inline array on the fixed
-/// path). Sealed: implemented only by this crate's buffer types.
-pub trait Buf: Clone + Debug + Send + Sync + private::Sealed {
-    /// A zero buffer able to hold `len` entries (fixed buffers ignore `len`; their size is
-    /// checked by [`Dims`]).
-    fn zeros(len: usize) -> Self;
-    /// The entries.
-    fn as_slice(&self) -> &[f64];
-    /// The entries, mutable.
-    fn as_mut_slice(&mut self) -> &mut [f64];
-}
-
-impl Buf for Vec<f64> {
-    fn zeros(len: usize) -> Self {
-        vec![0.0; len]
-    }
-    fn as_slice(&self) -> &[f64] {
-        self
-    }
-    fn as_mut_slice(&mut self) -> &mut [f64] {
-        self
-    }
-}
-
-/// An inline `R`×`C` column-major array (the fixed path's buffer).
-#[derive(Clone, Copy, Debug)]
-pub struct Arr<const R: usize, const C: usize>(pub [[f64; R]; C]);
-
-impl<const R: usize, const C: usize> Buf for Arr<R, C> {
-    fn zeros(_len: usize) -> Self {
-        Arr([[0.0; R]; C])
-    }
-    fn as_slice(&self) -> &[f64] {
-        self.0.as_flattened()
-    }
-    fn as_mut_slice(&mut self) -> &mut [f64] {
-        self.0.as_flattened_mut()
-    }
-}
-
-mod private {
-    pub trait Sealed {}
-    impl Sealed for Vec<f64> {}
-    impl<const R: usize, const C: usize> Sealed for super::Arr<R, C> {}
-    impl Sealed for super::Dyn {}
-    impl<const N: usize, const M: usize, const P: usize> Sealed for super::Fixed<N, M, P> {}
-}
-
 /// The dimensions of a filter problem and the storage that goes with them: n states,
-/// m measurements, p control inputs. Implemented by [`Dyn`] and [`Fixed`] only.
-pub trait Dims: Copy + Debug + Send + Sync + private::Sealed + 'static {
-    /// n×n buffers (F, Q, P).
-    type Nn: Buf;
-    /// n×m buffers (K, S).
-    type Nm: Buf;
-    /// m×n buffers (H).
-    type Mn: Buf;
-    /// m×m buffers (R, innovation covariance).
-    type Mm: Buf;
-    /// n×p buffers (B).
-    type Np: Buf;
-    /// n-vectors.
-    type Nv: Buf;
-    /// m-vectors.
-    type Mv: Buf;
-    /// (n+m)×(n+m) buffers (the joint noise factor).
-    type Joint: Buf;
-    /// (m+2n)×(m+2n) buffers (the square-root pre-array).
-    type Array: Buf;
+/// m measurements, p control inputs. Implemented by [`Dyn`] and [`Fixed`] only (sealed).
+pub trait Dims: Copy + Debug + Send + Sync + sealed::Storage + 'static {
     /// Number of states.
     fn n(&self) -> usize;
     /// Number of measurements.
     fn m(&self) -> usize;
     /// Number of control inputs.
     fn p(&self) -> usize;
-    /// Whether this is the fixed-size path (dimensions limited to [`FIXED_MAX`]).
+    /// Whether this is the fixed-size path (dimensions limited to [`FIXED_MAX`]; products
+    /// always in the crate's own loops).
     fn is_fixed(&self) -> bool {
         false
     }
-    /// `C = beta·C + alpha·op(A)·op(B)` on column-major slices (`C` is `rows`×`cols`, the
-    /// inner dimension `inner`); only the lower triangle of `C` when `lower` (for
-    /// symmetric results). The dynamic path hands large products to faer.
-    #[doc(hidden)]
-    #[inline(always)]
-    fn gemm(&self, g: kernels::Gemm<'_>, c: &mut [f64]) {
-        kernels::gemm(g, c);
+}
+
+/// The buffers behind [`Dims`], out of the public API: the crate names them as `D::Nn`,
+/// `D::Mi`, …; users never need to.
+pub(crate) mod sealed {
+    use core::fmt::Debug;
+
+    /// An element of a buffer.
+    pub trait Elem: Copy + Default + Debug + Send + Sync + 'static {}
+    impl Elem for f64 {}
+    impl Elem for bool {}
+    impl Elem for usize {}
+    impl Elem for Option<usize> {}
+
+    /// A column-major buffer (a `Vec` on the dynamic path, an inline array on the fixed one).
+    pub trait Buf<T: Elem>: Clone + Debug + Send + Sync {
+        /// A buffer of `len` default entries (fixed buffers ignore `len`: their size is the
+        /// type's).
+        fn zeros(len: usize) -> Self;
+        /// The entries.
+        fn as_slice(&self) -> &[T];
+        /// The entries, mutable.
+        fn as_mut_slice(&mut self) -> &mut [T];
+    }
+
+    impl<T: Elem> Buf<T> for Vec<T> {
+        fn zeros(len: usize) -> Self {
+            vec![T::default(); len]
+        }
+        fn as_slice(&self) -> &[T] {
+            self
+        }
+        fn as_mut_slice(&mut self) -> &mut [T] {
+            self
+        }
+    }
+
+    /// An inline `R`×`C` column-major array (the fixed path's buffer).
+    #[derive(Clone, Copy, Debug)]
+    pub struct Arr<T, const R: usize, const C: usize>([[T; R]; C]);
+
+    impl<T: Elem, const R: usize, const C: usize> Buf<T> for Arr<T, R, C> {
+        fn zeros(_len: usize) -> Self {
+            Arr([[T::default(); R]; C])
+        }
+        fn as_slice(&self) -> &[T] {
+            self.0.as_flattened()
+        }
+        fn as_mut_slice(&mut self) -> &mut [T] {
+            self.0.as_flattened_mut()
+        }
+    }
+
+    /// The buffer types of a storage path.
+    pub trait Storage {
+        /// n×n buffers (F, Q, P).
+        type Nn: Buf<f64>;
+        /// n×m buffers (K, S).
+        type Nm: Buf<f64>;
+        /// m×n buffers (H).
+        type Mn: Buf<f64>;
+        /// m×m buffers (R, innovation covariance).
+        type Mm: Buf<f64>;
+        /// n×p buffers (B).
+        type Np: Buf<f64>;
+        /// n-vectors.
+        type Nv: Buf<f64>;
+        /// m-vectors.
+        type Mv: Buf<f64>;
+        /// Per-measurement flags (the observation mask).
+        type Mb: Buf<bool>;
+        /// Per-measurement indices (a row's pivot column; a pivot's row).
+        type Mi: Buf<usize>;
+        /// Per-measurement optional indices (pivot columns, `None` for a dependent row).
+        type Mo: Buf<Option<usize>>;
+        /// Per-state optional indices.
+        type No: Buf<Option<usize>>;
+    }
+
+    impl Storage for super::Dyn {
+        type Nn = Vec<f64>;
+        type Nm = Vec<f64>;
+        type Mn = Vec<f64>;
+        type Mm = Vec<f64>;
+        type Np = Vec<f64>;
+        type Nv = Vec<f64>;
+        type Mv = Vec<f64>;
+        type Mb = Vec<bool>;
+        type Mi = Vec<usize>;
+        type Mo = Vec<Option<usize>>;
+        type No = Vec<Option<usize>>;
+    }
+
+    impl<const N: usize, const M: usize, const P: usize> Storage for super::Fixed<N, M, P> {
+        type Nn = Arr<f64, N, N>;
+        type Nm = Arr<f64, N, M>;
+        type Mn = Arr<f64, M, N>;
+        type Mm = Arr<f64, M, M>;
+        type Np = Arr<f64, N, P>;
+        type Nv = Arr<f64, N, 1>;
+        type Mv = Arr<f64, M, 1>;
+        type Mb = Arr<bool, M, 1>;
+        type Mi = Arr<usize, M, 1>;
+        type Mo = Arr<Option<usize>, M, 1>;
+        type No = Arr<Option<usize>, N, 1>;
     }
 }
 
-/// Dynamic dimensions (the default path): heap buffers allocated once at construction,
-/// products at or above [`FAER_THRESHOLD`] multiply-adds go to faer's GEMM with `Par::Seq`
-/// (or Rayon with the `parallel` feature and [`PARALLEL_THRESHOLD`]).
+pub(crate) use sealed::Buf;
+
+/// Dynamic dimensions (the default path): heap buffers allocated once at construction;
+/// products of at least [`crate::FAER_THRESHOLD`] multiply-adds go to faer's GEMM.
 ///
 /// # Example
 /// ```
@@ -113,18 +145,6 @@ pub struct Dyn {
     m: usize,
     p: usize,
 }
-
-/// Products with `rows·cols·inner` below this many multiply-adds use the crate's own loops
-/// on the dynamic path. Chosen from faer's per-call overhead (20–75 ns a call, measured
-/// with faer 0.24), about the cost of this many multiply-adds in plain loops; not
-/// tuned further.
-pub const FAER_THRESHOLD: usize = 8 * 8 * 8;
-
-/// With the `parallel` feature, products of at least this many multiply-adds run on Rayon
-/// (faer's own default of 32 768 was 3.6× slower at n = 50 on a 2-core machine; Rayon paid
-/// off only near n = 1000). On a loaded machine Rayon can lose even
-/// there: the feature is off by default.
-pub const PARALLEL_THRESHOLD: usize = 400 * 400 * 400;
 
 impl Dyn {
     /// Dimensions n (states, ≥ 1), m (measurements, ≥ 1), p (control inputs, may be 0).
@@ -151,37 +171,26 @@ impl Dyn {
 }
 
 impl Dims for Dyn {
-    type Nn = Vec<f64>;
-    type Nm = Vec<f64>;
-    type Mn = Vec<f64>;
-    type Mm = Vec<f64>;
-    type Np = Vec<f64>;
-    type Nv = Vec<f64>;
-    type Mv = Vec<f64>;
-    type Joint = Vec<f64>;
-    type Array = Vec<f64>;
+    #[inline(always)]
     fn n(&self) -> usize {
         self.n
     }
+    #[inline(always)]
     fn m(&self) -> usize {
         self.m
     }
+    #[inline(always)]
     fn p(&self) -> usize {
         self.p
-    }
-    #[inline]
-    fn gemm(&self, g: kernels::Gemm<'_>, c: &mut [f64]) {
-        if g.rows * g.cols * g.inner < FAER_THRESHOLD {
-            kernels::gemm(g, c);
-        } else {
-            kernels::gemm_faer(g, c);
-        }
     }
 }
 
 /// Fixed dimensions known at compile time (n = `N` ≤ 16, m = `M` ≤ 16, p = `P` ≤ 16
-/// control inputs): all buffers inline, loops unrolled by the compiler. Same API and
-/// results as [`Dyn`].
+/// control inputs): every buffer is an inline array of exactly its size (a
+/// `FixedFilter<2, 1>` is a few hundred bytes), loops are unrolled by the compiler. Same
+/// API and results as [`Dyn`]. The one heap buffer is the square-root form's
+/// (m + 2n)² pre-array, allocated when such a filter is built (stable Rust cannot size an
+/// inline array by `M + 2N`); no form allocates in a step.
 ///
 /// # Example
 /// ```
@@ -213,17 +222,6 @@ impl<const N: usize, const M: usize, const P: usize> Fixed<N, M, P> {
 }
 
 impl<const N: usize, const M: usize, const P: usize> Dims for Fixed<N, M, P> {
-    type Nn = Arr<N, N>;
-    type Nm = Arr<N, M>;
-    type Mn = Arr<M, N>;
-    type Mm = Arr<M, M>;
-    type Np = Arr<N, P>;
-    type Nv = Arr<N, 1>;
-    type Mv = Arr<M, 1>;
-    // (n+m)² ≤ 32², (m+2n)² ≤ 48²: no generic const expressions on stable Rust, so these
-    // two are sized for the largest fixed model and used with a leading dimension.
-    type Joint = Arr<32, 32>;
-    type Array = Arr<48, 48>;
     #[inline(always)]
     fn n(&self) -> usize {
         N
@@ -236,6 +234,7 @@ impl<const N: usize, const M: usize, const P: usize> Dims for Fixed<N, M, P> {
     fn p(&self) -> usize {
         P
     }
+    #[inline(always)]
     fn is_fixed(&self) -> bool {
         true
     }

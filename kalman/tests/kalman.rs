@@ -1,4 +1,4 @@
-//! Integration tests of the `kalman` crate, one binary: the filter engine (issue "kalman 1")
+//! Integration tests of the `kalman` crate, one binary: the filter engine
 //! in `engine/`, steady state, continuous time, smoothing and the Monte Carlo mode in
 //! `steady/`, the nonlinear filters in `nonlinear/`, and the counting global allocator both use in `common/`.
 #![allow(non_snake_case)]

@@ -120,3 +120,19 @@ fn reset_restarts_from_a_new_prior() {
             .all(|(x, y)| (x - y).abs() <= 0.0)
     );
 }
+
+#[test]
+fn fixed_filters_are_sized_by_their_dimensions() {
+    use kalman::FixedFilter;
+    let small = core::mem::size_of::<FixedFilter<2, 1>>();
+    let medium = core::mem::size_of::<FixedFilter<7, 2>>();
+    // A (2, 1) filter holds about 30 buffers of at most n² = 4 entries plus a few words of
+    // bookkeeping: well under 2 kB (it was ~26 kB when every buffer was sized for n = 16).
+    assert!(small < 2048, "FixedFilter<2, 1> is {small} bytes");
+    // Bigger dimensions, bigger filter: the buffers follow N and M.
+    assert!(medium > 4 * small, "{medium} vs {small} bytes");
+    // And the largest fixed size is still bounded by its own dimensions: about 30 buffers of
+    // at most 16² entries.
+    let large = core::mem::size_of::<FixedFilter<16, 16>>();
+    assert!(large <= 30 * 16 * 16 * 8 + 1024, "FixedFilter<16, 16> is {large} bytes");
+}
