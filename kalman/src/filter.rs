@@ -457,4 +457,3 @@ pub(crate) fn propagate_mean(
         add_mat_vec(n, B, &u[..p], out);
     }
 }
-

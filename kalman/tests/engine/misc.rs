@@ -134,5 +134,8 @@ fn fixed_filters_are_sized_by_their_dimensions() {
     // And the largest fixed size is still bounded by its own dimensions: about 30 buffers of
     // at most 16² entries.
     let large = core::mem::size_of::<FixedFilter<16, 16>>();
-    assert!(large <= 30 * 16 * 16 * 8 + 1024, "FixedFilter<16, 16> is {large} bytes");
+    assert!(
+        large <= 30 * 16 * 16 * 8 + 1024,
+        "FixedFilter<16, 16> is {large} bytes"
+    );
 }
