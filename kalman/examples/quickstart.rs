@@ -21,7 +21,11 @@ fn main() -> Result<(), kalman::Error> {
     for z in [0.11, 0.19, f64::NAN, 0.42] {
         // NaN: a missing sample, predict only
         let info = filter.step(&[z], None)?; // update with z_k, then predict to k + 1
-        println!("x = {:?}, NIS = {:.3}", filter.state(), info.nis);
+        println!(
+            "x = {:?}, NIS = {:.3}",
+            filter.state(),
+            info.nis.map_or(f64::NAN, |v| v)
+        );
     }
     Ok(())
 }

@@ -3,9 +3,10 @@
 /// Errors of model construction, filter construction and filter steps.
 ///
 /// Every variant names the matrix or vector it is about (`"F"`, `"Q"`, `"z"`, …) so a
-/// message points at the culprit. Steps return errors only for inputs of the wrong length;
-/// a numerically singular innovation covariance is *not* an error (it takes the
-/// rank-revealing path, see [`crate::StepInfo::rank`]).
+/// message points at the culprit. Steps return errors for inputs of the wrong length or
+/// non-finite values and for a diverged estimate ([`Error::Diverged`]); a numerically
+/// singular innovation covariance is *not* an error (it takes the rank-revealing path, see
+/// [`crate::StepInfo::rank`]).
 ///
 /// # Example
 /// ```
@@ -106,7 +107,21 @@ pub enum Error {
         /// What went wrong.
         reason: &'static str,
     },
-    // ---- steady state, continuous time, smoothing, gain schedule (issue 5) ----
+    /// The filter diverged: after step `step` (0 for the first measurement) an entry of a
+    /// state estimate or a diagonal entry of a covariance is NaN or infinite — typically an
+    /// unstable mode the measurements do not see, whose variance overflowed. Checked at
+    /// every step, so all earlier steps' estimates were finite; what was computed at this
+    /// step is not meaningful, and [`crate::Filter::reset`] restarts the filter.
+    #[error("the filter diverged at step {step}: {what} is not finite ({value})")]
+    Diverged {
+        /// The step index.
+        step: usize,
+        /// The quantity that diverged, e.g. `"P_{k+1|k}"`, `"x_{k|k}"`, `"x_{k|N}"`.
+        what: &'static str,
+        /// The offending value (NaN or ±∞).
+        value: f64,
+    },
+    // ---- steady state, continuous time, smoothing, gain schedule ----
     /// A matrix that must be positive definite (not merely semidefinite) is not.
     #[error("{name} ({n}x{n}) is not positive definite: {rule}")]
     NotPositiveDefinite {
@@ -117,7 +132,7 @@ pub enum Error {
         /// Why it must be positive definite.
         rule: &'static str,
     },
-    // ---- steady-state / Riccati variants (issue 5) ----
+    // ---- steady-state / Riccati variants ----
     /// A pair fails the PBH detectability test: an eigenvalue on or outside the stability
     /// boundary has an eigenvector the output matrix does not see.
     #[error(

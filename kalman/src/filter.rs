@@ -17,6 +17,38 @@ mod sqrt;
 /// ln(2π), for the Gaussian log-likelihood.
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
+/// The first entry of `values` that is NaN or infinite.
+#[inline(always)]
+pub(crate) fn diverged(values: impl IntoIterator<Item = f64>) -> Option<f64> {
+    values.into_iter().find(|v| !v.is_finite())
+}
+
+/// [`Error::Diverged`] naming `what` at `step` if the vector `x` or the diagonal of the
+/// n×n matrix `P` has diverged.
+#[inline(always)]
+pub(crate) fn check_diverged(
+    step: usize,
+    (xname, x): (&'static str, &[f64]),
+    (pname, P): (&'static str, &[f64]),
+    n: usize,
+) -> Result<(), Error> {
+    if let Some(value) = diverged(x[..n].iter().copied()) {
+        return Err(Error::Diverged {
+            step,
+            what: xname,
+            value,
+        });
+    }
+    if let Some(value) = diverged((0..n).map(|i| P[i + i * n])) {
+        return Err(Error::Diverged {
+            step,
+            what: pname,
+            value,
+        });
+    }
+    Ok(())
+}
+
 /// How the covariance update is computed. All three give the same P in exact arithmetic.
 ///
 /// # Example
@@ -62,10 +94,12 @@ pub struct StepInfo {
     /// some channels are exact linear combinations of others, e.g. with singular R).
     pub rank: usize,
     /// Normalised innovation squared `eᵀ Σ⁺ e` (χ² with `rank` degrees of freedom for a
-    /// consistent filter); 0 on a predict-only step.
-    pub nis: f64,
+    /// consistent filter); `None` on a predict-only step (no measurement, so no statistic:
+    /// averages over steps must skip it rather than count a zero).
+    pub nis: Option<f64>,
     /// Gaussian log-likelihood of the innovation, `−½(eᵀΣ⁺e + log pdet Σ + rank·log 2π)`;
-    /// 0 on a predict-only step.
+    /// 0 on a predict-only step (the log-likelihood of no data, so sums over steps stay
+    /// right).
     pub log_likelihood: f64,
 }
 
@@ -221,7 +255,10 @@ impl<D: Dims> Filter<D> {
     ///
     /// # Errors
     /// [`Error::Shape`] naming `z` or `u` for a wrong length; [`Error::NonFinite`] for an
-    /// infinite `z` entry or a non-finite `u` entry. The state is unchanged on error.
+    /// infinite `z` entry or a non-finite `u` entry (the state is then unchanged).
+    /// [`Error::Diverged`] if the step's estimates are no longer finite (checked on x and
+    /// the diagonal of P, an O(n) test that catches the first overflow, before NaN spreads
+    /// to the other estimates): the step counts as taken, its estimates must not be used.
     #[inline]
     pub fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
         step_impl(&self.model, &mut self.st, z, u)
@@ -409,8 +446,24 @@ fn step_impl<D: Dims>(
     };
     info.step = st.k;
     info.observed = observed;
+    if observed == 0 {
+        info.nis = None;
+    }
     st.k += 1;
     st.info = info;
+    let n = d.n();
+    check_diverged(
+        info.step,
+        ("x_{k|k}", st.xf.as_slice()),
+        ("P_{k|k}", st.pf.as_slice()),
+        n,
+    )?;
+    check_diverged(
+        info.step,
+        ("x_{k+1|k}", st.xp.as_slice()),
+        ("P_{k+1|k}", st.pp.as_slice()),
+        n,
+    )?;
     Ok(info)
 }
 

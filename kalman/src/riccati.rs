@@ -16,9 +16,13 @@
 //! product is an LU solve. The CARE is mapped to the same iteration by the Cayley transform
 //! (ℋ + γI)(ℋ − γI)⁻¹ of its Hamiltonian (derivation in [`care`]).
 //!
-//! Checks. Before iterating, the PBH rank test rejects a pair with an undetectable or
-//! unstabilisable mode on or outside the stability boundary (|λ| ≥ 1 − 10⁻⁶ discrete,
-//! Re λ ≥ −10⁻⁶·max(1, |λ|) continuous); a mode is "unseen" when the smallest singular value
+//! Checks. Before iterating, the PBH rank test rejects an undetectable mode on or outside
+//! the stability boundary (|λ| ≥ 1 − 10⁻⁶ discrete, Re λ ≥ −10⁻⁶·max(1, |λ|) continuous)
+//! and, for the discrete equations, an unreachable (noise) mode *on* the unit circle
+//! (||λ| − 1| ≤ 10⁻⁶): the stabilising solution exists exactly when neither occurs. An
+//! unreachable mode outside the circle is stabilised by the gain; the doubling is then
+//! restarted from Q̃ + δI and polished by Newton's method (see [`dare`]). The CARE keeps
+//! the stricter test (no unreachable mode with Re λ ≥ −10⁻⁶·max(1, |λ|)); a mode is "unseen" when the smallest singular value
 //! of [λI − F; C] (C scaled to ‖F‖) is below `pbh_tolerance`·max(1, ‖F‖). After iterating,
 //! the relative residual ‖Res‖_F / ‖P‖_F must be below `residual_tolerance` (10⁻¹⁰) and the
 //! closed loop must be stable, or a typed [`Error`] says which check failed. R must be
@@ -165,8 +169,9 @@ pub struct ContinuousSteadyState {
 /// (n×m, `None` = 0), with default [`RiccatiOptions`].
 ///
 /// Errors: a shape or finiteness error naming the matrix; [`Error::NotPositiveDefinite`]
-/// for R; [`Error::NotDetectable`] for (F, H); [`Error::NotStabilisable`] for
-/// (F̃, Q̃^{1/2}) (F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ; plain (F, Q^{1/2}) when S = 0);
+/// for R; [`Error::NotDetectable`] for (F, H); [`Error::NotStabilisable`] for a mode of
+/// (F̃, Q̃^{1/2}) on the unit circle that the noise does not reach (F̃ = F − S R⁻¹ H,
+/// Q̃ = Q − S R⁻¹ Sᵀ; plain (F, Q^{1/2}) when S = 0);
 /// [`Error::RiccatiNoConvergence`] / [`Error::RiccatiCheck`] if the result fails.
 ///
 /// ```
@@ -263,8 +268,10 @@ pub fn dare_with(
 /// (`N` = `None` for no cross weight): solves X = AᵀXA + Q − (AᵀXB + N)(R + BᵀXB)⁻¹(BᵀXA + Nᵀ)
 /// by the dual filter DARE (F = Aᵀ, H = Bᵀ, S = N) and returns L with u = −L x.
 ///
-/// Errors: [`Error::NotStabilisable`] for (A, B), [`Error::NotDetectable`] for (Q^{1/2}, A)
-/// (modes on or outside the unit circle), shape/finiteness/PD errors naming the matrix.
+/// Errors: [`Error::NotStabilisable`] for (A, B) (modes on or outside the unit circle),
+/// [`Error::NotDetectable`] for (Q^{1/2}, A) (modes on the unit circle: an unobserved
+/// unstable mode off the circle is stabilised by the gain), shape/finiteness/PD errors
+/// naming the matrix.
 ///
 /// The UAV loop of Gridnev, Rusetsky and Rak (state weight diag(1, 0.1), input weight 1,
 /// Δt = 0.25):
@@ -642,11 +649,23 @@ fn psd_sqrt(Q: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
     Ok(&US * U.transpose())
 }
 
-/// Eigenvalues of F on or outside the stability boundary (|λ| ≥ 1 − margin discrete,
-/// Re λ ≥ −margin·max(1, |λ|) continuous), one of each conjugate pair.
+/// Which eigenvalues a PBH test looks at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Modes {
+    /// On or outside the stability boundary: what detectability needs.
+    OnOrOutside,
+    /// On the boundary only: what the existence of a stabilising solution needs of the
+    /// noise (or state-weight) pair.
+    On,
+}
+
+/// Eigenvalues of F on (or outside) the stability boundary, within `margin`: |λ| ≥ 1 − margin
+/// (|1 − |λ|| ≤ margin for [`Modes::On`]) discrete, Re λ ≥ −margin·max(1, |λ|)
+/// (|Re λ| ≤ margin·max(1, |λ|)) continuous; one of each conjugate pair.
 fn marginal_modes(
     F: MatRef<'_, f64>,
     continuous: bool,
+    which: Modes,
     opts: &RiccatiOptions,
 ) -> Result<Vec<(f64, f64)>, Error> {
     if F.nrows() == 0 {
@@ -657,15 +676,17 @@ fn marginal_modes(
         iterations: 0,
         reason: "eigenvalue computation failed",
     })?;
+    let margin = opts.marginal_margin;
     Ok(eig
         .into_iter()
         .filter(|l| l.im >= 0.0)
         .filter(|l| {
             let modulus = l.norm();
-            if continuous {
-                l.re >= -opts.marginal_margin * modulus.max(1.0)
-            } else {
-                modulus >= 1.0 - opts.marginal_margin
+            match (continuous, which) {
+                (true, Modes::OnOrOutside) => l.re >= -margin * modulus.max(1.0),
+                (true, Modes::On) => l.re.abs() <= margin * modulus.max(1.0),
+                (false, Modes::OnOrOutside) => modulus >= 1.0 - margin,
+                (false, Modes::On) => (modulus - 1.0).abs() <= margin,
             }
         })
         .map(|l| (l.re, l.im))
@@ -758,15 +779,14 @@ fn discrete_dual(
         None => (F.to_owned(), Q.to_owned()),
     };
     // F̃ = F − S R⁻¹ H has F's eigenvalues when S = 0: one eigen-decomposition then.
-    let modes = marginal_modes(F, false, opts)?;
+    let modes = marginal_modes(F, false, Modes::OnOrOutside, opts)?;
     if let Some((re, im)) = pbh(F, H, &modes, opts)? {
         return Err(names.detect.error(re, im));
     }
-    let modes_t = if S.is_some() {
-        marginal_modes(Ft.as_ref(), false, opts)?
-    } else {
-        modes
-    };
+    // A stabilising solution exists when (F̃, Q̃^{1/2}) has no unreachable mode *on* the
+    // unit circle; an unreachable mode outside it is stabilised through the gain (F = 2,
+    // Q = 0, H = R = 1: P = 3).
+    let modes_t = marginal_modes(Ft.as_ref(), false, Modes::On, opts)?;
     if !modes_t.is_empty() {
         let Qh = psd_sqrt(Qt.as_ref())?;
         if let Some((re, im)) = pbh(Ft.transpose(), Qh.as_ref(), &modes_t, opts)? {
@@ -777,11 +797,36 @@ fn discrete_dual(
     symmetrise(&mut G);
     let mut Qs = Qt.clone();
     symmetrise(&mut Qs);
-    let (mut X, iterations) = sda(Ft.transpose().to_owned(), G, Qs, opts, names.equation)?;
-    let mut relative_residual = dare_residual(F, H, Q, R, S, X.as_ref());
+    let (mut X, mut iterations) = sda(
+        Ft.transpose().to_owned(),
+        G.clone(),
+        Qs.clone(),
+        opts,
+        names.equation,
+    )?;
     // Ill-conditioned problems leave the doubling a little short of full accuracy: up to two
     // Newton corrections, each kept only if it lowers the residual.
-    for _ in 0..2 {
+    let mut newton_steps = 2;
+    if !(closed_loop_radius(Ft.as_ref(), H, R, &X) < 1.0) {
+        // Q̃ leaves an unstable mode unexcited: the doubling from Q̃ then converges to a
+        // solution that does not stabilise it (X = 0 for Q̃ = 0). The doubling from
+        // Q̃ + δI does (every mode is then reachable), and lies within O(δ) of the
+        // stabilising solution; Newton's method from a stabilising start stays stabilising
+        // and removes the O(δ) in a few quadratic steps. δ is relative to the scale of X
+        // (that of Q̃, or of (Hᵀ R⁻¹ H)⁻¹ when Q̃ vanishes).
+        let gnorm = G.norm_l2();
+        let scale = Qs
+            .norm_l2()
+            .max(if gnorm > 0.0 { 1.0 / gnorm } else { 1.0 });
+        let n = Qs.nrows();
+        let Qd = &Qs + (1e-8 * scale) * Mat::<f64>::identity(n, n);
+        let (Xd, it) = sda(Ft.transpose().to_owned(), G, Qd, opts, names.equation)?;
+        X = Xd;
+        iterations += it;
+        newton_steps = 20;
+    }
+    let mut relative_residual = dare_residual(F, H, Q, R, S, X.as_ref());
+    for _ in 0..newton_steps {
         if relative_residual <= 1e-3 * opts.residual_tolerance {
             break;
         }
@@ -798,17 +843,7 @@ fn discrete_dual(
             None => break,
         }
     }
-    // Closed loop of the predictor: F̃ − F̃ P Hᵀ Σ⁻¹ H (= F − K_p H).
-    let mut Sigma = H * &X * H.transpose() + R;
-    symmetrise(&mut Sigma);
-    let rho = match Sigma.llt(Side::Lower) {
-        Ok(l) => {
-            let Kt = l.solve(H * &X * Ft.transpose());
-            let cl = &Ft - Kt.transpose() * H;
-            spectral(cl.as_ref(), false)
-        }
-        Err(_) => f64::INFINITY,
-    };
+    let rho = closed_loop_radius(Ft.as_ref(), H, R, &X);
     // Written so that a NaN residual or radius fails the check.
     let ok = relative_residual <= opts.residual_tolerance && rho < 1.0;
     if !ok {
@@ -826,6 +861,26 @@ fn discrete_dual(
     })
 }
 
+/// Spectral radius of the predictor's closed loop F̃ − F̃ X Hᵀ Σ⁻¹ H (= F − K_p H) for a
+/// candidate DARE solution X (+∞ if Σ = H X Hᵀ + R is not positive definite).
+fn closed_loop_radius(
+    Ft: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    X: &Mat<f64>,
+) -> f64 {
+    let mut Sigma = H * X * H.transpose() + R;
+    symmetrise(&mut Sigma);
+    match Sigma.llt(Side::Lower) {
+        Ok(l) => {
+            let Kt = l.solve(H * X * Ft.transpose());
+            let cl = Ft - Kt.transpose() * H;
+            spectral(cl.as_ref(), false)
+        }
+        Err(_) => f64::INFINITY,
+    }
+}
+
 /// PBH tests and SDA-after-Cayley for the filter-form CARE A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0.
 fn continuous_dual(
     A: MatRef<'_, f64>,
@@ -837,7 +892,9 @@ fn continuous_dual(
 ) -> Result<Solved, Error> {
     let n = A.nrows();
     let llt = factor_r(R, "the Riccati solvers need R^-1")?;
-    let modes = marginal_modes(A, true, opts)?;
+    // The CARE keeps the stricter test (no unreachable mode on or right of the imaginary
+    // axis): its doubling has no restart for a Q that leaves an unstable mode unexcited.
+    let modes = marginal_modes(A, true, Modes::OnOrOutside, opts)?;
     if let Some((re, im)) = pbh(A, H, &modes, opts)? {
         return Err(names.detect.error(re, im));
     }
@@ -1008,11 +1065,31 @@ mod tests {
             matches!(e, Error::NotDetectable { pair: "(F, H)", .. }),
             "{e}"
         );
+        // A mode on the unit circle that the noise does not reach has no stabilising
+        // solution: refused.
+        let F1 = mat![[1.0, 0.0], [0.0, 0.5]];
         let H = mat![[1.0, 1.0]];
         let Q = mat![[0.0, 0.0], [0.0, 1.0]];
-        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None)
+        let e = dare(F1.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None)
             .expect_err("must be an error");
-        assert!(matches!(e, Error::NotStabilisable { .. }), "{e}");
+        assert!(
+            matches!(e, Error::NotStabilisable { re, im, .. } if (re - 1.0).abs() < 1e-12 && im == 0.0),
+            "{e}"
+        );
+        // The same on the circle at an angle: a rotation without noise.
+        let (c, s) = (0.6_f64.cos(), 0.6_f64.sin());
+        let e = dare(
+            mat![[c, -s], [s, c]].as_ref(),
+            mat![[1.0, 0.0]].as_ref(),
+            Mat::<f64>::zeros(2, 2).as_ref(),
+            R.as_ref(),
+            None,
+        )
+        .expect_err("must be an error");
+        assert!(
+            matches!(e, Error::NotStabilisable { im, .. } if im > 0.5),
+            "{e}"
+        );
         // Complex unstable pair, unobservable.
         let c = 1.1 * 0.6_f64.cos();
         let s = 1.1 * 0.6_f64.sin();
@@ -1024,6 +1101,49 @@ mod tests {
         assert!(
             matches!(e, Error::NotDetectable { im, .. } if im > 0.5),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn unreached_unstable_modes_off_the_circle_have_a_stabilising_solution() {
+        // F = 2, Q = 0, H = R = 1: p = 4p − 4p²/(p + 1) ⇔ p² − 3p = 0. The root p = 0 leaves
+        // the closed loop at 2; p = 3 gives K_p = F p/(p + 1) = 1.5, closed loop
+        // 2 − 1.5 = 0.5: the stabilising solution, posterior p − p²/(p + 1) = 0.75.
+        let ss = dare(
+            mat![[2.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            mat![[0.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+            None,
+        )
+        .expect("stabilising solution exists");
+        // 1e-12: a few Newton steps from a 1e-8 perturbation, quadratic convergence.
+        assert!(
+            (ss.prior[(0, 0)] - 3.0).abs() < 1e-12,
+            "{}",
+            ss.prior[(0, 0)]
+        );
+        assert!((ss.posterior[(0, 0)] - 0.75).abs() < 1e-12);
+        assert!((ss.predictor_gain[(0, 0)] - 1.5).abs() < 1e-12);
+        // Two states: the unreached mode 1.2 is seen through H and stabilised by the gain.
+        let F = mat![[1.2, 0.0], [0.0, 0.5]];
+        let H = mat![[1.0, 1.0]];
+        let Q = mat![[0.0, 0.0], [0.0, 1.0]];
+        let R = mat![[1.0]];
+        let ss = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None)
+            .expect("stabilising solution exists");
+        let cl = &F - &ss.predictor_gain * &H;
+        assert!(spectral(cl.as_ref(), false) < 1.0);
+        // Independent check: the residual of the DARE itself.
+        assert!(
+            dare_residual(
+                F.as_ref(),
+                H.as_ref(),
+                Q.as_ref(),
+                R.as_ref(),
+                None,
+                ss.prior.as_ref()
+            ) < 1e-12
         );
     }
 

@@ -19,7 +19,7 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
 
-use crate::filter::{add_mat_vec, check_step_inputs, propagate_mean};
+use crate::filter::{add_mat_vec, check_step_inputs, diverged, propagate_mean};
 use crate::model::load_vec;
 use crate::riccati::SteadyState;
 use crate::storage::{Buf, Dims};
@@ -81,9 +81,10 @@ impl<D: Dims> GainSchedule<D> {
     /// Runs the covariance recursion of `model` from `P0` until the gain converges.
     ///
     /// # Errors
-    /// Validation errors naming `P0` (as [`Filter::new`]); [`Error::RiccatiNoConvergence`]
-    /// if the gain has not converged after `opts.max_steps` steps (e.g. an undetectable
-    /// model).
+    /// Validation errors naming `P0` (as [`Filter::new`]); [`Error::Diverged`] naming the
+    /// step at which the covariance recursion left the finite numbers (an unstable mode the
+    /// measurements do not see); [`Error::RiccatiNoConvergence`] if the gain has not
+    /// converged after `opts.max_steps` steps (e.g. an undetectable model).
     pub fn new(
         model: Model<D>,
         P0: &impl MatrixInput,
@@ -254,7 +255,9 @@ impl<D: Dims> ScheduledFilter<'_, D> {
     ///
     /// # Errors
     /// [`Error::Shape`] naming `z` or `u` for a wrong length, [`Error::NonFinite`] for an
-    /// infinite `z` entry or non-finite `u` entry (the state is then unchanged).
+    /// infinite `z` entry or non-finite `u` entry (the state is then unchanged);
+    /// [`Error::Diverged`] naming the step if an entry of the state is no longer finite (its
+    /// estimates must not be used).
     #[inline]
     pub fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<(), Error> {
         let s = self.s;
@@ -287,7 +290,13 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         if !s.cross.is_empty() {
             add_mat_vec(n, &s.cross[idx].as_slice()[..n * m], e, xp);
         }
+        let step = self.k;
         self.k += 1;
+        for (what, x) in [("x_{k|k}", &*xf), ("x_{k+1|k}", &*xp)] {
+            if let Some(value) = diverged(x.iter().copied()) {
+                return Err(Error::Diverged { step, what, value });
+            }
+        }
         Ok(())
     }
 
@@ -304,7 +313,12 @@ impl<D: Dims> ScheduledFilter<'_, D> {
             self.full.reset(&self.xp.as_slice()[..n], &P)?;
             self.in_full = true;
         }
-        self.full.step(z, u)?;
+        // The internal filter counts from its restart: name the stream's step instead.
+        let step = self.k;
+        self.full.step(z, u).map_err(|e| match e {
+            Error::Diverged { what, value, .. } => Error::Diverged { step, what, value },
+            e => e,
+        })?;
         self.xf.as_mut_slice()[..n].copy_from_slice(self.full.state());
         self.xp.as_mut_slice()[..n].copy_from_slice(self.full.predicted_state());
         let e = self.full.innovation();

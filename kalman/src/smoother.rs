@@ -18,6 +18,7 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
 
+use crate::filter::diverged;
 use crate::riccati::symmetrise;
 use crate::storage::Dims;
 use crate::{Error, Filter, Model, RANK_TOL};
@@ -131,7 +132,8 @@ impl RtsSmoother {
     ///
     /// # Errors
     /// [`Error::Dimension`] if nothing was recorded; [`Error::Factorisation`] if the eigen
-    /// fallback for a singular P_{k+1|k} fails.
+    /// fallback for a singular P_{k+1|k} fails; [`Error::Diverged`] naming the step if a
+    /// smoothed mean or variance is not finite.
     pub fn smooth(&self) -> Result<Smoothed, Error> {
         let (n, N) = (self.n, self.steps);
         if N == 0 {
@@ -163,6 +165,15 @@ impl RtsSmoother {
             means.as_mut().col_mut(k).copy_from(x.col(0));
             let mut P = mat(&self.pf, k, n) + J * (&covs[k + 1] - Pp) * J.transpose();
             symmetrise(&mut P);
+            let x_bad = diverged((0..n).map(|i| means[(i, k)])).map(|v| ("x_{k|N}", v));
+            let p_bad = diverged((0..n).map(|i| P[(i, i)])).map(|v| ("P_{k|N}", v));
+            if let Some((what, value)) = x_bad.or(p_bad) {
+                return Err(Error::Diverged {
+                    step: k,
+                    what,
+                    value,
+                });
+            }
             covs[k] = P;
         }
         Ok(Smoothed {

@@ -11,6 +11,7 @@ mod engine {
     pub mod agreement;
     pub mod alloc;
     pub mod correlated;
+    pub mod diverge;
     pub mod errors;
     pub mod fuel;
     pub mod misc;

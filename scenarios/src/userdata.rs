@@ -305,11 +305,8 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
             remove_feedthrough(&model.D, &mut row);
             let info = step(&mut kf, &reader, &row)?;
             copy_col_major(kf.covariance(), &mut P);
-            let nis = if info.observed > 0 {
-                info.nis
-            } else {
-                f64::NAN
-            };
+            // No measurement, no NIS: written as NaN.
+            let nis = info.nis.unwrap_or(f64::NAN);
             data::write_estimate(w, out, row.t, kf.state(), &P, args.full_covariance, nis)?;
         }
         Ok(())
@@ -384,11 +381,7 @@ fn smooth<R: std::io::Read>(
         rts.record(kf)
             .map_err(|e| Error::Compute(format!("smoother: {e}")))?;
         times.push(row.t);
-        nis.push(if info.observed > 0 {
-            info.nis
-        } else {
-            f64::NAN
-        });
+        nis.push(info.nis.unwrap_or(f64::NAN));
     }
     let smoothed = if times.is_empty() {
         None

@@ -149,7 +149,7 @@ fn estimates<D: Dims>(
     }
     StepInfo {
         rank: r,
-        nis,
+        nis: Some(nis),
         log_likelihood: if r > 0 {
             -0.5 * (nis + logdet + r as f64 * LN_2PI)
         } else {

@@ -47,7 +47,12 @@ pub fn deviation<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> f
             .max(rel_mat(f.covariance(), &r.pf))
             .max(rel_vec(f.predicted_state(), &r.xp))
             .max(rel_mat(f.predicted_covariance(), &r.pp))
-            .max((info.nis - r.nis).abs() / r.nis.max(1.0));
+            .max(match (info.nis, r.nis) {
+                (Some(a), Some(b)) => (a - b).abs() / b.max(1.0),
+                (None, None) => 0.0,
+                // One says "no measurement", the other does not: as wrong as it gets.
+                _ => f64::INFINITY,
+            });
     }
     worst
 }

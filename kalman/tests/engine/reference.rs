@@ -80,7 +80,8 @@ pub struct RefStep {
     pub pf: M,
     pub xp: Vec<f64>,
     pub pp: M,
-    pub nis: f64,
+    /// `None` on a predict-only step.
+    pub nis: Option<f64>,
 }
 
 pub fn run(p: &kalman::strategies::FilterProblem) -> Vec<RefStep> {
@@ -111,7 +112,7 @@ pub fn run(p: &kalman::strategies::FilterProblem) -> Vec<RefStep> {
                 pf: P.clone(),
                 xp: (0..n).map(|i| Fx[i] + Bu[i]).collect(),
                 pp: add(&FPFt, &Q, 1.0),
-                nis: 0.0,
+                nis: None,
             }
         } else {
             let Ho: M = obs.iter().map(|&i| H[i].clone()).collect();
@@ -146,7 +147,7 @@ pub fn run(p: &kalman::strategies::FilterProblem) -> Vec<RefStep> {
                 pf: add(&P, &mul(&K, &tr(&PHt)), -1.0),
                 xp: (0..n).map(|i| Fx[i] + Bu[i] + Kpe[i]).collect(),
                 pp: add(&add(&FPFt, &Q, 1.0), &mul(&mul(&Kp, &Sig), &tr(&Kp)), -1.0),
-                nis,
+                nis: Some(nis),
             }
         };
         x = step.xp.clone();
