@@ -93,7 +93,8 @@ pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
 pub use smoother::{ForwardPass, NonlinearRts};
 pub use ukf::{SigmaPoints, Ukf};
 
-use crate::storage::{Arr, Buf, Dims, Dyn, Fixed};
+use crate::storage::sealed::Arr;
+use crate::storage::{Buf, Dims, Dyn, Fixed};
 
 /// What one nonlinear step produced.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -119,11 +120,11 @@ pub struct StepInfo {
 /// largest fixed model, 2·16 + 1 points, and used with a leading dimension).
 pub trait NlDims: Dims {
     /// n×(2n+1) buffers (sigma points in state space).
-    type Sig: Buf;
+    type Sig: Buf<f64>;
     /// m×(2n+1) buffers (sigma points in measurement space).
-    type ZSig: Buf;
+    type ZSig: Buf<f64>;
     /// (2n+1)-vectors (weights).
-    type W: Buf;
+    type W: Buf<f64>;
 }
 
 impl NlDims for Dyn {
@@ -133,9 +134,9 @@ impl NlDims for Dyn {
 }
 
 impl<const N: usize, const M: usize, const P: usize> NlDims for Fixed<N, M, P> {
-    type Sig = Arr<N, 33>;
-    type ZSig = Arr<M, 33>;
-    type W = Arr<33, 1>;
+    type Sig = Arr<f64, N, 33>;
+    type ZSig = Arr<f64, M, 33>;
+    type W = Arr<f64, 33, 1>;
 }
 
 /// ln(2π), for the Gaussian log-likelihood.
