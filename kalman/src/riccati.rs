@@ -807,7 +807,8 @@ fn discrete_dual(
     // Ill-conditioned problems leave the doubling a little short of full accuracy: up to two
     // Newton corrections, each kept only if it lowers the residual.
     let mut newton_steps = 2;
-    if !(closed_loop_radius(Ft.as_ref(), H, R, &X) < 1.0) {
+    let rho0 = closed_loop_radius(Ft.as_ref(), H, R, &X);
+    if rho0.is_nan() || rho0 >= 1.0 {
         // Q̃ leaves an unstable mode unexcited: the doubling from Q̃ then converges to a
         // solution that does not stabilise it (X = 0 for Q̃ = 0). The doubling from
         // Q̃ + δI does (every mode is then reachable), and lies within O(δ) of the
