@@ -416,6 +416,42 @@ fn smooth_against_textbook_rts() {
 }
 
 #[test]
+fn steady_state_exists_when_only_off_circle_modes_are_unreached() {
+    let dir = scratch("ud", "steady-exist");
+    // F = 2, Q = 0, H = R = 1: the unstable mode gets no process noise, yet (F, H) is
+    // detectable and the mode is off the unit circle, so the DARE has a stabilising
+    // solution. P = 4P/(P + 1) gives P = 3 (the other root, 0, leaves F − KH = 2); then
+    // K = P/(P + 1) = 0.75 and P_post = P − P²/(P + 1) = 0.75. Closed forms: 1e-12.
+    write(
+        &dir,
+        "u.toml",
+        "dt = 1\nF = [[2]]\nH = [[1]]\nQ = [[0]]\nR = [[1]]\n",
+    );
+    ok(
+        &dir,
+        &["steady-state", "--model", "u.toml", "--out", "ss.json"],
+    );
+    let ss = read_json(&dir.join("ss.json"));
+    assert!(close(mat(&ss["P"])[0][0], 3.0, 1e-12), "{ss}");
+    assert!(close(mat(&ss["K"])[0][0], 0.75, 1e-12), "{ss}");
+    assert!(close(mat(&ss["P_post"])[0][0], 0.75, 1e-12), "{ss}");
+    // F = 1 with Q = 0: the unreached mode sits on the unit circle, where no stabilising
+    // solution exists (the gain decays like 1/k and never settles): refused by name.
+    std::fs::remove_file(dir.join("ss.json")).expect("remove");
+    write(
+        &dir,
+        "c.toml",
+        "dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[0]]\nR = [[1]]\n",
+    );
+    fails(
+        &dir,
+        &["steady-state", "--model", "c.toml", "--out", "ss.json"],
+        &["c.toml", "is not stabilisable"],
+        2,
+    );
+}
+
+#[test]
 fn steady_state_against_iterated_riccati() {
     let dir = scratch("ud", "steady");
     // Scalar random walk, q = r = 1: P = (1 + √5)/2, K = P/(P + 1), P_post = P/(P + 1).
