@@ -101,6 +101,7 @@ mod consistency;
 pub mod continuous;
 mod error;
 mod filter;
+pub mod fit;
 mod kernels;
 mod model;
 pub mod nonlinear;

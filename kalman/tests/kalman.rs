@@ -30,6 +30,13 @@ mod nonlinear {
     pub mod nis;
 }
 
+mod fit {
+    pub mod common;
+    pub mod estimators;
+    pub mod golden;
+    pub mod likelihood;
+}
+
 mod steady {
     pub mod common;
     pub mod continuous;

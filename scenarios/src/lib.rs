@@ -8,6 +8,7 @@
 //! | [`uav`] | paper U: the UAV channel's closed loop (LQR + discrete Kalman filter), Welch spectra at four nodes, whiteness test, Kalman–Bucy check |
 //! | [`boom`] | paper B: the erector-boom estimators over the turn, ±Δa variants, γ sweep, units/weights study |
 //! | [`userdata`] | `filter`, `discretize`, `steady-state` on users' own model files and CSV logs |
+//! | [`fit`] | `fit`: Q, R, x0, P0 of a user's model file learned from a CSV log (MLE or EM) |
 //! | [`output`] | whole-or-nothing file writing (temporary name, then rename), CSV/JSON |
 //! | [`plot`] | the one SVG line-plot function every report uses |
 //! | [`campaign`] | what every scenario does, written once: the [`campaign::Scenario`] trait, `run`, `merge`, `all`, checked run-record files |
@@ -27,6 +28,7 @@ pub mod boom;
 pub mod campaign;
 pub mod config;
 pub mod error;
+pub mod fit;
 pub mod fueling;
 pub mod montecarlo;
 pub mod output;

@@ -94,6 +94,8 @@ enum Command {
     Discretize(scenarios::userdata::DiscretizeArgs),
     /// Steady-state covariance and gain of a discrete model (DARE).
     SteadyState(scenarios::userdata::SteadyStateArgs),
+    /// Learn Q, R (and x0, P0) of a discrete model from data by maximum likelihood or EM.
+    Fit(scenarios::fit::FitArgs),
 }
 
 impl CampaignArgs {
@@ -118,7 +120,9 @@ fn check_directory_out(command: &Command) -> Result<(), Error> {
         Command::Boom(a) => ("boom", a.out.as_ref()),
         Command::All(a) => ("all", a.out.as_ref()),
         Command::Merge { out, .. } => ("merge", Some(out)),
-        Command::Filter(_) | Command::Discretize(_) | Command::SteadyState(_) => return Ok(()),
+        Command::Filter(_) | Command::Discretize(_) | Command::SteadyState(_) | Command::Fit(_) => {
+            return Ok(());
+        }
     };
     let Some(out) = out else { return Ok(()) };
     if out.as_os_str() == "-" {
@@ -191,7 +195,7 @@ fn one_line(e: &clap::Error) -> String {
             format!(" (did you mean {}?)", either(&s))
         }
     };
-    let commands = "fueling, uav, boom, all, merge, filter, discretize or steady-state";
+    let commands = "fueling, uav, boom, all, merge, filter, discretize, steady-state or fit";
     match e.kind() {
         ErrorKind::ValueValidation => {
             let why = std::error::Error::source(e).map_or_else(String::new, ToString::to_string);
@@ -249,6 +253,7 @@ fn main() -> ExitCode {
         Command::Filter(a) => scenarios::userdata::filter(&a),
         Command::Discretize(a) => scenarios::userdata::discretize(&a),
         Command::SteadyState(a) => scenarios::userdata::steady_state(&a),
+        Command::Fit(a) => scenarios::fit::fit(&a),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,

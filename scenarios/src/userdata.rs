@@ -487,7 +487,7 @@ fn discrete_file(d: &model::DiscreteSs, R: Option<&DMatrix<f64>>) -> DiscreteFil
 }
 
 /// Writes a discrete model as JSON, or TOML when the destination's name ends in `.toml`.
-fn write_model(dest: &crate::output::Destination, file: &DiscreteFile) -> Result<()> {
+pub(crate) fn write_model(dest: &crate::output::Destination, file: &DiscreteFile) -> Result<()> {
     let is_toml = match dest {
         crate::output::Destination::File(path) => path
             .extension()

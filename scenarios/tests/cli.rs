@@ -6,6 +6,8 @@
 mod boom;
 #[path = "cli/common.rs"]
 mod common;
+#[path = "cli/fit.rs"]
+mod fit;
 #[path = "cli/fueling.rs"]
 mod fueling;
 #[path = "cli/hostile.rs"]

@@ -1510,14 +1510,14 @@ fn argument_errors_are_one_line_naming_the_argument() {
     usage_error(
         &dir,
         &["filtr"],
-        "unknown command filtr: expected fueling, uav, boom, all, merge, filter, discretize or \
-         steady-state (did you mean filter?)",
+        "unknown command filtr: expected fueling, uav, boom, all, merge, filter, discretize, \
+         steady-state or fit (did you mean fit or filter?)",
     );
     usage_error(
         &dir,
         &[],
-        "a command is required: fueling, uav, boom, all, merge, filter, discretize or \
-         steady-state (see scenarios --help)",
+        "a command is required: fueling, uav, boom, all, merge, filter, discretize, \
+         steady-state or fit (see scenarios --help)",
     );
     usage_error(
         &dir,

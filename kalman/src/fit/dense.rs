@@ -1,0 +1,123 @@
+//! Small dense column-major kernels for the fitting recursions (plain loops: the fitted
+//! models are small, and per-call dispatch would dominate a 2×2 product).
+#![allow(non_snake_case)]
+
+/// `C = beta·C + alpha·op(A)·op(B)`, all column-major. `op(A)` is `r×k`, `op(B)` is `k×c`;
+/// `lda`/`ldb` are the row counts of the stored `A` and `B`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn gemm(
+    c: &mut [f64],
+    r: usize,
+    cc: usize,
+    k: usize,
+    alpha: f64,
+    a: &[f64],
+    lda: usize,
+    ta: bool,
+    b: &[f64],
+    ldb: usize,
+    tb: bool,
+    beta: f64,
+) {
+    for j in 0..cc {
+        for i in 0..r {
+            let mut s = 0.0;
+            for l in 0..k {
+                let av = if ta { a[l + i * lda] } else { a[i + l * lda] };
+                let bv = if tb { b[j + l * ldb] } else { b[l + j * ldb] };
+                s += av * bv;
+            }
+            let dst = &mut c[i + j * r];
+            *dst = if beta == 0.0 {
+                alpha * s
+            } else {
+                beta * *dst + alpha * s
+            };
+        }
+    }
+}
+
+/// In-place lower Cholesky of the `n×n` matrix `a` (upper triangle zeroed). `false` if a
+/// pivot is not positive.
+pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
+    for j in 0..n {
+        let mut d = a[j + j * n];
+        for l in 0..j {
+            d -= a[j + l * n] * a[j + l * n];
+        }
+        if d.is_nan() || d <= 0.0 {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j + j * n] = d;
+        for i in j + 1..n {
+            let mut s = a[i + j * n];
+            for l in 0..j {
+                s -= a[i + l * n] * a[j + l * n];
+            }
+            a[i + j * n] = s / d;
+        }
+        for i in 0..j {
+            a[i + j * n] = 0.0;
+        }
+    }
+    true
+}
+
+/// Solves `L Lᵀ X = B` in place for `B` (`n×c`, column-major) with the Cholesky factor `L`.
+pub(crate) fn chol_solve(l: &[f64], n: usize, b: &mut [f64], c: usize) {
+    for col in 0..c {
+        let x = &mut b[col * n..(col + 1) * n];
+        for i in 0..n {
+            let mut s = x[i];
+            for k in 0..i {
+                s -= l[i + k * n] * x[k];
+            }
+            x[i] = s / l[i + i * n];
+        }
+        for i in (0..n).rev() {
+            let mut s = x[i];
+            for k in i + 1..n {
+                s -= l[k + i * n] * x[k];
+            }
+            x[i] = s / l[i + i * n];
+        }
+    }
+}
+
+/// `a = (a + aᵀ)/2` for an `n×n` matrix.
+pub(crate) fn symmetrise(a: &mut [f64], n: usize) {
+    for j in 0..n {
+        for i in j + 1..n {
+            let s = 0.5 * (a[i + j * n] + a[j + i * n]);
+            a[i + j * n] = s;
+            a[j + i * n] = s;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cholesky_solve_reconstructs() {
+        // A = M Mᵀ + I is SPD; A·X = B solved and multiplied back.
+        let m = [1.0, 2.0, -1.0, 0.5, 3.0, 1.0, 0.0, -2.0, 1.5];
+        let mut a = [0.0; 9];
+        gemm(&mut a, 3, 3, 3, 1.0, &m, 3, false, &m, 3, true, 0.0);
+        for i in 0..3 {
+            a[i + 3 * i] += 1.0;
+        }
+        let mut l = a;
+        assert!(cholesky(&mut l, 3));
+        let b = [1.0, -2.0, 0.5, 4.0, 0.0, 1.0];
+        let mut x = b;
+        chol_solve(&l, 3, &mut x, 2);
+        let mut back = [0.0; 6];
+        gemm(&mut back, 3, 2, 3, 1.0, &a, 3, false, &x, 3, false, 0.0);
+        for (u, v) in back.iter().zip(b) {
+            assert!((u - v).abs() < 1e-12 * 10.0, "{u} vs {v}");
+        }
+    }
+}

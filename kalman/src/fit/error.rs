@@ -1,0 +1,46 @@
+//! The fitting error: every failure names what is wrong with the model, the data or the
+//! parameterisation.
+
+/// Errors of likelihood evaluation and fitting.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum FitError {
+    /// The model or prior is invalid (shape, finiteness, symmetry, PSD).
+    #[error(transparent)]
+    Model(#[from] crate::Error),
+    /// The data do not fit the model or are malformed.
+    #[error("data: {0}")]
+    Data(String),
+    /// The series holds no observed measurement.
+    #[error("the data hold no measurement (every entry is missing)")]
+    NoMeasurements,
+    /// Nothing is free: there is nothing to fit.
+    #[error("nothing is free: free at least one of Q, R, x0, P0")]
+    NothingFree,
+    /// A free quantity cannot be identified from the data.
+    #[error("{what} cannot be identified from the data: {why}")]
+    NotIdentifiable {
+        /// The free quantity, e.g. `"R"`.
+        what: String,
+        /// Why.
+        why: String,
+    },
+    /// An innovation covariance (or a smoother's prediction covariance) is not positive
+    /// definite, so the likelihood or its gradient is undefined there.
+    #[error("{name} is not positive definite at step {step}")]
+    NotPositiveDefinite {
+        /// `"innovation covariance"` or `"predicted covariance"`.
+        name: &'static str,
+        /// The step.
+        step: usize,
+    },
+    /// A parameter vector has the wrong length or a non-finite entry.
+    #[error("parameter vector: {0}")]
+    Parameters(String),
+    /// The estimator is not available for this request.
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+    /// The optimiser failed.
+    #[error("optimiser failed: {0}")]
+    Optimiser(String),
+}

@@ -1,0 +1,201 @@
+//! What a fit returns: the estimate with its log-likelihood, convergence and boundary
+//! flags, the observed information and standard errors, AIC and BIC.
+
+use faer::Mat;
+
+use super::dense::{chol_solve, cholesky};
+use super::params::data_scale;
+use super::score::log_likelihood_gradient;
+use super::{FitError, ParamMap, Series, System};
+
+/// The estimator that produced a [`Fit`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Maximum likelihood by L-BFGS (Nelder–Mead fallback).
+    Mle,
+    /// Expectation–maximisation (Shumway–Stoffer).
+    Em,
+}
+
+/// The result of the estimators `mle` and `em` of this module.
+#[derive(Clone, Debug)]
+pub struct Fit {
+    /// The estimator.
+    pub method: Method,
+    /// The parameter vector at the optimum.
+    pub theta: Vec<f64>,
+    /// The fitted system.
+    pub system: System,
+    /// The exact Gaussian log-likelihood at the optimum (with the `−½ m_k ln 2π` terms).
+    pub loglik: f64,
+    /// Optimiser iterations (EM: E/M cycles).
+    pub iterations: usize,
+    /// Whether the estimator met its convergence test.
+    pub converged: bool,
+    /// What happened, in words (and what to try when not converged).
+    pub message: String,
+    /// Names of the parameters whose variance sits on the boundary (numerically zero): the
+    /// optimum is on the edge of the parameter space and their standard errors are not
+    /// meaningful.
+    pub boundary: Vec<String>,
+    /// The observed information `−∇² ln L` at the optimum (`n_params`²).
+    pub information: Mat<f64>,
+    /// The covariance of θ, the inverse of the observed information, or `None` when that
+    /// is not positive definite (a flat direction: a parameter the data do not identify).
+    pub covariance: Option<Mat<f64>>,
+    /// The standard errors of θ (square roots of the covariance's diagonal).
+    pub std_errors: Option<Vec<f64>>,
+    /// Number of observed scalar measurements.
+    pub n_obs: usize,
+    /// Akaike's information criterion `2k − 2 ln L`.
+    pub aic: f64,
+    /// The Bayesian information criterion `k ln(n_obs) − 2 ln L`.
+    pub bic: f64,
+}
+
+/// Akaike's information criterion `2k − 2 ln L` for `k` free parameters.
+///
+/// ```
+/// assert!((kalman::fit::aic(-10.0, 3) - 26.0).abs() < 1e-12);
+/// ```
+pub fn aic(loglik: f64, k: usize) -> f64 {
+    2.0 * k as f64 - 2.0 * loglik
+}
+
+/// The Bayesian information criterion `k ln(n_obs) − 2 ln L`.
+///
+/// ```
+/// assert!((kalman::fit::bic(-10.0, 2, 100) - (2.0 * 100f64.ln() + 20.0)).abs() < 1e-12);
+/// ```
+pub fn bic(loglik: f64, k: usize, n_obs: usize) -> f64 {
+    k as f64 * (n_obs as f64).ln() - 2.0 * loglik
+}
+
+/// The observed information `−∇² ln L(θ)`: central differences of the exact gradient with
+/// step `h = 1e-4·max(1, |θ_j|)` (error `O(h²)` relative to the third derivative),
+/// symmetrised.
+///
+/// # Errors
+/// As [`super::log_likelihood_gradient`].
+///
+/// # Example
+/// ```
+/// use kalman::fit::{Free, Series, StandardMap, Structure, System, observed_information};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// let base = System::new(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[1.0]])?;
+/// let map = StandardMap::new(base, Free { r: Structure::Scalar, ..Free::default() })?;
+/// let z = [0.5, -0.3, 1.2, 0.4, 0.9];
+/// let info = observed_information(&map, &[0.0], &Series::new(&z, 1)?)?;
+/// assert!(info[(0, 0)].is_finite());
+/// # Ok(())
+/// # }
+/// ```
+pub fn observed_information<M: ParamMap + ?Sized>(
+    map: &M,
+    theta: &[f64],
+    data: &Series<'_>,
+) -> Result<Mat<f64>, FitError> {
+    let k = theta.len();
+    let mut h = Mat::zeros(k, k);
+    let mut t = theta.to_vec();
+    for j in 0..k {
+        let step = 1e-4 * theta[j].abs().max(1.0);
+        t[j] = theta[j] + step;
+        let (_, gp) = log_likelihood_gradient(map, &t, data)?;
+        t[j] = theta[j] - step;
+        let (_, gm) = log_likelihood_gradient(map, &t, data)?;
+        t[j] = theta[j];
+        for i in 0..k {
+            h[(i, j)] = -(gp[i] - gm[i]) / (2.0 * step);
+        }
+    }
+    for j in 0..k {
+        for i in j + 1..k {
+            let s = 0.5 * (h[(i, j)] + h[(j, i)]);
+            h[(i, j)] = s;
+            h[(j, i)] = s;
+        }
+    }
+    Ok(h)
+}
+
+/// The inverse of an SPD matrix by Cholesky solves against the identity (`None` if not PD).
+pub(crate) fn spd_inverse(a: &Mat<f64>) -> Option<Mat<f64>> {
+    let k = a.nrows();
+    let mut l = super::flat(a);
+    if !cholesky(&mut l, k) {
+        return None;
+    }
+    let mut x = vec![0.0; k * k];
+    for i in 0..k {
+        x[i + i * k] = 1.0;
+    }
+    chol_solve(&l, k, &mut x, k);
+    let mut m = Mat::from_fn(k, k, |i, j| x[i + j * k]);
+    for j in 0..k {
+        for i in j + 1..k {
+            let s = 0.5 * (m[(i, j)] + m[(j, i)]);
+            m[(i, j)] = s;
+            m[(j, i)] = s;
+        }
+    }
+    Some(m)
+}
+
+/// Builds the [`Fit`] at θ: log-likelihood, information, standard errors, boundary flags.
+pub(crate) fn finish<M: ParamMap + ?Sized>(
+    map: &M,
+    theta: Vec<f64>,
+    data: &Series<'_>,
+    method: Method,
+    iterations: usize,
+    converged: bool,
+    mut message: String,
+) -> Result<Fit, FitError> {
+    let (loglik, _) = log_likelihood_gradient(map, &theta, data)?;
+    let system = map.system(&theta)?;
+    let information = observed_information(map, &theta, data)?;
+    let covariance = spd_inverse(&information);
+    let std_errors = covariance.as_ref().map(|c| {
+        (0..theta.len())
+            .map(|i| c[(i, i)].max(0.0).sqrt())
+            .collect()
+    });
+    // A variance below 1e-8 of the data's variance is numerically zero: the boundary.
+    let floor = (1e-8 * data_scale(data)).ln();
+    let names = map.names();
+    let boundary: Vec<String> = map
+        .log_variances()
+        .into_iter()
+        .filter(|&i| theta[i] < floor)
+        .map(|i| names[i].clone())
+        .collect();
+    if !boundary.is_empty() {
+        message.push_str(&format!(
+            "; on the boundary: {} (variance numerically zero; its standard error is not meaningful)",
+            boundary.join(", ")
+        ));
+    }
+    if covariance.is_none() {
+        message.push_str("; the observed information is not positive definite (a direction the data do not identify): no standard errors");
+    }
+    let n_obs = data.observed();
+    let k = theta.len();
+    Ok(Fit {
+        method,
+        system,
+        loglik,
+        iterations,
+        converged,
+        message,
+        boundary,
+        information,
+        covariance,
+        std_errors,
+        n_obs,
+        aic: aic(loglik, k),
+        bic: bic(loglik, k, n_obs),
+        theta,
+    })
+}

@@ -1,0 +1,72 @@
+//! Seeded simulation and the local-linear-trend model shared by the fitting tests.
+
+use kalman::fit::System;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+/// A seeded generator.
+pub fn rng(seed: u64) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(seed)
+}
+
+/// Simulates `len` steps of `sys` with diagonal Q and R (standard deviations from their
+/// diagonals); returns z row-major.
+pub fn simulate_diag(sys: &System, len: usize, rng: &mut ChaCha8Rng) -> Vec<f64> {
+    let (n, m) = (sys.n(), sys.m());
+    let mut x: Vec<f64> = (0..n)
+        .map(|i| sys.x0[i] + sys.P0[(i, i)].sqrt() * rng.sample::<f64, _>(StandardNormal))
+        .collect();
+    let mut z = Vec::with_capacity(len * m);
+    for _ in 0..len {
+        for r in 0..m {
+            let hx: f64 = (0..n).map(|c| sys.H[(r, c)] * x[c]).sum();
+            z.push(hx + sys.R[(r, r)].sqrt() * rng.sample::<f64, _>(StandardNormal));
+        }
+        let mut xn = vec![0.0; n];
+        for r in 0..n {
+            xn[r] = (0..n).map(|c| sys.F[(r, c)] * x[c]).sum::<f64>()
+                + sys.Q[(r, r)].sqrt() * rng.sample::<f64, _>(StandardNormal);
+        }
+        x = xn;
+    }
+    z
+}
+
+/// The local linear trend: level and slope, the level measured.
+pub fn llt(q_level: f64, q_slope: f64, r: f64, x0: [f64; 2], p0: [f64; 2]) -> System {
+    System::new(
+        &[[1.0, 1.0], [0.0, 1.0]],
+        &[[1.0, 0.0]],
+        &[[q_level, 0.0], [0.0, q_slope]],
+        &[[r]],
+        &x0,
+        &[[p0[0], 0.0], [0.0, p0[1]]],
+    )
+    .expect("valid LLT")
+}
+
+/// The lower and upper limits of a central 99.9 % band of Binomial(n, p): the count lies
+/// outside with probability below 0.1 %.
+pub fn binomial_band(n: usize, p: f64) -> (usize, usize) {
+    // pmf by the recursion pmf(k+1) = pmf(k)·(n−k)/(k+1)·p/(1−p), from pmf(0) = (1−p)^n in logs.
+    let mut logpmf = vec![0.0; n + 1];
+    logpmf[0] = n as f64 * (1.0 - p).ln();
+    for k in 0..n {
+        logpmf[k + 1] = logpmf[k] + ((n - k) as f64 / (k + 1) as f64).ln() + (p / (1.0 - p)).ln();
+    }
+    let pmf: Vec<f64> = logpmf.iter().map(|v| v.exp()).collect();
+    let mut lo = 0;
+    let mut acc = 0.0;
+    while acc + pmf[lo] < 0.0005 {
+        acc += pmf[lo];
+        lo += 1;
+    }
+    let mut hi = n;
+    let mut acc = 0.0;
+    while acc + pmf[hi] < 0.0005 {
+        acc += pmf[hi];
+        hi -= 1;
+    }
+    (lo, hi)
+}

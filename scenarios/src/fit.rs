@@ -1,0 +1,319 @@
+//! `scenarios fit`: learns the free parts of a discrete model file (Q, R as scalar, diagonal
+//! or full; x0; a diagonal P0) from a data CSV by maximum likelihood or EM, and writes the
+//! fitted model file and a summary. The mathematics is `kalman::fit`'s; this module parses,
+//! checks and writes.
+//!
+//! `FITTED` is a model file in the input's format with the free entries replaced, read by
+//! `scenarios filter` as is. `--summary FIT.json` holds `loglik` (the exact Gaussian
+//! log-likelihood of the data under the fitted model, with the `−½ m_k ln 2π` terms),
+//! `method`, `iterations`, `converged`, `message`, `std_errors` (observed-information
+//! standard errors in the shapes of the free matrices; `null` when the information is not
+//! positive definite), `boundary` (free variances at zero), `aic`, `bic`, `n_params`,
+//! `n_obs`. A fit that does not converge is an error (exit code 1) unless
+//! `--allow-unconverged`.
+#![allow(non_snake_case)]
+
+use std::path::{Path, PathBuf};
+
+use faer::Mat;
+use kalman::fit::{
+    EmOptions, Fit, FitError, Free, MleOptions, Series, StandardMap, Structure, System,
+};
+use nalgebra::DMatrix;
+use serde_json::json;
+
+use crate::error::{Error, Result};
+use crate::userdata::data::parse_data;
+use crate::userdata::model_file::{DiscreteFile, DiscreteModel, load_discrete, to_rows};
+
+/// Estimator of `fit --method`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FitMethod {
+    /// Maximum likelihood: L-BFGS with the exact gradient (Nelder–Mead fallback).
+    Mle,
+    /// Expectation–maximisation (Shumway–Stoffer).
+    Em,
+}
+
+/// Options of `scenarios fit`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct FitArgs {
+    /// Discrete model (.json or .toml): the fixed parts and the starting values of the free ones.
+    #[arg(long, value_name = "MODEL")]
+    pub model: PathBuf,
+    /// Data CSV: header t,z1,…,zm[,u1,…,up]; an empty or NaN z cell is a missing value.
+    #[arg(long, value_name = "Z.csv")]
+    pub data: PathBuf,
+    /// What to fit, comma-separated: Q:scalar|diag|full, R:scalar|diag|full, x0, P0:diag.
+    #[arg(long, value_name = "LIST", value_parser = parse_free, allow_hyphen_values = true)]
+    pub free: Free,
+    /// Estimator.
+    #[arg(long, value_enum, default_value_t = FitMethod::Mle)]
+    pub method: FitMethod,
+    /// Fitted model file to write (.json, or .toml).
+    #[arg(long, value_name = "FITTED")]
+    pub out: PathBuf,
+    /// Summary JSON to write (log-likelihood, standard errors, AIC/BIC, convergence).
+    #[arg(long, value_name = "FIT.json")]
+    pub summary: Option<PathBuf>,
+    /// Write the result even if the estimator did not converge.
+    #[arg(long)]
+    pub allow_unconverged: bool,
+    /// Iteration cap (default: 500 for mle, 10000 for em).
+    #[arg(long, value_name = "N")]
+    pub max_iter: Option<usize>,
+}
+
+/// Parses `--free`: `Q:scalar|diag|full`, `R:scalar|diag|full`, `x0`, `P0:diag`, each at
+/// most once. An empty list parses (and is rejected by `fit` as "nothing is free").
+pub fn parse_free(s: &str) -> Result<Free> {
+    let usage = |m: String| Error::Usage(format!("--free: {m}"));
+    let mut free = Free::default();
+    let mut seen = Vec::new();
+    for item in s.split(',').map(str::trim).filter(|t| !t.is_empty()) {
+        let (name, kind) = match item.split_once(':') {
+            Some((a, b)) => (a.trim(), Some(b.trim())),
+            None => (item, None),
+        };
+        if seen.contains(&name.to_string()) {
+            return Err(usage(format!("{name} is listed twice")));
+        }
+        seen.push(name.to_string());
+        let structure = |kind: Option<&str>| match kind {
+            Some("scalar") => Ok(Structure::Scalar),
+            Some("diag") => Ok(Structure::Diag),
+            Some("full") => Ok(Structure::Full),
+            Some(k) => Err(usage(format!(
+                "{name}:{k}: the structure must be scalar, diag or full"
+            ))),
+            None => Err(usage(format!(
+                "{name} needs a structure: {name}:scalar, {name}:diag or {name}:full"
+            ))),
+        };
+        match name {
+            "Q" => free.q = structure(kind)?,
+            "R" => free.r = structure(kind)?,
+            "x0" if kind.is_none() => free.x0 = true,
+            "P0" if kind == Some("diag") => free.p0_diag = true,
+            "x0" => return Err(usage("x0 takes no structure (write x0)".into())),
+            "P0" => {
+                return Err(usage(
+                    "P0 can only be freed as a diagonal (write P0:diag)".into(),
+                ));
+            }
+            other => {
+                return Err(usage(format!(
+                    "unknown free item '{other}': use Q:…, R:…, x0, P0:diag"
+                )));
+            }
+        }
+    }
+    Ok(free)
+}
+
+fn to_faer(m: &DMatrix<f64>) -> Mat<f64> {
+    Mat::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
+}
+
+fn faer_rows(m: &Mat<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows())
+        .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+        .collect()
+}
+
+/// The engine's system of a model file (P0 defaults to I when it is free and absent).
+fn system_of(path: &Path, model: &DiscreteModel, free: Free) -> Result<System> {
+    let n = model.n();
+    let P0 = match (&model.P0, free.p0_diag) {
+        (Some(p), _) => to_faer(p),
+        (None, true) => Mat::identity(n, n),
+        (None, false) => {
+            return Err(Error::invalid(
+                path,
+                "matrix P0 is missing (fit needs the prior of the first state, or P0:diag free)",
+            ));
+        }
+    };
+    let x0: Vec<f64> = model.x0.iter().copied().collect();
+    let sys = System::new(
+        &to_faer(&model.F),
+        &to_faer(&model.H),
+        &to_faer(&model.Q),
+        &to_faer(&model.R),
+        &x0,
+        &P0,
+    )
+    .and_then(|s| {
+        if model.p() > 0 {
+            s.with_control(&to_faer(&model.B))
+        } else {
+            Ok(s)
+        }
+    })
+    .map_err(|e| Error::invalid(path, e.to_string()))?;
+    sys.model()
+        .map_err(|e| Error::invalid(path, e.to_string()))?;
+    Ok(sys)
+}
+
+fn fit_error(args: &FitArgs, e: FitError) -> Error {
+    match e {
+        FitError::NothingFree => Error::Usage(
+            "--free: nothing is free; list at least one of Q:…, R:…, x0, P0:diag".into(),
+        ),
+        FitError::NoMeasurements | FitError::NotIdentifiable { .. } | FitError::Data(_) => {
+            Error::invalid(&args.data, e.to_string())
+        }
+        FitError::Model(_) => Error::invalid(&args.model, e.to_string()),
+        other => Error::Compute(format!("fit: {other}")),
+    }
+}
+
+/// The fitted model file: the input with Q, R, x0, P0 from the fit.
+fn fitted_file(model: &DiscreteModel, sys: &System) -> DiscreteFile {
+    let p = model.p();
+    DiscreteFile {
+        dt: model.dt,
+        F: to_rows(&model.F),
+        B: (p > 0).then(|| to_rows(&model.B)),
+        H: to_rows(&model.H),
+        D: (p > 0).then(|| to_rows(&model.D)),
+        Q: faer_rows(&sys.Q),
+        R: Some(faer_rows(&sys.R)),
+        S: None,
+        x0: Some(sys.x0.clone()),
+        P0: Some(faer_rows(&sys.P0)),
+    }
+}
+
+fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_json::Value> {
+    let std_errors = match &fit.covariance {
+        Some(cov) => {
+            let se = map
+                .matrix_std_errors(&fit.theta, cov)
+                .map_err(|e| Error::Compute(e.to_string()))?;
+            let n = map.base().n();
+            let p0 = se.P0.map(|d| {
+                (0..n)
+                    .map(|i| {
+                        (0..n)
+                            .map(|j| if i == j { d[i] } else { 0.0 })
+                            .collect::<Vec<_>>()
+                    })
+                    .collect::<Vec<_>>()
+            });
+            let mut o = serde_json::Map::new();
+            if let Some(q) = se.Q {
+                o.insert("Q".into(), json!(faer_rows(&q)));
+            }
+            if let Some(r) = se.R {
+                o.insert("R".into(), json!(faer_rows(&r)));
+            }
+            if let Some(x) = se.x0 {
+                o.insert("x0".into(), json!(x));
+            }
+            if let Some(p) = p0 {
+                o.insert("P0".into(), json!(p));
+            }
+            serde_json::Value::Object(o)
+        }
+        None => serde_json::Value::Null,
+    };
+    Ok(json!({
+        "loglik": fit.loglik,
+        "method": match args.method { FitMethod::Mle => "mle", FitMethod::Em => "em" },
+        "iterations": fit.iterations,
+        "converged": fit.converged,
+        "message": fit.message,
+        "std_errors": std_errors,
+        "boundary": fit.boundary,
+        "aic": fit.aic,
+        "bic": fit.bic,
+        "n_params": fit.theta.len(),
+        "n_obs": fit.n_obs,
+    }))
+}
+
+/// `scenarios fit`.
+///
+/// # Errors
+/// [`Error::Usage`] for an empty `--free`; [`Error::Invalid`] for a bad model or data file,
+/// a model with `S`, no measurement, a free matrix the data cannot identify;
+/// [`Error::Compute`] for a fit that fails or (without `--allow-unconverged`) does not
+/// converge; [`Error::Write`].
+pub fn fit(args: &FitArgs) -> Result<()> {
+    if args.free == Free::default() {
+        return Err(fit_error(args, FitError::NothingFree));
+    }
+    let dest = crate::output::destination(
+        &args.out,
+        &[("--model", &args.model), ("--data", &args.data)],
+    )?;
+    let model = load_discrete(&args.model)?;
+    if model.S.is_some() {
+        return Err(Error::invalid(
+            &args.model,
+            "fit does not handle the cross-covariance S (remove S, or fit without it)",
+        ));
+    }
+    let bytes = std::fs::read(&args.data).map_err(|source| Error::Read {
+        path: args.data.clone(),
+        source,
+    })?;
+    let (m, p, rows) = parse_data(&args.data, &bytes)?;
+    if m != model.m() || p != model.p() {
+        return Err(Error::invalid(
+            &args.data,
+            format!(
+                "the data have {m} measurement and {p} input columns, the model has m = {} and p = {}",
+                model.m(),
+                model.p()
+            ),
+        ));
+    }
+    // z − D u: the feed-through is known, so it leaves the likelihood unchanged when removed.
+    let mut z = Vec::with_capacity(rows.len() * m);
+    let mut u = Vec::with_capacity(rows.len() * p);
+    for row in &rows {
+        for i in 0..m {
+            let du: f64 = (0..p).map(|j| model.D[(i, j)] * row.u[j]).sum();
+            z.push(row.z[i] - du);
+        }
+        u.extend_from_slice(&row.u);
+    }
+    let series = Series::new(&z, m)
+        .and_then(|s| if p > 0 { s.with_inputs(&u, p) } else { Ok(s) })
+        .map_err(|e| fit_error(args, e))?;
+    let base = system_of(&args.model, &model, args.free)?;
+    let map = StandardMap::new(base.clone(), args.free).map_err(|e| fit_error(args, e))?;
+    let result = match args.method {
+        FitMethod::Mle => {
+            let mut opts = MleOptions::default();
+            if let Some(k) = args.max_iter {
+                opts.max_iter = k as u64;
+            }
+            kalman::fit::check_identifiable(&map, &series).map_err(|e| fit_error(args, e))?;
+            kalman::fit::mle(&map, map.theta_of(&base, Some(&series)), &series, &opts)
+        }
+        FitMethod::Em => {
+            let mut opts = EmOptions::default();
+            if let Some(k) = args.max_iter {
+                opts.max_iter = k;
+            }
+            kalman::fit::em(&map, &series, &opts)
+        }
+    }
+    .map_err(|e| fit_error(args, e))?;
+    if !result.converged && !args.allow_unconverged {
+        return Err(Error::Compute(format!(
+            "fit: not converged ({}); rerun with --allow-unconverged to write it anyway",
+            result.message
+        )));
+    }
+    let summary = summary_json(args, &map, &result)?;
+    crate::userdata::write_model(&dest, &fitted_file(&model, &result.system))?;
+    if let Some(path) = &args.summary {
+        crate::output::write_json(path, &summary)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,231 @@
+//! `scenarios fit`: the round trip fit → filter, the summary against the library, EM
+//! against MLE, and every bad input through the binary.
+
+use std::path::{Path, PathBuf};
+
+use kalman::CovarianceForm;
+use kalman::fit::{Series, System, log_likelihood};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+use super::common::{fails, ok, read, run, scratch};
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).expect("write input");
+    p
+}
+
+/// 300 steps of a local level (σ²: level 0.5, measurement 4), seeded.
+fn llt_csv() -> (String, Vec<f64>) {
+    let mut g = ChaCha8Rng::seed_from_u64(3);
+    let mut level = 0.0;
+    let mut csv = String::from("t,z1\n");
+    let mut z = Vec::new();
+    for k in 0..300 {
+        let v = level + 2.0 * g.sample::<f64, _>(StandardNormal);
+        csv.push_str(&format!("{k},{v}\n"));
+        z.push(v);
+        level += 0.5f64.sqrt() * g.sample::<f64, _>(StandardNormal);
+    }
+    (csv, z)
+}
+
+const LLT_MODEL: &str =
+    r#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "x0": [0], "P0": [[100]]}"#;
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&read(path)).expect("JSON")
+}
+
+#[test]
+fn fit_then_filter_round_trip_and_the_summary_matches_the_library() {
+    let dir = scratch("fit", "round_trip");
+    let (csv, z) = llt_csv();
+    write(&dir, "z.csv", &csv);
+    write(&dir, "m.json", LLT_MODEL);
+    let mut ll = [0.0; 2];
+    for (i, method) in ["mle", "em"].iter().enumerate() {
+        let (out, summary) = (
+            format!("fitted-{method}.json"),
+            format!("fit-{method}.json"),
+        );
+        ok(
+            &dir,
+            &[
+                "fit",
+                "--model",
+                "m.json",
+                "--data",
+                "z.csv",
+                "--free",
+                "Q:scalar,R:diag",
+                "--method",
+                method,
+                "--out",
+                &out,
+                "--summary",
+                &summary,
+            ],
+        );
+        let s = json(&dir.join(&summary));
+        assert_eq!(s["converged"], serde_json::Value::Bool(true), "{s}");
+        assert_eq!(s["method"], serde_json::Value::String((*method).into()));
+        let loglik = s["loglik"].as_f64().expect("loglik");
+        // The fitted file is a model file `filter` reads as is …
+        ok(
+            &dir,
+            &[
+                "filter", "--model", &out, "--data", "z.csv", "--out", "est.csv",
+            ],
+        );
+        // … and the summary's log-likelihood is the library's on the fitted model.
+        let m =
+            scenarios::userdata::model_file::load_discrete(&dir.join(&out)).expect("fitted model");
+        let f =
+            |a: &nalgebra::DMatrix<f64>| faer::Mat::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)]);
+        let x0: Vec<f64> = m.x0.iter().copied().collect();
+        let sys = System::new(
+            &f(&m.F),
+            &f(&m.H),
+            &f(&m.Q),
+            &f(&m.R),
+            &x0,
+            &f(m.P0.as_ref().expect("P0")),
+        )
+        .expect("system");
+        let lib = log_likelihood(
+            &sys,
+            &Series::new(&z, 1).expect("series"),
+            CovarianceForm::Joseph,
+        )
+        .expect("ll");
+        assert!(
+            (lib - loglik).abs() <= 1e-9 * lib.abs(),
+            "{method}: summary {loglik} vs library {lib}"
+        );
+        // AIC, BIC from the log-likelihood and the 2 free parameters; standard errors in the
+        // shapes of the free matrices.
+        assert!((s["aic"].as_f64().expect("aic") - (4.0 - 2.0 * loglik)).abs() < 1e-9);
+        assert!(
+            (s["bic"].as_f64().expect("bic") - (2.0 * 300f64.ln() - 2.0 * loglik)).abs() < 1e-9
+        );
+        let se = &s["std_errors"];
+        assert_eq!(se["Q"][0].as_array().map(|r| r.len()), Some(1), "{se}");
+        assert_eq!(se["R"][0].as_array().map(|r| r.len()), Some(1), "{se}");
+        assert!(se["R"][0][0].as_f64().expect("se") > 0.0);
+        ll[i] = loglik;
+    }
+    assert!(
+        (ll[0] - ll[1]).abs() < 1e-3,
+        "MLE {} vs EM {}",
+        ll[0],
+        ll[1]
+    );
+}
+
+#[test]
+fn fit_bad_inputs_are_one_line_errors() {
+    let dir = scratch("fit", "bad");
+    let (csv, _) = llt_csv();
+    write(&dir, "z.csv", &csv);
+    write(&dir, "m.json", LLT_MODEL);
+    // Nothing free.
+    let err = fails(
+        &dir,
+        &[
+            "fit", "--model", "m.json", "--data", "z.csv", "--free", "", "--out", "o.json",
+        ],
+    );
+    assert!(err.contains("nothing is free"), "{err}");
+    // An unknown item (a usage error reported by the argument parser).
+    let out = run(
+        &dir,
+        &[
+            "fit", "--model", "m.json", "--data", "z.csv", "--free", "F:diag", "--out", "o.json",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("unknown free item 'F'"), "{err}");
+    // A free R entry whose channel is never observed.
+    write(
+        &dir,
+        "m2.json",
+        r#"{"dt": 1, "F": [[1]], "H": [[1], [1]], "Q": [[1]], "R": [[1, 0], [0, 1]], "P0": [[1]]}"#,
+    );
+    write(&dir, "z2.csv", "t,z1,z2\n0,1,\n1,2,\n2,1.5,\n3,2.5,\n");
+    let err = fails(
+        &dir,
+        &[
+            "fit", "--model", "m2.json", "--data", "z2.csv", "--free", "R:diag", "--out", "o.json",
+        ],
+    );
+    assert!(
+        err.contains("cannot be identified") && err.contains("channel 1"),
+        "{err}"
+    );
+    // No measurement at all.
+    write(&dir, "z3.csv", "t,z1\n0,\n1,NaN\n2,\n");
+    let err = fails(
+        &dir,
+        &[
+            "fit", "--model", "m.json", "--data", "z3.csv", "--free", "Q:diag", "--out", "o.json",
+        ],
+    );
+    assert!(err.contains("no measurement"), "{err}");
+    // Not converged: exit code 1, one line saying what to try; nothing written.
+    let out = run(
+        &dir,
+        &[
+            "fit",
+            "--model",
+            "m.json",
+            "--data",
+            "z.csv",
+            "--free",
+            "Q:scalar,R:diag",
+            "--method",
+            "em",
+            "--max-iter",
+            "2",
+            "--out",
+            "o.json",
+        ],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("not converged") && err.contains("--allow-unconverged"),
+        "{err}"
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(!dir.join("o.json").exists());
+    // … unless allowed.
+    ok(
+        &dir,
+        &[
+            "fit",
+            "--model",
+            "m.json",
+            "--data",
+            "z.csv",
+            "--free",
+            "Q:scalar,R:diag",
+            "--method",
+            "em",
+            "--max-iter",
+            "2",
+            "--allow-unconverged",
+            "--out",
+            "o.json",
+            "--summary",
+            "s.json",
+        ],
+    );
+    assert_eq!(
+        json(&dir.join("s.json"))["converged"],
+        serde_json::Value::Bool(false)
+    );
+}
