@@ -230,7 +230,7 @@ impl<'a> Series<'a> {
     /// [`FitError::Data`] if `m` is 0 or does not divide `z.len()`, or an entry is infinite;
     /// [`FitError::NoMeasurements`] if every entry is NaN (or the series is empty).
     pub fn new(z: &'a [f64], m: usize) -> Result<Self, FitError> {
-        if m == 0 || !z.len().is_multiple_of(m) {
+        if m == 0 || z.len() % m != 0 {
             return Err(FitError::Data(format!(
                 "{} measurement values do not form rows of length m = {m}",
                 z.len()
