@@ -10,6 +10,24 @@ use super::score::Flat;
 use super::{FitError, LN_2PI, ParamMap, Series, StandardMap, Structure};
 
 /// Options of [`em`].
+///
+/// # Example
+/// ```
+/// use kalman::CovarianceForm;
+/// use kalman::fit::{EmOptions, Free, Series, StandardMap, Structure, System, em, log_likelihood};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// // A local level: learn the scalar Q and R from ten samples.
+/// let base = System::new(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[10.0]])?;
+/// let free = Free { q: Structure::Scalar, r: Structure::Scalar, ..Free::default() };
+/// let map = StandardMap::new(base.clone(), free)?;
+/// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2];
+/// let data = Series::new(&z, 1)?;
+/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000 })?;
+/// // EM never lowers the likelihood: the optimum is at least as likely as the start.
+/// assert!(fit.loglik >= log_likelihood(&base, &data, CovarianceForm::Joseph)? - 1e-9);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmOptions {
     /// Stop when an iteration raises the log-likelihood by less than `tol·(1 + |ln L|)`.
@@ -465,6 +483,24 @@ fn to_mat(v: &[f64], n: usize) -> Mat<f64> {
 ///
 /// # Example
 /// See the [module documentation](super).
+///
+/// # Example
+/// ```
+/// use kalman::CovarianceForm;
+/// use kalman::fit::{EmOptions, Free, Series, StandardMap, Structure, System, em, log_likelihood};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// // A local level: learn the scalar Q and R from ten samples.
+/// let base = System::new(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[10.0]])?;
+/// let free = Free { q: Structure::Scalar, r: Structure::Scalar, ..Free::default() };
+/// let map = StandardMap::new(base.clone(), free)?;
+/// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2];
+/// let data = Series::new(&z, 1)?;
+/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000 })?;
+/// // EM never lowers the likelihood: the optimum is at least as likely as the start.
+/// assert!(fit.loglik >= log_likelihood(&base, &data, CovarianceForm::Joseph)? - 1e-9);
+/// # Ok(())
+/// # }
+/// ```
 pub fn em(map: &StandardMap, data: &Series<'_>, opts: &EmOptions) -> Result<Fit, FitError> {
     data.check(map.base())?;
     check_identifiable(map, data)?;

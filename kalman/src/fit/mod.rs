@@ -82,6 +82,21 @@ pub(crate) const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// A complete linear Gaussian model with its prior: `x_{k+1} = F x_k + B u_k + w_k`,
 /// `z_k = H x_k + v_k`, `w ~ N(0, Q)`, `v ~ N(0, R)`, `x_0 ~ N(x0, P0)`.
+///
+/// # Example
+/// ```
+/// use kalman::CovarianceForm;
+/// use kalman::fit::{Series, System, log_likelihood};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// // One state, one observation z = 1, prior N(0, 1), R = 1: z ~ N(0, 2) exactly.
+/// let sys = System::new(&[[1.0]], &[[1.0]], &[[0.0]], &[[1.0]], &[0.0], &[[1.0]])?;
+/// let z = [1.0];
+/// let ll = log_likelihood(&sys, &Series::new(&z, 1)?, CovarianceForm::Joseph)?;
+/// let exact = -0.5 * ((2.0 * std::f64::consts::PI).ln() + 2.0_f64.ln() + 0.5);
+/// assert!((ll - exact).abs() < 1e-12);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct System {
     /// Transition (n×n).
@@ -214,6 +229,21 @@ impl System {
 
 /// A recorded series: `N` measurement vectors of length `m` (row-major, NaN = missing) and
 /// optionally `N` input vectors of length `p`.
+///
+/// # Example
+/// ```
+/// use kalman::CovarianceForm;
+/// use kalman::fit::{Series, System, log_likelihood};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// // One state, one observation z = 1, prior N(0, 1), R = 1: z ~ N(0, 2) exactly.
+/// let sys = System::new(&[[1.0]], &[[1.0]], &[[0.0]], &[[1.0]], &[0.0], &[[1.0]])?;
+/// let z = [1.0];
+/// let ll = log_likelihood(&sys, &Series::new(&z, 1)?, CovarianceForm::Joseph)?;
+/// let exact = -0.5 * ((2.0 * std::f64::consts::PI).ln() + 2.0_f64.ln() + 0.5);
+/// assert!((ll - exact).abs() < 1e-12);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug)]
 pub struct Series<'a> {
     z: &'a [f64],
@@ -336,6 +366,21 @@ impl<'a> Series<'a> {
 /// # Errors
 /// [`FitError::Model`] if `sys` is not a valid model or prior; [`FitError::Data`] if the
 /// data's dimensions do not match.
+///
+/// # Example
+/// ```
+/// use kalman::CovarianceForm;
+/// use kalman::fit::{Series, System, log_likelihood};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// // One state, one observation z = 1, prior N(0, 1), R = 1: z ~ N(0, 2) exactly.
+/// let sys = System::new(&[[1.0]], &[[1.0]], &[[0.0]], &[[1.0]], &[0.0], &[[1.0]])?;
+/// let z = [1.0];
+/// let ll = log_likelihood(&sys, &Series::new(&z, 1)?, CovarianceForm::Joseph)?;
+/// let exact = -0.5 * ((2.0 * std::f64::consts::PI).ln() + 2.0_f64.ln() + 0.5);
+/// assert!((ll - exact).abs() < 1e-12);
+/// # Ok(())
+/// # }
+/// ```
 pub fn log_likelihood(
     sys: &System,
     data: &Series<'_>,

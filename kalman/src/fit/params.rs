@@ -110,6 +110,24 @@ fn central_differences<M: ParamMap + ?Sized>(
 }
 
 /// How a covariance is freed.
+///
+/// # Example
+/// ```
+/// use kalman::CovarianceForm;
+/// use kalman::fit::{EmOptions, Free, Series, StandardMap, Structure, System, em, log_likelihood};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// // A local level: learn the scalar Q and R from ten samples.
+/// let base = System::new(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[10.0]])?;
+/// let free = Free { q: Structure::Scalar, r: Structure::Scalar, ..Free::default() };
+/// let map = StandardMap::new(base.clone(), free)?;
+/// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2];
+/// let data = Series::new(&z, 1)?;
+/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000 })?;
+/// // EM never lowers the likelihood: the optimum is at least as likely as the start.
+/// assert!(fit.loglik >= log_likelihood(&base, &data, CovarianceForm::Joseph)? - 1e-9);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(
     Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
 )]
@@ -139,6 +157,24 @@ impl Structure {
 }
 
 /// What [`StandardMap`] frees.
+///
+/// # Example
+/// ```
+/// use kalman::CovarianceForm;
+/// use kalman::fit::{EmOptions, Free, Series, StandardMap, Structure, System, em, log_likelihood};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// // A local level: learn the scalar Q and R from ten samples.
+/// let base = System::new(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[10.0]])?;
+/// let free = Free { q: Structure::Scalar, r: Structure::Scalar, ..Free::default() };
+/// let map = StandardMap::new(base.clone(), free)?;
+/// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2];
+/// let data = Series::new(&z, 1)?;
+/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000 })?;
+/// // EM never lowers the likelihood: the optimum is at least as likely as the start.
+/// assert!(fit.loglik >= log_likelihood(&base, &data, CovarianceForm::Joseph)? - 1e-9);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(
     Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
 )]
