@@ -8,25 +8,35 @@
 //! the estimators and the per-turn error bookkeeping are `wls::boom`'s (`run_turn`,
 //! `sweep_gamma`).
 //!
+//! Beyond the paper, [`tracking`] solves the same problem as a tracking problem: (α, ω, ε)
+//! carried through time by a white-jerk model, the `sensors` accelerometer as the
+//! measurement function, and `kalman::nonlinear`'s EKF, UKF and unscented RTS smoother over
+//! the same turns; a noise Monte Carlo compares them with the WLS.
+//!
 //! Layout (the same as every scenario's): [`parameters`], [`simulation`] (the accelerometer
-//! as the measurement model, per-turn statistics), [`summary`] (every number) and [`report`]
-//! (formatting only). There is no records file: the scenario has no Monte Carlo runs (it is
-//! deterministic; noise, where enabled, draws from streams of the campaign seed), so a shard
-//! holds no records, and `merge` checks that the shards share parameters and seed and
-//! recomputes the same outputs.
+//! as the measurement model, per-turn statistics, the Monte Carlo runs), [`tracking`],
+//! [`records`] (`runs_noise.csv`, the Monte Carlo's ground truth), [`summary`] (every number)
+//! and [`report`] with [`tracking_report`] (formatting only). The paper's cases are deterministic (the
+//! beyond-the-paper noise draws from streams of the campaign seed) and are recomputed by
+//! every shard; the noise Monte Carlo's runs are split between shards, and `merge`
+//! recomputes everything from their records.
 
 pub mod parameters;
+pub mod records;
 pub mod report;
 pub mod simulation;
 pub mod summary;
+pub mod tracking;
+pub mod tracking_report;
 
 use std::path::Path;
 
 use crate::campaign::Scenario;
 use crate::campaign::records::RecordFile;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::montecarlo::Shard;
 use parameters::BoomParams;
+use records::NoiseRecord;
 use summary::{BoomSummary, Computed};
 
 /// The boom scenario, as the campaign runs it.
@@ -36,12 +46,15 @@ pub struct Boom;
 impl Scenario for Boom {
     const NAME: &'static str = "boom";
     type Params = BoomParams;
-    type Records = ();
+    type Records = Vec<NoiseRecord>;
     type Summary = Computed;
     type Json = BoomSummary;
 
-    fn set_runs(_params: &mut BoomParams, _runs: usize) -> Result<()> {
-        // Deterministic: nothing to repeat.
+    fn set_runs(params: &mut BoomParams, runs: usize) -> Result<()> {
+        if runs == 0 {
+            return Err(Error::Usage("--runs must be ≥ 1".into()));
+        }
+        params.tracking.runs = runs;
         Ok(())
     }
 
@@ -49,35 +62,35 @@ impl Scenario for Boom {
         params.validate(source)
     }
 
-    fn record_files(_params: &BoomParams) -> Vec<RecordFile> {
-        Vec::new()
+    fn record_files(params: &BoomParams) -> Vec<RecordFile> {
+        records::record_files(params)
     }
 
     fn simulate(
-        _params: &BoomParams,
-        _seed: u64,
-        _shard: Shard,
-        _threads: Option<usize>,
-    ) -> Result<()> {
-        Ok(())
+        params: &BoomParams,
+        seed: u64,
+        shard: Shard,
+        threads: Option<usize>,
+    ) -> Result<Vec<NoiseRecord>> {
+        simulation::simulate_noise_runs(params, seed, shard, threads)
     }
 
-    fn to_tables(_records: &()) -> Vec<Vec<Vec<f64>>> {
-        Vec::new()
+    fn to_tables(records: &Vec<NoiseRecord>) -> Vec<Vec<Vec<f64>>> {
+        records::to_tables(records)
     }
 
-    fn from_tables(_params: &BoomParams, _tables: Vec<Vec<Vec<f64>>>) -> Result<()> {
-        Ok(())
+    fn from_tables(_params: &BoomParams, tables: Vec<Vec<Vec<f64>>>) -> Result<Vec<NoiseRecord>> {
+        records::from_tables(tables)
     }
 
     fn summarise(
         params: &BoomParams,
         seed: u64,
         _shard: Shard,
-        _records: &(),
+        records: &Vec<NoiseRecord>,
         threads: Option<usize>,
     ) -> Result<Computed> {
-        summary::summarise(params, seed, threads, Path::new("<parameters>"))
+        summary::summarise(params, seed, records, threads, Path::new("<parameters>"))
     }
 
     fn json(summary: &Computed) -> &BoomSummary {
@@ -85,7 +98,8 @@ impl Scenario for Boom {
     }
 
     fn write_outputs(summary: &Computed, dir: &Path) -> Result<()> {
-        report::write_outputs(summary, dir)
+        let section = tracking_report::write_outputs(summary, dir)?;
+        report::write_outputs(summary, dir, &section)
     }
 }
 

@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use kalman::nonlinear::SigmaPoints;
 use serde::{Deserialize, Serialize};
 use wls::boom::{
     AngleRecovery, AngleUnit, AxWeightLaw, BoomConfig, BoomMethod, Deceleration, ErrorVariant,
@@ -12,7 +13,8 @@ use wls::boom::{
 
 use crate::error::{Error, Result};
 
-/// The three estimators, serialised by the names the summary uses.
+/// The estimators, serialised by the names the summary uses: the paper's three and the
+/// nonlinear filters of the tracking formulation (beyond the paper).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
@@ -22,24 +24,34 @@ pub enum Method {
     Linear3,
     /// Weighted least squares, eqs. (9)–(10).
     Wls,
+    /// Extended Kalman filter on the white-jerk model (module `tracking`).
+    Ekf,
+    /// Unscented Kalman filter on the white-jerk model.
+    Ukf,
+    /// Unscented Rauch–Tung–Striebel smoother over the UKF's forward pass.
+    Urts,
 }
 
 impl Method {
-    /// The `wls` crate's method.
-    pub fn to_wls(self) -> BoomMethod {
+    /// The `wls` crate's method; `None` for the Kalman filters and the smoother.
+    pub fn to_wls(self) -> Option<BoomMethod> {
         match self {
-            Method::Direct => BoomMethod::Direct,
-            Method::Linear3 => BoomMethod::Linear3,
-            Method::Wls => BoomMethod::Wls,
+            Method::Direct => Some(BoomMethod::Direct),
+            Method::Linear3 => Some(BoomMethod::Linear3),
+            Method::Wls => Some(BoomMethod::Wls),
+            Method::Ekf | Method::Ukf | Method::Urts => None,
         }
     }
 
-    /// The name in file names and tables: "direct", "linear3", "wls".
+    /// The name in file names and tables (the serialised name).
     pub fn name(self) -> &'static str {
         match self {
             Method::Direct => "direct",
             Method::Linear3 => "linear3",
             Method::Wls => "wls",
+            Method::Ekf => "ekf",
+            Method::Ukf => "ukf",
+            Method::Urts => "urts",
         }
     }
 }
@@ -185,6 +197,33 @@ impl Default for BeyondParams {
     }
 }
 
+/// The tracking formulation (beyond the paper): the white-jerk model, the sigma points and
+/// the noise Monte Carlo that compares it with the WLS.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrackingParams {
+    /// White-jerk intensity q, (°/s³)²·s = (°/s²)²/s (> 0); omitted = derived from the
+    /// nominal turn (the largest change of ε over 1 s, squared, per second: ≈ 0.21).
+    pub jerk_psd_deg2_s5: Option<f64>,
+    /// The UKF's sigma points (default the cubature set: positive weights, P stays PSD).
+    pub sigma_points: SigmaPoints,
+    /// White-noise σ per axis of the Monte Carlo, on top of ±Δa, m/s² (≥ 0; 0.01).
+    pub noise_std_mps2: f64,
+    /// Monte Carlo turns per γ (≥ 1; `--runs`); each turn is run under "+" and "−".
+    pub runs: usize,
+}
+
+impl Default for TrackingParams {
+    fn default() -> Self {
+        Self {
+            jerk_psd_deg2_s5: None,
+            sigma_points: SigmaPoints::Cubature,
+            noise_std_mps2: 0.01,
+            runs: 40,
+        }
+    }
+}
+
 /// Every parameter of the scenario; SPEC B defaults, overridable by `--config`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -211,6 +250,8 @@ pub struct BoomParams {
     pub estimator: EstimatorParams,
     /// Beyond-the-paper cases.
     pub beyond: BeyondParams,
+    /// The tracking formulation and its noise Monte Carlo.
+    pub tracking: TrackingParams,
 }
 
 impl Default for BoomParams {
@@ -227,6 +268,7 @@ impl Default for BoomParams {
             profile: ProfileParams::default(),
             estimator: EstimatorParams::default(),
             beyond: BeyondParams::default(),
+            tracking: TrackingParams::default(),
         }
     }
 }
@@ -257,10 +299,32 @@ impl BoomParams {
         for (key, value) in [
             ("limiting_error_mps2", self.limiting_error_mps2),
             ("beyond.noise_std_mps2", self.beyond.noise_std_mps2),
+            ("tracking.noise_std_mps2", self.tracking.noise_std_mps2),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return bad(key, value, "must be finite and ≥ 0");
             }
+        }
+        if let Some(q) = self.tracking.jerk_psd_deg2_s5
+            && !(q.is_finite() && q > 0.0)
+        {
+            return bad("tracking.jerk_psd_deg2_s5", q, "must be finite and > 0");
+        }
+        if self.tracking.runs == 0 {
+            return bad("tracking.runs", 0.0, "must be ≥ 1");
+        }
+        if let SigmaPoints::Merwe { alpha, beta, kappa } = self.tracking.sigma_points
+            && !(alpha.is_finite()
+                && alpha > 0.0
+                && beta.is_finite()
+                && kappa.is_finite()
+                && 3.0 + kappa > 0.0)
+        {
+            return bad(
+                "tracking.sigma_points",
+                alpha,
+                "Merwe needs finite alpha > 0, beta, kappa with 3 + kappa > 0",
+            );
         }
         if self.cycle_s > 1.0 {
             return bad("cycle_s", self.cycle_s, "must be ≤ 1 s");

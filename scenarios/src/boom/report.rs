@@ -15,16 +15,17 @@ use crate::plot::{Figure, Scale, Series, line_plot};
 /// The paper's two variants, in table order.
 const BOTH: [Sign; 2] = [Sign::Plus, Sign::Minus];
 
-fn deg(x: f64) -> f64 {
+pub(super) fn deg(x: f64) -> f64 {
     x.to_degrees()
 }
 
 /// Writes the error curves, the nominal turn, the γ sweep (CSV and SVG) and `report.md` of
-/// `c` into `dir`.
+/// `c` into `dir`, with `tracking_section` (the tracking filters' section, already
+/// formatted) appended to the report.
 ///
 /// # Errors
 /// [`crate::Error::Write`] naming the file.
-pub fn write_outputs(c: &Computed, dir: &Path) -> Result<()> {
+pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result<()> {
     let s = &c.summary;
     let lim = s.limits;
     // Per-case error curves.
@@ -226,12 +227,14 @@ pub fn write_outputs(c: &Computed, dir: &Path) -> Result<()> {
         ],
     )?;
 
-    output::write_atomic(&dir.join("report.md"), report(s, &figures).as_bytes())
+    let mut text = report(s, &figures);
+    text.push_str(tracking_section);
+    output::write_atomic(&dir.join("report.md"), text.as_bytes())
 }
 
 /// Every `step`-th bin of `rows[.][col]` against `rows[.][0]`, keeping each bin's largest
 /// value (so spikes survive the thinning); non-finite values win a bin.
-fn decimate(rows: &[Vec<f64>], col: usize, step: usize) -> Vec<(f64, f64)> {
+pub(super) fn decimate(rows: &[Vec<f64>], col: usize, step: usize) -> Vec<(f64, f64)> {
     rows.chunks(step.max(1))
         .filter_map(|bin| {
             bin.iter()
@@ -242,7 +245,7 @@ fn decimate(rows: &[Vec<f64>], col: usize, step: usize) -> Vec<(f64, f64)> {
 }
 
 /// A number without trailing zeros ("10", "0.5").
-fn fmt_num(x: f64) -> String {
+pub(super) fn fmt_num(x: f64) -> String {
     let s = format!("{x:.3}");
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }

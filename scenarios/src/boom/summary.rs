@@ -1,6 +1,7 @@
 //! The boom scenario's summary: every turn the report shows (the paper's cases, the γ sweep,
-//! the 32 unit/weight option sets and their verdicts, the beyond-the-paper cases), reduced to
-//! the numbers of `summary.json`.
+//! the 32 unit/weight option sets and their verdicts, the beyond-the-paper cases, the
+//! tracking filters' cases, bias-free turns and noise Monte Carlo), reduced to the numbers of
+//! `summary.json`.
 
 use std::path::Path;
 
@@ -11,7 +12,9 @@ use wls::boom::{
 };
 
 use super::parameters::{BoomParams, EstimatorParams, LimitParams, Method};
-use super::simulation::{Meter, stats, wls_err};
+use super::records::{NOISE_METHODS, NoiseRecord};
+use super::simulation::{Meter, readings, replay, stats, tracked_runs, wls_err};
+use super::tracking::{TrackingModel, jerk_intensity};
 use crate::error::{Error, Result};
 use crate::montecarlo::{par_runs, run_rng};
 
@@ -28,10 +31,102 @@ pub struct CaseSummary {
     pub max_alpha_err_deg: f64,
     /// Worst |ε̂ − ε_n| over the defined cycles after the start-up cycle, °/s².
     pub max_eps_err_deg_s2: f64,
-    /// Nominal α at the first undefined cycle, degrees (null: defined throughout).
+    /// Nominal α at the first undefined cycle, degrees (null: defined throughout). For the
+    /// WLS family: no estimate that cycle (arcsin of |s| > 1, g² < a_x²); for the filters and
+    /// the smoother: the first cycle whose step the library refused (singular innovation
+    /// covariance, sigma-point covariance not PSD, a non-finite value), undefined from there
+    /// to the end of the turn.
     pub undefined_from_alpha_deg: Option<f64>,
-    /// Nominal α at the first cycle over either limit (undefined counts), degrees.
+    /// Nominal α at the first cycle after the start-up cycle with δα > Δα or δε > Δε, an
+    /// undefined cycle counting as over (the same rule for every method), degrees.
     pub first_violation_alpha_deg: Option<f64>,
+}
+
+/// One row of the noise Monte Carlo: white noise σ on top of ±Δa, `runs` turns per variant.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NoiseMcRow {
+    /// The estimator (`wls`, `ekf`, `ukf`, `urts`).
+    pub method: Method,
+    /// γ, degrees.
+    pub gamma_deg: f64,
+    /// Monte Carlo runs (each a "+" and a "−" turn with the same noise draws).
+    pub runs: usize,
+    /// √(mean over the runs of the run's mean square δα), over the defined cycles after the
+    /// start-up cycle, degrees.
+    pub rms_alpha_err_deg: f64,
+    /// The same for δε, °/s².
+    pub rms_eps_err_deg_s2: f64,
+}
+
+/// One turn without bias or noise: what the method makes of exact readings (the
+/// reference a constant bias is measured against).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BiasFreeRow {
+    /// The estimator.
+    pub method: Method,
+    /// γ, degrees.
+    pub gamma_deg: f64,
+    /// As in [`CaseSummary`].
+    pub max_alpha_err_deg: f64,
+    /// As in [`CaseSummary`].
+    pub max_eps_err_deg_s2: f64,
+    /// As in [`CaseSummary`].
+    pub undefined_from_alpha_deg: Option<f64>,
+}
+
+/// The tracking formulation's settings as run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrackingSummary {
+    /// White-jerk intensity q used, (°/s²)²/s.
+    pub jerk_psd_deg2_s5: f64,
+    /// Measurement σ the filters assume in the paper's cases (√R = Δa), m/s².
+    pub r_std_cases_mps2: f64,
+    /// Measurement σ the filters assume in the Monte Carlo (√(Δa² + σ²)), m/s².
+    pub r_std_noise_mps2: f64,
+    /// White-noise σ of the Monte Carlo, m/s².
+    pub noise_std_mps2: f64,
+}
+
+/// What a constant ±Δa does to one method at one γ, next to its bias-free turn.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BiasEffect {
+    /// The estimator.
+    pub method: Method,
+    /// γ, degrees.
+    pub gamma_deg: f64,
+    /// Worst δα without bias, degrees.
+    pub bias_free_alpha_deg: f64,
+    /// Worst δα over "+" and "−", degrees.
+    pub with_bias_alpha_deg: f64,
+    /// Worst δε over "+" and "−", °/s².
+    pub with_bias_eps_deg_s2: f64,
+    /// Nominal α where that worst δα occurs, degrees.
+    pub alpha_at_worst_deg: f64,
+    /// Both variants defined and within both limits.
+    pub within_limits: bool,
+}
+
+/// The conditions the report's "Nonlinear filters against WLS" comment is written from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrackingVerdict {
+    /// The γ the conditioning question is asked at (0 when it is a case γ, else the
+    /// smallest case γ), degrees.
+    pub low_gamma_deg: f64,
+    /// Worst bias-free δα of the EKF, UKF and smoother at that γ, degrees.
+    pub filters_bias_free_alpha_deg: f64,
+    /// Worst bias-free δε of the EKF, UKF and smoother at that γ, °/s².
+    pub filters_bias_free_eps_deg_s2: f64,
+    /// The WLS's bias-free δα at that γ, degrees.
+    pub wls_bias_free_alpha_deg: f64,
+    /// The WLS's bias-free δε at that γ, °/s².
+    pub wls_bias_free_eps_deg_s2: f64,
+    /// The filters, bias-free at that γ, stay defined, within both limits and below the
+    /// WLS's errors: carrying the state cures the 90° ill-conditioning without the offset.
+    pub state_cures_conditioning: bool,
+    /// Per method (WLS, EKF, UKF, smoother) and case γ: the bias's effect.
+    pub bias_effects: Vec<BiasEffect>,
+    /// The smoother's Monte Carlo RMS δα and δε are at most the UKF's at every case γ.
+    pub smoother_not_worse: bool,
 }
 
 /// One row of the γ sweep.
@@ -139,8 +234,17 @@ pub struct BoomSummary {
     /// The sensor's range clips the "+" variant's a_y (g·cos α + ε·r + Δa > range) up to this
     /// nominal α, degrees (γ = 0); null if it never does.
     pub saturated_until_alpha_deg: Option<f64>,
-    /// Direct, linear3 and WLS at each case γ under "+" and "−".
+    /// Direct, linear3, WLS, EKF, UKF and the unscented RTS smoother at each case γ under
+    /// "+" and "−".
     pub cases: Vec<CaseSummary>,
+    /// The tracking model's settings.
+    pub tracking: TrackingSummary,
+    /// WLS and the filters on exact readings (no bias, no noise) at each case γ.
+    pub bias_free: Vec<BiasFreeRow>,
+    /// The noise Monte Carlo: per case γ and method, RMS errors over `runs` noisy turns.
+    pub noise_mc: Vec<NoiseMcRow>,
+    /// What the report says about the filters against the WLS, as computed conditions.
+    pub tracking_verdict: TrackingVerdict,
     /// The γ sweep of WLS.
     pub gamma_sweep: Vec<SweepRow>,
     /// The contiguous feasible window starting at the smallest feasible γ, degrees.
@@ -187,6 +291,8 @@ pub struct Computed {
     pub summary: BoomSummary,
     /// (method, γ) → (run "+", run "−"), for the error-curve CSVs and plots.
     pub case_runs: Vec<(Method, f64, TurnRun, TurnRun)>,
+    /// The same for the tracking filters (EKF, UKF, unscented RTS).
+    pub tracking_runs: Vec<(Method, f64, TurnRun, TurnRun)>,
     /// The nominal turn.
     pub trajectory: Vec<TrajectoryPoint>,
 }
@@ -199,6 +305,7 @@ pub struct Computed {
 pub fn summarise(
     params: &BoomParams,
     seed: u64,
+    records: &[NoiseRecord],
     threads: Option<usize>,
     config_path: &Path,
 ) -> Result<Computed> {
@@ -225,8 +332,12 @@ pub fn summarise(
     let mut case_runs = Vec::new();
     let mut cases = Vec::new();
     for &gamma in &params.case_gammas_deg {
-        for method in [Method::Direct, Method::Linear3, Method::Wls] {
-            let cfg = params.config(method.to_wls(), gamma, &opt);
+        for (method, wls_method) in [
+            (Method::Direct, BoomMethod::Direct),
+            (Method::Linear3, BoomMethod::Linear3),
+            (Method::Wls, BoomMethod::Wls),
+        ] {
+            let cfg = params.config(wls_method, gamma, &opt);
             let plus = turn(&cfg, &variants[0], quiet())?;
             let minus = turn(&cfg, &variants[1], quiet())?;
             for run in [&plus, &minus] {
@@ -242,6 +353,86 @@ pub fn summarise(
                 });
             }
             case_runs.push((method, gamma, plus, minus));
+        }
+    }
+
+    // The tracking filters on the paper's cases, on the very readings the WLS saw, and all
+    // four on exact readings (no bias) for reference.
+    let q = jerk_intensity(params, &points);
+    let nominal_variant = ErrorVariant {
+        sign: Sign::Nominal,
+        size: 0.0,
+    };
+    let mut tracking_runs = Vec::new();
+    let mut bias_free = Vec::new();
+    for &gamma in &params.case_gammas_deg {
+        let model = TrackingModel::new(params, gamma, false, 0.0, q)?;
+        let g = gamma.to_radians();
+        let mut by_variant = Vec::new();
+        for v in &variants {
+            let z = readings(&points, &mut quiet(), g, v);
+            by_variant.push(tracked_runs(&points, &model.track(&z)?, v.sign, limits));
+        }
+        let [plus, minus]: [[TurnRun; 3]; 2] = by_variant
+            .try_into()
+            .map_err(|_| Error::Degenerate("the boom cases have two variants"))?;
+        for (method, p, m) in [Method::Ekf, Method::Ukf, Method::Urts]
+            .into_iter()
+            .zip(plus)
+            .zip(minus)
+            .map(|((a, p), m)| (a, p, m))
+        {
+            for run in [&p, &m] {
+                let s = stats(run);
+                cases.push(CaseSummary {
+                    method,
+                    gamma_deg: gamma,
+                    bias: run.sign,
+                    max_alpha_err_deg: s.max_alpha_deg,
+                    max_eps_err_deg_s2: s.max_eps_deg,
+                    undefined_from_alpha_deg: s.undefined_from_deg,
+                    first_violation_alpha_deg: s.violation.map(|v| v.1),
+                });
+            }
+            tracking_runs.push((method, gamma, p, m));
+        }
+        let z = readings(&points, &mut quiet(), g, &nominal_variant);
+        let wls_cfg = params.config(BoomMethod::Wls, gamma, &opt);
+        let wls_run = replay(&points, &wls_cfg, &z, &nominal_variant, limits)?;
+        let [e, u, sm] = tracked_runs(&points, &model.track(&z)?, Sign::Nominal, limits);
+        for (method, run) in [
+            (Method::Wls, wls_run),
+            (Method::Ekf, e),
+            (Method::Ukf, u),
+            (Method::Urts, sm),
+        ] {
+            let s = stats(&run);
+            bias_free.push(BiasFreeRow {
+                method,
+                gamma_deg: gamma,
+                max_alpha_err_deg: s.max_alpha_deg,
+                max_eps_err_deg_s2: s.max_eps_deg,
+                undefined_from_alpha_deg: s.undefined_from_deg,
+            });
+        }
+    }
+
+    // The noise Monte Carlo, from the run records.
+    let mut noise_mc = Vec::new();
+    for (gi, &gamma) in params.case_gammas_deg.iter().enumerate() {
+        let rows: Vec<&NoiseRecord> = records.iter().filter(|r| r.gamma_index == gi).collect();
+        for (j, method) in NOISE_METHODS.into_iter().enumerate() {
+            let n = rows.len().max(1) as f64;
+            let ms = |f: fn((f64, f64)) -> f64| {
+                (rows.iter().map(|r| f(r.rms[j]).powi(2)).sum::<f64>() / n).sqrt()
+            };
+            noise_mc.push(NoiseMcRow {
+                method,
+                gamma_deg: gamma,
+                runs: rows.len(),
+                rms_alpha_err_deg: ms(|(a, _)| a),
+                rms_eps_err_deg_s2: ms(|(_, e)| e),
+            });
         }
     }
 
@@ -342,9 +533,12 @@ pub fn summarise(
                 params.beyond.noise_std_mps2,
             ),
         ] {
-            for method in [Method::Direct, Method::Wls] {
+            for (method, wls_method) in [
+                (Method::Direct, BoomMethod::Direct),
+                (Method::Wls, BoomMethod::Wls),
+            ] {
                 for &gamma in &params.case_gammas_deg {
-                    let cfg = params.config(method.to_wls(), gamma, &opt);
+                    let cfg = params.config(wls_method, gamma, &opt);
                     for v in &variants {
                         let meter = Meter::new(params, centripetal, noise, run_rng(seed, stream));
                         stream += 1;
@@ -394,6 +588,23 @@ pub fn summarise(
             cruise_rate_rad_s: cruise,
             saturated_until_alpha_deg,
             cases,
+            tracking: TrackingSummary {
+                jerk_psd_deg2_s5: q / 1f64.to_radians().powi(2),
+                r_std_cases_mps2: params.limiting_error_mps2,
+                r_std_noise_mps2: params
+                    .limiting_error_mps2
+                    .hypot(params.tracking.noise_std_mps2),
+                noise_std_mps2: params.tracking.noise_std_mps2,
+            },
+            tracking_verdict: tracking_verdict(
+                params,
+                &case_runs,
+                &tracking_runs,
+                &bias_free,
+                &noise_mc,
+            ),
+            bias_free,
+            noise_mc,
             gamma_sweep,
             feasible_gamma_deg,
             alternatives,
@@ -402,6 +613,7 @@ pub fn summarise(
             feasible_gamma_deg_centripetal,
         },
         case_runs,
+        tracking_runs,
         trajectory: points,
     })
 }
@@ -452,5 +664,103 @@ fn verdict(options: EstimatorParams, rows: &[AlternativeRow]) -> AlternativeVerd
         reproduces_paper: defined_at_0 && alpha_within_at_0 && eps_pattern_at_0 && within_at_10,
         departures_at_0,
         feasible_gamma_deg: None,
+    }
+}
+
+/// The conditions of the "Nonlinear filters against WLS" comment.
+fn tracking_verdict(
+    params: &BoomParams,
+    case_runs: &[(Method, f64, TurnRun, TurnRun)],
+    tracking_runs: &[(Method, f64, TurnRun, TurnRun)],
+    bias_free: &[BiasFreeRow],
+    noise_mc: &[NoiseMcRow],
+) -> TrackingVerdict {
+    let same = |a: f64, b: f64| (a - b).abs() < 1e-9;
+    let low_gamma_deg = if params.case_gammas_deg.iter().any(|&g| same(g, 0.0)) {
+        0.0
+    } else {
+        params
+            .case_gammas_deg
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+    };
+    let free = |m: Method| {
+        bias_free
+            .iter()
+            .find(|r| r.method == m && same(r.gamma_deg, low_gamma_deg))
+    };
+    let filters = [Method::Ekf, Method::Ukf, Method::Urts];
+    let (mut fa, mut fe, mut f_defined) = (0.0f64, 0.0f64, true);
+    for m in filters {
+        if let Some(r) = free(m) {
+            fa = fa.max(r.max_alpha_err_deg);
+            fe = fe.max(r.max_eps_err_deg_s2);
+            f_defined &= r.undefined_from_alpha_deg.is_none();
+        }
+    }
+    let (wa, we) = free(Method::Wls).map_or((f64::NAN, f64::NAN), |r| {
+        (r.max_alpha_err_deg, r.max_eps_err_deg_s2)
+    });
+    let lim = params.limits;
+    let state_cures_conditioning =
+        f_defined && fa <= lim.alpha_deg && fe <= lim.eps_deg_s2 && fa < wa && fe < we;
+    let mut bias_effects = Vec::new();
+    for (method, gamma, plus, minus) in case_runs
+        .iter()
+        .filter(|r| r.0 == Method::Wls)
+        .chain(tracking_runs)
+    {
+        let (mut worst, mut at, mut eps) = (0.0f64, 0.0f64, 0.0f64);
+        for run in [plus, minus] {
+            for c in run.cycles.iter().skip(1).filter(|c| c.defined) {
+                if c.angle_error > worst {
+                    worst = c.angle_error;
+                    at = c.alpha;
+                }
+                eps = eps.max(c.epsilon_error);
+            }
+        }
+        let within = [plus, minus]
+            .iter()
+            .all(|r| r.first_violation.is_none() && r.first_undefined.is_none());
+        bias_effects.push(BiasEffect {
+            method: *method,
+            gamma_deg: *gamma,
+            bias_free_alpha_deg: bias_free
+                .iter()
+                .find(|r| r.method == *method && same(r.gamma_deg, *gamma))
+                .map_or(f64::NAN, |r| r.max_alpha_err_deg),
+            with_bias_alpha_deg: worst.to_degrees(),
+            with_bias_eps_deg_s2: eps.to_degrees(),
+            alpha_at_worst_deg: at.to_degrees(),
+            within_limits: within,
+        });
+    }
+    let mc = |m: Method, g: f64| {
+        noise_mc
+            .iter()
+            .find(|r| r.method == m && same(r.gamma_deg, g))
+    };
+    let smoother_not_worse =
+        params
+            .case_gammas_deg
+            .iter()
+            .all(|&g| match (mc(Method::Urts, g), mc(Method::Ukf, g)) {
+                (Some(s), Some(f)) => {
+                    s.rms_alpha_err_deg <= f.rms_alpha_err_deg
+                        && s.rms_eps_err_deg_s2 <= f.rms_eps_err_deg_s2
+                }
+                _ => false,
+            });
+    TrackingVerdict {
+        low_gamma_deg,
+        filters_bias_free_alpha_deg: fa,
+        filters_bias_free_eps_deg_s2: fe,
+        wls_bias_free_alpha_deg: wa,
+        wls_bias_free_eps_deg_s2: we,
+        state_cures_conditioning,
+        bias_effects,
+        smoother_not_worse,
     }
 }

@@ -1,13 +1,14 @@
 //! `scenarios boom` at reduced size through the built binary: the paper's conclusions
 //! (direct inversion fails near 90°, WLS at γ = 10° holds both limits for both variants, WLS
-//! at γ = 0 stays defined, the γ window contains 10°), the summary schema, the units/weights
-//! verdict in the report, shards that merge into the single run's files, and errors that
-//! name the key.
+//! at γ = 0 stays defined, the γ window contains 10°), the summary schema (the WLS family's
+//! and the tracking filters' rows, the noise Monte Carlo), the units/weights verdict in the
+//! report, shards that merge into the single run's files, and errors that name the key.
 
 use crate::common::{assert_same_files, fails, ok, read, run, scratch};
 
-/// The full turn and all cases, with a coarse γ sweep (0, 5, …, 20°) to keep it fast.
-const SMALL: &str = "[sweep]\nstep_deg = 5.0\n";
+/// The full turn and all cases, with a coarse γ sweep (0, 5, …, 20°) and a small noise
+/// Monte Carlo to keep it fast.
+const SMALL: &str = "[sweep]\nstep_deg = 5.0\n[tracking]\nruns = 6\n";
 
 fn case<'a>(
     s: &'a serde_json::Value,
@@ -58,7 +59,58 @@ fn the_papers_conclusions_hold() {
         k.sort_unstable();
         assert_eq!(k, keys);
     }
-    assert_eq!(s["cases"].as_array().map(Vec::len), Some(12));
+    // Six methods (three of the paper's, EKF, UKF, unscented RTS) × γ ∈ {0, 10} × {+, −}.
+    assert_eq!(s["cases"].as_array().map(Vec::len), Some(24));
+    for method in ["direct", "linear3", "wls", "ekf", "ukf", "urts"] {
+        for gamma in [0.0, 10.0] {
+            for bias in ["+", "-"] {
+                let c = case(&s, method, gamma, bias);
+                assert!(c["max_alpha_err_deg"].as_f64().is_some_and(f64::is_finite));
+            }
+        }
+    }
+    // The noise Monte Carlo: one row per method and γ, with its schema.
+    let mc = s["noise_mc"].as_array().expect("noise_mc");
+    assert_eq!(mc.len(), 8);
+    for r in mc {
+        let mut k: Vec<&str> = r
+            .as_object()
+            .expect("object")
+            .keys()
+            .map(String::as_str)
+            .collect();
+        k.sort_unstable();
+        assert_eq!(
+            k,
+            [
+                "gamma_deg",
+                "method",
+                "rms_alpha_err_deg",
+                "rms_eps_err_deg_s2",
+                "runs"
+            ]
+        );
+        assert_eq!(r["runs"], 6);
+    }
+    let mc_row = |method: &str, gamma: f64| {
+        mc.iter()
+            .find(|r| {
+                r["method"] == method && (r["gamma_deg"].as_f64().expect("γ") - gamma).abs() < 1e-9
+            })
+            .unwrap_or_else(|| panic!("no noise_mc row {method} γ={gamma}"))
+    };
+    // The smoother conditions on the whole turn, the filter only on the past: over the same
+    // noisy turns its RMS errors cannot be larger (the UKF's forward pass is its input).
+    for gamma in [0.0, 10.0] {
+        for what in ["rms_alpha_err_deg", "rms_eps_err_deg_s2"] {
+            let smooth = mc_row("urts", gamma)[what].as_f64().expect("num");
+            let filter = mc_row("ukf", gamma)[what].as_f64().expect("num");
+            assert!(
+                smooth <= filter,
+                "γ={gamma} {what}: urts {smooth} > ukf {filter}"
+            );
+        }
+    }
     // Direct inversion fails near 90° in both variants: over the limits (or undefined) from
     // somewhere in (80°, 90°), and nowhere before.
     for bias in ["+", "-"] {
@@ -98,7 +150,11 @@ fn the_papers_conclusions_hold() {
     assert!(report.contains("**Verdict.**"));
     assert!(report.contains("Maxima exclude only the first cycle"));
     assert_eq!(s["alternative_verdicts"].as_array().map(Vec::len), Some(32));
+    assert!(report.contains("## Nonlinear filters against WLS"));
+    assert!(report.contains("**Comment.**"));
     for svg in [
+        "tracking_gamma0_alpha.svg",
+        "tracking_gamma0_eps.svg",
         "gamma_sweep.svg",
         "wls_gamma10_eps.svg",
         "direct_gamma0_alpha.svg",
@@ -114,7 +170,7 @@ fn shards_merge_into_the_single_run() {
     // The smallest useful campaign: one γ sweep point beyond 0 and no extras.
     std::fs::write(
         dir.join("tiny.toml"),
-        "case_gammas_deg = [10.0]\n[sweep]\nfrom_deg = 8.0\nto_deg = 12.0\nstep_deg = 4.0\n[beyond]\nenabled = false\n",
+        "case_gammas_deg = [10.0]\n[sweep]\nfrom_deg = 8.0\nto_deg = 12.0\nstep_deg = 4.0\n[beyond]\nenabled = false\n[tracking]\nruns = 3\n",
     )
     .expect("write config");
     ok(
@@ -170,8 +226,11 @@ fn shards_merge_into_the_single_run() {
     assert_same_files(&dir.join("t1"), &dir.join("m"));
     assert_same_files(&dir.join("t1"), &dir.join("t2"));
     assert!(read(&dir.join("a/summary.json")).contains("\"shard\": \"1/2\""));
+    // The Monte Carlo's runs are split between the shards (1 + 2 of 3) and merged whole.
+    let rows = |d: &str| read(&dir.join(d).join("runs_noise.csv")).lines().count() - 1;
+    assert_eq!((rows("a"), rows("b"), rows("m")), (1, 2, 3));
     // A shard of a differently configured campaign is refused.
-    std::fs::write(dir.join("other.toml"), "case_gammas_deg = [5.0]\n[sweep]\nfrom_deg = 8.0\nto_deg = 12.0\nstep_deg = 4.0\n[beyond]\nenabled = false\n").expect("write");
+    std::fs::write(dir.join("other.toml"), "case_gammas_deg = [5.0]\n[sweep]\nfrom_deg = 8.0\nto_deg = 12.0\nstep_deg = 4.0\n[beyond]\nenabled = false\n[tracking]\nruns = 3\n").expect("write");
     ok(&dir, &["boom", "--config", "other.toml", "--out", "c"]);
     let err = fails(&dir, &["merge", "a", "c", "--out", "bad"]);
     assert!(err.contains("another campaign"), "{err}");
