@@ -138,7 +138,9 @@ fn common_dt(blocks: &[&DiscreteSs]) -> Result<f64> {
 /// The blocks are appended (states and noise inputs in block order). Their control inputs
 /// `v` (all blocks' inputs stacked) are wired as `v = K·y + E·u` from their outputs `y` (all
 /// blocks' outputs stacked) and the new external inputs `u`; the new outputs are
-/// `z = P·y + Qd·u`. Algebraic loops through the feed-throughs are solved exactly.
+/// `z = P·y + Qd·u`, with `K` = `loop_gain`, `E` = `input_map`, `P` = `output_map` and
+/// `Qd` = `feedthrough` (the letters of the wiring, named as in errors; not the covariances
+/// of the workspace's notation). Algebraic loops through the feed-throughs are solved exactly.
 ///
 /// # Errors
 /// [`Error::DimensionMismatch`] for wiring matrices of the wrong shape,
@@ -165,14 +167,14 @@ fn common_dt(blocks: &[&DiscreteSs]) -> Result<f64> {
 /// ```
 pub fn connect(
     blocks: &[&DiscreteSs],
-    k: &DMatrix<f64>,
-    e: &DMatrix<f64>,
-    p: &DMatrix<f64>,
-    qd: &DMatrix<f64>,
+    loop_gain: &DMatrix<f64>,
+    input_map: &DMatrix<f64>,
+    output_map: &DMatrix<f64>,
+    feedthrough: &DMatrix<f64>,
 ) -> Result<DiscreteSs> {
     let dt = common_dt(blocks)?;
     let parts: Vec<Parts> = blocks.iter().map(|b| parts_d(b)).collect();
-    let r = connect_parts(&parts, k, e, p, qd)?;
+    let r = connect_parts(&parts, loop_gain, input_map, output_map, feedthrough)?;
     DiscreteSs::new(r.f, r.b, r.h, r.d, dt)?.with_noise(r.g, r.j, validate::symmetrize(&r.q))
 }
 
@@ -196,10 +198,10 @@ pub fn connect(
 /// ```
 pub fn connect_continuous(
     blocks: &[&ContinuousSs],
-    k: &DMatrix<f64>,
-    e: &DMatrix<f64>,
-    p: &DMatrix<f64>,
-    qd: &DMatrix<f64>,
+    loop_gain: &DMatrix<f64>,
+    input_map: &DMatrix<f64>,
+    output_map: &DMatrix<f64>,
+    feedthrough: &DMatrix<f64>,
 ) -> Result<ContinuousSs> {
     let parts: Vec<Parts> = blocks
         .iter()
@@ -213,7 +215,7 @@ pub fn connect_continuous(
             q: s.w().clone(),
         })
         .collect();
-    let r = connect_parts(&parts, k, e, p, qd)?;
+    let r = connect_parts(&parts, loop_gain, input_map, output_map, feedthrough)?;
     ContinuousSs::new(r.f, r.b, r.h, r.d)?.with_noise(r.g, validate::symmetrize(&r.q))
 }
 

@@ -7,12 +7,13 @@
 //! |---|---|
 //! | n | number of states |
 //! | m | number of outputs (measurements) |
-//! | l | number of control (deterministic) inputs |
-//! | p | number of white-noise inputs |
+//! | p | number of control (deterministic) inputs |
+//! | q | number of white-noise inputs |
 //! | `A`, `B`, `C`, `D` | continuous model `ẋ = Ax + Bu + Gw`, `y = Cx + Du` ([`ContinuousSs`]) |
 //! | `G`, `W` | noise input matrix and white-noise intensity (spectral density) `E[w(t)w(s)ᵀ] = Wδ(t−s)` |
 //! | `F`, `B`, `H`, `D` | discrete model `x_{k+1} = Fx_k + Bu_k + Gw_k`, `y_k = Hx_k + Du_k + Jw_k` ([`DiscreteSs`]) |
 //! | `J`, `Q` | discrete noise feed-through and covariance `cov(w_k) = Q`; cross-covariance `GQJᵀ` |
+//! | [`SYMMETRY_TOL`], [`PSD_TOL`] | the tolerance policy of every covariance check, relative to the matrix's own scale (a change of units never changes a verdict) |
 //! | Δt (`dt`) | sampling interval in seconds |
 //! | `N` | white-noise intensity of a scalar shaping filter; `D` its output variance |
 //!
@@ -108,6 +109,7 @@ pub use tf::{ContinuousTf, DiscreteTf, PaperVariant};
 
 /// Re-export of the linear-algebra crate whose types appear in this API.
 pub use nalgebra;
+pub use validate::{PSD_TOL, SYMMETRY_TOL};
 
 /// The README's examples, compiled and run as doc tests.
 #[cfg(doctest)]

@@ -4,10 +4,15 @@ use nalgebra::DMatrix;
 
 use crate::error::{Error, Result};
 
-/// Relative tolerance for symmetry of covariance / intensity matrices: |M − Mᵀ| ≤ this × max(1, max|M|).
-pub(crate) const SYMMETRY_TOL: f64 = 1e-9;
-/// Relative tolerance for PSD: smallest eigenvalue ≥ −this × max(1, max|M|).
-pub(crate) const PSD_TOL: f64 = 1e-10;
+/// Symmetry tolerance of covariance and intensity inputs, relative to the matrix's own scale:
+/// accepted when `max|Mᵢⱼ − Mⱼᵢ| ≤ SYMMETRY_TOL · max|M|`, then symmetrised. The workspace's
+/// one tolerance policy (the same value and rule in `kalman` and `wls`): scaling a matrix by
+/// any positive factor — a change of units — never changes the verdict.
+pub const SYMMETRY_TOL: f64 = 1e-10;
+/// Positive-semidefiniteness tolerance, relative to the matrix's own scale: accepted when the
+/// smallest eigenvalue of the symmetric part is `≥ −PSD_TOL · max|λ|` (round-off of an exactly
+/// singular covariance, such as the fuel model's, lies far inside it).
+pub const PSD_TOL: f64 = 1e-10;
 
 pub(crate) fn finite(name: &'static str, m: &DMatrix<f64>) -> Result<()> {
     for c in 0..m.ncols() {
@@ -69,7 +74,7 @@ pub(crate) fn covariance(
     if n == 0 {
         return Ok(());
     }
-    let scale = m.amax().max(1.0);
+    let scale = m.amax();
     let mut asym: f64 = 0.0;
     for i in 0..n {
         for j in 0..i {
@@ -83,8 +88,9 @@ pub(crate) fn covariance(
         });
     }
     let sym = (m + m.transpose()) * 0.5;
-    let min_eig = sym.symmetric_eigenvalues().min();
-    if min_eig < -PSD_TOL * scale {
+    let eig = sym.symmetric_eigenvalues();
+    let min_eig = eig.min();
+    if min_eig < -PSD_TOL * eig.amax() {
         return Err(Error::NotPositiveSemiDefinite {
             name,
             min_eigenvalue: min_eig,

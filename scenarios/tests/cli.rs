@@ -12,6 +12,10 @@ mod fit;
 mod fueling;
 #[path = "cli/hostile.rs"]
 mod hostile;
+#[path = "cli/input_errors.rs"]
+mod input_errors;
+#[path = "cli/output_safety.rs"]
+mod output_safety;
 #[path = "cli/uav.rs"]
 mod uav;
 #[path = "cli/userdata.rs"]

@@ -301,10 +301,8 @@ impl Whitener {
                     });
                 }
                 check_finite(name, V)?;
-                let scale = V.amax();
-                // Asymmetry up to a few hundred ulps of the largest entry is rounding from
-                // whoever assembled V; anything larger is a modelling error.
-                let tol = 256.0 * f64::EPSILON * scale;
+                // The workspace's tolerance policy: asymmetry relative to V's own scale.
+                let tol = crate::SYMMETRY_TOL * V.amax();
                 let mut worst = (0, 0, 0.0_f64);
                 for i in 0..m {
                     for j in 0..i {

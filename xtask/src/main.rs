@@ -6,6 +6,7 @@
 mod bench;
 mod examples;
 mod mutants;
+mod notation;
 mod tidy;
 
 use std::path::{Path, PathBuf};

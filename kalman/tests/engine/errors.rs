@@ -194,3 +194,35 @@ fn dimensions_are_checked() {
         Err(Error::NoModel { step: 0 })
     ));
 }
+
+/// `R(θ)·diag(l1, l2)·R(θ)ᵀ`, plus `skew` added to the (0, 1) entry only.
+fn rotated(l1: f64, l2: f64, skew: f64, unit: f64) -> [[f64; 2]; 2] {
+    let (s, c) = 0.3_f64.sin_cos();
+    let a = c * c * l1 + s * s * l2;
+    let b = s * c * (l1 - l2);
+    let d = s * s * l1 + c * c * l2;
+    [[a * unit, (b + skew) * unit], [b * unit, d * unit]]
+}
+
+/// The tolerance policy is relative to the matrix's own scale: one process noise covariance
+/// written in m² and in mm² (× 1e6) gets the same verdict; the cases sit a factor of 50
+/// either side of the 1e-10 tolerances, far from round-off and from real modelling errors.
+#[test]
+fn covariance_checks_do_not_depend_on_units() {
+    let cases = [
+        ((1e-4, -5e-11, 0.0), false),
+        ((1e-4, -5e-15, 0.0), true),
+        ((1e-4, 1e-5, 5e-13), false),
+        ((1e-4, 1e-5, 5e-16), true),
+    ];
+    for ((l1, l2, skew), ok) in cases {
+        for unit in [1.0, 1e6] {
+            let q = rotated(l1, l2, skew, unit);
+            let got = Model::new(dims(), &F, &H, &q, &R);
+            assert_eq!(got.is_ok(), ok, "unit × {unit}: {q:?} gave {:?}", got.err());
+        }
+    }
+    assert!(
+        (kalman::SYMMETRY_TOL - 1e-10).abs() < 1e-25 && (kalman::PSD_TOL - 1e-10).abs() < 1e-25
+    );
+}

@@ -463,3 +463,39 @@ fn ill_posed_feedback_loop_and_singular_dc_gain() {
         Err(Error::Singular { name: "A", .. })
     ));
 }
+
+/// `R(θ)·diag(l1, l2)·R(θ)ᵀ`, plus `skew` added to the (0, 1) entry only.
+fn rotated(l1: f64, l2: f64, skew: f64) -> DMatrix<f64> {
+    let (s, c) = 0.3_f64.sin_cos();
+    let r = DMatrix::from_row_slice(2, 2, &[c, -s, s, c]);
+    let mut m = &r * DMatrix::from_diagonal(&nalgebra::dvector![l1, l2]) * r.transpose();
+    m[(0, 1)] += skew;
+    m
+}
+
+/// The tolerance policy is relative to the matrix's own scale: one noise intensity written in
+/// m² and in mm² (× 1e6) gets the same verdict. The matrices sit a factor of 50 either side
+/// of the 1e-10 tolerances, far from round-off (1e-16) and from any real modelling error.
+#[test]
+fn covariance_checks_do_not_depend_on_units() {
+    let verdict = |w: DMatrix<f64>| {
+        ContinuousSs::new(z(2, 2), z(2, 0), z(1, 2), z(1, 0))
+            .expect("valid")
+            .with_noise(DMatrix::identity(2, 2), w)
+    };
+    // (1 cm)² variance with an eigenvalue of −5e-7 relative: not PSD in any unit.
+    let cases = [
+        (rotated(1e-4, -5e-11, 0.0), false),
+        (rotated(1e-4, -5e-15, 0.0), true),
+        (rotated(1e-4, 1e-5, 5e-13), false),
+        (rotated(1e-4, 1e-5, 5e-16), true),
+    ];
+    for (m2, ok) in cases {
+        for unit in [1.0, 1e6] {
+            let w = &m2 * unit;
+            let got = verdict(w.clone());
+            assert_eq!(got.is_ok(), ok, "unit × {unit}: {w} gave {got:?}");
+        }
+    }
+    assert!((model::SYMMETRY_TOL - 1e-10).abs() < 1e-25 && (model::PSD_TOL - 1e-10).abs() < 1e-25);
+}

@@ -85,3 +85,83 @@ pub fn fails(dir: &Path, args: &[&str]) -> String {
     );
     err
 }
+
+pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).expect("write input");
+    p
+}
+
+/// Runs a command that must fail with exit code 2 and exactly one line on stderr containing
+/// every string of `expect`, leaving nothing in `dir` but the inputs (`inputs` files).
+pub fn refused(dir: &Path, args: &[&str], expect: &[&str], inputs: usize) {
+    let out = run(dir, args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.lines().count(), 1, "one line on stderr: {err}");
+    for e in expect {
+        assert!(err.contains(e), "{args:?}: `{e}` not in: {err}");
+    }
+    let left = std::fs::read_dir(dir).map(|d| d.count()).unwrap_or(0);
+    assert_eq!(
+        left, inputs,
+        "a failed run must leave no output or temporary file"
+    );
+}
+
+/// Header and numeric rows of a CSV written by the program.
+pub fn read_csv(path: &Path) -> (String, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).expect("read output");
+    let mut lines = text.lines();
+    let header = lines.next().expect("header").to_string();
+    let rows = lines
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse::<f64>().expect("number"))
+                .collect()
+        })
+        .collect();
+    (header, rows)
+}
+
+pub fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a.is_nan() && b.is_nan()) || (a - b).abs() <= tol * (1.0 + a.abs().max(b.abs()))
+}
+
+/// Reads a JSON file written by the program.
+pub fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("JSON")
+}
+
+pub fn mat(v: &serde_json::Value) -> Vec<Vec<f64>> {
+    v.as_array()
+        .expect("matrix")
+        .iter()
+        .map(|r| {
+            r.as_array()
+                .expect("row")
+                .iter()
+                .map(|x| x.as_f64().expect("number"))
+                .collect()
+        })
+        .collect()
+}
+
+/// Every file in `dir` (following links) with its bytes, to show a failed run touched none.
+pub fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .expect("list dir")
+        .map(|e| {
+            let e = e.expect("entry");
+            let bytes = std::fs::read(e.path()).unwrap_or_default();
+            (e.file_name().to_string_lossy().into_owned(), bytes)
+        })
+        .collect()
+}
+
+/// A scalar random walk with a prior, and a discrete JSON and a continuous model beside it.
+pub const WALK_TOML: &str =
+    "dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\nx0 = [0]\nP0 = [[1]]\n";
+pub const WALK_JSON: &str =
+    r#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "x0": [0], "P0": [[1]]}"#;
+pub const CONT_JSON: &str = r#"{"A": [[-1]], "C": [[1]], "Qc": [[2]], "R": [[1]]}"#;

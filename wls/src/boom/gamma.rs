@@ -4,7 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::estimator::{BoomConfig, BoomEstimator};
+use super::config::BoomConfig;
+use super::estimator::BoomEstimator;
 use super::profile::TrajectoryPoint;
 use crate::error::{Error, Result};
 

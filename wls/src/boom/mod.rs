@@ -26,14 +26,16 @@
 //! Errors are judged at the sensor's limit: variant "+" adds +Δa to a_x and a_y, "−" adds −Δa;
 //! δα± = |α± − α|, δε± = |ε± − ε| against the allowed Δα, Δε.
 
+pub mod config;
 pub mod estimator;
 pub mod gamma;
 pub mod profile;
 
-pub use estimator::{
-    AngleRecovery, AngleUnit, AxWeightLaw, BoomConfig, BoomEstimator, BoomMethod, BoomSolver,
-    Estimate, RateWeight, WlsWeights,
+pub use config::{
+    AngleRecovery, AngleUnit, AxWeightLaw, BoomConfig, BoomMethod, BoomSolver, Estimate,
+    RateWeight, WlsWeights,
 };
+pub use estimator::BoomEstimator;
 pub use gamma::{
     CycleError, ErrorVariant, GammaRow, GammaSweepReport, Limits, Sign, TurnRun,
     ideal_accelerometer, run_turn, sweep_gamma,

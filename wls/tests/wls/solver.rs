@@ -558,3 +558,22 @@ fn invalid_inputs_are_typed_errors() {
         .to_string();
     assert!(msg.contains("V[1]") && msg.contains("≥ 0"), "{msg}");
 }
+
+/// The tolerance policy is relative to the matrix's own scale: one weight matrix written in
+/// two units (× 1e6) gets the same symmetry verdict; the asymmetries sit a factor of 50 either
+/// side of `SYMMETRY_TOL` (256 ulps, the old absolute-looking rule, would refuse the second).
+#[test]
+fn weight_checks_do_not_depend_on_units() {
+    let h = dmatrix![1.0, 0.0; 0.0, 1.0; 1.0, 1.0];
+    let z = dvector![1.0, 2.0, 3.0];
+    let o = SolveOptions::default();
+    for (skew, ok) in [(5e-9, false), (5e-12, true)] {
+        for unit in [1e-4, 1e2] {
+            let mut v = dmatrix![1.0, 0.2, 0.0; 0.2, 1.0, 0.0; 0.0, 0.0, 2.0];
+            v[(0, 1)] += skew;
+            let got = solve(&h, &z, &Weights::Full(v * unit), &o);
+            assert_eq!(got.is_ok(), ok, "skew {skew}, unit {unit}: {got:?}");
+        }
+    }
+    assert!((wls::SYMMETRY_TOL - 1e-10).abs() < 1e-25);
+}
