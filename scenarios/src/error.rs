@@ -93,6 +93,35 @@ pub enum Error {
     },
 }
 
+/// Why a command-line value was refused; clap prints it after naming the argument.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ValueError {
+    /// Not a string of decimal digits.
+    #[error("expected a whole number")]
+    NotWhole,
+    /// Digits, but more than the target type holds.
+    #[error("too large for a whole number here")]
+    TooLarge,
+    /// A count that must be at least 1.
+    #[error("must be at least 1")]
+    Zero,
+    /// A number of seconds that is zero, negative or not finite.
+    #[error("must be finite and > 0 (seconds)")]
+    NotPositiveSeconds,
+    /// Not a number where seconds were expected.
+    #[error("not a number (seconds, finite and > 0)")]
+    NotSeconds,
+    /// A discretisation method the program does not know (the text given).
+    #[error(
+        "unknown method `{0}`: expected zoh, tustin, tustin-prewarp:W, euler or backward-euler"
+    )]
+    UnknownMethod(String),
+    /// `tustin-prewarp:W` with a frequency that is not a finite number > 0 (the text given).
+    #[error("tustin-prewarp:W needs a pre-warp frequency W > 0 in rad/s, not `{0}`")]
+    Prewarp(String),
+}
+
 impl Error {
     /// The process exit code for this error: 2 for input the user can fix, 1 otherwise.
     pub fn exit_code(&self) -> u8 {

@@ -38,4 +38,4 @@ pub mod uav;
 pub mod userdata;
 
 pub use campaign::Campaign;
-pub use error::Error;
+pub use error::{Error, ValueError};

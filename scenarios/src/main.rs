@@ -13,7 +13,7 @@ use scenarios::boom::Boom;
 use scenarios::fueling::Fueling;
 use scenarios::montecarlo::Shard;
 use scenarios::uav::Uav;
-use scenarios::{Campaign, Error};
+use scenarios::{Campaign, Error, ValueError};
 
 /// Stochastic estimation for launch and flight-test measurement: the papers' scenarios and
 /// the engine's front door for recorded data.
@@ -47,24 +47,23 @@ struct CampaignArgs {
     shard: Option<Shard>,
 }
 
-fn parse_shard(s: &str) -> Result<Shard, String> {
-    s.parse::<Shard>().map_err(|e| e.to_string())
+fn parse_shard(s: &str) -> Result<Shard, Error> {
+    s.parse::<Shard>()
 }
 
-/// A whole number (the message says what is wrong with the text).
-fn parse_whole<T: std::str::FromStr>(s: &str) -> Result<T, String> {
+/// A whole number (the error says what is wrong with the text).
+fn parse_whole<T: std::str::FromStr>(s: &str) -> Result<T, ValueError> {
     let digits = !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
     if !digits {
-        return Err("expected a whole number".into());
+        return Err(ValueError::NotWhole);
     }
-    s.parse::<T>()
-        .map_err(|_| "too large for a whole number here".into())
+    s.parse::<T>().map_err(|_| ValueError::TooLarge)
 }
 
 /// A count ≥ 1.
-fn parse_count(s: &str) -> Result<usize, String> {
+fn parse_count(s: &str) -> Result<usize, ValueError> {
     match parse_whole::<usize>(s)? {
-        0 => Err("must be at least 1".into()),
+        0 => Err(ValueError::Zero),
         n => Ok(n),
     }
 }

@@ -127,22 +127,39 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     }
 }
 
+/// Why a destination is refused (the caller names the path or the option).
+#[derive(Debug, thiserror::Error)]
+enum Refusal {
+    #[error("an empty file name")]
+    EmptyName,
+    #[error("{} is {kind}, not a directory", dir.display())]
+    AncestorNotDirectory { dir: PathBuf, kind: &'static str },
+    #[error("cannot resolve the symbolic link: {0}")]
+    UnresolvedLink(std::io::Error),
+    #[error("a symbolic link to {0}; refusing to replace it (only regular files are written)")]
+    LinkToSpecial(&'static str),
+    #[error("a symbolic link to a missing file; refusing to follow it")]
+    DanglingLink,
+    #[error("is {kind}; refusing to replace it: only regular files are written{}",
+        if *directory { "" } else { "; use --out - for standard output" })]
+    NotRegular { kind: &'static str, directory: bool },
+}
+
 /// The regular file to replace when writing `path`, by the rules in the module docs: `path`
 /// itself, or the file a symbolic link points to. `Err` says why `path` is refused.
-fn resolve(path: &Path) -> std::result::Result<PathBuf, String> {
+fn resolve(path: &Path) -> std::result::Result<PathBuf, Refusal> {
     if path.as_os_str().is_empty() {
-        return Err("an empty file name".into());
+        return Err(Refusal::EmptyName);
     }
     let Ok(meta) = std::fs::symlink_metadata(path) else {
         // A new file: every existing ancestor must be a directory.
         for dir in path.ancestors().skip(1) {
             if let Ok(m) = std::fs::metadata(dir) {
                 if !m.is_dir() {
-                    return Err(format!(
-                        "{} is {}, not a directory",
-                        dir.display(),
-                        kind_of(&m)
-                    ));
+                    return Err(Refusal::AncestorNotDirectory {
+                        dir: dir.to_path_buf(),
+                        kind: kind_of(&m),
+                    });
                 }
                 break;
             }
@@ -151,27 +168,20 @@ fn resolve(path: &Path) -> std::result::Result<PathBuf, String> {
     };
     if meta.file_type().is_symlink() {
         return match std::fs::metadata(path) {
-            Ok(target) if target.is_file() => std::fs::canonicalize(path)
-                .map_err(|e| format!("cannot resolve the symbolic link: {e}")),
-            Ok(target) => Err(format!(
-                "a symbolic link to {}; refusing to replace it (only regular files are written)",
-                kind_of(&target)
-            )),
-            Err(_) => Err("a symbolic link to a missing file; refusing to follow it".into()),
+            Ok(target) if target.is_file() => {
+                std::fs::canonicalize(path).map_err(Refusal::UnresolvedLink)
+            }
+            Ok(target) => Err(Refusal::LinkToSpecial(kind_of(&target))),
+            Err(_) => Err(Refusal::DanglingLink),
         };
     }
     if meta.is_file() {
         return Ok(path.to_path_buf());
     }
-    let hint = if meta.is_dir() {
-        ""
-    } else {
-        "; use --out - for standard output"
-    };
-    Err(format!(
-        "is {}; refusing to replace it: only regular files are written{hint}",
-        kind_of(&meta)
-    ))
+    Err(Refusal::NotRegular {
+        kind: kind_of(&meta),
+        directory: meta.is_dir(),
+    })
 }
 
 /// Checks a command's single output `out` before any work: `-` is standard output;

@@ -35,7 +35,7 @@ use std::path::{Path, PathBuf};
 use faer::Mat;
 use nalgebra::DMatrix;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, ValueError};
 use data::{DataReader, Row};
 use model_file::{DiscreteFile, DiscreteModel, to_rows};
 
@@ -91,8 +91,8 @@ pub enum MethodArg {
 }
 
 impl std::str::FromStr for MethodArg {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
+    type Err = ValueError;
+    fn from_str(s: &str) -> std::result::Result<Self, ValueError> {
         match s {
             "zoh" => Ok(MethodArg::Zoh),
             "tustin" => Ok(MethodArg::Tustin),
@@ -101,13 +101,9 @@ impl std::str::FromStr for MethodArg {
             _ => match s.strip_prefix("tustin-prewarp:") {
                 Some(w) => match w.parse::<f64>() {
                     Ok(w) if w.is_finite() && w > 0.0 => Ok(MethodArg::TustinPrewarp(w)),
-                    _ => Err(format!(
-                        "tustin-prewarp:W needs a pre-warp frequency W > 0 in rad/s, not `{w}`"
-                    )),
+                    _ => Err(ValueError::Prewarp(w.to_string())),
                 },
-                None => Err(format!(
-                    "unknown method `{s}`: expected zoh, tustin, tustin-prewarp:W, euler or backward-euler"
-                )),
+                None => Err(ValueError::UnknownMethod(s.to_string())),
             },
         }
     }
@@ -144,15 +140,15 @@ pub struct DiscretizeArgs {
 }
 
 /// A sampling interval: a finite number > 0 (seconds).
-fn parse_dt(s: &str) -> std::result::Result<f64, String> {
+fn parse_dt(s: &str) -> std::result::Result<f64, ValueError> {
     match s.trim().parse::<f64>() {
         Ok(dt) if dt.is_finite() && dt > 0.0 => Ok(dt),
-        Ok(_) => Err("must be finite and > 0 (seconds)".into()),
-        Err(_) => Err("not a number (seconds, finite and > 0)".into()),
+        Ok(_) => Err(ValueError::NotPositiveSeconds),
+        Err(_) => Err(ValueError::NotSeconds),
     }
 }
 
-fn parse_method(s: &str) -> std::result::Result<MethodArg, String> {
+fn parse_method(s: &str) -> std::result::Result<MethodArg, ValueError> {
     s.parse()
 }
 

@@ -39,14 +39,6 @@ const OVER_LENGTH: &[&str] = &["kalman/src/riccati.rs"];
 /// for the change that owns it; the list only shrinks, like [`OVER_LENGTH`].
 const KNOWN_CYCLES: &[&str] = &["kalman: filter -> schedule -> filter"];
 
-/// Files of `scenarios` that still return `Result<_, String>` (clap value parsers and
-/// helpers owned by the command-line changes); the list only shrinks, like [`OVER_LENGTH`].
-const STRING_ERRORS: &[&str] = &[
-    "scenarios/src/main.rs",
-    "scenarios/src/output.rs",
-    "scenarios/src/userdata.rs",
-];
-
 /// Returns one human-readable line per problem found below `root`.
 pub(crate) fn check(root: &Path) -> Result<Vec<String>> {
     let mut problems = Vec::new();
@@ -90,21 +82,13 @@ pub(crate) fn check(root: &Path) -> Result<Vec<String>> {
                 ));
             }
             if rel.starts_with("scenarios/") {
-                let listed = STRING_ERRORS.contains(&rel.as_str());
-                let mut any = false;
                 for (i, line) in text.lines().enumerate() {
-                    any |= string_result(line);
-                    if string_result(line) && !listed {
+                    if string_result(line) {
                         problems.push(format!(
                             "{rel}:{}: `Result<_, String>`: return a typed error",
                             i + 1
                         ));
                     }
-                }
-                if listed && !any {
-                    problems.push(format!(
-                        "{rel}: no `Result<_, String>` left: remove it from STRING_ERRORS"
-                    ));
                 }
             }
         }
