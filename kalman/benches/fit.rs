@@ -98,7 +98,7 @@ fn bench(c: &mut Criterion) {
                 CovarianceForm::Standard,
             )
             .expect("filter");
-            let mut s = RtsSmoother::new(2);
+            let mut s = RtsSmoother::new();
             for k in 0..z.len() {
                 f.step(&z[k..k + 1], None).expect("step");
                 s.record(&f).expect("record");

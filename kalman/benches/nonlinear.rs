@@ -11,7 +11,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use kalman::Fixed;
+use kalman::FixedDims;
 use kalman::nonlinear::{
     AutoDiff, Ekf, EkfUpdate, GenericModel, Jacobians, NonlinearModel, Scalar, SigmaPoints, Ukf,
 };
@@ -127,7 +127,7 @@ fn nonlinear(c: &mut Criterion) {
     g.warm_up_time(Duration::from_millis(500));
     g.measurement_time(Duration::from_secs(2));
     let zs = measurements();
-    let d = Fixed::<4, 2>::new();
+    let d = FixedDims::<4, 2>::new();
     let label = "(4,2)";
     let mut k = 0;
     let mut hand = Ekf::new(d, Hand, &X0, &P0, EkfUpdate::Extended).unwrap();

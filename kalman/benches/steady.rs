@@ -17,7 +17,7 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use faer::Mat;
 use kalman::riccati::dare;
 use kalman::schedule::{GainSchedule, ScheduleOptions};
-use kalman::{CovarianceForm, Dyn, Filter, Fixed};
+use kalman::{CovarianceForm, DynDims, Filter, FixedDims};
 
 use common::{Problem, model, problem};
 
@@ -27,7 +27,7 @@ fn gain_schedule(c: &mut Criterion) {
     let id = "(7,2)";
     let P0 = Mat::<f64>::identity(7, 7);
     let mut full = Filter::new(
-        model(&p, Fixed::<7, 2>::new()),
+        model(&p, FixedDims::<7, 2>::new()),
         &[0.0; 7],
         &P0,
         CovarianceForm::Joseph,
@@ -41,7 +41,7 @@ fn gain_schedule(c: &mut Criterion) {
         })
     });
     let sched = GainSchedule::new(
-        model(&p, Fixed::<7, 2>::new()),
+        model(&p, FixedDims::<7, 2>::new()),
         &P0,
         ScheduleOptions::default(),
     )
@@ -63,7 +63,7 @@ fn iterate(p: &Problem) -> (Mat<f64>, usize) {
     let (n, m) = (p.F.nrows(), p.H.nrows());
     let P0 = Mat::<f64>::identity(n, n);
     let mut f = Filter::new(
-        model(p, Dyn::new(n, m, 0).unwrap()),
+        model(p, DynDims::new(n, m, 0).unwrap()),
         &vec![0.0; n],
         &P0,
         CovarianceForm::Joseph,

@@ -13,7 +13,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use faer::Mat;
-use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed};
+use kalman::{CovarianceForm, Dims, DynDims, Filter, FixedDims};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 use common::{Problem, model, problem};
@@ -156,14 +156,14 @@ fn small<const N: usize, const M: usize>(
             na.step(black_box(&zs[k]));
         })
     });
-    let mut fixed = engine(&p, Fixed::<N, M, 0>::new());
+    let mut fixed = engine(&p, FixedDims::<N, M, 0>::new());
     c.bench_function(BenchmarkId::new("kalman_fixed", &label), |b| {
         b.iter(|| {
             k = (k + 1) % p.z.len();
             black_box(fixed.step(black_box(&p.z[k]), None).unwrap());
         })
     });
-    let mut dynf = engine(&p, Dyn::new(N, M, 0).unwrap());
+    let mut dynf = engine(&p, DynDims::new(N, M, 0).unwrap());
     c.bench_function(BenchmarkId::new("kalman_dyn", &label), |b| {
         b.iter(|| {
             k = (k + 1) % p.z.len();
@@ -187,7 +187,7 @@ fn large(
             na.step(black_box(&p.z[k]));
         })
     });
-    let mut dynf = engine(&p, Dyn::new(n, m, 0).unwrap());
+    let mut dynf = engine(&p, DynDims::new(n, m, 0).unwrap());
     c.bench_function(BenchmarkId::new("kalman_dyn", &label), |b| {
         b.iter(|| {
             k = (k + 1) % p.z.len();

@@ -1,12 +1,12 @@
 //! The README's example of using `kalman` alone:
 //! `cargo run -p stochest-kalman --example quickstart`.
 
-use kalman::{CovarianceForm, Dyn, Filter, Model};
+use kalman::{CovarianceForm, DynDims, Filter, Model};
 
 fn main() -> Result<(), kalman::Error> {
     let dt = 0.1; // constant velocity, position measured
     let model = Model::new(
-        Dyn::new(2, 1, 0)?,          // n = 2 states, m = 1 measurement, p = 0 inputs
+        DynDims::new(2, 1, 0)?,      // n = 2 states, m = 1 measurement, p = 0 inputs
         &[[1.0, dt], [0.0, 1.0]],    // F
         &[[1.0, 0.0]],               // H
         &[[1e-4, 0.0], [0.0, 1e-3]], // Q

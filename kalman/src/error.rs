@@ -10,10 +10,10 @@
 ///
 /// # Example
 /// ```
-/// use kalman::{Dyn, Error, Model};
+/// use kalman::{DynDims, Error, Model};
 ///
 /// // A 2×2 F for a model declared with n = 3.
-/// let err = Model::new(Dyn::new(3, 1, 0)?, &[[1.0, 0.0], [0.0, 1.0]], &[[1.0, 0.0, 0.0]],
+/// let err = Model::new(DynDims::new(3, 1, 0)?, &[[1.0, 0.0], [0.0, 1.0]], &[[1.0, 0.0, 0.0]],
 ///     &[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], &[[1.0]]).unwrap_err();
 /// assert!(matches!(err, Error::Shape { name: "F", .. }));
 /// println!("{err}");

@@ -9,7 +9,7 @@ use crate::Error;
 use crate::model::{
     MatrixInput, Model, ModelSource, check_vec, load, load_vec, psd_factor, symmetrise,
 };
-use crate::storage::{Buf, Dims, Dyn};
+use crate::storage::{Buf, Dims, DynDims};
 
 mod dense;
 mod sqrt;
@@ -53,12 +53,12 @@ pub(crate) fn check_diverged(
 ///
 /// # Example
 /// ```
-/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
 ///
 /// // The three forms agree on a well-conditioned problem.
 /// let mut last = Vec::new();
 /// for form in [CovarianceForm::Joseph, CovarianceForm::Standard, CovarianceForm::SquareRoot] {
-///     let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
+///     let model = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
 ///     let mut f = Filter::new(model, &[0.0], &[[1.0]], form)?;
 ///     f.step(&[1.0], None)?;
 ///     last.push(f.covariance()[(0, 0)]);
@@ -147,8 +147,8 @@ struct State<D: Dims> {
     arr: Vec<f64>,
 }
 
-/// A linear Kalman filter on the storage path `D` ([`Dyn`] by default, or
-/// [`crate::Fixed`]).
+/// A linear Kalman filter on the storage path `D` ([`DynDims`] by default, or
+/// [`crate::FixedDims`]).
 ///
 /// `(x0, P0)` is the prior for the first measurement. Each [`Filter::step`] updates with
 /// `z_k` and then predicts to `k + 1` with `u_k`, so after step `k` both the filtered
@@ -158,10 +158,10 @@ struct State<D: Dims> {
 ///
 /// # Example
 /// ```
-/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
 ///
 /// // A random walk observed in unit noise; one step from the prior N(0, 1).
-/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.5]], &[[1.0]])?;
+/// let model = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.5]], &[[1.0]])?;
 /// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
 /// let info = filter.step(&[2.0], None)?;
 /// // Gain 1/2: x = 1, P = 1/2; then the prediction adds Q.
@@ -172,7 +172,7 @@ struct State<D: Dims> {
 /// # Ok::<(), kalman::Error>(())
 /// ```
 #[derive(Clone, Debug)]
-pub struct Filter<D: Dims = Dyn> {
+pub struct Filter<D: Dims = DynDims> {
     model: Model<D>,
     st: State<D>,
 }

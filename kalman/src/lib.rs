@@ -20,9 +20,9 @@
 //! ("delayed" form).
 //!
 //! # Storage paths
-//! [`Filter<Dyn>`](Filter) (the default) keeps heap buffers sized at construction and hands
+//! [`Filter<DynDims>`](Filter) (the default) keeps heap buffers sized at construction and hands
 //! large products to faer's GEMM (`Par::Seq`; Rayon above a threshold with the `parallel`
-//! feature). [`Filter<Fixed<N, M, P>>`](Filter) keeps its buffers inline, each sized by N, M
+//! feature). [`Filter<FixedDims<N, M, P>>`](Filter) keeps its buffers inline, each sized by N, M
 //! and P (n, m ≤ 16).
 //! Both run the same kernels on slices, so they share validation, semantics and tests.
 //!
@@ -48,12 +48,12 @@
 //!
 //! # Example
 //! ```
-//! use kalman::{CovarianceForm, Dyn, Filter, Model};
+//! use kalman::{CovarianceForm, DynDims, Filter, Model};
 //! # fn main() -> Result<(), kalman::Error> {
 //! // Constant-velocity model with position measurements.
 //! let dt = 0.1;
 //! let model = Model::new(
-//!     Dyn::new(2, 1, 0)?,
+//!     DynDims::new(2, 1, 0)?,
 //!     &[[1.0, dt], [0.0, 1.0]],
 //!     &[[1.0, 0.0]],
 //!     &[[1e-4, 0.0], [0.0, 1e-3]],
@@ -117,7 +117,7 @@ pub use error::Error;
 pub use filter::{CovarianceForm, Filter, StepInfo};
 pub use kernels::{FAER_THRESHOLD, PARALLEL_THRESHOLD, RANK_TOL};
 pub use model::{MatrixInput, Model, ModelSource, PSD_TOL, SYMMETRY_TOL};
-pub use storage::{Dims, Dyn, FIXED_MAX, Fixed};
+pub use storage::{Dims, DynDims, FIXED_MAX, FixedDims};
 
 /// Re-export of the faer version whose matrix types this API returns.
 pub use faer;
@@ -125,10 +125,11 @@ pub use faer;
 #[cfg(feature = "nalgebra")]
 pub use nalgebra;
 
-/// The fixed-size filter: `FixedFilter<N, M, P>` = `Filter<Fixed<N, M, P>>`.
-pub type FixedFilter<const N: usize, const M: usize, const P: usize = 0> = Filter<Fixed<N, M, P>>;
+/// The fixed-size filter: `FixedFilter<N, M, P>` = `Filter<FixedDims<N, M, P>>`.
+pub type FixedFilter<const N: usize, const M: usize, const P: usize = 0> =
+    Filter<FixedDims<N, M, P>>;
 /// The fixed-size model.
-pub type FixedModel<const N: usize, const M: usize, const P: usize = 0> = Model<Fixed<N, M, P>>;
+pub type FixedModel<const N: usize, const M: usize, const P: usize = 0> = Model<FixedDims<N, M, P>>;
 
 /// The README's examples, compiled and run as doc tests.
 #[cfg(doctest)]

@@ -285,12 +285,12 @@ pub(crate) fn psd_factor(
 ///
 /// # Example
 /// ```
-/// use kalman::{Dyn, Model};
+/// use kalman::{DynDims, Model};
 ///
 /// // Constant velocity with a known acceleration input and correlated noise.
 /// let dt = 0.1;
 /// let model = Model::new(
-///     Dyn::new(2, 1, 1)?,
+///     DynDims::new(2, 1, 1)?,
 ///     &[[1.0, dt], [0.0, 1.0]],
 ///     &[[1.0, 0.0]],
 ///     &[[1e-4, 0.0], [0.0, 1e-2]],
@@ -298,9 +298,9 @@ pub(crate) fn psd_factor(
 /// )?
 /// .with_control(&[[dt * dt / 2.0], [dt]])?
 /// .with_cross_covariance(&[[0.0], [1e-3]])?;
-/// assert!(model.S().is_some());
+/// assert!(model.s().is_some());
 /// // An indefinite joint covariance [[R, Sᵀ], [S, Q]] is refused by name.
-/// let bad = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[1e-4]], &[[0.1]])?
+/// let bad = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[1e-4]], &[[0.1]])?
 ///     .with_cross_covariance(&[[1.0]]);
 /// assert!(bad.is_err());
 /// # Ok::<(), kalman::Error>(())
@@ -449,34 +449,34 @@ impl<D: Dims> Model<D> {
         self.dims
     }
     /// Transition matrix `F` (n×n).
-    pub fn F(&self) -> MatRef<'_, f64> {
+    pub fn f(&self) -> MatRef<'_, f64> {
         let n = self.dims.n();
         MatRef::from_column_major_slice(&self.F.as_slice()[..n * n], n, n)
     }
     /// Measurement matrix `H` (m×n).
-    pub fn H(&self) -> MatRef<'_, f64> {
+    pub fn h(&self) -> MatRef<'_, f64> {
         let (n, m) = (self.dims.n(), self.dims.m());
         MatRef::from_column_major_slice(&self.H.as_slice()[..m * n], m, n)
     }
     /// Process noise covariance `Q` (n×n).
-    pub fn Q(&self) -> MatRef<'_, f64> {
+    pub fn q(&self) -> MatRef<'_, f64> {
         let n = self.dims.n();
         MatRef::from_column_major_slice(&self.Q.as_slice()[..n * n], n, n)
     }
     /// Measurement noise covariance `R` (m×m).
-    pub fn R(&self) -> MatRef<'_, f64> {
+    pub fn r(&self) -> MatRef<'_, f64> {
         let m = self.dims.m();
         MatRef::from_column_major_slice(&self.R.as_slice()[..m * m], m, m)
     }
     /// Cross-covariance `S` (n×m), if any.
-    pub fn S(&self) -> Option<MatRef<'_, f64>> {
+    pub fn s(&self) -> Option<MatRef<'_, f64>> {
         let (n, m) = (self.dims.n(), self.dims.m());
         self.S
             .as_ref()
             .map(|s| MatRef::from_column_major_slice(&s.as_slice()[..n * m], n, m))
     }
     /// Control matrix `B` (n×p; zero unless set).
-    pub fn B(&self) -> MatRef<'_, f64> {
+    pub fn b(&self) -> MatRef<'_, f64> {
         let (n, p) = (self.dims.n(), self.dims.p());
         MatRef::from_column_major_slice(&self.B.as_slice()[..n * p], n, p)
     }

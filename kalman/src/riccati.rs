@@ -82,10 +82,10 @@ impl Default for RiccatiOptions {
 /// # Example
 /// ```
 /// use kalman::riccati::SteadyState;
-/// use kalman::{Dyn, Model};
+/// use kalman::{DynDims, Model};
 ///
 /// // The steady state of an engine model: random walk, q = 1, r = 1.
-/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]])?;
+/// let model = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]])?;
 /// let ss = SteadyState::of(&model)?;
 /// let p = (1.0 + 5f64.sqrt()) / 2.0; // the golden ratio
 /// assert!((ss.prior[(0, 0)] - p).abs() < 1e-12);
@@ -201,7 +201,7 @@ impl SteadyState {
     /// # Errors
     /// As [`dare`].
     pub fn of<D: Dims>(model: &Model<D>) -> Result<Self, Error> {
-        dare(model.F(), model.H(), model.Q(), model.R(), model.S())
+        dare(model.f(), model.h(), model.q(), model.r(), model.s())
     }
 }
 

@@ -103,7 +103,7 @@ impl<D: Dims> GainSchedule<D> {
             priors.push(to_buf::<D::Nn>(f.predicted_covariance()));
             f.step(&zeros_m, None)?;
             gains.push(to_buf::<D::Nm>(f.gain()));
-            if let Some(S) = model.S() {
+            if let Some(S) = model.s() {
                 cross.push(to_buf::<D::Nm>(
                     cross_gain(S, f.innovation_covariance())?.as_ref(),
                 ));
@@ -161,7 +161,7 @@ impl<D: Dims> GainSchedule<D> {
             CovarianceForm::Joseph,
         )?;
         let mut cross = Vec::new();
-        if let Some(S) = model.S() {
+        if let Some(S) = model.s() {
             cross.push(to_buf::<D::Nm>(
                 cross_gain(S, steady.innovation_cov.as_ref())?.as_ref(),
             ));

@@ -23,16 +23,18 @@ use crate::riccati::symmetrise;
 use crate::storage::Dims;
 use crate::{Error, Filter, Model, RANK_TOL};
 
-/// Recorder and backward pass of the RTS smoother (offline: it stores every step).
+/// Recorder and backward pass of the RTS smoother (offline: it stores every step). The
+/// common path is one call, [`Filter::run_smoothed`]; record by hand (below) to pass control
+/// inputs or per-step models ([`RtsSmoother::record_with`]) or to interleave other work.
 ///
 /// # Example
 /// ```
 /// use kalman::smoother::RtsSmoother;
-/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
 ///
-/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
+/// let model = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
 /// let mut filter = Filter::new(model, &[0.0], &[[10.0]], CovarianceForm::Joseph)?;
-/// let mut rts = RtsSmoother::new(1);
+/// let mut rts = RtsSmoother::new(); // n is taken from the first recorded step
 /// for z in [1.0, 1.3, f64::NAN, 0.8] {
 ///     filter.step(&[z], None)?;
 ///     rts.record(&filter)?;
@@ -43,7 +45,7 @@ use crate::{Error, Filter, Model, RANK_TOL};
 /// assert!((s.covariances[3][(0, 0)] - filter.covariance()[(0, 0)]).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct RtsSmoother {
     n: usize,
     xf: Vec<f64>,
@@ -64,17 +66,9 @@ pub struct Smoothed {
 }
 
 impl RtsSmoother {
-    /// An empty recorder for n states.
-    pub fn new(n: usize) -> Self {
-        Self {
-            n,
-            xf: Vec::new(),
-            pf: Vec::new(),
-            xp: Vec::new(),
-            pp: Vec::new(),
-            ct: Vec::new(),
-            steps: 0,
-        }
+    /// An empty recorder; the number of states is fixed by the first recorded step.
+    pub fn new() -> Self {
+        Self::default()
     }
 
     /// Number of recorded steps.
@@ -90,7 +84,7 @@ impl RtsSmoother {
     /// Records the step the filter has just taken with its own (time-invariant) model.
     ///
     /// # Errors
-    /// [`Error::Dimension`] if the filter's n differs from the smoother's.
+    /// [`Error::Dimension`] if the filter's n differs from that of the steps recorded before.
     pub fn record<D: Dims>(&mut self, filter: &Filter<D>) -> Result<(), Error> {
         self.record_with(filter, filter.model())
     }
@@ -99,12 +93,16 @@ impl RtsSmoother {
     /// model passed to [`Filter::step_with`] for that step).
     ///
     /// # Errors
-    /// [`Error::Dimension`] if n differs from the smoother's.
+    /// [`Error::Dimension`] if n differs from that of the steps recorded before, or the
+    /// model's n from the filter's.
     pub fn record_with<D: Dims>(
         &mut self,
         filter: &Filter<D>,
         model: &Model<D>,
     ) -> Result<(), Error> {
+        if self.steps == 0 {
+            self.n = filter.state().len();
+        }
         let n = self.n;
         if model.dims().n() != n || filter.state().len() != n {
             return Err(Error::Dimension {
@@ -115,8 +113,8 @@ impl RtsSmoother {
         }
         let Pf = filter.covariance();
         // C_k = P_{k|k} Fᵀ − K_k Sᵀ.
-        let mut C = Pf * model.F().transpose();
-        if let Some(S) = model.S() {
+        let mut C = Pf * model.f().transpose();
+        if let Some(S) = model.s() {
             C -= filter.gain() * S.transpose();
         }
         self.xf.extend_from_slice(filter.state());
@@ -183,6 +181,44 @@ impl RtsSmoother {
     }
 }
 
+impl<D: Dims> Filter<D> {
+    /// Runs the filter over `measurements` (one m-vector per step, NaN entries missing, no
+    /// control input) and returns the Rauch–Tung–Striebel smoothed means and covariances of
+    /// every step: the common offline path in one call. The filter is left after the last
+    /// step, so [`Filter::state`] is the filtered estimate there. For control inputs or
+    /// per-step models, record by hand with [`RtsSmoother`].
+    ///
+    /// # Errors
+    /// The errors of [`Filter::step`] (naming the measurement's shape, or the step that
+    /// diverged) and of [`RtsSmoother::smooth`] ([`Error::Dimension`] for no measurements).
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::{CovarianceForm, DynDims, Filter, Model};
+    ///
+    /// // Random walk, q = r = 1, prior N(0, 1), measurements 1 and 3.
+    /// let model = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]])?;
+    /// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
+    /// let s = filter.run_smoothed([[1.0], [3.0]])?;
+    /// // The batch least-squares solution: information matrix [[3, −1], [−1, 2]], rhs [1, 3]
+    /// // gives x = (1, 2) with variances 2/5 and 3/5.
+    /// assert!((s.means[(0, 0)] - 1.0).abs() < 1e-12 && (s.means[(0, 1)] - 2.0).abs() < 1e-12);
+    /// assert!((s.covariances[0][(0, 0)] - 0.4).abs() < 1e-12);
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    pub fn run_smoothed<Z: AsRef<[f64]>>(
+        &mut self,
+        measurements: impl IntoIterator<Item = Z>,
+    ) -> Result<Smoothed, Error> {
+        let mut rts = RtsSmoother::new();
+        for z in measurements {
+            self.step(z.as_ref(), None)?;
+            rts.record(self)?;
+        }
+        rts.smooth()
+    }
+}
+
 fn push(v: &mut Vec<f64>, M: MatRef<'_, f64>) {
     for j in 0..M.ncols() {
         for i in 0..M.nrows() {
@@ -232,13 +268,13 @@ pub(crate) fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f6
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{CovarianceForm, Dyn};
+    use crate::{CovarianceForm, DynDims};
 
     #[test]
     fn scalar_random_walk_two_steps() {
         // x1 = x0 + w, q = 1; z_k = x_k + v, r = 1; prior x0 ~ N(0, 1).
         let model = Model::new(
-            Dyn::new(1, 1, 0).expect("must succeed"),
+            DynDims::new(1, 1, 0).expect("must succeed"),
             &[[1.0]],
             &[[1.0]],
             &[[1.0]],
@@ -247,7 +283,7 @@ mod tests {
         .expect("must succeed");
         let mut f =
             Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph).expect("must succeed");
-        let mut s = RtsSmoother::new(1);
+        let mut s = RtsSmoother::new();
         for z in [1.0, 3.0] {
             f.step(&[z], None).expect("must succeed");
             s.record(&f).expect("must succeed");

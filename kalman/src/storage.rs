@@ -1,10 +1,10 @@
-//! The two storage paths: [`Dyn`] (heap buffers sized at construction) and [`Fixed`]
+//! The two storage paths: [`DynDims`] (heap buffers sized at construction) and [`FixedDims`]
 //! (const-generic inline arrays sized by N, M and P). Kernels see only slices.
 
 use core::fmt::Debug;
 
 /// The dimensions of a filter problem and the storage that goes with them: n states,
-/// m measurements, p control inputs. Implemented by [`Dyn`] and [`Fixed`] only (sealed).
+/// m measurements, p control inputs. Implemented by [`DynDims`] and [`FixedDims`] only (sealed).
 pub trait Dims: Copy + Debug + Send + Sync + sealed::Storage + 'static {
     /// Number of states.
     fn n(&self) -> usize;
@@ -96,7 +96,7 @@ pub(crate) mod sealed {
         type No: Buf<Option<usize>>;
     }
 
-    impl Storage for super::Dyn {
+    impl Storage for super::DynDims {
         type Nn = Vec<f64>;
         type Nm = Vec<f64>;
         type Mn = Vec<f64>;
@@ -110,7 +110,7 @@ pub(crate) mod sealed {
         type No = Vec<Option<usize>>;
     }
 
-    impl<const N: usize, const M: usize, const P: usize> Storage for super::Fixed<N, M, P> {
+    impl<const N: usize, const M: usize, const P: usize> Storage for super::FixedDims<N, M, P> {
         type Nn = Arr<f64, N, N>;
         type Nm = Arr<f64, N, M>;
         type Mn = Arr<f64, M, N>;
@@ -132,21 +132,21 @@ pub(crate) use sealed::Buf;
 ///
 /// # Example
 /// ```
-/// use kalman::{Dyn, Error};
+/// use kalman::{DynDims, Error};
 ///
-/// let dims = Dyn::new(7, 2, 0)?; // n = 7 states, m = 2 measurements, no input
-/// assert!(matches!(Dyn::new(0, 1, 0), Err(Error::Dimension { name: "n", .. })));
+/// let dims = DynDims::new(7, 2, 0)?; // n = 7 states, m = 2 measurements, no input
+/// assert!(matches!(DynDims::new(0, 1, 0), Err(Error::Dimension { name: "n", .. })));
 /// # let _ = dims;
 /// # Ok::<(), kalman::Error>(())
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Dyn {
+pub struct DynDims {
     n: usize,
     m: usize,
     p: usize,
 }
 
-impl Dyn {
+impl DynDims {
     /// Dimensions n (states, ≥ 1), m (measurements, ≥ 1), p (control inputs, may be 0).
     ///
     /// # Errors
@@ -166,11 +166,11 @@ impl Dyn {
                 rule: "at least one measurement",
             });
         }
-        Ok(Dyn { n, m, p })
+        Ok(DynDims { n, m, p })
     }
 }
 
-impl Dims for Dyn {
+impl Dims for DynDims {
     #[inline(always)]
     fn n(&self) -> usize {
         self.n
@@ -188,40 +188,40 @@ impl Dims for Dyn {
 /// Fixed dimensions known at compile time (n = `N` ≤ 16, m = `M` ≤ 16, p = `P` ≤ 16
 /// control inputs): every buffer is an inline array of exactly its size (a
 /// `FixedFilter<2, 1>` is a few hundred bytes), loops are unrolled by the compiler. Same
-/// API and results as [`Dyn`]. The one heap buffer is the square-root form's
+/// API and results as [`DynDims`]. The one heap buffer is the square-root form's
 /// (m + 2n)² pre-array, allocated when such a filter is built (stable Rust cannot size an
 /// inline array by `M + 2N`); no form allocates in a step.
 ///
 /// # Example
 /// ```
-/// use kalman::{CovarianceForm, Filter, Fixed, Model};
+/// use kalman::{CovarianceForm, Filter, FixedDims, Model};
 ///
 /// // The same random walk on the fixed-size path: storage inline, n = m = 1.
-/// let model = Model::new(Fixed::<1, 1>::new(), &[[1.0]], &[[1.0]], &[[0.5]], &[[1.0]])?;
+/// let model = Model::new(FixedDims::<1, 1>::new(), &[[1.0]], &[[1.0]], &[[0.5]], &[[1.0]])?;
 /// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
 /// filter.step(&[2.0], None)?;
 /// assert!((filter.state()[0] - 1.0).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Fixed<const N: usize, const M: usize, const P: usize = 0>(());
+pub struct FixedDims<const N: usize, const M: usize, const P: usize = 0>(());
 
 /// Largest n and m of the fixed-size path.
 pub const FIXED_MAX: usize = 16;
 
-impl<const N: usize, const M: usize, const P: usize> Fixed<N, M, P> {
+impl<const N: usize, const M: usize, const P: usize> FixedDims<N, M, P> {
     /// The fixed dimensions (checked at compile time: 1 ≤ N, M ≤ 16, P ≤ 16).
     pub const fn new() -> Self {
         const {
-            assert!(N >= 1 && N <= FIXED_MAX, "Fixed: N must be in 1..=16");
-            assert!(M >= 1 && M <= FIXED_MAX, "Fixed: M must be in 1..=16");
-            assert!(P <= FIXED_MAX, "Fixed: P must be at most 16");
+            assert!(N >= 1 && N <= FIXED_MAX, "FixedDims: N must be in 1..=16");
+            assert!(M >= 1 && M <= FIXED_MAX, "FixedDims: M must be in 1..=16");
+            assert!(P <= FIXED_MAX, "FixedDims: P must be at most 16");
         }
-        Fixed(())
+        FixedDims(())
     }
 }
 
-impl<const N: usize, const M: usize, const P: usize> Dims for Fixed<N, M, P> {
+impl<const N: usize, const M: usize, const P: usize> Dims for FixedDims<N, M, P> {
     #[inline(always)]
     fn n(&self) -> usize {
         N

@@ -3,7 +3,9 @@
 //! `cargo run -p stochest-model --example discretize`
 
 use model::nalgebra::dmatrix;
-use model::{ContinuousSs, IrregularRolling, Method, NoiseConvention, ShapingFilter};
+use model::{
+    ContinuousSs, Discretization, IrregularRollingShaping, NoiseConvention, ShapingFilter,
+};
 
 fn main() -> Result<(), model::Error> {
     // A mass on a spring with light damping, position measured, pushed by white force noise.
@@ -15,7 +17,7 @@ fn main() -> Result<(), model::Error> {
     )?
     .with_noise(dmatrix![0.0; 1.0], dmatrix![0.05])?; // G, W
     let dt = 0.1;
-    for method in [Method::Zoh, Method::Tustin] {
+    for method in [Discretization::Zoh, Discretization::Tustin] {
         let d = sys.discretize(dt, method, NoiseConvention::VanLoan)?;
         println!("{method:?}, dt = {dt} s");
         println!("  F = {}", d.f());
@@ -25,12 +27,12 @@ fn main() -> Result<(), model::Error> {
     }
 
     // A shaping filter: sea rolling with a 10 s period, σ = 1°, sampled every 0.1 s.
-    let rolling = IrregularRolling::new(
+    let rolling = IrregularRollingShaping::new(
         1f64.to_radians().powi(2),
         0.08,
         2.0 * std::f64::consts::PI / 10.0,
     )?;
-    let d = rolling.discretize(dt, Method::Zoh, NoiseConvention::VanLoan)?;
+    let d = rolling.discretize(dt, Discretization::Zoh, NoiseConvention::VanLoan)?;
     let p = model::discrete_lyapunov(d.f(), &d.process_covariance())?;
     let var = (d.h() * &p * d.h().transpose())[(0, 0)];
     println!(

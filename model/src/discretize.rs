@@ -16,19 +16,19 @@ use crate::validate;
 /// # Example
 /// ```
 /// use model::nalgebra::dmatrix;
-/// use model::{ContinuousSs, Method, NoiseConvention};
+/// use model::{ContinuousSs, Discretization, NoiseConvention};
 ///
 /// // 1/(s + 1) at Δt = 0.1: ZOH gives F = e^{−0.1}, Tustin (1 − 0.05)/(1 + 0.05).
 /// let sys = ContinuousSs::new(dmatrix![-1.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0])?;
-/// let zoh = sys.discretize(0.1, Method::Zoh, NoiseConvention::VanLoan)?;
-/// let tustin = sys.discretize(0.1, Method::Tustin, NoiseConvention::VanLoan)?;
+/// let zoh = sys.discretize(0.1, Discretization::Zoh, NoiseConvention::VanLoan)?;
+/// let tustin = sys.discretize(0.1, Discretization::Tustin, NoiseConvention::VanLoan)?;
 /// assert!((zoh.f()[(0, 0)] - (-0.1f64).exp()).abs() < 1e-14);
 /// assert!((tustin.f()[(0, 0)] - 0.95 / 1.05).abs() < 1e-14);
 /// # Ok::<(), model::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[non_exhaustive]
-pub enum Method {
+pub enum Discretization {
     /// Zero-order hold: `F = e^{AΔt}`, `B_d = ∫₀^Δt e^{Aτ}dτ·B` (exact for inputs held
     /// constant over the step), `H = C`, `D_d = D`.
     Zoh,
@@ -53,14 +53,14 @@ pub enum Method {
 /// # Example
 /// ```
 /// use model::nalgebra::dmatrix;
-/// use model::{ContinuousSs, Method, NoiseConvention};
+/// use model::{ContinuousSs, Discretization, NoiseConvention};
 ///
 /// // Integrated white noise of intensity 2: Van Loan gives var = 2·Δt in the state;
 /// // the paper's convention a held noise of variance 2/Δt through B_d = Δt.
-/// let sys = ContinuousSs::new(dmatrix![0.0], dmatrix![0.0], dmatrix![1.0], dmatrix![0.0])?
+/// let sys = ContinuousSs::autonomous(dmatrix![0.0], dmatrix![1.0])?
 ///     .with_noise(dmatrix![1.0], dmatrix![2.0])?;
-/// let vl = sys.discretize(0.1, Method::Zoh, NoiseConvention::VanLoan)?;
-/// let held = sys.discretize(0.1, Method::Zoh, NoiseConvention::IntensityOverDt)?;
+/// let vl = sys.discretize(0.1, Discretization::Zoh, NoiseConvention::VanLoan)?;
+/// let held = sys.discretize(0.1, Discretization::Zoh, NoiseConvention::IntensityOverDt)?;
 /// assert!((vl.process_covariance()[(0, 0)] - 0.2).abs() < 1e-12);
 /// assert!((held.q()[(0, 0)] - 20.0).abs() < 1e-12);
 /// assert!((held.process_covariance()[(0, 0)] - 0.2).abs() < 1e-12); // Δt²·2/Δt
@@ -72,7 +72,7 @@ pub enum NoiseConvention {
     /// Van Loan: the exact covariance of `∫₀^Δt e^{Aτ}G w(τ)dτ`,
     /// `Q_d = ∫₀^Δt e^{Aτ}GWGᵀe^{Aᵀτ}dτ`, from one matrix exponential of
     /// `[[−A, GWGᵀ], [0, Aᵀ]]·Δt`. The discrete model gets `G = I_n`, `J = 0`, `Q = Q_d`
-    /// (n×n). Exact with [`Method::Zoh`]; with other methods it pairs an exact noise
+    /// (n×n). Exact with [`Discretization::Zoh`]; with other methods it pairs an exact noise
     /// covariance with an approximate `F`.
     VanLoan,
     /// Mazurenko's convention (fuel-level paper): the noise is held over the step as a white
@@ -238,12 +238,12 @@ enum Kind {
 }
 
 impl Mapped {
-    fn new(sys: &ContinuousSs, dt: f64, method: Method) -> Result<Self> {
+    fn new(sys: &ContinuousSs, dt: f64, method: Discretization) -> Result<Self> {
         let a = sys.a();
         let n = a.nrows();
         let eye = DMatrix::<f64>::identity(n, n);
         match method {
-            Method::Zoh => {
+            Discretization::Zoh => {
                 let f = expm_step(&(a * dt), a, dt, "e^{A·dt}")?;
                 Ok(Self {
                     f,
@@ -251,16 +251,18 @@ impl Mapped {
                     kind: Kind::Zoh { a: a.clone(), dt },
                 })
             }
-            Method::ForwardEuler => Ok(Self {
+            Discretization::ForwardEuler => Ok(Self {
                 f: &eye + a * dt,
                 h: sys.c().clone(),
                 kind: Kind::Forward { dt },
             }),
-            Method::Tustin | Method::TustinPrewarp { .. } | Method::BackwardEuler => {
+            Discretization::Tustin
+            | Discretization::TustinPrewarp { .. }
+            | Discretization::BackwardEuler => {
                 // Implicit maps: M = (I − A·τ)⁻¹ with τ = Δt/2 (Tustin, Δt pre-warped) or Δt.
                 let (tau, name, plus) = match method {
-                    Method::BackwardEuler => (dt, "I − A·dt", false),
-                    Method::TustinPrewarp { omega } => {
+                    Discretization::BackwardEuler => (dt, "I − A·dt", false),
+                    Discretization::TustinPrewarp { omega } => {
                         (1.0 / tustin_kappa(dt, Some(omega))?, "I − A·dt/2", true)
                     }
                     _ => (1.0 / tustin_kappa(dt, None)?, "I − A·dt/2", true),
@@ -331,7 +333,7 @@ impl ContinuousSs {
     pub fn discretize(
         &self,
         dt: f64,
-        method: Method,
+        method: Discretization,
         noise: NoiseConvention,
     ) -> Result<DiscreteSs> {
         discretize(self, dt, method, noise)
@@ -352,20 +354,20 @@ impl ContinuousSs {
 /// # Example
 /// ```
 /// use model::nalgebra::dmatrix;
-/// use model::{ContinuousSs, Method, NoiseConvention, discretize};
+/// use model::{ContinuousSs, Discretization, NoiseConvention, discretize};
 ///
 /// let sys = ContinuousSs::new(dmatrix![-2.0], dmatrix![1.0], dmatrix![1.0], dmatrix![0.0])?;
-/// let d = discretize(&sys, 0.05, Method::Zoh, NoiseConvention::VanLoan)?;
+/// let d = discretize(&sys, 0.05, Discretization::Zoh, NoiseConvention::VanLoan)?;
 /// // The DC gain 1/2 of the continuous model is kept by ZOH: H (1 − F)⁻¹ B_d = 1/2.
 /// let dc = d.h()[(0, 0)] * d.b()[(0, 0)] / (1.0 - d.f()[(0, 0)]);
 /// assert!((dc - 0.5).abs() < 1e-12);
-/// assert!(discretize(&sys, 0.0, Method::Zoh, NoiseConvention::VanLoan).is_err());
+/// assert!(discretize(&sys, 0.0, Discretization::Zoh, NoiseConvention::VanLoan).is_err());
 /// # Ok::<(), model::Error>(())
 /// ```
 pub fn discretize(
     sys: &ContinuousSs,
     dt: f64,
-    method: Method,
+    method: Discretization,
     noise: NoiseConvention,
 ) -> Result<DiscreteSs> {
     validate::positive("dt", dt)?;
@@ -415,11 +417,9 @@ mod tests {
 
     /// A scalar `ẋ = 1000 x`: `e^{1000·dt}` overflows `f64` for dt = 1 (e^{1000} > 1.8e308).
     fn fast_scalar(w: f64) -> ContinuousSs {
-        ContinuousSs::new(
+        ContinuousSs::autonomous(
             DMatrix::from_element(1, 1, 1000.0),
-            DMatrix::zeros(1, 0),
             DMatrix::from_element(1, 1, 1.0),
-            DMatrix::zeros(1, 0),
         )
         .and_then(|s| {
             s.with_noise(
@@ -436,7 +436,7 @@ mod tests {
         let d = discretize(
             &fast_scalar(0.0),
             1.0,
-            Method::ForwardEuler,
+            Discretization::ForwardEuler,
             NoiseConvention::VanLoan,
         )
         .expect("Euler needs no exponential");
@@ -447,9 +447,9 @@ mod tests {
     #[test]
     fn overflowing_exponential_names_the_step() {
         for (method, w) in [
-            (Method::Zoh, 0.0),
-            (Method::ForwardEuler, 1.0),
-            (Method::Zoh, 1.0),
+            (Discretization::Zoh, 0.0),
+            (Discretization::ForwardEuler, 1.0),
+            (Discretization::Zoh, 1.0),
         ] {
             let e = discretize(&fast_scalar(w), 1.0, method, NoiseConvention::VanLoan);
             match e {
@@ -464,7 +464,7 @@ mod tests {
         let d = discretize(
             &fast_scalar(1.0),
             0.01,
-            Method::Zoh,
+            Discretization::Zoh,
             NoiseConvention::VanLoan,
         )
         .expect("small step");
@@ -483,7 +483,12 @@ mod tests {
             DMatrix::zeros(1, 1),
         )
         .expect("valid");
-        let e = discretize(&sys, 0.1, Method::Tustin, NoiseConvention::IntensityOverDt);
+        let e = discretize(
+            &sys,
+            0.1,
+            Discretization::Tustin,
+            NoiseConvention::IntensityOverDt,
+        );
         assert!(matches!(e, Err(Error::Singular { .. })), "{e:?}");
     }
 }

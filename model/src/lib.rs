@@ -25,15 +25,15 @@
 //!
 //! # Discretisation methods
 //!
-//! [`discretize()`](fn@discretize) maps a [`ContinuousSs`] with a [`Method`] and a [`NoiseConvention`]:
+//! [`discretize()`](fn@discretize) maps a [`ContinuousSs`] with a [`Discretization`] and a [`NoiseConvention`]:
 //!
 //! | method | map | use it when |
 //! |---|---|---|
-//! | [`Method::Zoh`] | `F = e^{AΔt}`, `B_d = ∫e^{Aτ}dτ·B` | inputs are held between samples (actuators, DAC), or you want the exact transition matrix of the continuous model; the default for simulation and Kalman filtering |
-//! | [`Method::Tustin`] | `s = (2/Δt)(1−z⁻¹)/(1+z⁻¹)` | you need the frequency response preserved in shape and stability guaranteed (stable ↦ stable, DC gain kept), e.g. digital filters, or to match Mazurenko's fuel model |
-//! | [`Method::TustinPrewarp`] | Tustin with Δt → `2tan(ωΔt/2)/ω` | as Tustin, but one frequency ω (a resonance, a notch, a crossover) must be exact |
-//! | [`Method::ForwardEuler`] | `s = (z−1)/Δt` | Δt is far below every time constant and you want the simplest explicit update; can turn a stable model unstable |
-//! | [`Method::BackwardEuler`] | `s = (z−1)/(zΔt)` | stiff models where robustness matters more than accuracy; always stable for stable models, but damps too much |
+//! | [`Discretization::Zoh`] | `F = e^{AΔt}`, `B_d = ∫e^{Aτ}dτ·B` | inputs are held between samples (actuators, DAC), or you want the exact transition matrix of the continuous model; the default for simulation and Kalman filtering |
+//! | [`Discretization::Tustin`] | `s = (2/Δt)(1−z⁻¹)/(1+z⁻¹)` | you need the frequency response preserved in shape and stability guaranteed (stable ↦ stable, DC gain kept), e.g. digital filters, or to match Mazurenko's fuel model |
+//! | [`Discretization::TustinPrewarp`] | Tustin with Δt → `2tan(ωΔt/2)/ω` | as Tustin, but one frequency ω (a resonance, a notch, a crossover) must be exact |
+//! | [`Discretization::ForwardEuler`] | `s = (z−1)/Δt` | Δt is far below every time constant and you want the simplest explicit update; can turn a stable model unstable |
+//! | [`Discretization::BackwardEuler`] | `s = (z−1)/(zΔt)` | stiff models where robustness matters more than accuracy; always stable for stable models, but damps too much |
 //! | paper variant ([`ContinuousTf::paper_tustin`], [`ShapingFilter::discretize_paper`]) | Tustin with one `(1+z⁻¹)` numerator factor replaced by `2z⁻¹` or `2` | reproducing the paper's fuel model ([`Realisation::Paper`]) |
 //!
 //! and the white noise either by [`NoiseConvention::VanLoan`] (the exact covariance of the
@@ -100,10 +100,12 @@ pub use analysis::{
 pub use compose::{
     append, connect, connect_continuous, feedback, parallel, select_outputs, series, stack,
 };
-pub use discretize::{Method, NoiseConvention, discretize, expm, van_loan, zoh};
+pub use discretize::{Discretization, NoiseConvention, discretize, expm, van_loan, zoh};
 pub use error::{Error, Result};
 pub use fuel::{Channels, FuelModel, FuelParams, OUTPUT_NAMES, PaperCoefficients, Realisation};
-pub use shaping::{DampedCosine, Exponential, IrregularRolling, ShapingFilter, noise_driven};
+pub use shaping::{
+    DampedCosineShaping, ExponentialShaping, IrregularRollingShaping, ShapingFilter, noise_driven,
+};
 pub use ss::{ContinuousSs, DiscreteSs};
 pub use tf::{ContinuousTf, DiscreteTf, PaperVariant};
 

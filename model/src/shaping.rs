@@ -4,7 +4,7 @@
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use crate::discretize::{Method, NoiseConvention, discretize};
+use crate::discretize::{Discretization, NoiseConvention, discretize};
 use crate::error::{Error, Result};
 use crate::ss::{ContinuousSs, DiscreteSs};
 use crate::tf::{ContinuousTf, DiscreteTf, PaperVariant};
@@ -19,12 +19,12 @@ use crate::validate;
 ///
 /// # Example
 /// ```
-/// use model::{Exponential, Method, NoiseConvention, ShapingFilter};
+/// use model::{ExponentialShaping, Discretization, NoiseConvention, ShapingFilter};
 ///
 /// // A first-order Gauss–Markov process of variance 4 and correlation time 2 s.
-/// let f = Exponential::new(4.0, 2.0)?;
+/// let f = ExponentialShaping::new(4.0, 2.0)?;
 /// assert!((f.intensity() - 16.0).abs() < 1e-12); // N = 2 T D
-/// let d = f.discretize(0.1, Method::Zoh, NoiseConvention::VanLoan)?;
+/// let d = f.discretize(0.1, Discretization::Zoh, NoiseConvention::VanLoan)?;
 /// // Its stationary variance is D again: P = F P Fᵀ + Q.
 /// let p = model::discrete_lyapunov(d.f(), &d.process_covariance())?;
 /// assert!((p[(0, 0)] * d.h()[(0, 0)].powi(2) - 4.0).abs() < 1e-9);
@@ -65,11 +65,16 @@ pub trait ShapingFilter {
         )
     }
 
-    /// Discrete model by any [`Method`] and [`NoiseConvention`].
+    /// Discrete model by any [`Discretization`] and [`NoiseConvention`].
     ///
     /// # Errors
     /// As [`discretize`] (`dt` ≤ 0, bad pre-warp frequency).
-    fn discretize(&self, dt: f64, method: Method, noise: NoiseConvention) -> Result<DiscreteSs> {
+    fn discretize(
+        &self,
+        dt: f64,
+        method: Discretization,
+        noise: NoiseConvention,
+    ) -> Result<DiscreteSs> {
         discretize(&self.continuous(), dt, method, noise)
     }
 
@@ -112,31 +117,27 @@ pub trait ShapingFilter {
 pub fn noise_driven(tf: &DiscreteTf, q: f64) -> Result<DiscreteSs> {
     validate::non_negative("q", q)?;
     let r = tf.realize();
-    let (n, m) = (r.n_states(), r.n_outputs());
-    DiscreteSs::new(
-        r.f().clone(),
-        DMatrix::zeros(n, 0),
-        r.h().clone(),
-        DMatrix::zeros(m, 0),
-        r.dt(),
-    )?
-    .with_noise(r.b().clone(), r.d().clone(), DMatrix::from_element(1, 1, q))
+    DiscreteSs::autonomous(r.f().clone(), r.h().clone(), r.dt())?.with_noise(
+        r.b().clone(),
+        r.d().clone(),
+        DMatrix::from_element(1, 1, q),
+    )
 }
 
 /// Exponential correlation `R(τ) = D·e^{−|τ|/T}`; filter `1/(T s + 1)`, `N = 2·T·D`.
 ///
 /// # Example
 /// ```
-/// use model::{Exponential, ShapingFilter};
+/// use model::{ExponentialShaping, ShapingFilter};
 ///
-/// let f = Exponential::new(1.0, 0.5)?;
+/// let f = ExponentialShaping::new(1.0, 0.5)?;
 /// assert!((f.correlation(0.5) - (-1.0f64).exp()).abs() < 1e-15); // R(T) = D/e
-/// assert!(Exponential::new(1.0, 0.0).is_err()); // T must be > 0
+/// assert!(ExponentialShaping::new(1.0, 0.0).is_err()); // T must be > 0
 /// # Ok::<(), model::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "ExponentialRaw")]
-pub struct Exponential {
+pub struct ExponentialShaping {
     variance: f64,
     time_constant: f64,
 }
@@ -147,14 +148,14 @@ struct ExponentialRaw {
     time_constant: f64,
 }
 
-impl TryFrom<ExponentialRaw> for Exponential {
+impl TryFrom<ExponentialRaw> for ExponentialShaping {
     type Error = Error;
     fn try_from(r: ExponentialRaw) -> Result<Self> {
-        Exponential::new(r.variance, r.time_constant)
+        ExponentialShaping::new(r.variance, r.time_constant)
     }
 }
 
-impl Exponential {
+impl ExponentialShaping {
     /// `variance` = D > 0, `time_constant` = T > 0 (seconds).
     ///
     /// # Errors
@@ -171,7 +172,7 @@ impl Exponential {
     }
 }
 
-impl ShapingFilter for Exponential {
+impl ShapingFilter for ExponentialShaping {
     fn variance(&self) -> f64 {
         self.variance
     }
@@ -197,11 +198,11 @@ impl ShapingFilter for Exponential {
 ///
 /// # Example
 /// ```
-/// use model::{IrregularRolling, ShapingFilter};
+/// use model::{IrregularRollingShaping, ShapingFilter};
 ///
 /// // Rolling with a 10 s period (β = 2π/10) and irregularity μ = 0.08 s⁻¹, σ = 1°.
 /// let beta = 2.0 * std::f64::consts::PI / 10.0;
-/// let f = IrregularRolling::new(1f64.to_radians().powi(2), 0.08, beta)?;
+/// let f = IrregularRollingShaping::new(1f64.to_radians().powi(2), 0.08, beta)?;
 /// let (a, b) = f.coefficients();
 /// assert!((b - 1.0 / (0.08f64.powi(2) + f.beta().powi(2))).abs() < 1e-12);
 /// assert!((f.intensity() - 2.0 * a * f.variance()).abs() < 1e-18);
@@ -209,7 +210,7 @@ impl ShapingFilter for Exponential {
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RollingRaw")]
-pub struct IrregularRolling {
+pub struct IrregularRollingShaping {
     variance: f64,
     mu: f64,
     beta: f64,
@@ -222,14 +223,14 @@ struct RollingRaw {
     beta: f64,
 }
 
-impl TryFrom<RollingRaw> for IrregularRolling {
+impl TryFrom<RollingRaw> for IrregularRollingShaping {
     type Error = Error;
     fn try_from(r: RollingRaw) -> Result<Self> {
-        IrregularRolling::new(r.variance, r.mu, r.beta)
+        IrregularRollingShaping::new(r.variance, r.mu, r.beta)
     }
 }
 
-impl IrregularRolling {
+impl IrregularRollingShaping {
     /// `variance` = D > 0, `mu` = μ > 0 (1/s, irregularity), `beta` = β > 0 (rad/s, dominant
     /// frequency).
     ///
@@ -257,7 +258,7 @@ impl IrregularRolling {
     }
 }
 
-impl ShapingFilter for IrregularRolling {
+impl ShapingFilter for IrregularRollingShaping {
     fn variance(&self) -> f64 {
         self.variance
     }
@@ -293,16 +294,16 @@ impl ShapingFilter for IrregularRolling {
 ///
 /// # Example
 /// ```
-/// use model::{DampedCosine, ShapingFilter};
+/// use model::{DampedCosineShaping, ShapingFilter};
 ///
-/// let f = DampedCosine::new(1.0, 0.05, std::f64::consts::PI)?;
+/// let f = DampedCosineShaping::new(1.0, 0.05, std::f64::consts::PI)?;
 /// // R(τ) = D e^{−ξτ} cos ωτ: half a period later the sign has flipped.
 /// assert!((f.correlation(1.0) + (-0.05f64).exp()).abs() < 1e-12);
 /// # Ok::<(), model::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "DampedRaw")]
-pub struct DampedCosine {
+pub struct DampedCosineShaping {
     variance: f64,
     xi: f64,
     omega: f64,
@@ -315,14 +316,14 @@ struct DampedRaw {
     omega: f64,
 }
 
-impl TryFrom<DampedRaw> for DampedCosine {
+impl TryFrom<DampedRaw> for DampedCosineShaping {
     type Error = Error;
     fn try_from(r: DampedRaw) -> Result<Self> {
-        DampedCosine::new(r.variance, r.xi, r.omega)
+        DampedCosineShaping::new(r.variance, r.xi, r.omega)
     }
 }
 
-impl DampedCosine {
+impl DampedCosineShaping {
     /// `variance` = D > 0, `xi` = ξ > 0 (1/s), `omega` = ω > 0 (rad/s).
     ///
     /// # Errors
@@ -349,7 +350,7 @@ impl DampedCosine {
     }
 }
 
-impl ShapingFilter for DampedCosine {
+impl ShapingFilter for DampedCosineShaping {
     fn variance(&self) -> f64 {
         self.variance
     }
@@ -382,15 +383,15 @@ mod tests {
 
     #[test]
     fn coefficients_match_spec() {
-        let r = IrregularRolling::new(1.0, 0.08, 0.6).expect("valid");
+        let r = IrregularRollingShaping::new(1.0, 0.08, 0.6).expect("valid");
         let (a, b) = r.coefficients();
         let s = 0.08f64.powi(2) + 0.36;
         assert!((a - 0.16 / s).abs() < 1e-15 && (b - 1.0 / s).abs() < 1e-15);
         assert!((r.intensity() - 2.0 * a).abs() < 1e-15);
-        let q = DampedCosine::new(2.0, 0.05, 6.0).expect("valid");
+        let q = DampedCosineShaping::new(2.0, 0.05, 6.0).expect("valid");
         let (c, _) = q.coefficients();
         assert!((q.intensity() - 2.0 * c).abs() < 1e-15);
-        let e = Exponential::new(3.0, 2.0).expect("valid");
+        let e = ExponentialShaping::new(3.0, 2.0).expect("valid");
         assert!((e.intensity() - 12.0).abs() < 1e-15);
         assert!((e.correlation(-2.0) - 3.0 / std::f64::consts::E).abs() < 1e-15);
     }

@@ -88,6 +88,87 @@ impl ContinuousSs {
         })
     }
 
+    /// A model without control input, `ẋ = A x`, `y = C x` (l = 0): the common start of a
+    /// filtering model; add noise with [`ContinuousSs::with_noise`] and, if there is one, a
+    /// control input with [`ContinuousSs::with_input`].
+    ///
+    /// # Errors
+    /// [`Error::NotSquare`] for a non-square `A`, [`Error::DimensionMismatch`] when `C` has
+    /// not as many columns as `A`, [`Error::NonFiniteMatrix`] for NaN/∞.
+    ///
+    /// # Example
+    /// ```
+    /// use model::ContinuousSs;
+    /// use model::nalgebra::dmatrix;
+    ///
+    /// // Constant velocity driven by white acceleration noise of intensity 0.1, position seen.
+    /// let sys = ContinuousSs::autonomous(dmatrix![0.0, 1.0; 0.0, 0.0], dmatrix![1.0, 0.0])?
+    ///     .with_noise(dmatrix![0.0; 1.0], dmatrix![0.1])?;
+    /// assert_eq!((sys.n_states(), sys.n_inputs(), sys.n_noise()), (2, 0, 1));
+    /// # Ok::<(), model::Error>(())
+    /// ```
+    pub fn autonomous(a: DMatrix<f64>, c: DMatrix<f64>) -> Result<Self> {
+        let n = a.nrows();
+        let m = c.nrows();
+        Self::new(a, DMatrix::zeros(n, 0), c, DMatrix::zeros(m, 0))
+    }
+
+    /// Sets the control input `B·u` (n×l) with a zero feed-through `D` (m×l), replacing any
+    /// earlier input; [`ContinuousSs::with_feedthrough`] sets a non-zero `D` afterwards.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] when `B` has not as many rows as `A`,
+    /// [`Error::NonFiniteMatrix`] for NaN/∞.
+    ///
+    /// # Example
+    /// ```
+    /// use model::ContinuousSs;
+    /// use model::nalgebra::dmatrix;
+    ///
+    /// // A double integrator driven by a commanded acceleration.
+    /// let sys = ContinuousSs::autonomous(dmatrix![0.0, 1.0; 0.0, 0.0], dmatrix![1.0, 0.0])?
+    ///     .with_input(dmatrix![0.0; 1.0])?;
+    /// assert_eq!((sys.n_inputs(), sys.d().shape()), (1, (1, 1)));
+    /// assert!(sys.with_input(dmatrix![1.0]).is_err()); // B needs n = 2 rows
+    /// # Ok::<(), model::Error>(())
+    /// ```
+    pub fn with_input(mut self, b: DMatrix<f64>) -> Result<Self> {
+        let n = self.a.nrows();
+        validate::shape("B", &b, n, b.ncols(), "B must have as many rows as A")?;
+        self.d = DMatrix::zeros(self.c.nrows(), b.ncols());
+        self.b = b;
+        Ok(self)
+    }
+
+    /// Sets the control feed-through `D` (m×l, l from the input set before).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] when `D` is not (rows of C)×(columns of B),
+    /// [`Error::NonFiniteMatrix`] for NaN/∞.
+    ///
+    /// # Example
+    /// ```
+    /// use model::ContinuousSs;
+    /// use model::nalgebra::dmatrix;
+    ///
+    /// let sys = ContinuousSs::autonomous(dmatrix![-1.0], dmatrix![1.0])?
+    ///     .with_input(dmatrix![1.0])?
+    ///     .with_feedthrough(dmatrix![0.5])?;
+    /// assert!((sys.d()[(0, 0)] - 0.5).abs() < 1e-15);
+    /// # Ok::<(), model::Error>(())
+    /// ```
+    pub fn with_feedthrough(mut self, d: DMatrix<f64>) -> Result<Self> {
+        validate::shape(
+            "D",
+            &d,
+            self.c.nrows(),
+            self.b.ncols(),
+            "D must be (rows of C)×(columns of B)",
+        )?;
+        self.d = d;
+        Ok(self)
+    }
+
     /// Adds the noise input `G·w` with white-noise intensity `W` (replacing any earlier one).
     ///
     /// # Errors
@@ -234,6 +315,85 @@ impl DiscreteSs {
             d,
             dt,
         })
+    }
+
+    /// A model without control input, `x_{k+1} = F x_k`, `y_k = H x_k` (l = 0); add noise
+    /// with [`DiscreteSs::with_noise`] and a control input with [`DiscreteSs::with_input`].
+    ///
+    /// # Errors
+    /// As [`DiscreteSs::new`].
+    ///
+    /// # Example
+    /// ```
+    /// use model::DiscreteSs;
+    /// use model::nalgebra::dmatrix;
+    ///
+    /// // A random walk seen in its own noise, Δt = 1 s.
+    /// let d = DiscreteSs::autonomous(dmatrix![1.0], dmatrix![1.0], 1.0)?
+    ///     .with_noise(dmatrix![1.0], dmatrix![0.0], dmatrix![0.01])?;
+    /// assert_eq!((d.n_states(), d.n_inputs(), d.n_noise()), (1, 0, 1));
+    /// # Ok::<(), model::Error>(())
+    /// ```
+    pub fn autonomous(f: DMatrix<f64>, h: DMatrix<f64>, dt: f64) -> Result<Self> {
+        let n = f.nrows();
+        let m = h.nrows();
+        Self::new(f, DMatrix::zeros(n, 0), h, DMatrix::zeros(m, 0), dt)
+    }
+
+    /// Sets the control input `B·u_k` (n×l) with a zero feed-through `D` (m×l), replacing
+    /// any earlier input; [`DiscreteSs::with_feedthrough`] sets a non-zero `D` afterwards.
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] when `B` has not as many rows as `F`,
+    /// [`Error::NonFiniteMatrix`] for NaN/∞.
+    ///
+    /// # Example
+    /// ```
+    /// use model::DiscreteSs;
+    /// use model::nalgebra::dmatrix;
+    ///
+    /// let dt = 0.1;
+    /// let d = DiscreteSs::autonomous(dmatrix![1.0, dt; 0.0, 1.0], dmatrix![1.0, 0.0], dt)?
+    ///     .with_input(dmatrix![dt * dt / 2.0; dt])?;
+    /// assert_eq!((d.n_inputs(), d.d().shape()), (1, (1, 1)));
+    /// # Ok::<(), model::Error>(())
+    /// ```
+    pub fn with_input(mut self, b: DMatrix<f64>) -> Result<Self> {
+        let n = self.f.nrows();
+        validate::shape("B", &b, n, b.ncols(), "B must have as many rows as F")?;
+        self.d = DMatrix::zeros(self.h.nrows(), b.ncols());
+        self.b = b;
+        Ok(self)
+    }
+
+    /// Sets the control feed-through `D` (m×l, l from the input set before).
+    ///
+    /// # Errors
+    /// [`Error::DimensionMismatch`] when `D` is not (rows of H)×(columns of B),
+    /// [`Error::NonFiniteMatrix`] for NaN/∞.
+    ///
+    /// # Example
+    /// ```
+    /// use model::DiscreteSs;
+    /// use model::nalgebra::dmatrix;
+    ///
+    /// let d = DiscreteSs::autonomous(dmatrix![0.5], dmatrix![1.0], 1.0)?
+    ///     .with_input(dmatrix![1.0])?
+    ///     .with_feedthrough(dmatrix![2.0])?;
+    /// assert!((d.d()[(0, 0)] - 2.0).abs() < 1e-15);
+    /// assert!(d.with_feedthrough(dmatrix![1.0, 1.0]).is_err()); // must be 1×1
+    /// # Ok::<(), model::Error>(())
+    /// ```
+    pub fn with_feedthrough(mut self, d: DMatrix<f64>) -> Result<Self> {
+        validate::shape(
+            "D",
+            &d,
+            self.h.nrows(),
+            self.b.ncols(),
+            "D must be (rows of H)×(columns of B)",
+        )?;
+        self.d = d;
+        Ok(self)
     }
 
     /// Adds the noise input: `G·w_k` in the state, `J·w_k` in the output, `cov(w_k) = Q`.

@@ -175,8 +175,8 @@ fn model_error(path: &Path, e: impl std::fmt::Display) -> Error {
 
 /// The engine's model built from a parsed file: symmetry, PSD of `Q`, `R`, `[[R, Sᵀ], [S,
 /// Q]]` are checked here by `kalman`.
-fn engine_model(path: &Path, m: &DiscreteModel) -> Result<kalman::Model<kalman::Dyn>> {
-    let dims = kalman::Dyn::new(m.n(), m.m(), m.p()).map_err(|e| model_error(path, e))?;
+fn engine_model(path: &Path, m: &DiscreteModel) -> Result<kalman::Model<kalman::DynDims>> {
+    let dims = kalman::DynDims::new(m.n(), m.m(), m.p()).map_err(|e| model_error(path, e))?;
     let mut model = kalman::Model::new(
         dims,
         &to_faer(&m.F),
@@ -246,7 +246,7 @@ fn engine_filter(
     path: &Path,
     m: &DiscreteModel,
     form: Form,
-) -> Result<kalman::Filter<kalman::Dyn>> {
+) -> Result<kalman::Filter<kalman::DynDims>> {
     let P0 = m.P0.as_ref().ok_or_else(|| {
         Error::invalid(
             path,
@@ -313,7 +313,7 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
 /// after which the filtered or predicted state or covariance is no longer finite is an
 /// error naming the row: nothing is written rather than `inf`/`NaN` estimates.
 fn step<R: std::io::Read>(
-    kf: &mut kalman::Filter<kalman::Dyn>,
+    kf: &mut kalman::Filter<kalman::DynDims>,
     reader: &DataReader<R>,
     row: &Row,
 ) -> Result<kalman::StepInfo> {
@@ -363,11 +363,11 @@ fn smooth<R: std::io::Read>(
     args: &FilterArgs,
     dest: &crate::output::Destination,
     model: &DiscreteModel,
-    kf: &mut kalman::Filter<kalman::Dyn>,
+    kf: &mut kalman::Filter<kalman::DynDims>,
     reader: &mut DataReader<R>,
 ) -> Result<()> {
     let n = model.n();
-    let mut rts = kalman::smoother::RtsSmoother::new(n);
+    let mut rts = kalman::smoother::RtsSmoother::new();
     let mut times = Vec::new();
     let mut nis = Vec::new();
     let mut row = Row::default();
@@ -435,11 +435,11 @@ pub fn discretize(args: &DiscretizeArgs) -> Result<()> {
         .and_then(|s| s.with_noise(c.G.clone(), c.Qc.clone()))
         .map_err(err)?;
     let method = match args.method {
-        MethodArg::Zoh => model::Method::Zoh,
-        MethodArg::Tustin => model::Method::Tustin,
-        MethodArg::TustinPrewarp(omega) => model::Method::TustinPrewarp { omega },
-        MethodArg::Euler => model::Method::ForwardEuler,
-        MethodArg::BackwardEuler => model::Method::BackwardEuler,
+        MethodArg::Zoh => model::Discretization::Zoh,
+        MethodArg::Tustin => model::Discretization::Tustin,
+        MethodArg::TustinPrewarp(omega) => model::Discretization::TustinPrewarp { omega },
+        MethodArg::Euler => model::Discretization::ForwardEuler,
+        MethodArg::BackwardEuler => model::Discretization::BackwardEuler,
     };
     let noise = match args.noise {
         NoiseArg::VanLoan => model::NoiseConvention::VanLoan,

@@ -12,10 +12,10 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
 use sensors::{
-    Accelerometer, AccelerometerConfig, Attitude, BoomMotion, ChaCha8Rng, DampedCosine,
-    DampedCosineConfig, ExpCorrelated, ExpCorrelatedConfig, Gyro, GyroConfig, IrregularRolling,
-    IrregularRollingConfig, LevelSensor, LevelSensorConfig, PlatformMotion, PlatformMotionConfig,
-    Process, WhiteNoise, seeded_rng,
+    Accelerometer, AccelerometerConfig, Attitude, BoomMotion, ChaCha8Rng, DampedCosineConfig,
+    DampedCosineProcess, ExpCorrelated, ExpCorrelatedConfig, Gyro, GyroConfig,
+    IrregularRollingConfig, IrregularRollingProcess, LevelSensor, LevelSensorConfig,
+    PlatformMotion, PlatformMotionConfig, Process, WhiteNoise, seeded_rng,
 };
 
 const SAMPLES: usize = 1000;
@@ -102,7 +102,7 @@ fn per_sample(c: &mut Criterion) {
     let mut ar = ExpCorrelated::new(&ExpCorrelatedConfig::default(), DT).unwrap();
     bench("exp_correlated", &mut |r| ar.next(r));
     let cfg = IrregularRollingConfig::default();
-    let mut roll = IrregularRolling::new(&cfg, DT).unwrap();
+    let mut roll = IrregularRollingProcess::new(&cfg, DT).unwrap();
     bench("irregular_rolling_exact", &mut |r| roll.next(r));
     let mut spectral = Spectral::new(
         256,
@@ -111,7 +111,7 @@ fn per_sample(c: &mut Criterion) {
         &mut seeded_rng(2),
     );
     bench("spectral_synthesis_256", &mut |_| spectral.next());
-    let mut dc = DampedCosine::new(&DampedCosineConfig::default(), DT).unwrap();
+    let mut dc = DampedCosineProcess::new(&DampedCosineConfig::default(), DT).unwrap();
     bench("damped_cosine", &mut |r| dc.next(r));
     let mut platform = PlatformMotion::new(&PlatformMotionConfig::default(), DT).unwrap();
     bench("platform_motion", &mut |r| platform.next(r).roll);

@@ -22,7 +22,7 @@
 //! # Example
 //! ```
 //! use sensors::{
-//!     Attitude, IrregularRolling, IrregularRollingConfig, LevelSensor, LevelSensorConfig,
+//!     Attitude, IrregularRollingProcess, IrregularRollingConfig, LevelSensor, LevelSensorConfig,
 //!     PlatformMotion, PlatformMotionConfig, Process, seeded_rng,
 //! };
 //!
@@ -39,7 +39,7 @@
 //!     assert!(out.reading <= out.damped + 1e-12);
 //! }
 //!
-//! let rolling = IrregularRolling::new(&IrregularRollingConfig::default(), dt)?;
+//! let rolling = IrregularRollingProcess::new(&IrregularRollingConfig::default(), dt)?;
 //! assert!((rolling.variance() - 1.0).abs() < 1e-12);
 //! # Ok::<(), sensors::Error>(())
 //! ```
@@ -78,8 +78,8 @@ pub use lag::{FirstOrderLag, LagInput, Quantizer, Rounding};
 pub use level::{LevelReading, LevelSensor, LevelSensorConfig};
 pub use platform::{Attitude, PlatformMotion, PlatformMotionConfig, RollingAxisConfig};
 pub use process::{
-    DampedCosine, DampedCosineConfig, ExpCorrelated, ExpCorrelatedConfig, IrregularRolling,
-    IrregularRollingConfig, Process, Seeded, WhiteNoise, seeded_rng,
+    DampedCosineConfig, DampedCosineProcess, ExpCorrelated, ExpCorrelatedConfig,
+    IrregularRollingConfig, IrregularRollingProcess, Process, Seeded, WhiteNoise, seeded_rng,
 };
 pub use uav::{ChannelSensor, ChannelSensorConfig, Quantity};
 

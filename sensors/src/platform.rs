@@ -5,7 +5,7 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, non_negative, positive};
-use crate::process::{IrregularRolling, IrregularRollingConfig, Process};
+use crate::process::{IrregularRollingConfig, IrregularRollingProcess, Process};
 
 /// Platform attitude, rad.
 ///
@@ -126,8 +126,8 @@ pub struct PlatformMotionConfig {
 /// ```
 #[derive(Debug, Clone)]
 pub struct PlatformMotion {
-    roll: IrregularRolling,
-    pitch: IrregularRolling,
+    roll: IrregularRollingProcess,
+    pitch: IrregularRollingProcess,
 }
 
 impl PlatformMotion {
@@ -137,8 +137,8 @@ impl PlatformMotion {
     /// [`Error`] for an invalid axis configuration or Δt.
     pub fn new(config: &PlatformMotionConfig, dt: f64) -> Result<Self, Error> {
         Ok(Self {
-            roll: IrregularRolling::new(&config.roll.to_process()?, dt)?,
-            pitch: IrregularRolling::new(&config.pitch.to_process()?, dt)?,
+            roll: IrregularRollingProcess::new(&config.roll.to_process()?, dt)?,
+            pitch: IrregularRollingProcess::new(&config.pitch.to_process()?, dt)?,
         })
     }
     /// The attitude at the next sample.
@@ -156,11 +156,11 @@ impl PlatformMotion {
         }
     }
     /// The roll process θ.
-    pub fn roll(&self) -> &IrregularRolling {
+    pub fn roll(&self) -> &IrregularRollingProcess {
         &self.roll
     }
     /// The pitch process ψ.
-    pub fn pitch(&self) -> &IrregularRolling {
+    pub fn pitch(&self) -> &IrregularRollingProcess {
         &self.pitch
     }
     /// Theoretical correlation of the tilt toward angle `phi` (rad) at lag `tau` (s):

@@ -291,12 +291,12 @@ impl Process for ExpCorrelated {
 
 // ----------------------------------------------------------------------------------------------
 
-/// Configuration of an [`IrregularRolling`] process. Defaults: the fuel-level paper's rolling
+/// Configuration of an [`IrregularRollingProcess`]. Defaults: the fuel-level paper's rolling
 /// (period 2π/β = 10 s, μ = 0.08 s⁻¹; assumed) with unit σ.
 ///
 /// # Example
 /// ```
-/// use sensors::{IrregularRolling, IrregularRollingConfig, Process};
+/// use sensors::{IrregularRollingProcess, IrregularRollingConfig, Process};
 ///
 /// // Roll of 1° standard deviation with an 8 s period.
 /// let cfg = IrregularRollingConfig {
@@ -304,7 +304,7 @@ impl Process for ExpCorrelated {
 ///     period_s: 8.0,
 ///     ..IrregularRollingConfig::default()
 /// };
-/// let p = IrregularRolling::new(&cfg, 0.1)?;
+/// let p = IrregularRollingProcess::new(&cfg, 0.1)?;
 /// assert!((p.variance() - cfg.std_dev.powi(2)).abs() < 1e-18);
 /// # Ok::<(), sensors::Error>(())
 /// ```
@@ -343,16 +343,16 @@ impl Default for IrregularRollingConfig {
 ///
 /// # Example
 /// ```
-/// use sensors::{IrregularRolling, IrregularRollingConfig, Process};
+/// use sensors::{IrregularRollingProcess, IrregularRollingConfig, Process};
 ///
-/// let p = IrregularRolling::new(&IrregularRollingConfig::default(), 0.1)?;
+/// let p = IrregularRollingProcess::new(&IrregularRollingConfig::default(), 0.1)?;
 /// // Half a period later the correlation is negative: the platform has swung back.
 /// assert!(p.correlation(5.0) < 0.0);
 /// assert!((p.correlation(0.0) - 1.0).abs() < 1e-12);
 /// # Ok::<(), sensors::Error>(())
 /// ```
 #[derive(Debug, Clone)]
-pub struct IrregularRolling {
+pub struct IrregularRollingProcess {
     std_dev: f64,
     mu: f64,
     beta: f64,
@@ -365,7 +365,7 @@ pub struct IrregularRolling {
     state: Option<[f64; 2]>,
 }
 
-impl IrregularRolling {
+impl IrregularRollingProcess {
     /// Builds the process sampled every `dt` s.
     ///
     /// # Errors
@@ -432,7 +432,7 @@ impl IrregularRolling {
     }
 }
 
-impl Process for IrregularRolling {
+impl Process for IrregularRollingProcess {
     #[inline]
     fn next<R: Rng + ?Sized>(&mut self, rng: &mut R) -> f64 {
         let w1 = normal(rng);
@@ -467,7 +467,7 @@ impl Process for IrregularRolling {
 
 // ----------------------------------------------------------------------------------------------
 
-/// Configuration of a [`DampedCosine`] process. Defaults: the fuel-level paper's quantization noise
+/// Configuration of a [`DampedCosineProcess`]. Defaults: the fuel-level paper's quantization noise
 /// at its assumed defaults (δ = 10 mm: σ = δ/√12; ξ = 1/T_a = 0.05 s⁻¹; γ_q = 2π·V_c/δ = 2π rad/s).
 ///
 /// # Example
@@ -521,16 +521,16 @@ impl DampedCosineConfig {
 ///
 /// # Example
 /// ```
-/// use sensors::{DampedCosine, DampedCosineConfig, Process};
+/// use sensors::{DampedCosineProcess, DampedCosineConfig, Process};
 ///
-/// let p = DampedCosine::new(&DampedCosineConfig::default(), 0.1)?;
+/// let p = DampedCosineProcess::new(&DampedCosineConfig::default(), 0.1)?;
 /// let d = p.variance();
 /// // R(τ) = σ² e^{−ξτ} cos γτ with ξ = 0.05, γ = 2π: a full period later, e^{−0.05} of R(0).
 /// assert!((p.correlation(1.0) - d * (-0.05f64).exp()).abs() < 1e-12 * d);
 /// # Ok::<(), sensors::Error>(())
 /// ```
 #[derive(Debug, Clone)]
-pub struct DampedCosine {
+pub struct DampedCosineProcess {
     std_dev: f64,
     xi: f64,
     gamma: f64,
@@ -542,7 +542,7 @@ pub struct DampedCosine {
     state: Option<[f64; 2]>,
 }
 
-impl DampedCosine {
+impl DampedCosineProcess {
     /// Builds the process sampled every `dt` s.
     ///
     /// # Errors
@@ -567,7 +567,7 @@ impl DampedCosine {
     }
 }
 
-impl Process for DampedCosine {
+impl Process for DampedCosineProcess {
     #[inline]
     fn next<R: Rng + ?Sized>(&mut self, rng: &mut R) -> f64 {
         let w1 = normal(rng);
@@ -600,7 +600,8 @@ mod tests {
 
     #[test]
     fn rolling_discretisation_is_stationary_and_psd() {
-        let p = IrregularRolling::new(&IrregularRollingConfig::default(), 0.1).expect("valid");
+        let p =
+            IrregularRollingProcess::new(&IrregularRollingConfig::default(), 0.1).expect("valid");
         let f = p.transition();
         let q = p.noise_covariance();
         let w2 = p.mu() * p.mu() + p.beta() * p.beta();
@@ -633,7 +634,7 @@ mod tests {
     #[test]
     fn zero_variance_processes_stay_at_zero() {
         let mut rng = seeded_rng(1);
-        let mut r = IrregularRolling::new(
+        let mut r = IrregularRollingProcess::new(
             &IrregularRollingConfig {
                 std_dev: 0.0,
                 ..IrregularRollingConfig::default()

@@ -40,17 +40,17 @@ pub enum Weights {
 ///
 /// ```
 /// use wls::nalgebra::{dmatrix, dvector};
-/// use wls::solver::{Method, SolveOptions, Weights, solve};
+/// use wls::solver::{SolveMethod, SolveOptions, Weights, solve};
 /// let h = dmatrix![1.0, 1.0; 1.0, 2.0; 1.0, 3.0];
 /// let z = dvector![1.0, 2.0, 2.9];
 /// let qr = solve(&h, &z, &Weights::Identity, &SolveOptions::default())?;
-/// let ne = SolveOptions { method: Method::NormalEquations, ..SolveOptions::default() };
+/// let ne = SolveOptions { method: SolveMethod::NormalEquations, ..SolveOptions::default() };
 /// let ne = solve(&h, &z, &Weights::Identity, &ne)?;
 /// assert!((qr.x - ne.x).norm() < 1e-10); // well conditioned: both agree
 /// # Ok::<(), wls::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum Method {
+pub enum SolveMethod {
     /// Householder QR of A = V^{1/2}H: x = R⁻¹Qᵀb, covariance R⁻¹R⁻ᵀ. Accuracy ∝ κ(A).
     #[default]
     Qr,
@@ -128,7 +128,7 @@ pub struct PriorRows {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct SolveOptions {
     /// QR (default) or normal equations.
-    pub method: Method,
+    pub method: SolveMethod,
     /// Scale the covariance by the residual variance σ̂² = ‖Ax − b‖²/(rows − n).
     pub scale_covariance: bool,
     /// Singular values of V^{1/2}H at or below this count as zero; default
@@ -180,7 +180,7 @@ pub struct Solution {
     /// The tolerance that defined `rank`.
     pub rank_tolerance: f64,
     /// The method used.
-    pub method: Method,
+    pub method: SolveMethod,
 }
 
 /// Options of the iteratively re-weighted solve [`solve_irls`].
@@ -597,7 +597,7 @@ pub fn solve(
     let sys = assemble(H, z, weights, options)?;
     let n = H.ncols();
     let (x, mut covariance) = match options.method {
-        Method::Qr => {
+        SolveMethod::Qr => {
             let (qr, R) = qr_of(&sys.A);
             let mut qtb = sys.b.clone();
             qr.q_tr_mul(&mut qtb);
@@ -608,7 +608,7 @@ pub fn solve(
             })?;
             (x, covariance_from_r(&R)?)
         }
-        Method::NormalEquations => {
+        SolveMethod::NormalEquations => {
             let N = sys.A.transpose() * &sys.A;
             let rhs = sys.A.transpose() * &sys.b;
             let I = DMatrix::identity(n, n);

@@ -75,7 +75,7 @@ pub use mle::{MleOptions, mle};
 pub use params::{Derivative, FnMap, Free, MatrixStdErrors, ParamMap, StandardMap, Structure};
 pub use score::log_likelihood_gradient;
 
-use crate::{CovarianceForm, Dyn, Filter, MatrixInput, Model};
+use crate::{CovarianceForm, DynDims, Filter, MatrixInput, Model};
 
 /// ln(2π).
 pub(crate) const LN_2PI: f64 = 1.837_877_066_409_345_5;
@@ -211,9 +211,9 @@ impl System {
     ///
     /// # Errors
     /// As [`Model::new`] (e.g. an indefinite `Q`).
-    pub fn model(&self) -> Result<Model<Dyn>, crate::Error> {
+    pub fn model(&self) -> Result<Model<DynDims>, crate::Error> {
         let model = Model::new(
-            Dyn::new(self.n(), self.m(), self.p())?,
+            DynDims::new(self.n(), self.m(), self.p())?,
             &self.F,
             &self.H,
             &self.Q,

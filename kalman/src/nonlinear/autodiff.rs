@@ -17,7 +17,7 @@ impl<T: DualNum<Primitive = f64> + Copy> Scalar for T {}
 /// [`NonlinearModel`].
 ///
 /// ```
-/// use kalman::Dyn;
+/// use kalman::DynDims;
 /// use kalman::nonlinear::{AutoDiff, GenericModel, Jacobians, Scalar};
 /// /// Range and bearing of a planar position (x, y).
 /// struct RangeBearing;
@@ -33,7 +33,7 @@ impl<T: DualNum<Primitive = f64> + Copy> Scalar for T {}
 ///     fn r(&self, _k: usize, out: &mut [f64]) { out.copy_from_slice(&[1e-2, 0.0, 0.0, 1e-4]); }
 /// }
 /// # fn main() -> Result<(), kalman::Error> {
-/// let mut ad = AutoDiff::new(RangeBearing, Dyn::new(2, 2, 0)?);
+/// let mut ad = AutoDiff::new(RangeBearing, DynDims::new(2, 2, 0)?);
 /// let mut jac = [0.0; 4];
 /// ad.h_jacobian(&[3.0, 4.0], 0, &mut jac);
 /// // ∂r/∂x = x/r, ∂θ/∂x = −y/r² (column-major: jac[0], jac[1] are column x).

@@ -37,10 +37,10 @@ pub enum EkfUpdate {
 /// nothing.
 ///
 /// ```
-/// use kalman::Fixed;
+/// use kalman::FixedDims;
 /// use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel};
 /// # fn main() -> Result<(), kalman::Error> {
-/// let d = Fixed::<1, 1>::new();
+/// let d = FixedDims::<1, 1>::new();
 /// let model = FnModel::new(
 ///     d,
 ///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = x[0],

@@ -40,20 +40,20 @@
 //!
 //! All filters skip NaN rows of z (an all-NaN z is a predict-only step), report the
 //! normalised innovation squared and the Gaussian log-likelihood ([`StepInfo`]), run on the
-//! [`crate::Fixed`] path without allocating per step and on the [`crate::Dyn`] path with
+//! [`crate::FixedDims`] path without allocating per step and on the [`crate::DynDims`] path with
 //! heap buffers sized once. A non-finite f, h, Jacobian, Q or R, a sigma-point covariance
 //! that is not PSD, or a singular innovation covariance is a typed [`crate::Error`] naming
 //! the step.
 //!
 //! # Example
 //! ```
-//! use kalman::Fixed;
+//! use kalman::FixedDims;
 //! use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, Ukf};
 //! # fn main() -> Result<(), kalman::Error> {
 //! // A pendulum: x = (θ, ω), sin θ measured.
 //! let dt = 0.05;
 //! let model = FnModel::new(
-//!     Fixed::<2, 1>::new(),
+//!     FixedDims::<2, 1>::new(),
 //!     move |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| {
 //!         out[0] = x[0] + dt * x[1];
 //!         out[1] = x[1] - dt * 9.81 * x[0].sin();
@@ -62,10 +62,10 @@
 //!     &[[1e-6, 0.0], [0.0, 1e-4]],
 //!     &[[1e-3]],
 //! )?;
-//! let mut ukf = Ukf::new(Fixed::<2, 1>::new(), model.clone(), &[0.5, 0.0],
+//! let mut ukf = Ukf::new(FixedDims::<2, 1>::new(), model.clone(), &[0.5, 0.0],
 //!     &[[0.1, 0.0], [0.0, 0.1]], SigmaPoints::merwe(1e-3, 2.0, 0.0))?;
-//! let ekf_model = CentralDiff::new(model, Fixed::<2, 1>::new());
-//! let mut ekf = Ekf::new(Fixed::<2, 1>::new(), ekf_model, &[0.5, 0.0],
+//! let ekf_model = CentralDiff::new(model, FixedDims::<2, 1>::new());
+//! let mut ekf = Ekf::new(FixedDims::<2, 1>::new(), ekf_model, &[0.5, 0.0],
 //!     &[[0.1, 0.0], [0.0, 0.1]], EkfUpdate::Extended)?;
 //! for z in [0.45, 0.44, f64::NAN, 0.39] {
 //!     let a = ukf.step(&[z], None)?;
@@ -94,7 +94,7 @@ pub use smoother::{ForwardPass, NonlinearRts};
 pub use ukf::{SigmaPoints, Ukf};
 
 use crate::storage::sealed::Arr;
-use crate::storage::{Buf, Dims, Dyn, Fixed};
+use crate::storage::{Buf, Dims, DynDims, FixedDims};
 
 /// What one nonlinear step produced.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -116,7 +116,7 @@ pub struct StepInfo {
 }
 
 /// Storage of the nonlinear filters: the linear engine's buffers plus the sigma-point
-/// arrays. Implemented for [`Dyn`] and [`Fixed`] (where the sigma arrays are sized for the
+/// arrays. Implemented for [`DynDims`] and [`FixedDims`] (where the sigma arrays are sized for the
 /// largest fixed model, 2·16 + 1 points, and used with a leading dimension).
 pub trait NlDims: Dims {
     /// n×(2n+1) buffers (sigma points in state space).
@@ -127,13 +127,13 @@ pub trait NlDims: Dims {
     type W: Buf<f64>;
 }
 
-impl NlDims for Dyn {
+impl NlDims for DynDims {
     type Sig = Vec<f64>;
     type ZSig = Vec<f64>;
     type W = Vec<f64>;
 }
 
-impl<const N: usize, const M: usize, const P: usize> NlDims for Fixed<N, M, P> {
+impl<const N: usize, const M: usize, const P: usize> NlDims for FixedDims<N, M, P> {
     type Sig = Arr<f64, N, 33>;
     type ZSig = Arr<f64, M, 33>;
     type W = Arr<f64, 33, 1>;

@@ -91,11 +91,11 @@ pub trait Jacobians: NonlinearModel {
 /// extended filters.
 ///
 /// ```
-/// use kalman::Dyn;
+/// use kalman::DynDims;
 /// use kalman::nonlinear::{FnModel, NonlinearModel};
 /// # fn main() -> Result<(), kalman::Error> {
 /// let mut model = FnModel::new(
-///     Dyn::new(1, 1, 0)?,
+///     DynDims::new(1, 1, 0)?,
 ///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = 0.9 * x[0],
 ///     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0].exp(),
 ///     &[[0.1]],
@@ -196,17 +196,17 @@ where
 /// about 6e-11 relative for a well-scaled g. Costs 2n evaluations of f (or h) per Jacobian.
 ///
 /// ```
-/// use kalman::Dyn;
+/// use kalman::DynDims;
 /// use kalman::nonlinear::{CentralDiff, FnModel, Jacobians};
 /// # fn main() -> Result<(), kalman::Error> {
 /// let model = FnModel::new(
-///     Dyn::new(1, 1, 0)?,
+///     DynDims::new(1, 1, 0)?,
 ///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = x[0],
 ///     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0].sin(),
 ///     &[[0.1]],
 ///     &[[0.2]],
 /// )?;
-/// let mut cd = CentralDiff::new(model, Dyn::new(1, 1, 0)?);
+/// let mut cd = CentralDiff::new(model, DynDims::new(1, 1, 0)?);
 /// let mut j = [0.0];
 /// cd.h_jacobian(&[0.3], 0, &mut j);
 /// assert!((j[0] - 0.3_f64.cos()).abs() < 1e-9);

@@ -32,10 +32,10 @@ pub trait ForwardPass {
 /// are plain subtractions (the smoother does not hold the model's angle wrapping).
 ///
 /// ```
-/// use kalman::Dyn;
+/// use kalman::DynDims;
 /// use kalman::nonlinear::{FnModel, NonlinearRts, SigmaPoints, Ukf};
 /// # fn main() -> Result<(), kalman::Error> {
-/// let d = Dyn::new(1, 1, 0)?;
+/// let d = DynDims::new(1, 1, 0)?;
 /// let model = FnModel::new(
 ///     d,
 ///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = x[0],
@@ -44,7 +44,7 @@ pub trait ForwardPass {
 ///     &[[1.0]],
 /// )?;
 /// let mut ukf = Ukf::new(d, model, &[0.0], &[[1.0]], SigmaPoints::merwe(1.0, 2.0, 0.0))?;
-/// let mut rts = NonlinearRts::new(1);
+/// let mut rts = NonlinearRts::new();
 /// for z in [1.0, 3.0] {
 ///     ukf.step(&[z], None)?;
 ///     rts.record(&ukf)?;
@@ -55,7 +55,7 @@ pub trait ForwardPass {
 /// # Ok(())
 /// # }
 /// ```
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct NonlinearRts {
     n: usize,
     xf: Vec<f64>,
@@ -68,18 +68,9 @@ pub struct NonlinearRts {
 }
 
 impl NonlinearRts {
-    /// An empty recorder for n states.
-    pub fn new(n: usize) -> Self {
-        Self {
-            n,
-            xf: Vec::new(),
-            pf: Vec::new(),
-            xp: Vec::new(),
-            pp: Vec::new(),
-            ct: Vec::new(),
-            c: vec![0.0; n * n],
-            steps: 0,
-        }
+    /// An empty recorder; the number of states is fixed by the first recorded step.
+    pub fn new() -> Self {
+        Self::default()
     }
 
     /// Number of recorded steps.
@@ -95,10 +86,14 @@ impl NonlinearRts {
     /// Records the step the filter has just taken.
     ///
     /// # Errors
-    /// [`Error::Dimension`] if the filter's n differs from the smoother's.
+    /// [`Error::Dimension`] if the filter's n differs from that of the steps recorded before.
     pub fn record(&mut self, filter: &impl ForwardPass) -> Result<(), Error> {
-        let n = self.n;
         let (xf, pf) = filter.filtered();
+        if self.steps == 0 {
+            self.n = xf.len();
+            self.c = vec![0.0; self.n * self.n];
+        }
+        let n = self.n;
         let (xp, pp) = filter.predicted();
         if xf.len() != n {
             return Err(Error::Dimension {

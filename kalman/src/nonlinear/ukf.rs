@@ -146,10 +146,10 @@ impl SigmaPoints {
 /// allocates nothing.
 ///
 /// ```
-/// use kalman::Dyn;
+/// use kalman::DynDims;
 /// use kalman::nonlinear::{FnModel, SigmaPoints, Ukf};
 /// # fn main() -> Result<(), kalman::Error> {
-/// let d = Dyn::new(2, 1, 0)?;
+/// let d = DynDims::new(2, 1, 0)?;
 /// // Constant velocity, range to a point 1 m off the track measured.
 /// let model = FnModel::new(
 ///     d,

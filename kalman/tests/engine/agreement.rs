@@ -2,7 +2,7 @@
 //! against itself.
 
 use kalman::strategies::{FilterProblem, ProblemOptions};
-use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed};
+use kalman::{CovarianceForm, Dims, DynDims, Filter, FixedDims};
 
 use super::reference;
 
@@ -71,7 +71,7 @@ fn dyn_matches_reference_on_seeded_models() {
             };
             let p = FilterProblem::generate(3 + seed as usize, 1 + seed as usize % 3, opts, seed);
             for form in FORMS {
-                let dev = deviation(&p, Dyn::new(p.n(), p.m(), 2).expect("dims"), form);
+                let dev = deviation(&p, DynDims::new(p.n(), p.m(), 2).expect("dims"), form);
                 assert!(
                     dev < 1e-10,
                     "seed {seed} {form:?} S={correlated} miss={missing}: {dev:e}"
@@ -92,7 +92,7 @@ fn fixed_matches_reference() {
         };
         let p = FilterProblem::generate(7, 2, opts, seed);
         for form in FORMS {
-            let dev = deviation(&p, Fixed::<7, 2, 1>::new(), form);
+            let dev = deviation(&p, FixedDims::<7, 2, 1>::new(), form);
             assert!(dev < 1e-10, "seed {seed} {form:?}: {dev:e}");
         }
     }

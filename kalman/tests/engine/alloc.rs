@@ -2,7 +2,7 @@
 //! counting global allocator (`common/counting.rs`).
 
 use kalman::strategies::{FilterProblem, ProblemOptions};
-use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed};
+use kalman::{CovarianceForm, Dims, DynDims, Filter, FixedDims};
 
 use crate::common::counting::allocations;
 
@@ -41,19 +41,19 @@ fn no_allocation_per_step() {
             // Small model: fixed path and dynamic path with the crate's own loops.
             let small = FilterProblem::generate(7, 2, opts, 11);
             assert_eq!(
-                count(&small, Fixed::<7, 2, 1>::new(), form),
+                count(&small, FixedDims::<7, 2, 1>::new(), form),
                 0,
                 "{form:?} fixed"
             );
             assert_eq!(
-                count(&small, Dyn::new(7, 2, 1).expect("dims"), form),
+                count(&small, DynDims::new(7, 2, 1).expect("dims"), form),
                 0,
                 "{form:?} dyn"
             );
             // Larger model: products go through faer's GEMM.
             let big = FilterProblem::generate(24, 6, opts, 12);
             assert_eq!(
-                count(&big, Dyn::new(24, 6, 1).expect("dims"), form),
+                count(&big, DynDims::new(24, 6, 1).expect("dims"), form),
                 0,
                 "{form:?} dyn faer"
             );

@@ -4,7 +4,7 @@
 
 use faer::linalg::solvers::Solve;
 use kalman::strategies::{FilterProblem, ProblemOptions};
-use kalman::{CovarianceForm, Dyn, Filter, Model, Nees};
+use kalman::{CovarianceForm, DynDims, Filter, Model, Nees};
 
 const RUNS: usize = 2000;
 const STEPS: usize = 15;
@@ -31,7 +31,7 @@ fn errors(ignore_s: bool) -> (Vec<Vec<f64>>, faer::Mat<f64>, Nees) {
         // One model (`base`), a fresh seeded stream per run.
         let (zs, truth) = simulate(&base, 1000 + run as u64);
         let mut model = Model::new(
-            Dyn::new(n, 2, 0).expect("dims"),
+            DynDims::new(n, 2, 0).expect("dims"),
             &base.F,
             &base.H,
             &base.Q,
@@ -166,7 +166,9 @@ fn current_and_delayed_forms_agree() {
     let p = FilterProblem::generate(4, 2, opts(), 3);
     let S = p.S.as_ref().expect("S");
     for form in [CovarianceForm::Joseph, CovarianceForm::SquareRoot] {
-        let model = p.model(Dyn::new(4, 2, 0).expect("dims")).expect("model");
+        let model = p
+            .model(DynDims::new(4, 2, 0).expect("dims"))
+            .expect("model");
         let mut f = Filter::new(model, &p.x0, &p.P0, form).expect("filter");
         for z in &p.z {
             f.step(z, None).expect("step");

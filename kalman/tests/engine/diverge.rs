@@ -3,7 +3,7 @@
 //! a step without a measurement says so in its NIS.
 
 use kalman::schedule::{GainSchedule, ScheduleOptions};
-use kalman::{CovarianceForm, Dims, Dyn, Error, Filter, Fixed, Model};
+use kalman::{CovarianceForm, Dims, DynDims, Error, Filter, FixedDims, Model};
 
 const FORMS: [CovarianceForm; 3] = [
     CovarianceForm::Joseph,
@@ -86,8 +86,8 @@ fn a_diverging_filter_is_an_error_at_the_step_it_diverges() {
     // 1e300 is finite, 1e320 is not: step 15 (the sixteenth data row).
     assert_eq!(expected_step(), 15);
     for form in FORMS {
-        run(Fixed::<2, 1>::new(), form);
-        run(Dyn::new(2, 1, 0).expect("dims"), form);
+        run(FixedDims::<2, 1>::new(), form);
+        run(DynDims::new(2, 1, 0).expect("dims"), form);
     }
 }
 
@@ -99,7 +99,7 @@ fn the_gain_schedule_reports_the_diverging_step() {
             ..ScheduleOptions::default()
         };
         let e = GainSchedule::new(
-            exploding(Dyn::new(2, 1, 0).expect("dims")),
+            exploding(DynDims::new(2, 1, 0).expect("dims")),
             &[[1.0, 0.0], [0.0, 1.0]],
             opts,
         )
@@ -113,8 +113,14 @@ fn the_gain_schedule_reports_the_diverging_step() {
 
 #[test]
 fn a_predict_only_step_has_no_nis() {
-    let model = Model::new(Fixed::<1, 1>::new(), &[[0.9]], &[[1.0]], &[[1.0]], &[[1.0]])
-        .expect("valid model");
+    let model = Model::new(
+        FixedDims::<1, 1>::new(),
+        &[[0.9]],
+        &[[1.0]],
+        &[[1.0]],
+        &[[1.0]],
+    )
+    .expect("valid model");
     for form in FORMS {
         let mut f = Filter::new(model.clone(), &[0.0], &[[1.0]], form).expect("valid prior");
         // Measured: P⁻ = 1, Σ = 2, NIS = e²/Σ = 0.5 for z = 1.

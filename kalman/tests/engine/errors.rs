@@ -1,6 +1,6 @@
 //! Every invalid input gives a typed error naming the matrix.
 
-use kalman::{CovarianceForm, Dyn, Error, Filter, Fixed, Model};
+use kalman::{CovarianceForm, DynDims, Error, Filter, FixedDims, Model};
 
 const F: [[f64; 2]; 2] = [[1.0, 0.1], [0.0, 1.0]];
 const H: [[f64; 2]; 1] = [[1.0, 0.0]];
@@ -8,11 +8,11 @@ const Q: [[f64; 2]; 2] = [[0.01, 0.0], [0.0, 0.02]];
 const R: [[f64; 1]; 1] = [[0.5]];
 const P0: [[f64; 2]; 2] = [[1.0, 0.2], [0.2, 2.0]];
 
-fn dims() -> Dyn {
-    Dyn::new(2, 1, 1).expect("dims")
+fn dims() -> DynDims {
+    DynDims::new(2, 1, 1).expect("dims")
 }
 
-fn model() -> Model<Dyn> {
+fn model() -> Model<DynDims> {
     Model::new(dims(), &F, &H, &Q, &R).expect("valid model")
 }
 
@@ -32,7 +32,7 @@ fn name_of(e: &Error) -> &'static str {
 fn shape_errors_name_the_matrix() {
     let bad3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     let bad12 = [[1.0, 0.0]];
-    let cases: Vec<(&str, Result<Model<Dyn>, Error>)> = vec![
+    let cases: Vec<(&str, Result<Model<DynDims>, Error>)> = vec![
         ("F", Model::new(dims(), &bad3, &H, &Q, &R)),
         ("H", Model::new(dims(), &F, &bad3, &Q, &R)),
         ("Q", Model::new(dims(), &F, &H, &bad12, &R)),
@@ -61,7 +61,7 @@ fn nan_entries_name_the_matrix() {
     let nan21 = [[f64::NAN], [0.0]];
     let nan12 = [[f64::NAN, 0.0]];
     let nan11 = [[f64::INFINITY]];
-    let cases: Vec<(&str, Result<Model<Dyn>, Error>)> = vec![
+    let cases: Vec<(&str, Result<Model<DynDims>, Error>)> = vec![
         ("F", Model::new(dims(), &nan2, &H, &Q, &R)),
         ("H", Model::new(dims(), &F, &nan12, &Q, &R)),
         ("Q", Model::new(dims(), &F, &H, &nan2, &R)),
@@ -90,7 +90,7 @@ fn nan_entries_name_the_matrix() {
 #[test]
 fn asymmetric_covariances_are_rejected() {
     let asym = [[1.0, 0.5], [0.0, 1.0]];
-    let asym_r = Dyn::new(2, 2, 0).expect("dims");
+    let asym_r = DynDims::new(2, 2, 0).expect("dims");
     let h2 = [[1.0, 0.0], [0.0, 1.0]];
     let e = Model::new(dims(), &F, &H, &asym, &R).err();
     assert!(
@@ -165,30 +165,30 @@ fn step_inputs_are_checked_and_leave_the_state_unchanged() {
 #[test]
 fn dimensions_are_checked() {
     assert!(matches!(
-        Dyn::new(0, 1, 0),
+        DynDims::new(0, 1, 0),
         Err(Error::Dimension { name: "n", .. })
     ));
     assert!(matches!(
-        Dyn::new(1, 0, 0),
+        DynDims::new(1, 0, 0),
         Err(Error::Dimension { name: "m", .. })
     ));
-    // `Fixed::new()` checks at compile time; `Default` bypasses that and is caught here.
+    // `FixedDims::new()` checks at compile time; `Default` bypasses that and is caught here.
     let eye17 = faer::Mat::<f64>::identity(17, 17);
     let h = faer::Mat::<f64>::identity(1, 17);
     let r = faer::Mat::<f64>::identity(1, 1);
-    let e = Model::new(Fixed::<17, 1, 0>::default(), &eye17, &h, &eye17, &r).err();
+    let e = Model::new(FixedDims::<17, 1, 0>::default(), &eye17, &h, &eye17, &r).err();
     assert!(
         matches!(e, Some(Error::Dimension { name: "n", .. })),
         "{e:?}"
     );
     // A time-varying model must keep the dimensions.
-    let other = Model::new(Dyn::new(2, 1, 0).expect("dims"), &F, &H, &Q, &R).expect("model");
+    let other = Model::new(DynDims::new(2, 1, 0).expect("dims"), &F, &H, &Q, &R).expect("model");
     let mut f = Filter::new(model(), &[0.0; 2], &P0, CovarianceForm::Joseph).expect("filter");
     assert!(matches!(
         f.step_with(&other, &[1.0], None),
         Err(Error::Dimension { .. })
     ));
-    let empty: Vec<Model<Dyn>> = Vec::new();
+    let empty: Vec<Model<DynDims>> = Vec::new();
     assert!(matches!(
         f.step_source(&empty, &[1.0], None),
         Err(Error::NoModel { step: 0 })

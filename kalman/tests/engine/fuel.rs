@@ -3,7 +3,7 @@
 //! min eigenvalue ≥ −1e-12·trace P. Matrices are written here from SPEC F's formulas with
 //! its default parameters (kalman has no sibling dependencies).
 
-use kalman::{CovarianceForm, Filter, Fixed, Model};
+use kalman::{CovarianceForm, Filter, FixedDims, Model};
 use rand::{RngExt, SeedableRng};
 
 type M7 = [[f64; 7]; 7];
@@ -93,7 +93,7 @@ fn fuel_model_runs_a_million_steps() {
     // The mean fill rate V_c enters state 2 as a known input (SPEC F, "things left out" 1).
     let Bc = [[0.0], [1.0], [0.0], [0.0], [0.0], [0.0], [0.0]];
     let vc = 0.01;
-    let model = Model::new(Fixed::<7, 2, 1>::new(), &F, &H, &Q, &R)
+    let model = Model::new(FixedDims::<7, 2, 1>::new(), &F, &H, &Q, &R)
         .and_then(|m| m.with_cross_covariance(&S))
         .and_then(|m| m.with_control(&Bc))
         .expect("fuel model is valid");

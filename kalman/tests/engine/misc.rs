@@ -2,7 +2,7 @@
 //! `ModelSource`, and `reset`.
 
 use kalman::strategies::{FilterProblem, ProblemOptions};
-use kalman::{CovarianceForm, Dyn, Filter, Fixed, Model};
+use kalman::{CovarianceForm, DynDims, Filter, FixedDims, Model};
 
 #[test]
 fn nalgebra_matrices_build_the_same_model() {
@@ -11,7 +11,7 @@ fn nalgebra_matrices_build_the_same_model() {
         |a: &faer::Mat<f64>| nalgebra::DMatrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)]);
     let F: nalgebra::SMatrix<f64, 4, 4> = nalgebra::SMatrix::from_fn(|i, j| p.F[(i, j)]);
     let model = Model::new(
-        Fixed::<4, 2, 0>::new(),
+        FixedDims::<4, 2, 0>::new(),
         &F,
         &to_na(&p.H),
         &to_na(&p.Q),
@@ -20,7 +20,7 @@ fn nalgebra_matrices_build_the_same_model() {
     .expect("model");
     let mut a = Filter::new(model, &p.x0, &to_na(&p.P0), CovarianceForm::Joseph).expect("filter");
     let mut b = Filter::new(
-        p.model(Fixed::<4, 2, 0>::new()).expect("model"),
+        p.model(FixedDims::<4, 2, 0>::new()).expect("model"),
         &p.x0,
         &p.P0,
         CovarianceForm::Joseph,
@@ -40,7 +40,7 @@ fn nalgebra_matrices_build_the_same_model() {
     // A wrongly shaped nalgebra matrix is a typed error naming it.
     let bad = nalgebra::DMatrix::<f64>::zeros(3, 4);
     let e = Model::new(
-        Dyn::new(4, 2, 0).expect("dims"),
+        DynDims::new(4, 2, 0).expect("dims"),
         &F,
         &bad,
         &to_na(&p.Q),
@@ -57,11 +57,11 @@ fn nalgebra_matrices_build_the_same_model() {
 fn time_varying_models_step_by_step() {
     let p = FilterProblem::generate(3, 2, ProblemOptions::default(), 22);
     let q = FilterProblem::generate(3, 2, ProblemOptions::default(), 23);
-    let dims = Dyn::new(3, 2, 0).expect("dims");
+    let dims = DynDims::new(3, 2, 0).expect("dims");
     let m0 = p.model(dims).expect("model");
     let m1 = q.model(dims).expect("model");
     // Alternating models: step k uses models[k] for its update (H) and prediction (F, Q).
-    let models: Vec<Model<Dyn>> = (0..p.z.len())
+    let models: Vec<Model<DynDims>> = (0..p.z.len())
         .map(|k| if k % 2 == 0 { m0.clone() } else { m1.clone() })
         .collect();
     let mut by_source =
@@ -99,7 +99,8 @@ fn time_varying_models_step_by_step() {
 fn reset_restarts_from_a_new_prior() {
     let p = FilterProblem::generate(3, 1, ProblemOptions::default(), 24);
     let mut f = Filter::new(
-        p.model(Dyn::new(3, 1, 0).expect("dims")).expect("model"),
+        p.model(DynDims::new(3, 1, 0).expect("dims"))
+            .expect("model"),
         &p.x0,
         &p.P0,
         CovarianceForm::SquareRoot,

@@ -2,7 +2,7 @@
 //! log-likelihood is the Gaussian density of the innovation.
 
 use kalman::strategies::{FilterProblem, ProblemOptions};
-use kalman::{CovarianceForm, Dyn, Filter, Fixed, chi2_quantile};
+use kalman::{CovarianceForm, DynDims, Filter, FixedDims, chi2_quantile};
 
 #[test]
 fn nis_of_a_consistent_filter_is_in_the_95_percent_band() {
@@ -20,7 +20,7 @@ fn nis_of_a_consistent_filter_is_in_the_95_percent_band() {
         CovarianceForm::SquareRoot,
     ] {
         let mut f = Filter::new(
-            p.model(Fixed::<4, 3, 0>::new()).expect("model"),
+            p.model(FixedDims::<4, 3, 0>::new()).expect("model"),
             &p.x0,
             &p.P0,
             form,
@@ -63,7 +63,8 @@ fn nis_of_a_consistent_filter_is_in_the_95_percent_band() {
 fn log_likelihood_is_the_gaussian_density_of_the_innovation() {
     let p = FilterProblem::generate(3, 2, ProblemOptions::default(), 9);
     let mut f = Filter::new(
-        p.model(Dyn::new(3, 2, 0).expect("dims")).expect("model"),
+        p.model(DynDims::new(3, 2, 0).expect("dims"))
+            .expect("model"),
         &p.x0,
         &p.P0,
         CovarianceForm::Joseph,
@@ -98,7 +99,8 @@ fn singular_innovation_covariance_takes_the_rank_revealing_path() {
         CovarianceForm::Standard,
         CovarianceForm::SquareRoot,
     ] {
-        let model = Model::new(Dyn::new(2, 2, 0).expect("dims"), &F, &H, &Q, &R).expect("model");
+        let model =
+            Model::new(DynDims::new(2, 2, 0).expect("dims"), &F, &H, &Q, &R).expect("model");
         let mut f =
             Filter::new(model, &[0.0, 0.0], &[[1.0, 0.0], [0.0, 1.0]], form).expect("filter");
         for k in 0..50 {

@@ -2,7 +2,7 @@
 //! forms agree, P stays symmetric PSD, and the fixed-size and dynamic paths agree.
 
 use kalman::strategies::{FilterProblem, ProblemOptions, problem};
-use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed};
+use kalman::{CovarianceForm, Dims, DynDims, Filter, FixedDims};
 use proptest::prelude::*;
 
 /// Per-step (x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k}) of a run, flattened.
@@ -64,7 +64,7 @@ fn check_sym_psd(f: faer::MatRef<'_, f64>, scale: f64) -> Result<(), TestCaseErr
     Ok(())
 }
 
-/// Dispatches a runtime (n, m) to `Fixed<N, M, 1>`.
+/// Dispatches a runtime (n, m) to `FixedDims<N, M, 1>`.
 macro_rules! fixed_run {
     ($p:expr, $form:expr, $n:expr, $m:expr; [$($N:literal)*]; $ms:tt) => {{
         let mut out: Option<Vec<Vec<f64>>> = None;
@@ -72,7 +72,7 @@ macro_rules! fixed_run {
         out.expect("n, m within 1..=12, 1..=6")
     }};
     (@m $out:ident, $p:expr, $form:expr, $m:expr, $N:literal, [$($M:literal)*]) => {
-        $( if $m == $M { $out = Some(run($p, Fixed::<$N, $M, 1>::new(), $form)); } )*
+        $( if $m == $M { $out = Some(run($p, FixedDims::<$N, $M, 1>::new(), $form)); } )*
     };
 }
 
@@ -96,7 +96,7 @@ proptest! {
         ]
     ) {
         let (n, m) = (p.n(), p.m());
-        let dims = Dyn::new(n, m, 1).expect("dims");
+        let dims = DynDims::new(n, m, 1).expect("dims");
         let joseph = run(&p, dims, CovarianceForm::Joseph);
         // 1e-9 relative between forms: the same quantities through different arithmetic
         // (O(n³) operations, 12 steps) on problems with moderate conditioning.

@@ -7,7 +7,7 @@ use kalman::nonlinear::{
     Ukf,
 };
 use kalman::strategies::{FilterProblem, ProblemOptions};
-use kalman::{Dyn, Fixed};
+use kalman::{DynDims, FixedDims};
 
 use super::models::{Linear, RangeBearing};
 use crate::common::counting::allocations;
@@ -75,10 +75,10 @@ fn no_allocation_per_nonlinear_step() {
         ..ProblemOptions::default()
     };
     let p = FilterProblem::generate(7, 2, opts, 41);
-    linear_case(&p, Fixed::<7, 2, 1>::new());
-    linear_case(&p, Dyn::new(7, 2, 1).expect("dims"));
+    linear_case(&p, FixedDims::<7, 2, 1>::new());
+    linear_case(&p, DynDims::new(7, 2, 1).expect("dims"));
     let big = FilterProblem::generate(20, 5, opts, 42);
-    linear_case(&big, Dyn::new(20, 5, 1).expect("dims"));
+    linear_case(&big, DynDims::new(20, 5, 1).expect("dims"));
 
     // AD Jacobians and closures, on the range–bearing tracker.
     let zs: Vec<Vec<f64>> = (0..10)
@@ -95,8 +95,8 @@ fn no_allocation_per_nonlinear_step() {
         .collect();
     let x0 = RangeBearing::x0();
     let p0 = RangeBearing::p0();
-    let fixed = Fixed::<4, 2>::new();
-    let dynd = Dyn::new(4, 2, 0).expect("dims");
+    let fixed = FixedDims::<4, 2>::new();
+    let dynd = DynDims::new(4, 2, 0).expect("dims");
     let mut f = Ekf::new(
         fixed,
         AutoDiff::new(RangeBearing::default(), fixed),

@@ -3,7 +3,7 @@
 //! and bad shapes — never a panic or NaN output.
 
 use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, Ukf};
-use kalman::{Dyn, Error, Fixed};
+use kalman::{DynDims, Error, FixedDims};
 
 /// The transition and measurement closures of the scalar test model.
 type Transition = Box<dyn FnMut(&[f64], Option<&[f64]>, usize, &mut [f64])>;
@@ -17,12 +17,12 @@ fn scalar_model(h_nan_at: usize, f_nan_at: usize) -> Scalar {
     let h: Measurement = Box::new(move |x, k, out| {
         out[0] = if k == h_nan_at { f64::INFINITY } else { x[0] };
     });
-    FnModel::new(Fixed::<1, 1>::new(), f, h, &[[0.1]], &[[0.1]]).expect("model")
+    FnModel::new(FixedDims::<1, 1>::new(), f, h, &[[0.1]], &[[0.1]]).expect("model")
 }
 
 #[test]
 fn non_finite_model_values_name_function_and_step() {
-    let d = Fixed::<1, 1>::new();
+    let d = FixedDims::<1, 1>::new();
     let mut ukf = Ukf::new(
         d,
         scalar_model(2, 99),
@@ -65,7 +65,7 @@ fn non_finite_model_values_name_function_and_step() {
 fn indefinite_sigma_covariance_is_an_error() {
     // Q_k indefinite from step 1: P_{2|1} is indefinite and the UKF refuses to draw
     // sigma points from it at step 2.
-    let d = Dyn::new(2, 1, 0).expect("dims");
+    let d = DynDims::new(2, 1, 0).expect("dims");
     struct M;
     impl kalman::nonlinear::NonlinearModel for M {
         fn f(&mut self, x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]) {
@@ -111,7 +111,7 @@ fn indefinite_sigma_covariance_is_an_error() {
 #[test]
 fn singular_innovation_covariance_is_an_error() {
     // h constant and R = 0: Σ = 0.
-    let d = Fixed::<1, 1>::new();
+    let d = FixedDims::<1, 1>::new();
     let model = FnModel::new(
         d,
         |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = x[0],
@@ -158,7 +158,7 @@ fn singular_innovation_covariance_is_an_error() {
 
 #[test]
 fn bad_options_and_shapes_are_errors() {
-    let d = Fixed::<1, 1>::new();
+    let d = FixedDims::<1, 1>::new();
     for (set, name) in [
         (SigmaPoints::merwe(0.0, 2.0, 0.0), "alpha"),
         (SigmaPoints::merwe(1.0, 2.0, -1.0), "kappa"),

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use kalman::nonlinear::{AutoDiff, Ekf, EkfUpdate, ForwardPass, NlDims, SigmaPoints, Ukf};
 use kalman::nonlinear::{Jacobians, NonlinearModel};
-use kalman::{Fixed, MatrixInput};
+use kalman::{FixedDims, MatrixInput};
 
 use super::models::{Pendulum, PendulumHand, RangeBearing, RangeBearingHand};
 
@@ -145,7 +145,7 @@ fn prior<const N: usize>(x: [f64; N], P: &impl MatrixInput) -> ([f64; N], faer::
 
 #[test]
 fn range_bearing_runs_equal_filterpy() {
-    let d = Fixed::<4, 2>::new();
+    let d = FixedDims::<4, 2>::new();
     let (x0, P0) = prior(RangeBearing::x0(), &RangeBearing::p0());
     let ekf_csv = include_str!("../golden/nl_rangebearing_ekf.csv");
     let mut hand = Ekf::new(
@@ -183,7 +183,7 @@ fn range_bearing_runs_equal_filterpy() {
 
 #[test]
 fn pendulum_runs_equal_filterpy() {
-    let d = Fixed::<2, 1>::new();
+    let d = FixedDims::<2, 1>::new();
     let (x0, P0) = prior([1.2, 0.0], &[[0.05, 0.0], [0.0, 0.1]]);
     let mut ekf = Ekf::new(d, PendulumHand::default(), &x0, &P0, EkfUpdate::Extended).expect("ekf");
     compare(

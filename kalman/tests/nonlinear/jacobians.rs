@@ -2,7 +2,7 @@
 //! arithmetic, so a few ulps) on the boom accelerometer, range–bearing and pendulum models;
 //! central differences stay within their documented truncation-plus-rounding bound.
 
-use kalman::Dyn;
+use kalman::DynDims;
 use kalman::nonlinear::{AutoDiff, CentralDiff, GenericModel, Jacobians};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -32,7 +32,7 @@ fn autodiff_equals_hand_written_jacobians() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     for gamma in [0.0, 10.0] {
         let b = boom(gamma);
-        let mut ad = AutoDiff::new(b.clone(), Dyn::new(3, 2, 0).expect("dims"));
+        let mut ad = AutoDiff::new(b.clone(), DynDims::new(3, 2, 0).expect("dims"));
         for _ in 0..200 {
             let x = [
                 rng.random_range(0.0..std::f64::consts::FRAC_PI_2),
@@ -50,9 +50,12 @@ fn autodiff_equals_hand_written_jacobians() {
             close(&fa, &fh, 1e-14, "boom df/dx");
         }
     }
-    let mut ad = AutoDiff::new(RangeBearing::default(), Dyn::new(4, 2, 0).expect("dims"));
+    let mut ad = AutoDiff::new(
+        RangeBearing::default(),
+        DynDims::new(4, 2, 0).expect("dims"),
+    );
     let mut hand = RangeBearingHand::default();
-    let mut pad = AutoDiff::new(Pendulum::default(), Dyn::new(2, 1, 0).expect("dims"));
+    let mut pad = AutoDiff::new(Pendulum::default(), DynDims::new(2, 1, 0).expect("dims"));
     let mut phand = PendulumHand::default();
     for _ in 0..200 {
         let x: [f64; 4] = std::array::from_fn(|_| rng.random_range(-100.0..100.0));
@@ -87,7 +90,7 @@ fn central_differences_within_their_documented_bound() {
     for gamma in [0.0, 10.0] {
         let b = boom(gamma);
         let model = kalman::nonlinear::FnModel::new(
-            Dyn::new(3, 2, 0).expect("dims"),
+            DynDims::new(3, 2, 0).expect("dims"),
             {
                 let b = b.clone();
                 move |x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]| b.f(x, u, k, out)
@@ -100,7 +103,7 @@ fn central_differences_within_their_documented_bound() {
             &[[1.0, 0.0], [0.0, 1.0]],
         )
         .expect("model");
-        let mut cd = CentralDiff::new(model, Dyn::new(3, 2, 0).expect("dims"));
+        let mut cd = CentralDiff::new(model, DynDims::new(3, 2, 0).expect("dims"));
         let mut worst = 0.0_f64;
         for _ in 0..200 {
             let x = [

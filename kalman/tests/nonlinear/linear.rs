@@ -6,7 +6,7 @@ use faer::MatRef;
 use kalman::nonlinear::{Ekf, EkfUpdate, NlDims, NonlinearRts, SigmaPoints, Ukf};
 use kalman::smoother::RtsSmoother;
 use kalman::strategies::{FilterProblem, ProblemOptions};
-use kalman::{CovarianceForm, Dyn, Filter, Fixed};
+use kalman::{CovarianceForm, DynDims, Filter, FixedDims};
 
 use super::models::Linear;
 
@@ -71,8 +71,8 @@ enum Which {
 fn check<D: NlDims>(p: &FilterProblem, dims: D, which: &Which) {
     let model = p.model(dims).expect("model");
     let mut lin = Filter::new(model, &p.x0, &p.P0, CovarianceForm::Joseph).expect("filter");
-    let mut lin_s = RtsSmoother::new(p.n());
-    let mut nl_s = NonlinearRts::new(p.n());
+    let mut lin_s = RtsSmoother::new();
+    let mut nl_s = NonlinearRts::new();
     let nl = Linear::new(p);
     let mut ekf;
     let mut ukf;
@@ -180,7 +180,7 @@ fn all(n: usize) -> Vec<Which> {
 fn nonlinear_filters_reproduce_the_linear_filter_fixed() {
     let p = problem(7, 2, 31);
     for w in all(7) {
-        check(&p, Fixed::<7, 2, 1>::new(), &w);
+        check(&p, FixedDims::<7, 2, 1>::new(), &w);
     }
 }
 
@@ -189,7 +189,7 @@ fn nonlinear_filters_reproduce_the_linear_filter_dyn() {
     for (n, m, seed) in [(3, 3, 32), (10, 4, 33), (1, 1, 34)] {
         let p = problem(n, m, seed);
         for w in all(n) {
-            check(&p, Dyn::new(n, m, 1).expect("dims"), &w);
+            check(&p, DynDims::new(n, m, 1).expect("dims"), &w);
         }
     }
 }
@@ -199,7 +199,7 @@ fn iterated_ekf_needs_two_linearisations_on_a_linear_model() {
     // The second Gauss–Newton step of a linear problem is zero: converged at iteration 2.
     let p = problem(4, 2, 35);
     let mut f = Ekf::new(
-        Dyn::new(4, 2, 1).expect("dims"),
+        DynDims::new(4, 2, 1).expect("dims"),
         Linear::new(&p),
         &p.x0,
         &p.P0,

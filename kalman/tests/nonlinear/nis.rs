@@ -4,7 +4,7 @@
 
 use kalman::chi2_quantile;
 use kalman::nonlinear::{Ekf, EkfUpdate, GenericModel, SigmaPoints, Ukf};
-use kalman::{Fixed, MatrixInput};
+use kalman::{FixedDims, MatrixInput};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -44,7 +44,7 @@ fn mean_nis_is_in_the_chi2_band() {
     let p0 = RangeBearing::p0();
     let p0c: Vec<f64> = (0..16).map(|i| p0.at(i % 4, i / 4)).collect();
     let lp = chol(&p0c, 4);
-    let d = Fixed::<4, 2>::new();
+    let d = FixedDims::<4, 2>::new();
     // Sums of NIS and their degrees of freedom, per filter.
     let mut sums = [(0.0, 0usize); 3];
     let mut rng = ChaCha8Rng::seed_from_u64(2026);

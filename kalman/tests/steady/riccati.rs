@@ -5,7 +5,7 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side, mat};
 use kalman::riccati::{dare, dare_residual, dlqr};
-use kalman::{CovarianceForm, Dyn, Error, Filter, Model};
+use kalman::{CovarianceForm, DynDims, Error, Filter, Model};
 use proptest::prelude::*;
 
 use super::common::{joint_noise, randn, rel, rho, rng, spd, with_radius};
@@ -19,7 +19,7 @@ fn iterate_filter(
     S: Option<&Mat<f64>>,
 ) -> (Mat<f64>, usize) {
     let (n, m) = (F.nrows(), H.nrows());
-    let mut model = Model::new(Dyn::new(n, m, 0).expect("dims"), F, H, Q, R).expect("model");
+    let mut model = Model::new(DynDims::new(n, m, 0).expect("dims"), F, H, Q, R).expect("model");
     if let Some(S) = S {
         model = model.with_cross_covariance(S).expect("S");
     }

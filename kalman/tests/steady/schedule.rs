@@ -5,7 +5,7 @@
 use faer::Mat;
 use kalman::riccati::dare;
 use kalman::schedule::{GainSchedule, ScheduleOptions};
-use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed, Model};
+use kalman::{CovarianceForm, Dims, DynDims, Filter, FixedDims, Model};
 use rand::RngExt;
 
 use super::common::{joint_noise, randn, rng, spd, with_radius};
@@ -107,12 +107,12 @@ fn reproduces_the_full_filter() {
         (4, true, true),
     ] {
         let p = problem(seed, 7, 2, 300, missing);
-        let (d, len) = compare(Dyn::new(7, 2, 1).expect("dims"), &p, cross);
+        let (d, len) = compare(DynDims::new(7, 2, 1).expect("dims"), &p, cross);
         // Tolerance 1e-12 (the issue's): the schedule's gains are the engine's own, bit for
         // bit, during the transient; the steady gain is the fixed point to 1e-14 relative.
         assert!(d < 1e-12, "dyn seed {seed}: {d:e}");
         assert!(len > 1 && len < 300, "schedule length {len}");
-        let (d, _) = compare(Fixed::<7, 2, 1>::new(), &p, cross);
+        let (d, _) = compare(FixedDims::<7, 2, 1>::new(), &p, cross);
         assert!(d < 1e-12, "fixed seed {seed}: {d:e}");
     }
 }
@@ -120,7 +120,7 @@ fn reproduces_the_full_filter() {
 #[test]
 fn fixed_gain_mode_matches_a_filter_started_at_steady_state() {
     let p = problem(5, 4, 2, 200, false);
-    let dims = Dyn::new(4, 2, 1).expect("dims");
+    let dims = DynDims::new(4, 2, 1).expect("dims");
     let ss = dare(p.F.as_ref(), p.H.as_ref(), p.Q.as_ref(), p.R.as_ref(), None).expect("DARE");
     let sched = GainSchedule::fixed_gain(model(dims, &p, false), &ss).expect("fixed gain");
     assert_eq!(sched.len(), 1);
@@ -166,15 +166,15 @@ fn steady_allocations<D: Dims>(dims: D) -> usize {
 
 #[test]
 fn no_allocation_per_scheduled_step() {
-    assert_eq!(steady_allocations(Dyn::new(7, 2, 1).expect("dims")), 0);
-    assert_eq!(steady_allocations(Fixed::<7, 2, 1>::new()), 0);
+    assert_eq!(steady_allocations(DynDims::new(7, 2, 1).expect("dims")), 0);
+    assert_eq!(steady_allocations(FixedDims::<7, 2, 1>::new()), 0);
 }
 
 #[test]
 fn bad_inputs_are_typed_errors() {
     let p = problem(7, 3, 2, 10, false);
     let sched = GainSchedule::new(
-        model(Dyn::new(3, 2, 1).expect("dims"), &p, false),
+        model(DynDims::new(3, 2, 1).expect("dims"), &p, false),
         &p.P0,
         ScheduleOptions::default(),
     )
@@ -197,7 +197,7 @@ fn bad_inputs_are_typed_errors() {
     let H = faer::mat![[0.0, 1.0]];
     let I = Mat::<f64>::identity(2, 2);
     let m = Model::new(
-        Dyn::new(2, 1, 0).expect("dims"),
+        DynDims::new(2, 1, 0).expect("dims"),
         &F,
         &H,
         &I,
@@ -220,13 +220,13 @@ fn bad_inputs_are_typed_errors() {
 fn steady_state_of_model_matches_schedule() {
     let p = problem(8, 7, 2, 10, false);
     let dyn_ss =
-        kalman::riccati::SteadyState::of(&model(Dyn::new(7, 2, 1).expect("dims"), &p, true))
+        kalman::riccati::SteadyState::of(&model(DynDims::new(7, 2, 1).expect("dims"), &p, true))
             .expect("dyn");
-    let fix_ss =
-        kalman::riccati::SteadyState::of(&model(Fixed::<7, 2, 1>::new(), &p, true)).expect("fixed");
+    let fix_ss = kalman::riccati::SteadyState::of(&model(FixedDims::<7, 2, 1>::new(), &p, true))
+        .expect("fixed");
     assert!((&dyn_ss.prior - &fix_ss.prior).norm_l2() <= 1e-14 * dyn_ss.prior.norm_l2());
     let sched = GainSchedule::new(
-        model(Dyn::new(7, 2, 1).expect("dims"), &p, true),
+        model(DynDims::new(7, 2, 1).expect("dims"), &p, true),
         &p.P0,
         ScheduleOptions::default(),
     )
@@ -246,9 +246,9 @@ fn fallback_allocates_only_on_entry() {
     let p = problem(9, 7, 2, 400, true);
     for fixed in [false, true] {
         let counts = if fixed {
-            fallback_counts(Fixed::<7, 2, 1>::new(), &p)
+            fallback_counts(FixedDims::<7, 2, 1>::new(), &p)
         } else {
-            fallback_counts(Dyn::new(7, 2, 1).expect("dims"), &p)
+            fallback_counts(DynDims::new(7, 2, 1).expect("dims"), &p)
         };
         let (before_entry, after_entry, back_on_schedule) = counts;
         assert_eq!(before_entry, 0, "fixed {fixed}");

@@ -5,7 +5,7 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side, mat};
 use kalman::smoother::{RtsSmoother, Smoothed};
-use kalman::{CovarianceForm, Dims, Dyn, Filter, Fixed, Model};
+use kalman::{CovarianceForm, Dims, DynDims, Filter, FixedDims, Model};
 use proptest::prelude::*;
 use rand::RngExt;
 
@@ -23,7 +23,7 @@ fn smooth<D: Dims>(
 ) -> (Smoothed, Vec<Mat<f64>>) {
     let model = Model::new(dims, F, H, Q, R).expect("model");
     let mut f = Filter::new(model, x0, P0, CovarianceForm::Joseph).expect("filter");
-    let mut s = RtsSmoother::new(F.nrows());
+    let mut s = RtsSmoother::new();
     let mut filtered = Vec::new();
     for z in zs {
         f.step(z, None).expect("step");
@@ -117,7 +117,7 @@ fn smoothed_means_equal_batch_least_squares_on_both_paths() {
         .collect();
     let (lsx, lsP) = batch(&F, &H, &Q, &R, &x0, &P0, &zs);
     let (dyn_s, filtered) = smooth(
-        Dyn::new(2, 1, 0).expect("dims"),
+        DynDims::new(2, 1, 0).expect("dims"),
         &F,
         &H,
         &Q,
@@ -126,7 +126,7 @@ fn smoothed_means_equal_batch_least_squares_on_both_paths() {
         &P0,
         &zs,
     );
-    let (fix_s, _) = smooth(Fixed::<2, 1>::new(), &F, &H, &Q, &R, &x0, &P0, &zs);
+    let (fix_s, _) = smooth(FixedDims::<2, 1>::new(), &F, &H, &Q, &R, &x0, &P0, &zs);
     // Tolerance: both sides are backward-stable solves of a well-conditioned (cond ~1e3)
     // problem with values O(1): 1e-10 leaves a wide margin over ~1e-13 round-off.
     for k in 0..zs.len() {
@@ -166,7 +166,7 @@ proptest! {
         let R = spd(&mut g, m, 0.05);
         let P0 = spd(&mut g, n, 0.5);
         let zs: Vec<Vec<f64>> = (0..20).map(|_| (0..m).map(|_| g.random_range(-1.0..1.0)).collect()).collect();
-        let (s, filtered) = smooth(Dyn::new(n, m, 0).expect("dims"), &F, &H, &Q, &R, &vec![0.0; n], &P0, &zs);
+        let (s, filtered) = smooth(DynDims::new(n, m, 0).expect("dims"), &F, &H, &Q, &R, &vec![0.0; n], &P0, &zs);
         for k in 0..zs.len() {
             let d = &filtered[k] - &s.covariances[k];
             prop_assert!(min_eig(&d) >= -1e-10 * filtered[k].norm_l2(), "step {k}");
@@ -196,7 +196,7 @@ fn correlated_noise_matches_the_decorrelated_model() {
     let Ft = &F - &SRi * &H;
     let Qt = super::common::sym(&Q - &SRi * S.transpose());
 
-    let dims = Dyn::new(n, m, m).expect("dims");
+    let dims = DynDims::new(n, m, m).expect("dims");
     let a = Model::new(dims, &F, &H, &Q, &R)
         .expect("model")
         .with_cross_covariance(&S)
@@ -209,7 +209,7 @@ fn correlated_noise_matches_the_decorrelated_model() {
         Filter::new(a, &x0, &P0, CovarianceForm::Joseph).expect("filter"),
         Filter::new(b, &x0, &P0, CovarianceForm::Joseph).expect("filter"),
     );
-    let (mut sa, mut sb) = (RtsSmoother::new(n), RtsSmoother::new(n));
+    let (mut sa, mut sb) = (RtsSmoother::new(), RtsSmoother::new());
     let zero = vec![0.0; m];
     for z in &zs {
         fa.step(z, Some(&zero)).expect("step");

@@ -2,8 +2,8 @@
 //! Euler maps, and transfer-function realisations and Tustin in z⁻¹.
 
 use model::{
-    ContinuousSs, ContinuousTf, DiscreteTf, Method, NoiseConvention, discretize, expm, van_loan,
-    zoh,
+    ContinuousSs, ContinuousTf, DiscreteTf, Discretization, NoiseConvention, discretize, expm,
+    van_loan, zoh,
 };
 use nalgebra::{Complex, DMatrix};
 
@@ -24,7 +24,7 @@ fn zoh_double_integrator() {
     assert_close("B", &bd, &m(2, 1, &[dt * dt / 2.0, dt]), 1e-14);
     // Through discretize() with ZOH as well.
     let sys = ContinuousSs::new(a, b, m(1, 2, &[1.0, 0.0]), m(1, 1, &[0.0])).expect("valid");
-    let d = discretize(&sys, dt, Method::Zoh, NoiseConvention::VanLoan).expect("ok");
+    let d = discretize(&sys, dt, Discretization::Zoh, NoiseConvention::VanLoan).expect("ok");
     assert_close(
         "F via discretize",
         d.f(),
@@ -75,7 +75,7 @@ fn euler_scalar_closed_forms() {
     let fe = discretize(
         &sys,
         dt,
-        Method::ForwardEuler,
+        Discretization::ForwardEuler,
         NoiseConvention::IntensityOverDt,
     )
     .expect("ok");
@@ -84,7 +84,7 @@ fn euler_scalar_closed_forms() {
     let be = discretize(
         &sys,
         dt,
-        Method::BackwardEuler,
+        Discretization::BackwardEuler,
         NoiseConvention::IntensityOverDt,
     )
     .expect("ok");
@@ -102,10 +102,14 @@ fn tustin_scalar_closed_form_and_noise_feedthrough() {
     // 1/(T s + 1) by Tustin: F = (T − Δt/2)/(T + Δt/2) (the paper's p_a); with the paper's
     // noise convention the feed-through is g_a = Δt/(2(T + Δt/2)) and Q = N/Δt.
     let (t, dt) = (20.0, 0.1);
-    let f = model::Exponential::new(1e-6, t).expect("valid");
-    let d =
-        model::ShapingFilter::discretize(&f, dt, Method::Tustin, NoiseConvention::IntensityOverDt)
-            .expect("ok");
+    let f = model::ExponentialShaping::new(1e-6, t).expect("valid");
+    let d = model::ShapingFilter::discretize(
+        &f,
+        dt,
+        Discretization::Tustin,
+        NoiseConvention::IntensityOverDt,
+    )
+    .expect("ok");
     assert!(close(d.f()[(0, 0)], (t - dt / 2.0) / (t + dt / 2.0), 1e-14));
     let ga = dt / (2.0 * (t + dt / 2.0));
     assert!(close(d.j()[(0, 0)], ga, 1e-14), "J = {}", d.j()[(0, 0)]);
@@ -133,8 +137,13 @@ fn transfer_function_realisations_match_evaluation() {
         // of the realisation has the same response.
         let dt = 0.2;
         let dtf = tf.tustin(dt, None).expect("ok");
-        let dss =
-            discretize(&ss, dt, Method::Tustin, NoiseConvention::IntensityOverDt).expect("ok");
+        let dss = discretize(
+            &ss,
+            dt,
+            Discretization::Tustin,
+            NoiseConvention::IntensityOverDt,
+        )
+        .expect("ok");
         for w in [0.1, 1.0, 5.0] {
             let z = Complex::from_polar(1.0, w * dt);
             let s = (z - 1.0) / (z + 1.0) * (2.0 / dt);
@@ -187,7 +196,7 @@ fn pre_warped_tustin_is_exact_at_the_warp_frequency_scalar() {
 #[cfg(feature = "proptest")]
 mod props {
     use model::strategies::stable_continuous;
-    use model::{Method, NoiseConvention, discretize, expm, van_loan};
+    use model::{Discretization, NoiseConvention, discretize, expm, van_loan};
     use nalgebra::DMatrix;
     use proptest::prelude::*;
 
@@ -213,7 +222,7 @@ mod props {
         /// Tustin maps a stable system to a stable one and keeps its DC gain.
         #[test]
         fn tustin_stable_and_dc_gain(sys in stable_continuous(6, 3, 3), dt in 0.01..2.0f64) {
-            let d = discretize(&sys, dt, Method::Tustin, NoiseConvention::IntensityOverDt).expect("ok");
+            let d = discretize(&sys, dt, Discretization::Tustin, NoiseConvention::IntensityOverDt).expect("ok");
             let rho = d.spectral_radius().expect("ok");
             prop_assert!(rho < 1.0, "spectral radius {rho}");
             let gc = sys.dc_gain().expect("A is stable hence invertible");
@@ -231,7 +240,7 @@ mod props {
             frac in 0.05..0.9f64,
         ) {
             let omega = frac * std::f64::consts::PI / dt;
-            let d = discretize(&sys, dt, Method::TustinPrewarp { omega }, NoiseConvention::IntensityOverDt)
+            let d = discretize(&sys, dt, Discretization::TustinPrewarp { omega }, NoiseConvention::IntensityOverDt)
                 .expect("ok");
             let hc = sys.freq_response(omega).expect("stable: no pole on the axis");
             let hd = d.freq_response(omega).expect("stable");

@@ -1,8 +1,9 @@
 //! Bad input of every class returns a typed error naming the matrix or parameter.
 
 use model::{
-    ContinuousSs, ContinuousTf, DampedCosine, DiscreteSs, DiscreteTf, Error, Exponential,
-    FuelParams, IrregularRolling, Method, NoiseConvention, discrete_lyapunov, discretize, zoh,
+    ContinuousSs, ContinuousTf, DampedCosineShaping, DiscreteSs, DiscreteTf, Discretization, Error,
+    ExponentialShaping, FuelParams, IrregularRollingShaping, NoiseConvention, discrete_lyapunov,
+    discretize, zoh,
 };
 use nalgebra::DMatrix;
 
@@ -167,7 +168,7 @@ fn non_positive_sampling_interval() {
             matches!(e, Error::InvalidParameter { name: "dt", .. }),
             "{e}"
         );
-        let e = discretize(&lag(), dt, Method::Zoh, NoiseConvention::VanLoan)
+        let e = discretize(&lag(), dt, Discretization::Zoh, NoiseConvention::VanLoan)
             .expect_err("bad input must be rejected");
         assert!(
             matches!(e, Error::InvalidParameter { name: "dt", .. }),
@@ -198,7 +199,7 @@ fn non_positive_sampling_interval() {
     let e = discretize(
         &lag(),
         0.1,
-        Method::TustinPrewarp { omega: 40.0 },
+        Discretization::TustinPrewarp { omega: 40.0 },
         NoiseConvention::VanLoan,
     )
     .expect_err("bad input must be rejected");
@@ -216,7 +217,7 @@ fn non_positive_sampling_interval() {
 
 #[test]
 fn non_positive_time_constants_and_variances() {
-    let e = Exponential::new(1.0, 0.0).expect_err("bad input must be rejected");
+    let e = ExponentialShaping::new(1.0, 0.0).expect_err("bad input must be rejected");
     assert!(
         matches!(
             e,
@@ -227,7 +228,7 @@ fn non_positive_time_constants_and_variances() {
         ),
         "{e}"
     );
-    let e = Exponential::new(-1.0, 1.0).expect_err("bad input must be rejected");
+    let e = ExponentialShaping::new(-1.0, 1.0).expect_err("bad input must be rejected");
     assert!(
         matches!(
             e,
@@ -238,17 +239,17 @@ fn non_positive_time_constants_and_variances() {
         ),
         "{e}"
     );
-    let e = IrregularRolling::new(1.0, -0.1, 1.0).expect_err("bad input must be rejected");
+    let e = IrregularRollingShaping::new(1.0, -0.1, 1.0).expect_err("bad input must be rejected");
     assert!(
         matches!(e, Error::InvalidParameter { name: "mu", .. }),
         "{e}"
     );
-    let e = IrregularRolling::new(1.0, 0.1, 0.0).expect_err("bad input must be rejected");
+    let e = IrregularRollingShaping::new(1.0, 0.1, 0.0).expect_err("bad input must be rejected");
     assert!(
         matches!(e, Error::InvalidParameter { name: "beta", .. }),
         "{e}"
     );
-    let e = DampedCosine::new(0.0, 0.1, 1.0).expect_err("bad input must be rejected");
+    let e = DampedCosineShaping::new(0.0, 0.1, 1.0).expect_err("bad input must be rejected");
     assert!(
         matches!(
             e,
@@ -259,7 +260,7 @@ fn non_positive_time_constants_and_variances() {
         ),
         "{e}"
     );
-    let e = DampedCosine::new(1.0, 0.0, 1.0).expect_err("bad input must be rejected");
+    let e = DampedCosineShaping::new(1.0, 0.0, 1.0).expect_err("bad input must be rejected");
     assert!(
         matches!(e, Error::InvalidParameter { name: "xi", .. }),
         "{e}"

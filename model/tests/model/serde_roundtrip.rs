@@ -1,8 +1,9 @@
 //! JSON and TOML round trips of every serialisable type; invalid data is rejected on load.
 
 use model::{
-    Channels, ContinuousSs, ContinuousTf, DampedCosine, DiscreteSs, DiscreteTf, Exponential,
-    FuelModel, FuelParams, IrregularRolling, Method, NoiseConvention, Realisation, discretize,
+    Channels, ContinuousSs, ContinuousTf, DampedCosineShaping, DiscreteSs, DiscreteTf,
+    Discretization, ExponentialShaping, FuelModel, FuelParams, IrregularRollingShaping,
+    NoiseConvention, Realisation, discretize,
 };
 use nalgebra::DMatrix;
 use serde::{Serialize, de::DeserializeOwned};
@@ -35,9 +36,15 @@ fn sample_continuous() -> ContinuousSs {
 fn state_space_models() {
     let c = sample_continuous();
     roundtrip(&c);
-    let d = discretize(&c, 0.1, Method::Tustin, NoiseConvention::IntensityOverDt).expect("ok");
+    let d = discretize(
+        &c,
+        0.1,
+        Discretization::Tustin,
+        NoiseConvention::IntensityOverDt,
+    )
+    .expect("ok");
     roundtrip(&d);
-    let v = discretize(&c, 0.1, Method::Zoh, NoiseConvention::VanLoan).expect("ok");
+    let v = discretize(&c, 0.1, Discretization::Zoh, NoiseConvention::VanLoan).expect("ok");
     roundtrip(&v);
 }
 
@@ -45,18 +52,21 @@ fn state_space_models() {
 fn transfer_functions_filters_and_enums() {
     roundtrip(&ContinuousTf::new(vec![1.0, 0.5], vec![1.0, 0.2, 0.1]).expect("valid"));
     roundtrip(&DiscreteTf::new(vec![0.1, 0.1], vec![1.0, -0.8], 0.05).expect("valid"));
-    roundtrip(&Exponential::new(1e-6, 20.0).expect("valid"));
-    roundtrip(&IrregularRolling::new(3e-5, 0.08, 0.628).expect("valid"));
-    roundtrip(&DampedCosine::new(8.3e-6, 0.05, 6.0).expect("valid"));
+    roundtrip(&ExponentialShaping::new(1e-6, 20.0).expect("valid"));
+    roundtrip(&IrregularRollingShaping::new(3e-5, 0.08, 0.628).expect("valid"));
+    roundtrip(&DampedCosineShaping::new(8.3e-6, 0.05, 6.0).expect("valid"));
     for m in [
-        Method::Zoh,
-        Method::Tustin,
-        Method::TustinPrewarp { omega: 2.0 },
-        Method::ForwardEuler,
-        Method::BackwardEuler,
+        Discretization::Zoh,
+        Discretization::Tustin,
+        Discretization::TustinPrewarp { omega: 2.0 },
+        Discretization::ForwardEuler,
+        Discretization::BackwardEuler,
     ] {
         let json = serde_json::to_string(&m).expect("to JSON");
-        assert_eq!(serde_json::from_str::<Method>(&json).expect("from JSON"), m);
+        assert_eq!(
+            serde_json::from_str::<Discretization>(&json).expect("from JSON"),
+            m
+        );
     }
 }
 
@@ -101,9 +111,14 @@ fn invalid_data_is_rejected_on_load() {
     let e = serde_json::from_str::<DiscreteTf>(bad_dt).expect_err("negative dt must fail");
     assert!(e.to_string().contains("dt"), "{e}");
     let bad = r#"{"variance":1.0,"time_constant":0.0}"#;
-    assert!(serde_json::from_str::<Exponential>(bad).is_err());
-    let d: DiscreteSs =
-        discretize(&c, 0.1, Method::Zoh, NoiseConvention::IntensityOverDt).expect("ok");
+    assert!(serde_json::from_str::<ExponentialShaping>(bad).is_err());
+    let d: DiscreteSs = discretize(
+        &c,
+        0.1,
+        Discretization::Zoh,
+        NoiseConvention::IntensityOverDt,
+    )
+    .expect("ok");
     let mut v = serde_json::to_value(&d).expect("to JSON");
     v["q"] = serde_json::to_value(DMatrix::from_element(1, 1, -1.0)).expect("to JSON");
     let e = serde_json::from_value::<DiscreteSs>(v).expect_err("negative Q must fail");

@@ -2,8 +2,8 @@
 //! stationary variance (Lyapunov), and a long seeded simulation's autocorrelation.
 
 use model::{
-    DampedCosine, DiscreteSs, Exponential, IrregularRolling, Method, NoiseConvention,
-    ShapingFilter, psd_factor,
+    DampedCosineShaping, DiscreteSs, Discretization, ExponentialShaping, IrregularRollingShaping,
+    NoiseConvention, ShapingFilter, psd_factor,
 };
 use nalgebra::DVector;
 use rand::SeedableRng;
@@ -14,15 +14,15 @@ fn filters() -> Vec<(&'static str, Box<dyn ShapingFilter>)> {
     vec![
         (
             "exponential",
-            Box::new(Exponential::new(2.0, 1.5).expect("valid")),
+            Box::new(ExponentialShaping::new(2.0, 1.5).expect("valid")),
         ),
         (
             "rolling",
-            Box::new(IrregularRolling::new(0.5, 0.3, 2.0).expect("valid")),
+            Box::new(IrregularRollingShaping::new(0.5, 0.3, 2.0).expect("valid")),
         ),
         (
             "damped cosine",
-            Box::new(DampedCosine::new(1.2, 0.4, 3.0).expect("valid")),
+            Box::new(DampedCosineShaping::new(1.2, 0.4, 3.0).expect("valid")),
         ),
     ]
 }
@@ -76,14 +76,14 @@ fn check_lyapunov(f: &dyn ShapingFilter, dt: f64) {
     // Van Loan with ZOH is the exact sampled process: the variance is D up to rounding of
     // the exponential and the Lyapunov doubling.
     let exact = f
-        .discretize(dt, Method::Zoh, NoiseConvention::VanLoan)
+        .discretize(dt, Discretization::Zoh, NoiseConvention::VanLoan)
         .expect("ok");
     let v = lyapunov_variance(&exact);
     assert!((v - dv).abs() <= 1e-8 * dv, "ZOH/Van Loan: {v} vs {dv}");
     // The paper's convention (noise held over the step, variance N/Δt) through ZOH: within
     // 1 % of D once Δt ≤ (shortest time constant)/20 (the criterion).
     let held = f
-        .discretize(dt, Method::Zoh, NoiseConvention::IntensityOverDt)
+        .discretize(dt, Discretization::Zoh, NoiseConvention::IntensityOverDt)
         .expect("ok");
     let v = lyapunov_variance(&held);
     assert!(
@@ -104,7 +104,7 @@ fn lyapunov_variance_within_one_percent() {
 fn tustin_exponential_variance_closed_form() {
     // Tustin of 1/(Ts+1) with variance N/Δt has output variance D/(1 + Δt/(2T)) exactly:
     // the paper's discretisation under-states D by Δt/(2T) (0.25 % at its defaults).
-    let f = Exponential::new(3.0, 20.0).expect("valid");
+    let f = ExponentialShaping::new(3.0, 20.0).expect("valid");
     for dt in [0.1, 1.0, 4.0] {
         let d = f.discretize_paper(dt).expect("ok");
         let v = lyapunov_variance(&d);
@@ -137,7 +137,7 @@ fn simulated_autocorrelation_follows_the_correlation_function() {
     for (seed, (name, f)) in filters().into_iter().enumerate() {
         let dt = f.shortest_time_constant() / 10.0;
         let d = f
-            .discretize(dt, Method::Zoh, NoiseConvention::VanLoan)
+            .discretize(dt, Discretization::Zoh, NoiseConvention::VanLoan)
             .expect("ok");
         let y = simulate(&d, LEN, 17 + seed as u64);
         // Bartlett: var ĉ(k) ≈ (1/N)Σ_j [R(j)² + R(j+k)R(j−k)] ≤ (2/N)Σ_j R(j)² (Cauchy–
@@ -166,11 +166,11 @@ fn simulated_autocorrelation_follows_the_correlation_function() {
 #[test]
 fn paper_discretisations_of_the_filters() {
     // The paper's rolling filter has no feed-through; its quantization filter keeps d0.
-    let roll = IrregularRolling::new(1.0, 0.08, 0.628).expect("valid");
+    let roll = IrregularRollingShaping::new(1.0, 0.08, 0.628).expect("valid");
     let d = roll.discretize_paper(0.1).expect("ok");
     assert!(d.j().amax() < 1e-300);
     assert!((d.q()[(0, 0)] - roll.intensity() / 0.1).abs() < 1e-15);
-    let q = DampedCosine::new(1e-4 / 12.0, 0.05, 6.0).expect("valid");
+    let q = DampedCosineShaping::new(1e-4 / 12.0, 0.05, 6.0).expect("valid");
     let d = q.discretize_paper(0.1).expect("ok");
     assert!(d.j()[(0, 0)] > 0.0);
     // At Δt ≤ (shortest time constant)/20 the paper's discretisation of each filter stays
@@ -188,7 +188,7 @@ fn paper_discretisations_of_the_filters() {
 #[cfg(feature = "proptest")]
 mod props {
     use super::check_lyapunov;
-    use model::{DampedCosine, Exponential, IrregularRolling, ShapingFilter};
+    use model::{DampedCosineShaping, ExponentialShaping, IrregularRollingShaping, ShapingFilter};
     use proptest::prelude::*;
 
     proptest! {
@@ -203,9 +203,9 @@ mod props {
             frac in 0.05..1.0f64,
         ) {
             let fs: [Box<dyn ShapingFilter>; 3] = [
-                Box::new(Exponential::new(var, t).expect("valid")),
-                Box::new(IrregularRolling::new(var, mu, beta).expect("valid")),
-                Box::new(DampedCosine::new(var, mu, beta).expect("valid")),
+                Box::new(ExponentialShaping::new(var, t).expect("valid")),
+                Box::new(IrregularRollingShaping::new(var, mu, beta).expect("valid")),
+                Box::new(DampedCosineShaping::new(var, mu, beta).expect("valid")),
             ];
             for f in &fs {
                 check_lyapunov(f.as_ref(), frac * f.shortest_time_constant() / 20.0);

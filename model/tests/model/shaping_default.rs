@@ -2,7 +2,9 @@
 //! override it (every built-in filter overrides it with a closed form, so a user's filter is
 //! the only one that reaches it), and the shortest time constant that sets Δt.
 
-use model::{ContinuousTf, DampedCosine, Exponential, IrregularRolling, ShapingFilter};
+use model::{
+    ContinuousTf, DampedCosineShaping, ExponentialShaping, IrregularRollingShaping, ShapingFilter,
+};
 
 /// A user-defined filter: delegates everything but the spectral density to a built-in one.
 struct Delegating<'a>(&'a dyn ShapingFilter);
@@ -31,9 +33,9 @@ impl ShapingFilter for Delegating<'_> {
 #[test]
 fn the_provided_spectral_density_matches_the_closed_forms() {
     let builtins: [&dyn ShapingFilter; 3] = [
-        &Exponential::new(2.0, 1.5).expect("valid"),
-        &IrregularRolling::new(0.5, 0.3, 2.0).expect("valid"),
-        &DampedCosine::new(1.2, 0.4, 3.0).expect("valid"),
+        &ExponentialShaping::new(2.0, 1.5).expect("valid"),
+        &IrregularRollingShaping::new(0.5, 0.3, 2.0).expect("valid"),
+        &DampedCosineShaping::new(1.2, 0.4, 3.0).expect("valid"),
     ];
     for f in builtins {
         let user = Delegating(f);
@@ -56,16 +58,16 @@ fn the_provided_spectral_density_matches_the_closed_forms() {
 fn shortest_time_constant_is_the_smaller_time_scale() {
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-15 * b;
     assert!(close(
-        Exponential::new(1.0, 0.8)
+        ExponentialShaping::new(1.0, 0.8)
             .expect("valid")
             .shortest_time_constant(),
         0.8
     ));
     for (rate, freq) in [(0.3_f64, 2.0_f64), (5.0, 0.25)] {
         let expected = (1.0 / rate).min(1.0 / freq);
-        let rolling = IrregularRolling::new(1.0, rate, freq).expect("valid");
+        let rolling = IrregularRollingShaping::new(1.0, rate, freq).expect("valid");
         assert!(close(rolling.shortest_time_constant(), expected));
-        let damped = DampedCosine::new(1.0, rate, freq).expect("valid");
+        let damped = DampedCosineShaping::new(1.0, rate, freq).expect("valid");
         assert!(close(damped.shortest_time_constant(), expected));
     }
 }

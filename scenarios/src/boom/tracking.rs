@@ -49,7 +49,7 @@
 //! value), and stays undefined to the end of the turn. The smoother is undefined wherever
 //! its filter was.
 
-use kalman::Fixed;
+use kalman::FixedDims;
 use kalman::nonlinear::{
     CentralDiff, Ekf, EkfUpdate, FnModel, NonlinearModel, NonlinearRts, SigmaPoints, Ukf,
 };
@@ -60,7 +60,7 @@ use super::parameters::BoomParams;
 use crate::error::{Error, Result};
 
 /// n = 3 states (α, ω, ε), m = 2 readings (a_x, a_y).
-const DIMS: Fixed<3, 2> = Fixed::new();
+const DIMS: FixedDims<3, 2> = FixedDims::new();
 
 /// ω₀'s standard deviation at the start of the turn (rest), rad/s.
 const OMEGA0_STD: f64 = 1e-4;
@@ -276,7 +276,7 @@ impl TrackingModel {
         .map_err(kalman_err("boom EKF"))?;
         let mut ukf =
             Ukf::new(DIMS, model, &x0, &p0, self.points).map_err(kalman_err("boom UKF"))?;
-        let mut rts = NonlinearRts::new(3);
+        let mut rts = NonlinearRts::new();
         let mut out = Tracked {
             ekf: Track::with_capacity(n),
             ukf: Track::with_capacity(n),

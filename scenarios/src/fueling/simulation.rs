@@ -8,7 +8,7 @@
 #![allow(non_snake_case)]
 
 use kalman::schedule::{GainSchedule, ScheduleOptions, ScheduledFilter};
-use kalman::{Fixed, FixedModel};
+use kalman::{FixedDims, FixedModel};
 use model::nalgebra::{DMatrix, DVector};
 use model::{Channels, FuelModel, FuelParams, Realisation};
 use rand::{Rng, RngExt};
@@ -31,7 +31,7 @@ pub const SCHEDULE_TOLERANCE: f64 = 1e-7;
 /// only the state update) and the two row vectors that turn a state into a level.
 #[derive(Debug, Clone)]
 struct FilterSetup<const M: usize> {
-    schedule: GainSchedule<Fixed<7, M, 1>>,
+    schedule: GainSchedule<FixedDims<7, M, 1>>,
     /// State direction of "the level is one metre higher, everything in equilibrium".
     level_direction: [f64; 7],
     /// Row of G giving the tank level y2 (at the axis).
@@ -114,7 +114,7 @@ fn kalman_model<const M: usize>(m: &FuelModel, cross: bool) -> Result<FixedModel
     let Q: [[f64; 7]; 7] = dm_to_rows(&m.process_covariance);
     let R: [[f64; M]; M] = dm_to_rows(&m.r);
     let B: [[f64; 1]; 7] = std::array::from_fn(|i| [m.known_input[i]]);
-    let mut model = FixedModel::<7, M, 1>::new(Fixed::new(), &F, &H, &Q, &R)
+    let mut model = FixedModel::<7, M, 1>::new(FixedDims::new(), &F, &H, &Q, &R)
         .and_then(|model| model.with_control(&B))
         .map_err(|source| Error::Kalman {
             context: match channels {
@@ -288,10 +288,10 @@ impl Point {
         let mut v_prev = 0.0;
         let mut levels: Vec<f64> = Vec::with_capacity(self.max_steps + self.delay_steps + 1);
         let mut stop: [Option<usize>; 5] = [None; 5];
-        let mut kf1: Option<ScheduledFilter<'_, Fixed<7, 1, 1>>> = None;
-        let mut kf2: Option<ScheduledFilter<'_, Fixed<7, 2, 1>>> = None;
-        let mut kf2c: Option<ScheduledFilter<'_, Fixed<7, 2, 1>>> = None;
-        let mut kf2m: Option<ScheduledFilter<'_, Fixed<7, 2, 1>>> = None;
+        let mut kf1: Option<ScheduledFilter<'_, FixedDims<7, 1, 1>>> = None;
+        let mut kf2: Option<ScheduledFilter<'_, FixedDims<7, 2, 1>>> = None;
+        let mut kf2c: Option<ScheduledFilter<'_, FixedDims<7, 2, 1>>> = None;
+        let mut kf2m: Option<ScheduledFilter<'_, FixedDims<7, 2, 1>>> = None;
         let u = [1.0];
         let mut last_needed = usize::MAX;
         for k in 0..self.max_steps + self.delay_steps {
@@ -374,7 +374,7 @@ fn fire(stop: &mut [Option<usize>; 5], i: usize, k: usize, signal: f64, limit: f
 fn new_filter<const M: usize>(
     s: &FilterSetup<M>,
     level: f64,
-) -> Result<ScheduledFilter<'_, Fixed<7, M, 1>>> {
+) -> Result<ScheduledFilter<'_, FixedDims<7, M, 1>>> {
     let x0: [f64; 7] = std::array::from_fn(|i| s.level_direction[i] * level);
     s.schedule.runner(&x0).map_err(|source| Error::Kalman {
         context: "filter prior",
@@ -385,7 +385,7 @@ fn new_filter<const M: usize>(
 /// Updates with `z`, predicts, and returns the filtered tank level y2 = G₂·x̂_{k|k}.
 #[inline]
 fn step_level<const M: usize>(
-    f: &mut ScheduledFilter<'_, Fixed<7, M, 1>>,
+    f: &mut ScheduledFilter<'_, FixedDims<7, M, 1>>,
     s: &FilterSetup<M>,
     z: &[f64],
     u: &[f64],

@@ -4,7 +4,7 @@
 //! their records.
 
 use faer::{Mat, MatRef};
-use kalman::{CovarianceForm, Fixed, FixedFilter, Model};
+use kalman::{CovarianceForm, FixedDims, FixedFilter, Model};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rand::RngExt;
 use rand_distr::StandardNormal;
@@ -72,7 +72,7 @@ pub(super) fn design(p: &UavParams) -> Result<Design> {
     let d = model::discretize(
         &sys,
         p.dt_s,
-        model::Method::Zoh,
+        model::Discretization::Zoh,
         model::NoiseConvention::VanLoan,
     )
     .map_err(model_err("discretisation"))?;
@@ -150,7 +150,7 @@ pub(super) fn simulate(p: &UavParams, d: &Design, seed: u64, run: usize) -> Resu
     let mut rng = run_rng(seed, run as u64);
     let mut normal = || -> f64 { rng.sample(StandardNormal) };
     let model = Model::new(
-        Fixed::<2, 1, 1>::new(),
+        FixedDims::<2, 1, 1>::new(),
         &arr22(&d.f),
         &[[d.h[(0, 0)], d.h[(0, 1)]]],
         &arr22(&d.q),

@@ -227,7 +227,7 @@ fn kalman_bucy(p: &UavParams) -> Result<(KalmanBucyCheck, Vec<[f64; 3]>)> {
         let d = model::discretize(
             &sys,
             dt,
-            model::Method::Zoh,
+            model::Discretization::Zoh,
             model::NoiseConvention::VanLoan,
         )
         .map_err(model_err("discretisation"))?;

@@ -2,10 +2,10 @@
 //! fills defaults; unknown fields are rejected.
 
 use sensors::{
-    Accelerometer, AccelerometerConfig, ChannelSensor, ChannelSensorConfig, DampedCosine,
-    DampedCosineConfig, Error, ExpCorrelated, ExpCorrelatedConfig, FirstOrderLag, Gyro, GyroConfig,
-    IrregularRolling, IrregularRollingConfig, LagInput, LevelSensor, LevelSensorConfig,
-    PlatformMotion, PlatformMotionConfig, RollingAxisConfig, WhiteNoise,
+    Accelerometer, AccelerometerConfig, ChannelSensor, ChannelSensorConfig, DampedCosineConfig,
+    DampedCosineProcess, Error, ExpCorrelated, ExpCorrelatedConfig, FirstOrderLag, Gyro,
+    GyroConfig, IrregularRollingConfig, IrregularRollingProcess, LagInput, LevelSensor,
+    LevelSensorConfig, PlatformMotion, PlatformMotionConfig, RollingAxisConfig, WhiteNoise,
 };
 
 fn level(f: impl FnOnce(&mut LevelSensorConfig)) -> Result<LevelSensor, Error> {
@@ -156,7 +156,7 @@ fn invalid_process_and_instrument_configuration_is_a_typed_error() {
         })
     ));
     assert!(matches!(
-        IrregularRolling::new(
+        IrregularRollingProcess::new(
             &IrregularRollingConfig {
                 irregularity_per_s: 0.0,
                 ..IrregularRollingConfig::default()
@@ -169,11 +169,11 @@ fn invalid_process_and_instrument_configuration_is_a_typed_error() {
         })
     ));
     assert!(matches!(
-        IrregularRolling::new(&IrregularRollingConfig::default(), f64::NAN),
+        IrregularRollingProcess::new(&IrregularRollingConfig::default(), f64::NAN),
         Err(Error::NotFinite { name: "dt_s", .. })
     ));
     assert!(matches!(
-        DampedCosine::new(
+        DampedCosineProcess::new(
             &DampedCosineConfig {
                 frequency_rad_s: f64::NAN,
                 ..DampedCosineConfig::default()

@@ -3,8 +3,8 @@
 //! run length (`stats`); and seed reproducibility.
 
 use sensors::{
-    DampedCosine, DampedCosineConfig, ExpCorrelated, ExpCorrelatedConfig, IrregularRolling,
-    IrregularRollingConfig, Process, Seeded, WhiteNoise, seeded_rng,
+    DampedCosineConfig, DampedCosineProcess, ExpCorrelated, ExpCorrelatedConfig,
+    IrregularRollingConfig, IrregularRollingProcess, Process, Seeded, WhiteNoise, seeded_rng,
 };
 
 use crate::stats::{Z, autocov, mean, se_autocov, se_mean};
@@ -69,11 +69,11 @@ fn exp_correlated_statistics() {
 fn irregular_rolling_statistics() {
     // Defaults (period 10 s, μ = 0.08) at Δt = 0.5 s: lag 10 is half a period (negative R).
     let cfg = IrregularRollingConfig::default();
-    let p = IrregularRolling::new(&cfg, 0.5).expect("valid");
+    let p = IrregularRollingProcess::new(&cfg, 0.5).expect("valid");
     assert!(p.correlation(5.0) < -0.3);
     check("rolling Δt=0.5", p, 400_000, &[1, 5, 10, 20, 40], 1_000, 5);
     // Coarse step (a quarter period): the discretisation is exact at any Δt.
-    let p = IrregularRolling::new(&cfg, 2.5).expect("valid");
+    let p = IrregularRollingProcess::new(&cfg, 2.5).expect("valid");
     check("rolling Δt=2.5", p, 100_000, &[1, 2, 4], 300, 6);
     // Fine step, more damped and faster.
     let cfg = IrregularRollingConfig {
@@ -81,14 +81,14 @@ fn irregular_rolling_statistics() {
         period_s: 2.0,
         irregularity_per_s: 0.5,
     };
-    let p = IrregularRolling::new(&cfg, 0.01).expect("valid");
+    let p = IrregularRollingProcess::new(&cfg, 0.01).expect("valid");
     check("rolling Δt=0.01", p, 400_000, &[50, 100, 200], 6_000, 7);
 }
 
 #[test]
 fn damped_cosine_statistics() {
     // SPEC F's quantization noise at the defaults: period 1 s = 10 samples.
-    let p = DampedCosine::new(&DampedCosineConfig::default(), 0.1).expect("valid");
+    let p = DampedCosineProcess::new(&DampedCosineConfig::default(), 0.1).expect("valid");
     check(
         "damped cosine defaults",
         p,
@@ -102,7 +102,7 @@ fn damped_cosine_statistics() {
         decay_per_s: 1.0,
         frequency_rad_s: 3.0,
     };
-    let p = DampedCosine::new(&cfg, 0.2).expect("valid");
+    let p = DampedCosineProcess::new(&cfg, 0.2).expect("valid");
     check("damped cosine ξ=1", p, 200_000, &[1, 2, 3, 5, 8], 200, 9);
     // The quantization-noise constructor reproduces the defaults.
     let q = DampedCosineConfig::quantization_noise(0.01, 20.0, 0.01);
@@ -138,17 +138,17 @@ fn same_seed_is_bit_identical_and_seeds_differ() {
     );
     reproducible(
         "rolling",
-        &IrregularRolling::new(&IrregularRollingConfig::default(), dt).expect("valid"),
+        &IrregularRollingProcess::new(&IrregularRollingConfig::default(), dt).expect("valid"),
     );
     reproducible(
         "damped cosine",
-        &DampedCosine::new(&DampedCosineConfig::default(), dt).expect("valid"),
+        &DampedCosineProcess::new(&DampedCosineConfig::default(), dt).expect("valid"),
     );
 }
 
 #[test]
 fn seeded_wrapper_matches_manual_stepping_and_pins_the_stream() {
-    let p = IrregularRolling::new(&IrregularRollingConfig::default(), 0.1).expect("valid");
+    let p = IrregularRollingProcess::new(&IrregularRollingConfig::default(), 0.1).expect("valid");
     let mut manual = p.clone();
     let mut rng = seeded_rng(5);
     let a: Vec<u64> = (0..50).map(|_| manual.next(&mut rng).to_bits()).collect();
@@ -168,7 +168,7 @@ fn seeded_wrapper_matches_manual_stepping_and_pins_the_stream() {
             0x3fd3_627d_2303_f5db
         ]
     );
-    let p = IrregularRolling::new(&IrregularRollingConfig::default(), 0.1).expect("valid");
+    let p = IrregularRollingProcess::new(&IrregularRollingConfig::default(), 0.1).expect("valid");
     let mut r = Seeded::new(p, 0);
     let got: Vec<u64> = (0..3).map(|_| r.sample().to_bits()).collect();
     assert_eq!(

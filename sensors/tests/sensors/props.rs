@@ -5,8 +5,8 @@ use approx::relative_eq;
 use nalgebra::Matrix4;
 use proptest::prelude::*;
 use sensors::{
-    Accelerometer, AccelerometerConfig, BoomMotion, FirstOrderLag, IrregularRolling,
-    IrregularRollingConfig, LagInput, Quantizer, Rounding, seeded_rng,
+    Accelerometer, AccelerometerConfig, BoomMotion, FirstOrderLag, IrregularRollingConfig,
+    IrregularRollingProcess, LagInput, Quantizer, Rounding, seeded_rng,
 };
 
 proptest! {
@@ -18,7 +18,7 @@ proptest! {
         period in 1.0f64..30.0,
         dt in 0.02f64..2.0,
     ) {
-        let p = IrregularRolling::new(
+        let p = IrregularRollingProcess::new(
             &IrregularRollingConfig { std_dev: 1.0, period_s: period, irregularity_per_s: mu },
             dt,
         ).map_err(|e| TestCaseError::fail(e.to_string()))?;

@@ -7,7 +7,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use wls::Error;
 use wls::solver::{
-    IrlsOptions, Method, PriorRows, SolveOptions, Tikhonov, Weights, sensitivity, solve,
+    IrlsOptions, PriorRows, SolveMethod, SolveOptions, Tikhonov, Weights, sensitivity, solve,
     solve_irls, worst_case_bounds,
 };
 
@@ -30,7 +30,7 @@ fn qr() -> SolveOptions {
 
 fn normal() -> SolveOptions {
     SolveOptions {
-        method: Method::NormalEquations,
+        method: SolveMethod::NormalEquations,
         ..SolveOptions::default()
     }
 }
