@@ -375,8 +375,8 @@ fn init_prior<D: Dims>(
     Ok(())
 }
 
-/// The validation of one step's inputs, shared by [`Filter::step`] and
-/// [`crate::schedule::ScheduledFilter::step`]: `z` of length `m` with no infinite entry (NaN
+/// The validation of one step's inputs, shared by [`Filter::step`] and the
+/// scheduled filter's step: `z` of length `m` with no infinite entry (NaN
 /// marks a missing entry), `u` (if any) of length `p` and finite. Returns whether `z` has a
 /// missing entry; [`Error::Shape`] or [`Error::NonFinite`] naming `z` or `u`.
 #[inline(always)]

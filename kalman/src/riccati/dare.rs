@@ -1,0 +1,411 @@
+//! The discrete equations: the filter DARE ([`dare`]), its dual the discrete LQR
+//! ([`dlqr`]), the residual, Newton's polish and the decorrelate–test–double driver.
+#![allow(non_snake_case)]
+
+use faer::linalg::solvers::Solve;
+use faer::{Mat, MatRef, Side};
+
+use super::checks::{Modes, marginal_modes, pbh, psd_sqrt};
+use super::sda::sda;
+use super::{
+    Lqr, Names, Pair, RiccatiOptions, Solved, SteadyState, all_finite, factor_r, relative,
+    spectral, symmetrise,
+};
+use crate::model::check;
+use crate::storage::Dims;
+use crate::{Error, Model};
+
+/// Steady state of the discrete filter for (F, H, Q, R) and an optional cross-covariance S
+/// (n×m, `None` = 0), with default [`RiccatiOptions`].
+///
+/// Errors: a shape or finiteness error naming the matrix; [`Error::NotPositiveDefinite`]
+/// for R; [`Error::NotDetectable`] for (F, H); [`Error::NotStabilisable`] for a mode of
+/// (F̃, Q̃^{1/2}) on the unit circle that the noise does not reach (F̃ = F − S R⁻¹ H,
+/// Q̃ = Q − S R⁻¹ Sᵀ; plain (F, Q^{1/2}) when S = 0);
+/// [`Error::RiccatiNoConvergence`] / [`Error::RiccatiCheck`] if the result fails.
+///
+/// ```
+/// use faer::mat;
+/// // Random walk observed in unit noise, q = 1: P = (1 + √5)/2, K = P/(P + 1).
+/// let ss = kalman::riccati::dare(
+///     mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), None,
+/// ).expect("must succeed");
+/// let p = (1.0 + 5f64.sqrt()) / 2.0;
+/// assert!((ss.prior[(0, 0)] - p).abs() < 1e-12);
+/// assert!((ss.gain[(0, 0)] - p / (p + 1.0)).abs() < 1e-12);
+/// ```
+pub fn dare(
+    F: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    S: Option<MatRef<'_, f64>>,
+) -> Result<SteadyState, Error> {
+    dare_with(F, H, Q, R, S, &RiccatiOptions::default())
+}
+
+impl SteadyState {
+    /// The steady state of an engine [`Model`] (either storage path): [`dare`] on its F, H,
+    /// Q, R and S.
+    ///
+    /// # Errors
+    /// As [`dare`].
+    pub fn of<D: Dims>(model: &Model<D>) -> Result<Self, Error> {
+        dare(model.f(), model.h(), model.q(), model.r(), model.s())
+    }
+}
+
+/// [`dare`] with explicit options.
+pub fn dare_with(
+    F: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    S: Option<MatRef<'_, f64>>,
+    opts: &RiccatiOptions,
+) -> Result<SteadyState, Error> {
+    let n = F.nrows();
+    let m = H.nrows();
+    check("F", F, n, n)?;
+    check("H", H, m, n)?;
+    check("Q", Q, n, n)?;
+    check("R", R, m, m)?;
+    if let Some(S) = S {
+        check("S", S, n, m)?;
+    }
+    let names = Names {
+        equation: "filter DARE",
+        detect: Pair::Detect("(F, H)"),
+        stab: Pair::Stab(if S.is_some() {
+            "(F - S R^-1 H, (Q - S R^-1 S^T)^{1/2})"
+        } else {
+            "(F, Q^{1/2})"
+        }),
+    };
+    let sol = discrete_dual(F, H, Q, R, S, opts, &names)?;
+    let P = sol.x;
+    // Σ = H P Hᵀ + R; K = P Hᵀ Σ⁻¹; K_p = (F P Hᵀ + S) Σ⁻¹; all by Cholesky solves.
+    let HP = H * &P;
+    let mut Sigma = &HP * H.transpose() + R;
+    symmetrise(&mut Sigma);
+    let llt = Sigma
+        .llt(Side::Lower)
+        .map_err(|_| Error::NotPositiveDefinite {
+            name: "H P H^T + R",
+            n: m,
+            rule: "the steady-state innovation covariance must be invertible",
+        })?;
+    let gain = llt.solve(&HP).transpose().to_owned();
+    let mut FPHt_S = F * (&P * H.transpose());
+    if let Some(S) = S {
+        FPHt_S += S;
+    }
+    let predictor_gain = llt.solve(FPHt_S.transpose()).transpose().to_owned();
+    let mut posterior = &P - &gain * &HP;
+    symmetrise(&mut posterior);
+    Ok(SteadyState {
+        prior: P,
+        posterior,
+        gain,
+        predictor_gain,
+        innovation_cov: Sigma,
+        iterations: sol.iterations,
+        relative_residual: sol.relative_residual,
+    })
+}
+
+/// Discrete-time LQR for x_{k+1} = A x_k + B u_k with cost Σ xᵀQx + uᵀRu + 2xᵀN u
+/// (`N` = `None` for no cross weight): solves X = AᵀXA + Q − (AᵀXB + N)(R + BᵀXB)⁻¹(BᵀXA + Nᵀ)
+/// by the dual filter DARE (F = Aᵀ, H = Bᵀ, S = N) and returns L with u = −L x.
+///
+/// Errors: [`Error::NotStabilisable`] for (A, B) (modes on or outside the unit circle),
+/// [`Error::NotDetectable`] for (Q^{1/2}, A) (modes on the unit circle: an unobserved
+/// unstable mode off the circle is stabilised by the gain), shape/finiteness/PD errors
+/// naming the matrix.
+///
+/// The UAV loop of Gridnev, Rusetsky and Rak (state weight diag(1, 0.1), input weight 1,
+/// Δt = 0.25):
+/// ```
+/// use faer::mat;
+/// let dt = 0.25;
+/// let a = mat![[1.0, dt], [0.0, 1.0]];
+/// let b = mat![[dt * dt / 2.0], [dt]];
+/// let q = mat![[1.0, 0.0], [0.0, 0.1]];
+/// let r = mat![[1.0]];
+/// let lqr = kalman::riccati::dlqr(a.as_ref(), b.as_ref(), q.as_ref(), r.as_ref(), None).expect("must succeed");
+/// // The closed loop A − B L is stable.
+/// let cl = &a - &b * &lqr.gain;
+/// let rho = cl.eigenvalues().expect("must succeed").iter().map(|l| l.norm()).fold(0.0, f64::max);
+/// assert!(rho < 1.0);
+/// ```
+pub fn dlqr(
+    A: MatRef<'_, f64>,
+    B: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    N: Option<MatRef<'_, f64>>,
+) -> Result<Lqr, Error> {
+    dlqr_with(A, B, Q, R, N, &RiccatiOptions::default())
+}
+
+/// [`dlqr`] with explicit options.
+pub fn dlqr_with(
+    A: MatRef<'_, f64>,
+    B: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    N: Option<MatRef<'_, f64>>,
+    opts: &RiccatiOptions,
+) -> Result<Lqr, Error> {
+    let n = A.nrows();
+    let m = B.ncols();
+    check("A", A, n, n)?;
+    check("B", B, n, m)?;
+    check("Q", Q, n, n)?;
+    check("R", R, m, m)?;
+    if let Some(N) = N {
+        check("N", N, n, m)?;
+    }
+    let names = Names {
+        equation: "LQR DARE",
+        // Detectability of (Aᵀ, Bᵀ) is stabilisability of (A, B), and stabilisability of
+        // (Aᵀ, Q^{1/2}) is detectability of (Q^{1/2}, A).
+        detect: Pair::Stab("(A, B)"),
+        stab: Pair::Detect(if N.is_some() {
+            "((Q - N R^-1 N^T)^{1/2}, A - B R^-1 N^T)"
+        } else {
+            "(Q^{1/2}, A)"
+        }),
+    };
+    let sol = discrete_dual(A.transpose(), B.transpose(), Q, R, N, opts, &names)?;
+    let X = sol.x;
+    let BtX = B.transpose() * &X;
+    let mut Sigma = &BtX * B + R;
+    symmetrise(&mut Sigma);
+    let llt = Sigma
+        .llt(Side::Lower)
+        .map_err(|_| Error::NotPositiveDefinite {
+            name: "R + B^T X B",
+            n: m,
+            rule: "the LQR gain needs its inverse",
+        })?;
+    let mut rhs = &BtX * A;
+    if let Some(N) = N {
+        rhs += N.transpose();
+    }
+    let gain = llt.solve(&rhs);
+    Ok(Lqr {
+        gain,
+        cost: X,
+        iterations: sol.iterations,
+        relative_residual: sol.relative_residual,
+    })
+}
+
+/// Relative residual ‖F P Fᵀ + Q − (F P Hᵀ + S)(H P Hᵀ + R)⁻¹(⋯)ᵀ − P‖_F / ‖P‖_F of a
+/// candidate filter-DARE solution (0 when both the residual and P vanish). Used by the
+/// solvers' own check and by tests.
+pub fn dare_residual(
+    F: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    S: Option<MatRef<'_, f64>>,
+    P: MatRef<'_, f64>,
+) -> f64 {
+    match dare_residual_matrix(F, H, Q, R, S, P) {
+        Some(res) => relative(res.norm_l2(), P.norm_l2()),
+        None => f64::INFINITY,
+    }
+}
+
+/// The DARE residual matrix F P Fᵀ + Q − (F P Hᵀ + S) Σ⁻¹ (⋯)ᵀ − P (`None` if Σ is not
+/// positive definite).
+fn dare_residual_matrix(
+    F: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    S: Option<MatRef<'_, f64>>,
+    P: MatRef<'_, f64>,
+) -> Option<Mat<f64>> {
+    let mut Sigma = H * P * H.transpose() + R;
+    symmetrise(&mut Sigma);
+    let mut C = F * P * H.transpose();
+    if let Some(S) = S {
+        C += S;
+    }
+    let llt = Sigma.llt(Side::Lower).ok()?;
+    let corr = &C * llt.solve(C.transpose());
+    let mut res = F * P * F.transpose() + Q - corr - P;
+    symmetrise(&mut res);
+    Some(res)
+}
+
+/// One Newton (Hewer) correction of a DARE solution: with the closed loop
+/// A_cl = F − K_p H, the correction E solves the Stein equation E − A_cl E A_clᵀ = Res(P),
+/// here by Smith's doubling E = Σ_k A_cl^k Res (A_clᵀ)^k (squaring A_cl each step). Returns
+/// `None` if the closed loop is not contractive enough for the doubling to converge.
+fn newton_polish(
+    F: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    S: Option<MatRef<'_, f64>>,
+    P: &Mat<f64>,
+) -> Option<Mat<f64>> {
+    let res = dare_residual_matrix(F, H, Q, R, S, P.as_ref())?;
+    let mut Sigma = H * P * H.transpose() + R;
+    symmetrise(&mut Sigma);
+    let llt = Sigma.llt(Side::Lower).ok()?;
+    let mut C = F * (P * H.transpose());
+    if let Some(S) = S {
+        C += S;
+    }
+    let Kp = llt.solve(C.transpose()).transpose().to_owned();
+    let mut T = F - &Kp * H;
+    let mut E = res;
+    for _ in 0..64 {
+        let mut E_next = &E + &T * &E * T.transpose();
+        symmetrise(&mut E_next);
+        let change = (&E_next - &E).norm_l2();
+        E = E_next;
+        T = &T * &T;
+        if !all_finite(T.as_ref()) || !all_finite(E.as_ref()) {
+            return None;
+        }
+        if change <= f64::EPSILON * E.norm_l2() || T.norm_l2() <= f64::EPSILON {
+            let mut Pn = P + &E;
+            symmetrise(&mut Pn);
+            return Some(Pn);
+        }
+    }
+    None
+}
+
+/// Decorrelate, run the PBH tests, and solve the filter-form DARE for (F, H, Q, R, S);
+/// returns the prior P.
+fn discrete_dual(
+    F: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    S: Option<MatRef<'_, f64>>,
+    opts: &RiccatiOptions,
+    names: &Names,
+) -> Result<Solved, Error> {
+    let llt = factor_r(R, "the Riccati solvers need R^-1")?;
+    // F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ.
+    let (Ft, Qt) = match S {
+        Some(S) => {
+            let RinvSt = llt.solve(S.transpose());
+            let RinvH = llt.solve(H);
+            let mut Qt = Q - S * &RinvSt;
+            symmetrise(&mut Qt);
+            (F - S * &RinvH, Qt)
+        }
+        None => (F.to_owned(), Q.to_owned()),
+    };
+    // F̃ = F − S R⁻¹ H has F's eigenvalues when S = 0: one eigen-decomposition then.
+    let modes = marginal_modes(F, false, Modes::OnOrOutside, opts)?;
+    if let Some((re, im)) = pbh(F, H, &modes, opts)? {
+        return Err(names.detect.error(re, im));
+    }
+    // A stabilising solution exists when (F̃, Q̃^{1/2}) has no unreachable mode *on* the
+    // unit circle; an unreachable mode outside it is stabilised through the gain (F = 2,
+    // Q = 0, H = R = 1: P = 3).
+    let modes_t = marginal_modes(Ft.as_ref(), false, Modes::On, opts)?;
+    if !modes_t.is_empty() {
+        let Qh = psd_sqrt(Qt.as_ref())?;
+        if let Some((re, im)) = pbh(Ft.transpose(), Qh.as_ref(), &modes_t, opts)? {
+            return Err(names.stab.error(re, im));
+        }
+    }
+    let mut G = H.transpose() * llt.solve(H);
+    symmetrise(&mut G);
+    let mut Qs = Qt.clone();
+    symmetrise(&mut Qs);
+    let (mut X, mut iterations) = sda(
+        Ft.transpose().to_owned(),
+        G.clone(),
+        Qs.clone(),
+        opts,
+        names.equation,
+    )?;
+    // Ill-conditioned problems leave the doubling a little short of full accuracy: up to two
+    // Newton corrections, each kept only if it lowers the residual.
+    let mut newton_steps = 2;
+    let rho0 = closed_loop_radius(Ft.as_ref(), H, R, &X);
+    if rho0.is_nan() || rho0 >= 1.0 {
+        // Q̃ leaves an unstable mode unexcited: the doubling from Q̃ then converges to a
+        // solution that does not stabilise it (X = 0 for Q̃ = 0). The doubling from
+        // Q̃ + δI does (every mode is then reachable), and lies within O(δ) of the
+        // stabilising solution; Newton's method from a stabilising start stays stabilising
+        // and removes the O(δ) in a few quadratic steps. δ is relative to the scale of X
+        // (that of Q̃, or of (Hᵀ R⁻¹ H)⁻¹ when Q̃ vanishes).
+        let gnorm = G.norm_l2();
+        let scale = Qs
+            .norm_l2()
+            .max(if gnorm > 0.0 { 1.0 / gnorm } else { 1.0 });
+        let n = Qs.nrows();
+        let Qd = &Qs + (1e-8 * scale) * Mat::<f64>::identity(n, n);
+        let (Xd, it) = sda(Ft.transpose().to_owned(), G, Qd, opts, names.equation)?;
+        X = Xd;
+        iterations += it;
+        newton_steps = 20;
+    }
+    let mut relative_residual = dare_residual(F, H, Q, R, S, X.as_ref());
+    for _ in 0..newton_steps {
+        if relative_residual <= 1e-3 * opts.residual_tolerance {
+            break;
+        }
+        match newton_polish(F, H, Q, R, S, &X) {
+            Some(Xn) => {
+                let r = dare_residual(F, H, Q, R, S, Xn.as_ref());
+                if r < relative_residual {
+                    X = Xn;
+                    relative_residual = r;
+                } else {
+                    break;
+                }
+            }
+            None => break,
+        }
+    }
+    let rho = closed_loop_radius(Ft.as_ref(), H, R, &X);
+    // Written so that a NaN residual or radius fails the check.
+    let ok = relative_residual <= opts.residual_tolerance && rho < 1.0;
+    if !ok {
+        return Err(Error::RiccatiCheck {
+            equation: names.equation,
+            residual: relative_residual,
+            tolerance: opts.residual_tolerance,
+            closed_loop: rho,
+        });
+    }
+    Ok(Solved {
+        x: X,
+        iterations,
+        relative_residual,
+    })
+}
+
+/// Spectral radius of the predictor's closed loop F̃ − F̃ X Hᵀ Σ⁻¹ H (= F − K_p H) for a
+/// candidate DARE solution X (+∞ if Σ = H X Hᵀ + R is not positive definite).
+fn closed_loop_radius(
+    Ft: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    X: &Mat<f64>,
+) -> f64 {
+    let mut Sigma = H * X * H.transpose() + R;
+    symmetrise(&mut Sigma);
+    match Sigma.llt(Side::Lower) {
+        Ok(l) => {
+            let Kt = l.solve(H * X * Ft.transpose());
+            let cl = Ft - Kt.transpose() * H;
+            spectral(cl.as_ref(), false)
+        }
+        Err(_) => f64::INFINITY,
+    }
+}

@@ -1,0 +1,243 @@
+//! Steady-state Riccati equations: the filter DARE and the discrete LQR (its dual) by the
+//! structured doubling algorithm (SDA), the CARE and continuous LQR by SDA after a Cayley
+//! transform, each with a PBH detectability / stabilisability check and a residual check.
+//!
+//! Notation as in the crate doc: the discrete model x_{k+1} = F x_k + w_k, z_k = H x_k + v_k,
+//! cov(w) = Q, cov(v) = R, E[w_k v_kᵀ] = S. The steady-state *prior* covariance P solves the
+//! filter DARE
+//!
+//! P = F P Fᵀ + Q − (F P Hᵀ + S)(H P Hᵀ + R)⁻¹(F P Hᵀ + S)ᵀ.
+//!
+//! Method. With F̃ = F − S R⁻¹ H and Q̃ = Q − S R⁻¹ Sᵀ the equation has no cross term; it is
+//! the control-form DARE X = AᵀXA − AᵀXB(R + BᵀXB)⁻¹BᵀXA + Q with A = F̃ᵀ, B = Hᵀ, solved
+//! by the SDA of Chu, Fan, Lin & Wang (2004): A₀ = A, G₀ = B R⁻¹ Bᵀ, H₀ = Q,
+//! W = I + G_k H_k, A_{k+1} = A_k W⁻¹ A_k, G_{k+1} = G_k + A_k W⁻¹ G_k A_kᵀ,
+//! H_{k+1} = H_k + A_kᵀ H_k W⁻¹ A_k; H_k → X quadratically. W⁻¹ is never formed: each
+//! product is an LU solve. The CARE is mapped to the same iteration by the Cayley transform
+//! (ℋ + γI)(ℋ − γI)⁻¹ of its Hamiltonian (derivation in [`care`]).
+//!
+//! Checks. Before iterating, the PBH rank test rejects an undetectable mode on or outside
+//! the stability boundary (|λ| ≥ 1 − 10⁻⁶ discrete, Re λ ≥ −10⁻⁶·max(1, |λ|) continuous)
+//! and, for the discrete equations, an unreachable (noise) mode *on* the unit circle
+//! (||λ| − 1| ≤ 10⁻⁶): the stabilising solution exists exactly when neither occurs. An
+//! unreachable mode outside the circle is stabilised by the gain; the doubling is then
+//! restarted from Q̃ + δI and polished by Newton's method (see [`dare`]). The CARE keeps
+//! the stricter test (no unreachable mode with Re λ ≥ −10⁻⁶·max(1, |λ|)); a mode is "unseen" when the smallest singular value
+//! of [λI − F; C] (C scaled to ‖F‖) is below `pbh_tolerance`·max(1, ‖F‖). After iterating,
+//! the relative residual ‖Res‖_F / ‖P‖_F must be below `residual_tolerance` (10⁻¹⁰) and the
+//! closed loop must be stable, or a typed [`Error`] says which check failed. R must be
+//! positive definite (the doubling needs R⁻¹); a singular R is rejected with
+//! [`Error::NotPositiveDefinite`].
+#![allow(non_snake_case)]
+
+mod care;
+mod checks;
+mod dare;
+mod sda;
+#[cfg(test)]
+mod tests;
+
+use faer::linalg::solvers::Llt;
+use faer::{Mat, MatRef, Side};
+
+use crate::Error;
+
+pub use care::{care, care_residual, care_with, clqr};
+pub use dare::{dare, dare_residual, dare_with, dlqr, dlqr_with};
+
+/// Tuning and tolerances of the Riccati solvers. `Default` is right for almost every use.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+/// use kalman::riccati::{RiccatiOptions, dare_with};
+///
+/// let opts = RiccatiOptions { max_iterations: 200, ..RiccatiOptions::default() };
+/// let one = mat![[1.0]];
+/// let ss = dare_with(one.as_ref(), one.as_ref(), one.as_ref(), one.as_ref(), None, &opts)?;
+/// assert!(ss.relative_residual < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RiccatiOptions {
+    /// Maximum number of doubling steps (each squares the convergence factor). Default 100.
+    pub max_iterations: usize,
+    /// Stop when ‖X_{k+1} − X_k‖_F ≤ `tolerance`·‖X_{k+1}‖_F. Default 1e-14.
+    pub tolerance: f64,
+    /// Accept the solution only if ‖residual‖_F ≤ `residual_tolerance`·‖X‖_F. Default 1e-10.
+    pub residual_tolerance: f64,
+    /// PBH rank threshold relative to max(1, ‖F‖_F). Default 1e-7.
+    pub pbh_tolerance: f64,
+    /// Modes within this distance inside the stability boundary count as marginal (and are
+    /// PBH-tested). Default 1e-6.
+    pub marginal_margin: f64,
+}
+
+impl Default for RiccatiOptions {
+    fn default() -> Self {
+        Self {
+            max_iterations: 100,
+            tolerance: 1e-14,
+            residual_tolerance: 1e-10,
+            pbh_tolerance: 1e-7,
+            marginal_margin: 1e-6,
+        }
+    }
+}
+
+/// Steady state of the discrete Kalman filter (solution of the filter DARE).
+///
+/// # Example
+/// ```
+/// use kalman::riccati::SteadyState;
+/// use kalman::{DynDims, Model};
+///
+/// // The steady state of an engine model: random walk, q = 1, r = 1.
+/// let model = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]])?;
+/// let ss = SteadyState::of(&model)?;
+/// let p = (1.0 + 5f64.sqrt()) / 2.0; // the golden ratio
+/// assert!((ss.prior[(0, 0)] - p).abs() < 1e-12);
+/// assert!((ss.posterior[(0, 0)] - p / (p + 1.0)).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct SteadyState {
+    /// Steady-state prior covariance P = lim P_{k|k−1} (n×n), the DARE solution.
+    pub prior: Mat<f64>,
+    /// Steady-state posterior covariance P_{k|k} = P − K Σ Kᵀ (n×n).
+    pub posterior: Mat<f64>,
+    /// Filter (update) gain K = P Hᵀ Σ⁻¹ (n×m): x_{k|k} = x_{k|k−1} + K (z_k − H x_{k|k−1}).
+    pub gain: Mat<f64>,
+    /// One-step predictor gain K_p = (F P Hᵀ + S) Σ⁻¹ (n×m):
+    /// x_{k+1|k} = F x_{k|k−1} + B u_k + K_p (z_k − H x_{k|k−1}).
+    pub predictor_gain: Mat<f64>,
+    /// Steady-state innovation covariance Σ = H P Hᵀ + R (m×m).
+    pub innovation_cov: Mat<f64>,
+    /// Doubling steps used.
+    pub iterations: usize,
+    /// ‖DARE residual‖_F / ‖P‖_F (0 when P = 0).
+    pub relative_residual: f64,
+}
+
+/// Discrete-time LQR solution: cost matrix X and gain L with u_k = −L x_k.
+///
+/// # Example
+/// ```
+/// use faer::mat;
+///
+/// // x_{k+1} = x_k + u_k with cost Σ x² + u²: X = (1 + √5)/2, L = X/(1 + X).
+/// let one = mat![[1.0]];
+/// let lqr = kalman::riccati::dlqr(one.as_ref(), one.as_ref(), one.as_ref(), one.as_ref(), None)?;
+/// let x = (1.0 + 5f64.sqrt()) / 2.0;
+/// assert!((lqr.cost[(0, 0)] - x).abs() < 1e-12 && (lqr.gain[(0, 0)] - x / (1.0 + x)).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Lqr {
+    /// State-feedback gain L = (R + BᵀXB)⁻¹(BᵀXA + Nᵀ) (m×n) for discrete problems, or
+    /// L = R⁻¹(BᵀX + Nᵀ) for continuous ones; the control is u = −L x.
+    pub gain: Mat<f64>,
+    /// Cost-to-go matrix X (n×n, symmetric PSD), the Riccati solution.
+    pub cost: Mat<f64>,
+    /// Doubling steps used.
+    pub iterations: usize,
+    /// ‖Riccati residual‖_F / ‖X‖_F.
+    pub relative_residual: f64,
+}
+
+/// Steady state of the continuous Kalman–Bucy filter (solution of the filter CARE).
+///
+/// # Example
+/// ```
+/// use faer::mat;
+///
+/// // ẋ = −x + w, z = x + v, unit intensities: P = √2 − 1, K = P.
+/// let (a, one) = (mat![[-1.0]], mat![[1.0]]);
+/// let ss = kalman::riccati::care(a.as_ref(), one.as_ref(), one.as_ref(), one.as_ref())?;
+/// assert!((ss.gain[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct ContinuousSteadyState {
+    /// P solving A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0 (n×n).
+    pub covariance: Mat<f64>,
+    /// Kalman–Bucy gain K = P Hᵀ R⁻¹ (n×m).
+    pub gain: Mat<f64>,
+    /// Doubling steps used.
+    pub iterations: usize,
+    /// ‖CARE residual‖_F / ‖P‖_F.
+    pub relative_residual: f64,
+}
+
+enum Pair {
+    Detect(&'static str),
+    Stab(&'static str),
+}
+
+impl Pair {
+    fn error(&self, re: f64, im: f64) -> Error {
+        match *self {
+            Pair::Detect(pair) => Error::NotDetectable { pair, re, im },
+            Pair::Stab(pair) => Error::NotStabilisable { pair, re, im },
+        }
+    }
+}
+
+/// Error labels: `detect` is reported when the (F, H)-like pair of the filter form fails,
+/// `stab` when the (F, Q^{1/2})-like pair fails.
+struct Names {
+    equation: &'static str,
+    detect: Pair,
+    stab: Pair,
+}
+
+struct Solved {
+    x: Mat<f64>,
+    iterations: usize,
+    relative_residual: f64,
+}
+
+fn relative(num: f64, den: f64) -> f64 {
+    if num == 0.0 {
+        0.0
+    } else if den > 0.0 {
+        num / den
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The Cholesky factor of the positive definite `R`, or [`Error::NotPositiveDefinite`]
+/// naming R with `rule` (what needs R⁻¹).
+pub(crate) fn factor_r(R: MatRef<'_, f64>, rule: &'static str) -> Result<Llt<f64>, Error> {
+    R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
+        name: "R",
+        n: R.nrows(),
+        rule,
+    })
+}
+
+pub(crate) fn all_finite(M: MatRef<'_, f64>) -> bool {
+    (0..M.ncols()).all(|j| (0..M.nrows()).all(|i| M[(i, j)].is_finite()))
+}
+
+pub(crate) fn symmetrise(M: &mut Mat<f64>) {
+    let n = M.nrows();
+    for j in 0..n {
+        for i in j + 1..n {
+            let v = 0.5 * (M[(i, j)] + M[(j, i)]);
+            M[(i, j)] = v;
+            M[(j, i)] = v;
+        }
+    }
+}
+
+/// Spectral radius (discrete) or spectral abscissa (continuous); +∞ if the eigenvalue
+/// computation fails.
+pub(crate) fn spectral(M: MatRef<'_, f64>, continuous: bool) -> f64 {
+    match M.eigenvalues() {
+        Ok(e) if continuous => e.iter().map(|l| l.re).fold(f64::NEG_INFINITY, f64::max),
+        Ok(e) => e.iter().map(|l| l.norm()).fold(0.0, f64::max),
+        Err(_) => f64::INFINITY,
+    }
+}
