@@ -7,6 +7,7 @@ mod bench;
 mod examples;
 mod mutants;
 mod notation;
+mod python;
 mod tidy;
 
 use std::path::{Path, PathBuf};
@@ -18,7 +19,12 @@ use anyhow::{Context, Result, bail};
 const TASKS: &[(&str, &str)] = &[
     (
         "test",
-        "run every crate's tests, property tests, doc tests and tidy [--proptest-cases N]",
+        "run every crate's tests, property tests, doc tests, tidy and the Python package's \
+         tests (needs Python 3.11+) [--proptest-cases N]",
+    ),
+    (
+        "python",
+        "build the Python package into a cached venv and run its pytest suite (part of `test`)",
     ),
     (
         "bench",
@@ -64,6 +70,7 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         "test" => test(rest),
+        "python" => known(rest, &[], &[]).and_then(|()| python::test()),
         "bench" => bench::bench(rest),
         "reproduce" => reproduce(rest),
         "ci" => ci(rest),
@@ -170,7 +177,8 @@ fn test(args: &[String]) -> Result<()> {
     run(cmd)?;
     let mut cmd = cargo();
     cmd.args(["test", "--workspace", "--all-features", "--doc"]);
-    run(cmd)
+    run(cmd)?;
+    python::test()
 }
 
 fn reproduce(args: &[String]) -> Result<()> {

@@ -25,6 +25,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("wls", &[]),
     ("sensors", &["model"]),
     ("scenarios", &["model", "kalman", "wls", "sensors"]),
+    ("python", &["model", "kalman", "wls", "sensors"]),
     ("xtask", &[]),
 ];
 

@@ -1,0 +1,152 @@
+"""launch_estimation: the estimation engine from Python.
+
+Notation: n states, m measurements, p control inputs;
+x[k+1] = F x[k] + B u[k] + w[k],  z[k] = H x[k] + v[k],
+cov(w) = Q, cov(v) = R, E[w[k] v[k]^T] = S (the engine's cross-covariance).
+
+FilterPy's ``M`` (``KalmanFilter.update_correlated``) is a different quantity: the
+cross-covariance of the *prior state error* x[k] - x[k|k-1] with v[k]. When the prior comes
+from a prediction with correlated noise, x[k] - x[k|k-1] = F e[k-1] + w[k-1], so M[k] is the
+engine's S of the previous step's noise pair, E[w[k-1] v[k]^T] — the two models shift the
+index: the engine's S couples w[k] with v[k] and enters the *prediction*; FilterPy's M enters
+the *update*. A model with E[w[k-1] v[k]^T] = S is run in FilterPy with M = S, and in the
+engine by re-indexing the process noise.
+
+All inputs are NumPy arrays (integer arrays are converted to float64); lists, other dtypes
+and non-finite values are refused with a one-line TypeError/ValueError naming the argument.
+"""
+
+from typing import Any, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+Array = npt.NDArray[np.float64]
+MatrixLike = Union[npt.NDArray[Any], float]
+
+class KalmanFilter:
+    """FilterPy's ``KalmanFilter`` (predict/update, correlated update, batch filter, RTS
+    smoother) with its state in Rust.
+
+    ``from filterpy.kalman import KalmanFilter`` -> ``from launch_estimation import
+    KalmanFilter`` runs a FilterPy script unchanged for the attributes and methods below,
+    with FilterPy's shapes: x is (dim_x, 1) (or (dim_x,) if set so), P, F, Q (dim_x, dim_x),
+    H (dim_z, dim_x), R (dim_z, dim_z), B (dim_x, dim_u) or None, M and K (dim_x, dim_z),
+    y (dim_z, 1), S (dim_z, dim_z).
+
+    Differences from FilterPy, and why:
+
+    - Attributes are checked when set (shape, finiteness; P, Q, R symmetric positive
+      semi-definite): a bad value raises at once instead of producing NaNs later. A list is
+      refused for a matrix (TypeError); FilterPy silently keeps it.
+    - A scalar assigned to P, Q, R or F means that multiple of the identity; FilterPy adds
+      it to every entry by broadcasting (the same when the matrix is 1x1).
+    - NaN entries of z skip their rows (FilterPy has no partial update); K, y, S have zeros
+      in the rows/columns of the missing entries; log_likelihood and mahalanobis use the
+      present rows. ``z = None`` skips the update as in FilterPy.
+    - K is computed by solving with a Cholesky factor of S (LU if S is not positive
+      definite) rather than with inv(S); SI is computed from the factor when read. A
+      singular S raises ValueError (FilterPy raises LinAlgError). ``kf.inv`` is not used.
+    - ``z`` after a skipped update holds NaN (FilterPy: an object array of None).
+    - batch_filter and rts_smoother use the filter's own F, Q, H, R, B: the per-step
+      ``Fs, Qs, Hs, Rs, Bs``, ``saver`` and ``inv`` arguments raise TypeError (loop over
+      predict/update for time-varying models).
+    - Arrays read from the filter are kept until the filter changes them, so ``kf.x is
+      kf.x`` and in-place edits (``kf.x[0] = 1``, ``kf.P *= 10``) reach the filter, as in
+      FilterPy; arrays read before a predict/update are snapshots (``xs.append(kf.x)``).
+    - Not provided: predict_steadystate, update_steadystate, update_sequential,
+      get_prediction, get_update, residual_of, measurement_of_state, log_likelihood_of,
+      test_matrix_dimensions.
+    """
+
+    def __init__(self, dim_x: int, dim_z: int, dim_u: int = 0) -> None: ...
+    @property
+    def dim_x(self) -> int: ...
+    @property
+    def dim_z(self) -> int: ...
+    @property
+    def dim_u(self) -> int: ...
+    x: Array
+    P: Array
+    F: Array
+    Q: Array
+    H: Array
+    R: Array
+    B: Optional[Array]
+    M: Array
+    alpha: float
+    @property
+    def K(self) -> Array: ...
+    @property
+    def y(self) -> Array: ...
+    @property
+    def S(self) -> Array: ...
+    @property
+    def SI(self) -> Array: ...
+    @property
+    def z(self) -> Array: ...
+    @property
+    def x_prior(self) -> Array: ...
+    @property
+    def P_prior(self) -> Array: ...
+    @property
+    def x_post(self) -> Array: ...
+    @property
+    def P_post(self) -> Array: ...
+    @property
+    def log_likelihood(self) -> float:
+        """log N(y; 0, S) of the last update."""
+    @property
+    def likelihood(self) -> float:
+        """exp(log_likelihood), at least the smallest positive normal float."""
+    @property
+    def mahalanobis(self) -> float:
+        """sqrt(y^T S^-1 y) of the last update."""
+    def predict(
+        self,
+        u: Optional[MatrixLike] = None,
+        B: Optional[Array] = None,
+        F: Optional[MatrixLike] = None,
+        Q: Optional[MatrixLike] = None,
+    ) -> None:
+        """x <- F x + B u (when B and u are given), P <- alpha^2 F P F^T + Q."""
+    def update(
+        self,
+        z: Union[None, float, Sequence[float], npt.NDArray[Any]],
+        R: Optional[MatrixLike] = None,
+        H: Optional[Array] = None,
+    ) -> None:
+        """y = z - H x, S = H P H^T + R, K = P H^T S^-1, x <- x + K y,
+        P <- (I - K H) P (I - K H)^T + K R K^T (Joseph form). None skips; NaN rows skip."""
+    def update_correlated(
+        self,
+        z: Union[None, float, Sequence[float], npt.NDArray[Any]],
+        R: Optional[MatrixLike] = None,
+        H: Optional[Array] = None,
+    ) -> None:
+        """S = H P H^T + H M + M^T H^T + R, K = (P H^T + M) S^-1, x <- x + K y,
+        P <- P - K (H P + M^T)."""
+    def batch_filter(
+        self,
+        zs: Union[Sequence[Any], npt.NDArray[Any]],
+        Fs: None = None,
+        Qs: None = None,
+        Hs: None = None,
+        Rs: None = None,
+        Bs: None = None,
+        us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
+        update_first: bool = False,
+        saver: None = None,
+    ) -> Tuple[Array, Array, Array, Array]:
+        """(means, covariances, means_p, covariances_p): (N, dim_x, 1), (N, dim_x, dim_x),
+        ... in one call into Rust. Missing measurements: None items or NaN entries."""
+    def rts_smoother(
+        self,
+        Xs: Array,
+        Ps: Array,
+        Fs: None = None,
+        Qs: None = None,
+        inv: None = None,
+    ) -> Tuple[Array, Array, Array, Array]:
+        """(x, P, K, Pp): smoothed means and covariances, smoother gains, predicted
+        covariances; K[k] = P[k] F^T Pp[k]^-1 by a solve."""

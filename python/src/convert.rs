@@ -1,0 +1,288 @@
+//! Conversions between Python objects and the row-major buffers the filters keep, with the
+//! checks that turn bad input into a one-line `ValueError`/`TypeError` naming the argument.
+
+use numpy::ndarray::{Array1, Array2, Array3, ArrayViewD};
+use numpy::{
+    PyArray1, PyArray2, PyArray3, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyFloat, PyInt};
+
+/// A `ValueError` with a one-line message.
+pub(crate) fn value_error(msg: impl Into<String>) -> PyErr {
+    PyValueError::new_err(one_line(msg.into()))
+}
+
+/// A `TypeError` with a one-line message.
+pub(crate) fn type_error(msg: impl Into<String>) -> PyErr {
+    PyTypeError::new_err(one_line(msg.into()))
+}
+
+/// Joins the lines of a message, so every error the module raises is one line.
+fn one_line(msg: String) -> String {
+    if msg.contains('\n') {
+        msg.split_whitespace().collect::<Vec<_>>().join(" ")
+    } else {
+        msg
+    }
+}
+
+/// The Python type name of `obj`, for messages.
+pub(crate) fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+/// `obj` as a float64 NumPy array (integer arrays are converted; every other dtype, and
+/// anything that is not an `ndarray`, is a `TypeError` naming `name`).
+pub(crate) fn float_array<'py>(
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    if let Ok(a) = obj.cast::<PyArrayDyn<f64>>() {
+        return Ok(a.clone());
+    }
+    let Ok(untyped) = obj.cast::<PyUntypedArray>() else {
+        return Err(type_error(format!(
+            "{name} must be a numpy.ndarray of floats, not {}",
+            type_name(obj)
+        )));
+    };
+    let kind = untyped.dtype().kind();
+    if matches!(kind, b'i' | b'u' | b'f') {
+        let converted = obj.call_method1("astype", ("float64",))?;
+        if let Ok(a) = converted.cast::<PyArrayDyn<f64>>() {
+            return Ok(a.clone());
+        }
+    }
+    Err(type_error(format!(
+        "{name} must be a numpy.ndarray of real numbers, not of dtype {}",
+        untyped
+            .dtype()
+            .str()
+            .map(|s| s.to_string())
+            .unwrap_or_else(|_| "?".into())
+    )))
+}
+
+/// A real Python scalar (int or float, not bool), if `obj` is one.
+pub(crate) fn scalar(obj: &Bound<'_, PyAny>) -> Option<f64> {
+    if obj.is_instance_of::<PyBool>() {
+        return None;
+    }
+    if obj.is_instance_of::<PyFloat>() || obj.is_instance_of::<PyInt>() {
+        return obj.extract::<f64>().ok();
+    }
+    // NumPy scalars (np.float64 is a float subclass; np.int64 is not an int subclass).
+    let ty = type_name(obj);
+    if ty.starts_with("float") || ty.starts_with("int") || ty.starts_with("uint") {
+        return obj.extract::<f64>().ok();
+    }
+    None
+}
+
+/// The shape of a view, rendered like NumPy's `(2, 1)`.
+pub(crate) fn shape_str(shape: &[usize]) -> String {
+    match shape {
+        [a] => format!("({a},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(usize::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// Copies `view` (any strides) into `out` in row-major order, refusing non-finite entries.
+pub(crate) fn copy_finite(view: &ArrayViewD<'_, f64>, name: &str, out: &mut [f64]) -> PyResult<()> {
+    for (o, v) in out.iter_mut().zip(view.iter()) {
+        if !v.is_finite() {
+            return Err(value_error(format!(
+                "{name} has a non-finite entry ({v}); every entry must be finite"
+            )));
+        }
+        *o = *v;
+    }
+    Ok(())
+}
+
+/// Reads a `rows × cols` matrix argument into `out` (row-major): a float or integer array
+/// of exactly that shape, or — for a square matrix when `scalar_identity` — a real scalar
+/// s meaning s·I. Entries must be finite.
+pub(crate) fn read_matrix(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    rows: usize,
+    cols: usize,
+    scalar_identity: bool,
+    out: &mut [f64],
+) -> PyResult<()> {
+    if scalar_identity
+        && rows == cols
+        && let Some(s) = scalar(obj)
+    {
+        if !s.is_finite() {
+            return Err(value_error(format!("{name} is {s}; it must be finite")));
+        }
+        out.fill(0.0);
+        for i in 0..rows {
+            out[i * cols + i] = s;
+        }
+        return Ok(());
+    }
+    let arr = float_array(obj, name)?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    if view.shape() != [rows, cols] {
+        return Err(value_error(format!(
+            "{name} has shape {}, expected ({rows}, {cols})",
+            shape_str(view.shape())
+        )));
+    }
+    copy_finite(&view, name, out)
+}
+
+/// Reads a vector of length `len` given as a `(len, 1)` column, a `(len,)` array, a real
+/// scalar when `len == 1`, or — when `allow_sequence` — any sequence NumPy converts to
+/// floats. `missing_ok` lets NaN through (a missing measurement); infinities never pass.
+pub(crate) fn read_vector(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    len: usize,
+    allow_sequence: bool,
+    missing_ok: bool,
+    out: &mut [f64],
+) -> PyResult<()> {
+    if let Some(s) = scalar(obj) {
+        if len != 1 {
+            return Err(value_error(format!(
+                "{name} is a scalar but must have {len} entries"
+            )));
+        }
+        out[0] = s;
+        return check_entries(name, out, missing_ok);
+    }
+    let owned;
+    let source = if obj.cast::<PyUntypedArray>().is_err() && allow_sequence {
+        if obj.is_instance_of::<pyo3::types::PyString>() || obj.is_none() {
+            return Err(type_error(format!(
+                "{name} must be a number, a sequence of numbers or a numpy.ndarray, not {}",
+                type_name(obj)
+            )));
+        }
+        let np = obj.py().import("numpy")?;
+        owned = np.call_method1("asarray", (obj, "float64")).map_err(|_| {
+            type_error(format!(
+                "{name} must be a number, a sequence of numbers or a numpy.ndarray, not {}",
+                type_name(obj)
+            ))
+        })?;
+        &owned
+    } else {
+        obj
+    };
+    let arr = float_array(source, name)?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    let ok =
+        matches!(view.shape(), [l] if *l == len) || matches!(view.shape(), [l, 1] if *l == len);
+    if !ok {
+        return Err(value_error(format!(
+            "{name} has shape {}, expected ({len}, 1) or ({len},)",
+            shape_str(view.shape())
+        )));
+    }
+    for (o, v) in out.iter_mut().zip(view.iter()) {
+        *o = *v;
+    }
+    check_entries(name, out, missing_ok)
+}
+
+/// Refuses infinities, and NaN unless it marks a missing entry.
+fn check_entries(name: &str, v: &[f64], missing_ok: bool) -> PyResult<()> {
+    for &x in v {
+        if x.is_infinite() || (x.is_nan() && !missing_ok) {
+            return Err(value_error(format!(
+                "{name} has a non-finite entry ({x}); {}",
+                if missing_ok {
+                    "NaN marks a missing entry, infinities are refused"
+                } else {
+                    "every entry must be finite"
+                }
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a matrix that is not symmetric positive semi-definite (tolerances relative to
+/// its largest entry, so the verdict does not depend on units).
+pub(crate) fn check_psd(name: &str, a: &[f64], n: usize) -> PyResult<()> {
+    let scale = a.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    for i in 0..n {
+        for j in 0..i {
+            let (u, l) = (a[i * n + j], a[j * n + i]);
+            if (u - l).abs() > 1e-9 * scale {
+                return Err(value_error(format!(
+                    "{name} is not symmetric: {name}[{i}, {j}] = {u} but {name}[{j}, {i}] = {l}"
+                )));
+            }
+        }
+    }
+    if scale == 0.0 {
+        return Ok(());
+    }
+    // Cholesky of A + δI with δ a small multiple of the scale: a PSD matrix always
+    // factors, a matrix with an eigenvalue below −δ never does.
+    let delta = 1e-9 * scale * n as f64;
+    let mut l = a.to_vec();
+    for i in 0..n {
+        l[i * n + i] += delta;
+    }
+    if !crate::linalg::cholesky(&mut l, n) {
+        return Err(value_error(format!(
+            "{name} is not positive semi-definite (it has an eigenvalue below −{delta:.3e})"
+        )));
+    }
+    Ok(())
+}
+
+/// A new `(rows, cols)` float64 array holding a copy of `data` (row-major).
+pub(crate) fn matrix_out<'py>(
+    py: Python<'py>,
+    data: &[f64],
+    rows: usize,
+    cols: usize,
+) -> Bound<'py, PyArray2<f64>> {
+    let arr = Array2::from_shape_vec((rows, cols), data.to_vec())
+        .unwrap_or_else(|_| Array2::zeros((rows, cols)));
+    PyArray2::from_owned_array(py, arr)
+}
+
+/// A new vector array: `(len, 1)` when `column`, else `(len,)`.
+pub(crate) fn vector_out<'py>(py: Python<'py>, data: &[f64], column: bool) -> Bound<'py, PyAny> {
+    if column {
+        matrix_out(py, data, data.len(), 1).into_any()
+    } else {
+        PyArray1::from_owned_array(py, Array1::from_vec(data.to_vec())).into_any()
+    }
+}
+
+/// A new `(a, b, c)` float64 array taking `data` (row-major).
+pub(crate) fn array3_out(
+    py: Python<'_>,
+    data: Vec<f64>,
+    a: usize,
+    b: usize,
+    c: usize,
+) -> Bound<'_, PyArray3<f64>> {
+    let arr = Array3::from_shape_vec((a, b, c), data).unwrap_or_else(|_| Array3::zeros((a, b, c)));
+    PyArray3::from_owned_array(py, arr)
+}

@@ -1,0 +1,718 @@
+//! `launch_estimation.KalmanFilter`: FilterPy's `KalmanFilter` API over state kept in Rust.
+//!
+//! Attributes are copied into preallocated buffers when set (and checked once, there);
+//! reading one returns a NumPy array that is then kept, so reading it again returns the same
+//! object (as in FilterPy) and an in-place edit of it (`kf.x[0] = 1.0`, `kf.P *= 10`) is
+//! noticed — by comparing it with the buffer, a few dozen loads — before the next call
+//! uses it. A call that changes a quantity drops the kept array, so arrays already handed out
+//! stay snapshots (`xs.append(kf.x)` works as in FilterPy).
+#![allow(non_snake_case)]
+
+use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+
+use crate::convert::{
+    check_psd, float_array, matrix_out, read_matrix, read_vector, scalar, shape_str, type_error,
+    type_name, value_error, vector_out,
+};
+use crate::guard;
+use crate::kf_core::{Core, UpdateError};
+
+/// The attributes a `KalmanFilter` keeps a returned array for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum A {
+    X,
+    P,
+    F,
+    Q,
+    H,
+    R,
+    B,
+    M,
+    K,
+    Y,
+    S,
+    SI,
+    Z,
+    XPrior,
+    PPrior,
+    XPost,
+    PPost,
+}
+
+/// The inputs a user may edit in place, checked before every call.
+const INPUTS: [A; 8] = [A::X, A::P, A::F, A::Q, A::H, A::R, A::B, A::M];
+const N_ATTR: usize = 17;
+
+/// A linear Kalman filter with FilterPy's `KalmanFilter` interface (n = dim_x states,
+/// m = dim_z measurements, p = dim_u controls).
+#[pyclass(module = "launch_estimation")]
+#[derive(Debug)]
+pub struct KalmanFilter {
+    core: Core,
+    dim_u: usize,
+    /// Whether x is a (n, 1) column (FilterPy's default) rather than a (n,) vector.
+    x_col: bool,
+    cache: [Option<Py<PyAny>>; N_ATTR],
+}
+
+/// Reads a dimension argument (a non-negative int; `positive` refuses 0).
+fn dim(obj: &Bound<'_, PyAny>, name: &str, positive: bool) -> PyResult<usize> {
+    if obj.is_instance_of::<pyo3::types::PyBool>() || !obj.is_instance_of::<pyo3::types::PyInt>() {
+        return Err(type_error(format!(
+            "{name} must be an int, not {}",
+            type_name(obj)
+        )));
+    }
+    let v: i64 = obj
+        .extract()
+        .map_err(|_| value_error(format!("{name} is out of range")))?;
+    if v < 0 || (positive && v == 0) || v > 10_000 {
+        return Err(value_error(format!(
+            "{name} = {v}; it must be {} and at most 10000",
+            if positive { "≥ 1" } else { "≥ 0" }
+        )));
+    }
+    Ok(v as usize)
+}
+
+impl KalmanFilter {
+    fn shape(&self, a: A) -> (usize, usize) {
+        let (n, m) = (self.core.n, self.core.m);
+        match a {
+            A::X | A::XPrior | A::XPost => (n, 1),
+            A::P | A::F | A::Q | A::PPrior | A::PPost => (n, n),
+            A::H => (m, n),
+            A::R | A::S | A::SI => (m, m),
+            A::B => (n, self.core.p),
+            A::M | A::K => (n, m),
+            A::Y | A::Z => (m, 1),
+        }
+    }
+
+    fn buffer(&self, a: A) -> Option<&[f64]> {
+        let c = &self.core;
+        Some(match a {
+            A::X => &c.x,
+            A::P => &c.P,
+            A::F => &c.F,
+            A::Q => &c.Q,
+            A::H => &c.H,
+            A::R => &c.R,
+            A::B => return c.B.as_deref(),
+            A::M => &c.M,
+            A::K => &c.K,
+            A::Y => &c.y,
+            A::S => &c.S,
+            A::Z => &c.z,
+            A::XPrior => &c.x_prior,
+            A::PPrior => &c.P_prior,
+            A::XPost => &c.x_post,
+            A::PPost => &c.P_post,
+            A::SI => return None,
+        })
+    }
+
+    fn name(a: A) -> &'static str {
+        match a {
+            A::X => "x",
+            A::P => "P",
+            A::F => "F",
+            A::Q => "Q",
+            A::H => "H",
+            A::R => "R",
+            A::B => "B",
+            A::M => "M",
+            A::K => "K",
+            A::Y => "y",
+            A::S => "S",
+            A::SI => "SI",
+            A::Z => "z",
+            A::XPrior => "x_prior",
+            A::PPrior => "P_prior",
+            A::XPost => "x_post",
+            A::PPost => "P_post",
+        }
+    }
+
+    /// The array for attribute `a`, made from the buffer on first read and then kept.
+    fn get(&mut self, py: Python<'_>, a: A) -> Py<PyAny> {
+        if let Some(obj) = &self.cache[a as usize] {
+            return obj.clone_ref(py);
+        }
+        let (r, c) = self.shape(a);
+        let obj: Bound<'_, PyAny> = match a {
+            A::B if self.core.B.is_none() => py.None().into_bound(py),
+            A::SI => matrix_out(py, &self.core.si(), r, c).into_any(),
+            A::X | A::XPrior | A::XPost | A::Y | A::Z => {
+                vector_out(py, self.buffer(a).unwrap_or(&[]), self.x_col)
+            }
+            _ => matrix_out(py, self.buffer(a).unwrap_or(&[]), r, c).into_any(),
+        };
+        let obj = obj.unbind();
+        self.cache[a as usize] = Some(obj.clone_ref(py));
+        obj
+    }
+
+    /// Drops the kept arrays of the quantities a call changed.
+    fn invalidate(&mut self, which: &[A]) {
+        for &a in which {
+            self.cache[a as usize] = None;
+        }
+    }
+
+    /// Checks and stores a new value of input `a` (the setter), keeping `value` itself as the
+    /// attribute's array when it is a float64 array (so later in-place edits are seen).
+    fn assign(&mut self, a: A, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let (n, m) = (self.core.n, self.core.m);
+        let name = Self::name(a);
+        match a {
+            A::X => {
+                let mut x = vec![0.0; n];
+                read_vector(value, name, n, false, false, &mut x)?;
+                if let Ok(arr) = value.cast::<PyArrayDyn<f64>>() {
+                    self.x_col = arr.ndim() == 2;
+                } else if float_array(value, name).is_ok_and(|arr| arr.ndim() == 1) {
+                    self.x_col = false;
+                }
+                self.core.x = x;
+            }
+            A::B => {
+                if value.is_none() {
+                    self.core.B = None;
+                    if self.dim_u == 0 {
+                        self.core.p = 0;
+                    }
+                } else {
+                    let arr = float_array(value, name)?;
+                    let cols = match arr.shape() {
+                        [r, c] if *r == n && (self.dim_u == 0 || *c == self.dim_u) => *c,
+                        s => {
+                            let want = if self.dim_u == 0 {
+                                format!("({n}, p)")
+                            } else {
+                                format!("({n}, {})", self.dim_u)
+                            };
+                            return Err(value_error(format!(
+                                "B has shape {}, expected {want}",
+                                shape_str(s)
+                            )));
+                        }
+                    };
+                    let mut b = vec![0.0; n * cols];
+                    read_matrix(value, name, n, cols, false, &mut b)?;
+                    self.core.p = cols;
+                    self.core.B = Some(b);
+                }
+            }
+            _ => {
+                let (r, c) = self.shape(a);
+                let mut buf = vec![0.0; r * c];
+                let square = r == c && a != A::M;
+                read_matrix(value, name, r, c, square, &mut buf)?;
+                if matches!(a, A::P | A::Q | A::R) {
+                    check_psd(name, &buf, r)?;
+                }
+                match a {
+                    A::P => self.core.P = buf,
+                    A::F => self.core.F = buf,
+                    A::Q => self.core.Q = buf,
+                    A::H => self.core.H = buf,
+                    A::R => self.core.R = buf,
+                    A::M => self.core.M = buf,
+                    _ => unreachable!("assign is only called for inputs"),
+                }
+                let _ = m;
+            }
+        }
+        self.cache[a as usize] = value
+            .cast::<PyArrayDyn<f64>>()
+            .ok()
+            .map(|v| v.clone().into_any().unbind());
+        Ok(())
+    }
+
+    /// Adopts in-place edits of the input arrays handed out (or set) since they last changed.
+    fn sync(&mut self, py: Python<'_>) -> PyResult<()> {
+        for a in INPUTS {
+            let Some(obj) = self.cache[a as usize].as_ref().map(|o| o.clone_ref(py)) else {
+                continue;
+            };
+            let obj = obj.bind(py);
+            let Ok(arr) = obj.cast::<PyArrayDyn<f64>>() else {
+                continue; // B = None
+            };
+            let changed = {
+                let ro = arr
+                    .try_readonly()
+                    .map_err(|e| value_error(format!("{} cannot be read: {e}", Self::name(a))))?;
+                let view = ro.as_array();
+                let (r, c) = self.shape(a);
+                let same_shape = view.len() == r * c;
+                match self.buffer(a) {
+                    Some(buf) if same_shape => view
+                        .iter()
+                        .zip(buf)
+                        .any(|(v, b)| v.to_bits() != b.to_bits()),
+                    _ => true,
+                }
+            };
+            if changed {
+                self.assign(a, obj)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads an optional per-call override of a matrix (`None` → the filter's own).
+    fn override_matrix(
+        &self,
+        obj: Option<&Bound<'_, PyAny>>,
+        name: &str,
+        r: usize,
+        c: usize,
+        psd: bool,
+    ) -> PyResult<Option<Vec<f64>>> {
+        match obj {
+            Some(o) if !o.is_none() => {
+                let mut buf = vec![0.0; r * c];
+                read_matrix(o, name, r, c, r == c, &mut buf)?;
+                if psd {
+                    check_psd(name, &buf, r)?;
+                }
+                Ok(Some(buf))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Reads a control input u of length p (`None` → no control).
+    fn read_u(&self, u: Option<&Bound<'_, PyAny>>, p: usize) -> PyResult<Option<Vec<f64>>> {
+        match u {
+            Some(u) if !u.is_none() => {
+                if p == 0 {
+                    // FilterPy ignores u when there is no B.
+                    return Ok(None);
+                }
+                let mut buf = vec![0.0; p];
+                if let Some(s) = scalar(u)
+                    && p > 1
+                    && s == 0.0
+                {
+                    return Ok(Some(buf)); // FilterPy's batch_filter passes u = 0
+                }
+                read_vector(u, "u", p, true, false, &mut buf)?;
+                Ok(Some(buf))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Reads a measurement (`None` → all missing).
+    fn read_z(&self, z: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
+        let mut buf = vec![f64::NAN; self.core.m];
+        if !z.is_none() {
+            read_vector(z, name, self.core.m, true, true, &mut buf)?;
+        }
+        Ok(buf)
+    }
+
+    fn do_update(
+        &mut self,
+        py: Python<'_>,
+        z: &Bound<'_, PyAny>,
+        R: Option<&Bound<'_, PyAny>>,
+        H: Option<&Bound<'_, PyAny>>,
+        correlated: bool,
+    ) -> PyResult<()> {
+        self.sync(py)?;
+        let (n, m) = (self.core.n, self.core.m);
+        let zv = self.read_z(z, "z")?;
+        let R = self.override_matrix(R, "R", m, m, true)?;
+        let H = self.override_matrix(H, "H", m, n, false)?;
+        self.core
+            .update(&zv, R.as_deref(), H.as_deref(), correlated)
+            .map_err(|UpdateError::SingularS| {
+                value_error(
+                    "S (the innovation covariance H P Hᵀ + R) is singular for this update; \
+                     check R and P",
+                )
+            })?;
+        self.invalidate(&[
+            A::X,
+            A::P,
+            A::K,
+            A::Y,
+            A::S,
+            A::SI,
+            A::Z,
+            A::XPost,
+            A::PPost,
+        ]);
+        Ok(())
+    }
+}
+
+#[pymethods]
+impl KalmanFilter {
+    /// KalmanFilter(dim_x, dim_z, dim_u=0): FilterPy's defaults (x = 0, P = F = Q = I,
+    /// H = 0, R = I, B = None, M = 0).
+    #[new]
+    #[pyo3(signature = (dim_x, dim_z, dim_u = None))]
+    fn new(
+        dim_x: &Bound<'_, PyAny>,
+        dim_z: &Bound<'_, PyAny>,
+        dim_u: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        guard(|| {
+            let n = dim(dim_x, "dim_x", true)?;
+            let m = dim(dim_z, "dim_z", true)?;
+            let p = match dim_u {
+                Some(u) => dim(u, "dim_u", false)?,
+                None => 0,
+            };
+            Ok(Self {
+                core: Core::new(n, m, p),
+                dim_u: p,
+                x_col: true,
+                cache: Default::default(),
+            })
+        })
+    }
+
+    /// Number of states n.
+    #[getter]
+    fn dim_x(&self) -> usize {
+        self.core.n
+    }
+    /// Number of measurements m.
+    #[getter]
+    fn dim_z(&self) -> usize {
+        self.core.m
+    }
+    /// Number of control inputs p.
+    #[getter]
+    fn dim_u(&self) -> usize {
+        self.dim_u
+    }
+
+    /// State estimate, (dim_x, 1) (or (dim_x,) if set so).
+    #[getter]
+    fn get_x(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        guard(|| Ok(self.get(py, A::X)))
+    }
+    #[setter]
+    fn set_x(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        guard(|| self.assign(A::X, value))
+    }
+    /// State covariance, (dim_x, dim_x); symmetric PSD.
+    #[getter]
+    fn get_P(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        guard(|| Ok(self.get(py, A::P)))
+    }
+    #[setter]
+    fn set_P(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        guard(|| self.assign(A::P, value))
+    }
+    /// State transition F, (dim_x, dim_x).
+    #[getter]
+    fn get_F(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        guard(|| Ok(self.get(py, A::F)))
+    }
+    #[setter]
+    fn set_F(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        guard(|| self.assign(A::F, value))
+    }
+    /// Process noise covariance Q, (dim_x, dim_x); symmetric PSD.
+    #[getter]
+    fn get_Q(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        guard(|| Ok(self.get(py, A::Q)))
+    }
+    #[setter]
+    fn set_Q(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        guard(|| self.assign(A::Q, value))
+    }
+    /// Measurement matrix H, (dim_z, dim_x).
+    #[getter]
+    fn get_H(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        guard(|| Ok(self.get(py, A::H)))
+    }
+    #[setter]
+    fn set_H(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        guard(|| self.assign(A::H, value))
+    }
+    /// Measurement noise covariance R, (dim_z, dim_z); symmetric PSD.
+    #[getter]
+    fn get_R(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        guard(|| Ok(self.get(py, A::R)))
+    }
+    #[setter]
+    fn set_R(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        guard(|| self.assign(A::R, value))
+    }
+    /// Control matrix B, (dim_x, dim_u), or None.
+    #[getter]
+    fn get_B(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        guard(|| Ok(self.get(py, A::B)))
+    }
+    #[setter]
+    fn set_B(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        guard(|| self.assign(A::B, value))
+    }
+    /// Cross-covariance of the prior state error and the measurement noise, (dim_x, dim_z);
+    /// used by `update_correlated` only.
+    #[getter]
+    fn get_M(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        guard(|| Ok(self.get(py, A::M)))
+    }
+    #[setter]
+    fn set_M(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        guard(|| self.assign(A::M, value))
+    }
+    /// Kalman gain of the last update, (dim_x, dim_z).
+    #[getter]
+    fn get_K(&mut self, py: Python<'_>) -> Py<PyAny> {
+        self.get(py, A::K)
+    }
+    /// Innovation (residual) of the last update, (dim_z, 1).
+    #[getter]
+    fn get_y(&mut self, py: Python<'_>) -> Py<PyAny> {
+        self.get(py, A::Y)
+    }
+    /// Innovation covariance of the last update, (dim_z, dim_z).
+    #[getter]
+    fn get_S(&mut self, py: Python<'_>) -> Py<PyAny> {
+        self.get(py, A::S)
+    }
+    /// Inverse of S (computed from its factorisation when read).
+    #[getter]
+    fn get_SI(&mut self, py: Python<'_>) -> Py<PyAny> {
+        self.get(py, A::SI)
+    }
+    /// Last measurement, (dim_z, 1); NaN where missing (FilterPy stores None).
+    #[getter]
+    fn get_z(&mut self, py: Python<'_>) -> Py<PyAny> {
+        self.get(py, A::Z)
+    }
+    /// Prior (predicted) state after the last predict.
+    #[getter]
+    fn get_x_prior(&mut self, py: Python<'_>) -> Py<PyAny> {
+        self.get(py, A::XPrior)
+    }
+    /// Prior covariance after the last predict.
+    #[getter]
+    fn get_P_prior(&mut self, py: Python<'_>) -> Py<PyAny> {
+        self.get(py, A::PPrior)
+    }
+    /// Posterior state after the last update.
+    #[getter]
+    fn get_x_post(&mut self, py: Python<'_>) -> Py<PyAny> {
+        self.get(py, A::XPost)
+    }
+    /// Posterior covariance after the last update.
+    #[getter]
+    fn get_P_post(&mut self, py: Python<'_>) -> Py<PyAny> {
+        self.get(py, A::PPost)
+    }
+
+    /// Fading-memory factor α ≥ 1 (P ← α² F P Fᵀ + Q).
+    #[getter]
+    fn get_alpha(&self) -> f64 {
+        self.core.alpha_sq.sqrt()
+    }
+    #[setter]
+    fn set_alpha(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        match scalar(value) {
+            Some(a) if a.is_finite() && a >= 1.0 => {
+                self.core.alpha_sq = a * a;
+                Ok(())
+            }
+            Some(a) => Err(value_error(format!(
+                "alpha = {a}; it must be a finite float ≥ 1"
+            ))),
+            None => Err(type_error(format!(
+                "alpha must be a float, not {}",
+                type_name(value)
+            ))),
+        }
+    }
+
+    /// log N(y; 0, S) of the last update (over its present rows).
+    #[getter]
+    fn log_likelihood(&self) -> f64 {
+        self.core
+            .log_likelihood()
+            .unwrap_or_else(|| f64::MIN_POSITIVE.ln())
+    }
+    /// exp(log_likelihood), never below the smallest positive normal float (FilterPy).
+    #[getter]
+    fn likelihood(&self) -> f64 {
+        let l = self.log_likelihood().exp();
+        if l > 0.0 { l } else { f64::MIN_POSITIVE }
+    }
+    /// sqrt(yᵀ S⁻¹ y) of the last update.
+    #[getter]
+    fn mahalanobis(&self) -> f64 {
+        self.core.mahalanobis().unwrap_or(0.0)
+    }
+
+    /// predict(u=None, B=None, F=None, Q=None): x ← F x + B u, P ← α² F P Fᵀ + Q.
+    #[pyo3(signature = (u = None, B = None, F = None, Q = None))]
+    fn predict(
+        &mut self,
+        py: Python<'_>,
+        u: Option<&Bound<'_, PyAny>>,
+        B: Option<&Bound<'_, PyAny>>,
+        F: Option<&Bound<'_, PyAny>>,
+        Q: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        guard(|| {
+            self.sync(py)?;
+            let n = self.core.n;
+            let F = self.override_matrix(F, "F", n, n, false)?;
+            let Q = self.override_matrix(Q, "Q", n, n, true)?;
+            let (B, p) = match B {
+                Some(b) if !b.is_none() => {
+                    let arr = float_array(b, "B")?;
+                    let p = match arr.shape() {
+                        [r, c] if *r == n => *c,
+                        s => {
+                            return Err(value_error(format!(
+                                "B has shape {}, expected ({n}, p)",
+                                shape_str(s)
+                            )));
+                        }
+                    };
+                    let mut buf = vec![0.0; n * p];
+                    read_matrix(b, "B", n, p, false, &mut buf)?;
+                    (Some(buf), p)
+                }
+                _ => (
+                    None,
+                    if self.core.B.is_some() {
+                        self.core.p
+                    } else {
+                        0
+                    },
+                ),
+            };
+            let u = self.read_u(u, p)?;
+            self.core
+                .predict(u.as_deref(), F.as_deref(), Q.as_deref(), B.as_deref());
+            self.invalidate(&[A::X, A::P, A::XPrior, A::PPrior]);
+            Ok(())
+        })
+    }
+
+    /// update(z, R=None, H=None): FilterPy's update (Joseph form). `z = None` skips the
+    /// update; NaN entries of z skip their rows.
+    #[pyo3(signature = (z, R = None, H = None))]
+    fn update(
+        &mut self,
+        py: Python<'_>,
+        z: &Bound<'_, PyAny>,
+        R: Option<&Bound<'_, PyAny>>,
+        H: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        guard(|| self.do_update(py, z, R, H, false))
+    }
+
+    /// update_correlated(z, R=None, H=None): the update with M, the cross-covariance of the
+    /// prior state error and the measurement noise.
+    #[pyo3(signature = (z, R = None, H = None))]
+    fn update_correlated(
+        &mut self,
+        py: Python<'_>,
+        z: &Bound<'_, PyAny>,
+        R: Option<&Bound<'_, PyAny>>,
+        H: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        guard(|| self.do_update(py, z, R, H, true))
+    }
+
+    /// batch_filter(zs, us=None, update_first=False) → (means, covariances, means_p,
+    /// covariances_p), in one call into Rust. Per-step Fs, Qs, Hs, Rs, Bs and saver are not
+    /// supported (TypeError): loop over predict/update for those.
+    #[pyo3(signature = (zs, Fs = None, Qs = None, Hs = None, Rs = None, Bs = None, us = None, update_first = false, saver = None))]
+    fn batch_filter<'py>(
+        &mut self,
+        py: Python<'py>,
+        zs: &Bound<'py, PyAny>,
+        Fs: Option<&Bound<'py, PyAny>>,
+        Qs: Option<&Bound<'py, PyAny>>,
+        Hs: Option<&Bound<'py, PyAny>>,
+        Rs: Option<&Bound<'py, PyAny>>,
+        Bs: Option<&Bound<'py, PyAny>>,
+        us: Option<&Bound<'py, PyAny>>,
+        update_first: bool,
+        saver: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        guard(|| {
+            for (name, v) in [
+                ("Fs", Fs),
+                ("Qs", Qs),
+                ("Hs", Hs),
+                ("Rs", Rs),
+                ("Bs", Bs),
+                ("saver", saver),
+            ] {
+                if v.is_some_and(|v| !v.is_none()) {
+                    return Err(type_error(format!(
+                        "batch_filter: {name} is not supported; call predict/update in a \
+                         loop for per-step matrices"
+                    )));
+                }
+            }
+            self.sync(py)?;
+            let out =
+                crate::batch::batch_filter(&mut self.core, self.x_col, py, zs, us, update_first);
+            self.invalidate(&[
+                A::X,
+                A::P,
+                A::K,
+                A::Y,
+                A::S,
+                A::SI,
+                A::Z,
+                A::XPrior,
+                A::PPrior,
+                A::XPost,
+                A::PPost,
+            ]);
+            out
+        })
+    }
+
+    /// rts_smoother(Xs, Ps) → (x, P, K, Pp): the RTS smoother over batch_filter's output with
+    /// the filter's F and Q. Per-step Fs, Qs and a custom inv are not supported (TypeError).
+    #[pyo3(signature = (Xs, Ps, Fs = None, Qs = None, inv = None))]
+    fn rts_smoother<'py>(
+        &mut self,
+        py: Python<'py>,
+        Xs: &Bound<'py, PyAny>,
+        Ps: &Bound<'py, PyAny>,
+        Fs: Option<&Bound<'py, PyAny>>,
+        Qs: Option<&Bound<'py, PyAny>>,
+        inv: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        guard(|| {
+            for (name, v) in [("Fs", Fs), ("Qs", Qs), ("inv", inv)] {
+                if v.is_some_and(|v| !v.is_none()) {
+                    return Err(type_error(format!(
+                        "rts_smoother: {name} is not supported; the filter's F and Q are used"
+                    )));
+                }
+            }
+            self.sync(py)?;
+            crate::batch::rts_smoother(&self.core, py, Xs, Ps)
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "KalmanFilter(dim_x={}, dim_z={}, dim_u={}, x={:?})",
+            self.core.n, self.core.m, self.dim_u, self.core.x
+        )
+    }
+}

@@ -1,0 +1,55 @@
+//! `launch_estimation`: the estimation engine from Python — a FilterPy-compatible
+//! `KalmanFilter` whose state lives in Rust, and the engine's whole-series functions.
+//!
+//! Notation (as in the Rust crates): n states, m measurements, p control inputs;
+//! x_{k+1} = F x_k + B u_k + w_k, z_k = H x_k + v_k, cov(w) = Q, cov(v) = R,
+//! E[w_k v_kᵀ] = S. FilterPy's `M` (used by `update_correlated`) is the cross-covariance of
+//! the *prior state error* with v_k; for a prior x_{k|k−1} built by the prediction from
+//! step k − 1 it is the S of the step before: M_k = S_{k−1} (see the module docstring).
+//!
+//! Every entry point runs inside [`guard`]: errors are `ValueError`/`TypeError` with one
+//! line naming the argument, and a panic (a bug) becomes a `RuntimeError` instead of
+//! unwinding into the interpreter.
+#![deny(missing_docs)]
+
+mod batch;
+mod convert;
+mod kf;
+mod kf_core;
+mod linalg;
+
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+
+/// Runs `f`, turning a panic into a `RuntimeError` (the last line of defence: no input
+/// should reach one, but none may unwind into Python).
+pub(crate) fn guard<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(result) => result,
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            Err(PyRuntimeError::new_err(format!(
+                "internal error in launch_estimation (a bug, please report it): {}",
+                what.replace('\n', " ")
+            )))
+        }
+    }
+}
+
+/// Panics inside [`guard`], so the tests can check that a panic becomes a `RuntimeError`.
+#[pyfunction]
+fn _panic_for_test() -> PyResult<()> {
+    guard(|| -> PyResult<()> { panic!("deliberate panic for the test of the guard") })
+}
+
+/// The Python module.
+#[pymodule]
+fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<kf::KalmanFilter>()?;
+    m.add_function(wrap_pyfunction!(_panic_for_test, m)?)?;
+    Ok(())
+}
