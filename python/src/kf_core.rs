@@ -130,10 +130,19 @@ impl Core {
             }
         }
         self.x.copy_from_slice(&self.tx);
+        // F P Fᵀ is symmetric: its upper triangle, mirrored (half of the second product).
         mul(F, &self.P, n, n, n, &mut self.t1);
-        mul_bt(&self.t1, F, n, n, n, &mut self.t2);
-        for ((p, t), q) in self.P.iter_mut().zip(&self.t2).zip(Q) {
-            *p = self.alpha_sq * t + q;
+        for i in 0..n {
+            let ti = &self.t1[i * n..(i + 1) * n];
+            for j in i..n {
+                let s: f64 = ti
+                    .iter()
+                    .zip(&F[j * n..(j + 1) * n])
+                    .map(|(a, b)| a * b)
+                    .sum();
+                self.P[i * n + j] = self.alpha_sq * s + Q[i * n + j];
+                self.P[j * n + i] = self.alpha_sq * s + Q[j * n + i];
+            }
         }
         self.x_prior.copy_from_slice(&self.x);
         self.P_prior.copy_from_slice(&self.P);
@@ -243,24 +252,27 @@ impl Core {
                 }
             }
         } else {
-            // I − K H (n×n) into t1.
+            // Joseph form, FilterPy's P ← (I − K H) P (I − K H)ᵀ + K R Kᵀ, in O(n² r):
+            // with A = (I − K H) P = P − K (H P), it is A + (K R − A Hᵀ) Kᵀ.
+            mul(hr, &self.P, r, n, n, &mut self.hp); // H P (r×n)
             for i in 0..n {
                 for j in 0..n {
-                    let kh: f64 = (0..r).map(|a| kt[a * n + i] * hr[a * n + j]).sum();
-                    self.t1[i * n + j] = if i == j { 1.0 } else { 0.0 } - kh;
+                    let khp: f64 = (0..r).map(|a| kt[a * n + i] * self.hp[a * n + j]).sum();
+                    self.t2[i * n + j] = self.P[i * n + j] - khp;
                 }
             }
-            mul(&self.t1, &self.P, n, n, n, &mut self.t2); // (I − KH) P
-            mul_bt(&self.t2, &self.t1, n, n, n, &mut self.P); // … (I − KH)ᵀ
-            // + K R Kᵀ: (K R) is n×r, computed as (R Kᵀ)ᵀ… with R symmetric, R Kᵀ = (K R)ᵀ.
+            let c = &mut self.pht[..n * r]; // K R − A Hᵀ (n×r)
+            for i in 0..n {
+                for a in 0..r {
+                    let kr: f64 = (0..r).map(|b| kt[b * n + i] * rr[b * r + a]).sum();
+                    let aht: f64 = (0..n).map(|j| self.t2[i * n + j] * hr[a * n + j]).sum();
+                    c[i * r + a] = kr - aht;
+                }
+            }
             for i in 0..n {
                 for j in 0..n {
-                    let mut s = 0.0;
-                    for a in 0..r {
-                        let kra: f64 = (0..r).map(|b| kt[b * n + i] * rr[b * r + a]).sum();
-                        s += kra * kt[a * n + j];
-                    }
-                    self.P[i * n + j] += s;
+                    let ck: f64 = (0..r).map(|a| c[i * r + a] * kt[a * n + j]).sum();
+                    self.P[i * n + j] = self.t2[i * n + j] + ck;
                 }
             }
         }
