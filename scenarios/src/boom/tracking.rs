@@ -21,14 +21,15 @@
 //! **The jerk intensity.** The nominal turn's ε is piecewise linear in α: two ramps (9°–12°
 //! down from 0.4584 °/s² to 0, 77°–80° down to −ε_d ≈ −0.42 °/s²), each about 1 s long at
 //! the cruise rate, constant in between. The ramps are the only jerk, |j| ≈ 0.45 °/s³. The
-//! default `q = Δε_r²/T_r` is chosen so that the model's one-sigma spread of ε over one ramp,
-//! √(q·T_r), equals the change Δε_r the ramp makes (Δε_r = 0.4584 °/s² over T_r ≈ 1.05 s:
-//! q ≈ 0.2 (°/s²)²/s = 6.1e-5 rad²/s⁵). `jerk_psd` computes it from the nominal turn (the
-//! largest change of ε over any 1 s window, squared, per second), so a reconfigured profile
-//! gets its own. A smaller q (Bar-Shalom's per-cycle rule, √(q·Δt) ≈ j·Δt, gives 100 times
-//! less) makes the filter lag each ramp; a larger one passes more noise into ε: with R's
-//! σ_z = Δa = 0.02 m/s² a single a_y reading already gives ε to σ_z/r = 0.046 °/s², a tenth
-//! of Δε, so the choice is not critical, and the scenario's parameters can override it.
+//! default q is chosen so that the model's one-sigma spread of ε over one second, √(q·1 s),
+//! equals the largest change of ε the turn makes in one second (the first ramp's
+//! 0.4584 °/s²): q = 0.4584²/1 s ≈ 0.21 (°/s²)²/s = 6.4e-5 rad²/s⁵. `jerk_psd` computes it
+//! from the nominal turn, so a reconfigured profile gets its own, and `tracking.
+//! jerk_psd_deg2_s5` overrides it. A smaller q (Bar-Shalom's per-cycle rule √(q·Δt) ≈ j·Δt
+//! gives 100 times less) makes the filter lag each ramp; a larger one passes more noise
+//! into ε. With this q and σ_z = Δa the filter's time constant on ε is
+//! τ = √(r_ε/q) ≈ 0.01 s (r_ε = (σ_z/r)²·Δt), so on exact readings it lags a ramp by
+//! j·τ ≈ 0.005 °/s², a hundredth of Δε (a unit test holds the filters to twice that).
 //!
 //! **The measurement.** h is `sensors::Accelerometer::clean` of the world's own sensor
 //! configuration (γ, g, r, the centripetal flag, misalignment) without its bias: the gravity

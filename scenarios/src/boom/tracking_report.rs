@@ -279,9 +279,8 @@ fn tracking_comment(s: &BoomSummary) -> String {
             "The bias costs the filters more than the WLS (at γ = {}): a filter reads the a_y \
              bias as an angular acceleration (Δa/r = {:.3} °/s²) and its kinematic model \
              integrates that twice into α{}, while the WLS maps the bias into errors cycle by \
-             cycle (eq. 4) and never accumulates it. Under the paper's error model the \
-             offset γ stays necessary for the WLS, and a filter would need the bias in its \
-             state (not tried here). ",
+             cycle (eq. 4) and never accumulates it; a filter would need the bias in its state \
+             (not tried here). ",
             worse.join(", "),
             (s.params.limiting_error_mps2 / s.params.sensor_radius_m).to_degrees(),
             if late {
@@ -293,6 +292,34 @@ fn tracking_comment(s: &BoomSummary) -> String {
     } else {
         t.push_str("The bias costs the filters no more than the WLS. ");
     }
+    let within = |m: Method| -> Vec<String> {
+        gammas
+            .iter()
+            .filter(|&&g| effect(m, g).is_some_and(|b| b.within_limits))
+            .map(|&g| format!("{}°", fmt_num(g)))
+            .collect()
+    };
+    let (wls_ok, ukf_ok) = (within(Method::Wls), within(Method::Ukf));
+    let at = |v: &[String]| {
+        if v.is_empty() {
+            "at no case γ".to_string()
+        } else {
+            format!("at γ = {}", v.join(", "))
+        }
+    };
+    let _ = write!(
+        t,
+        "Under ±Δa the WLS holds both limits {}, the UKF {}: {}. ",
+        at(&wls_ok),
+        at(&ukf_ok),
+        match (wls_ok.is_empty(), ukf_ok.is_empty()) {
+            (false, true) =>
+                "the paper's cure, the offset γ, is still what makes the estimate usable under its error model",
+            (true, false) => "here the filter is what makes the estimate usable",
+            (false, false) => "both are usable at some case angle",
+            (true, true) => "neither is usable at the case angles",
+        }
+    );
     if let (Some(f), Some(sm)) = (
         effect(Method::Ukf, v.low_gamma_deg),
         effect(Method::Urts, v.low_gamma_deg),
