@@ -150,3 +150,51 @@ class KalmanFilter:
     ) -> Tuple[Array, Array, Array, Array]:
         """(x, P, K, Pp): smoothed means and covariances, smoother gains, predicted
         covariances; K[k] = P[k] F^T Pp[k]^-1 by a solve."""
+
+FilterResult = dict[str, Array]
+
+def filter(
+    F: Array,
+    H: Array,
+    Q: Array,
+    R: Array,
+    x0: Array,
+    P0: Array,
+    zs: Union[Sequence[Any], npt.NDArray[Any]],
+    us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
+    B: Optional[Array] = None,
+    S: Optional[Array] = None,
+    form: str = "joseph",
+) -> FilterResult:
+    """The engine's filter over a whole series in one call.
+
+    (x0, P0) is the prior of the first measurement; step k updates with zs[k] (NaN entries
+    skipped) and predicts to k + 1 with us[k]; S = E[w_k v_k^T] enters the prediction.
+    form: "joseph", "standard" or "sqrt". Returns "x", "P" (x_{k|k}: (N, n), (N, n, n)),
+    "x_pred", "P_pred" (x_{k+1|k}), "log_likelihood" (N,) (0 with no measurement) and
+    "nis" (N,) (NaN with no measurement).
+    """
+
+def smooth(
+    F: Array,
+    H: Array,
+    Q: Array,
+    R: Array,
+    x0: Array,
+    P0: Array,
+    zs: Union[Sequence[Any], npt.NDArray[Any]],
+    us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
+    B: Optional[Array] = None,
+    S: Optional[Array] = None,
+) -> FilterResult:
+    """Rauch-Tung-Striebel smoothing of the engine's filter: "x" (N, n), "P" (N, n, n)."""
+
+def dare(F: Array, H: Array, Q: Array, R: Array, S: Optional[Array] = None) -> FilterResult:
+    """The filter's discrete algebraic Riccati equation: "P" (prior), "P_post", "K",
+    "K_pred", "innovation_cov"."""
+
+def dlqr(A: Array, B: Array, Q: Array, R: Array, N: Optional[Array] = None) -> FilterResult:
+    """Discrete LQR: "K" (u = -K x) and the cost matrix "P"."""
+
+def care(A: Array, H: Array, Q: Array, R: Array) -> FilterResult:
+    """The Kalman-Bucy filter's continuous algebraic Riccati equation: "P" and "K"."""

@@ -14,7 +14,7 @@ use crate::kf_core::{Core, rts};
 
 /// Reads a whole series of vectors (`zs`, `us`): an array (N, len), (N, len, 1), or (N,)
 /// when len = 1, or a sequence whose items are vectors, scalars or None (missing).
-fn read_series(
+pub(crate) fn read_series(
     obj: &Bound<'_, PyAny>,
     name: &str,
     len: usize,

@@ -14,6 +14,7 @@
 
 mod batch;
 mod convert;
+mod engine;
 mod kf;
 mod kf_core;
 mod linalg;
@@ -50,6 +51,11 @@ fn _panic_for_test() -> PyResult<()> {
 #[pymodule]
 fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<kf::KalmanFilter>()?;
+    m.add_function(wrap_pyfunction!(engine::filter, m)?)?;
+    m.add_function(wrap_pyfunction!(engine::smooth, m)?)?;
+    m.add_function(wrap_pyfunction!(engine::dare, m)?)?;
+    m.add_function(wrap_pyfunction!(engine::dlqr, m)?)?;
+    m.add_function(wrap_pyfunction!(engine::care, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_test, m)?)?;
     Ok(())
 }
