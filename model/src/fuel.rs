@@ -222,6 +222,21 @@ pub enum Realisation {
 /// (The paper writes `x_k = A x_{k−1} + B u_{k−1}`; the same u_k enters the state at the next
 /// step and the measurement now, hence the cross-covariance S.)
 ///
+/// # The paper's letters and the workspace's notation
+/// The fields keep the paper's letters so the code reads against its equations; everywhere
+/// else the crate uses the workspace notation ([`crate`] docs), and
+/// [`FuelModel::to_discrete_ss`] gives the model in it:
+///
+/// | paper (field) | workspace notation | meaning |
+/// |---|---|---|
+/// | `A` ([`a`](Self::a)) | `F` | transition, 7×7 |
+/// | `B` ([`b`](Self::b)) | `G` | noise input, 7×3 (u₁…u₃ are the noise `w`) |
+/// | `C` ([`c`](Self::c)) | `H` | measurement, m×7 |
+/// | `D` ([`d`](Self::d)) | `J` | noise feed-through into the measurement, m×3 (not a control `D`) |
+/// | `G` ([`g`](Self::g)) | — | physical outputs y₁…y₅, 5×7 (not a noise input) |
+/// | `Q`, `R`, `S` | `Q`, `R`, `S` | the same |
+/// | known input | `B` with `u ≡ 1` | the mean fill rate V_c |
+///
 /// # Example
 /// ```
 /// use model::{Channels, FuelParams, Realisation};

@@ -72,6 +72,17 @@ pub enum Error {
         /// The library's error.
         source: sensors::Error,
     },
+    /// The interrupt handler could not be installed (one is already set).
+    #[error("cannot install the interrupt handler: {0}")]
+    Interrupt(ctrlc::Error),
+    /// A value could not be serialised for writing.
+    #[error("{path}: cannot serialise: {source}")]
+    Serialise {
+        /// The file it was for.
+        path: PathBuf,
+        /// serde_json's error.
+        source: serde_json::Error,
+    },
     /// A computed model lacks a property the scenario relies on.
     #[error("{0}")]
     Degenerate(&'static str),
@@ -133,6 +144,8 @@ impl Error {
             | Error::Wls { .. }
             | Error::Sensors { .. }
             | Error::Degenerate(_)
+            | Error::Interrupt(_)
+            | Error::Serialise { .. }
             | Error::Threads { .. }
             | Error::Plot { .. } => 1,
             _ => 2,

@@ -51,7 +51,7 @@ fn remove_all(paths: &[PathBuf]) {
 /// Call it once, from the program's `main`.
 ///
 /// # Errors
-/// [`Error::Compute`] if a handler cannot be installed (one is already set).
+/// [`Error::Interrupt`] if a handler cannot be installed (one is already set).
 pub fn remove_partial_files_on_interrupt() -> Result<()> {
     ctrlc::set_handler(|| {
         let open = in_progress();
@@ -59,7 +59,7 @@ pub fn remove_partial_files_on_interrupt() -> Result<()> {
         // Exit while still holding the lock: no write can rename into place after this.
         std::process::exit(INTERRUPTED_EXIT_CODE);
     })
-    .map_err(|e| Error::Compute(format!("cannot install the interrupt handler: {e}")))
+    .map_err(Error::Interrupt)
 }
 
 /// Where a command that writes one file sends it.
@@ -348,10 +348,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// Writes `value` as pretty JSON (with a final newline) whole or not at all.
 ///
 /// # Errors
-/// As [`write_with`]; [`Error::Compute`] if `value` cannot be serialised.
+/// As [`write_with`]; [`Error::Serialise`] if `value` cannot be serialised.
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
-    let mut text = serde_json::to_string_pretty(value)
-        .map_err(|e| Error::Compute(format!("{}: cannot serialise: {e}", path.display())))?;
+    let mut text = serde_json::to_string_pretty(value).map_err(|source| Error::Serialise {
+        path: path.to_path_buf(),
+        source,
+    })?;
     text.push('\n');
     write_atomic(path, text.as_bytes())
 }
@@ -421,9 +423,11 @@ mod tests {
         let dir = scratch("failed");
         let path = dir.join("x.csv");
         let r: Result<()> = write_with(&path, |out| {
-            out.write_all(b"half")
-                .map_err(|e| Error::Compute(e.to_string()))?;
-            Err(Error::Compute("stopped".into()))
+            out.write_all(b"half").map_err(|source| Error::Write {
+                path: path.clone(),
+                source,
+            })?;
+            Err(Error::Degenerate("stopped"))
         });
         assert!(r.is_err());
         assert!(!path.exists());
@@ -441,7 +445,7 @@ mod tests {
     fn failed_write_removes_the_directories_it_created() {
         let dir = scratch("dirs");
         let path = dir.join("new").join("deeper").join("x.csv");
-        let r: Result<()> = write_with(&path, |_| Err(Error::Compute("stopped".into())));
+        let r: Result<()> = write_with(&path, |_| Err(Error::Degenerate("stopped")));
         assert!(r.is_err());
         assert!(!dir.join("new").exists(), "created directories must go");
         assert!(dir.exists(), "an existing directory must stay");
