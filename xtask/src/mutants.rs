@@ -110,6 +110,10 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
         label
     };
     let out = root().join("target").join("mutants").join(&label);
+    // cargo-mutants creates its output directory but not the parents (a fresh clone has no
+    // `target/` yet).
+    std::fs::create_dir_all(root().join("target").join("mutants"))
+        .context("creating target/mutants")?;
     if let Some(s) = shard {
         // Round-robin: shard K takes every N-th mutant, a sample spread over the whole file.
         cmd.args(["--shard", s, "--sharding", "round-robin"]);
