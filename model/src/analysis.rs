@@ -368,7 +368,7 @@ impl ContinuousSs {
         is_observable(self.a(), self.c(), tol)
     }
 
-    /// Frequency response `C (jωI − A)⁻¹ B + D` (m×l).
+    /// Frequency response `C (jωI − A)⁻¹ B + D` (m×p).
     ///
     /// # Errors
     /// [`Error::Singular`] when jω is a pole.
@@ -383,7 +383,7 @@ impl ContinuousSs {
         )
     }
 
-    /// DC gain `D − C A⁻¹ B` (m×l), by a solve.
+    /// DC gain `D − C A⁻¹ B` (m×p), by a solve.
     ///
     /// # Errors
     /// [`Error::Singular`] when `A` is singular (a pole at s = 0).

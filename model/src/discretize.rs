@@ -77,7 +77,7 @@ pub enum NoiseConvention {
     VanLoan,
     /// Mazurenko's convention (fuel-level paper): the noise is held over the step as a white
     /// sequence of variance `W/Δt` and enters through the method's input map: `G_d` and `J` are
-    /// what the method gives for an input matrix `G`, and `Q = W/Δt` (p×p).
+    /// what the method gives for an input matrix `G`, and `Q = W/Δt` (q×q).
     IntensityOverDt,
 }
 
@@ -190,7 +190,7 @@ pub fn van_loan(
     validate::positive("dt", dt)?;
     let n = validate::square("A", a)?;
     validate::shape("G", g, n, g.ncols(), "G must have as many rows as A")?;
-    validate::covariance("W", w, g.ncols(), "W must be p×p with p = columns of G")?;
+    validate::covariance("W", w, g.ncols(), "W must be q×q with q = columns of G")?;
     let gwg = g * w * g.transpose();
     if !gwg.iter().any(|v| v.abs() > 0.0) {
         // No noise enters: Q_d = 0 exactly, and only e^{A·dt} is needed.

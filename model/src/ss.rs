@@ -12,8 +12,8 @@ use crate::validate;
 /// ẋ = A·x + B·u + G·w,     y = C·x + D·u,     E[w(t)w(s)ᵀ] = W·δ(t − s)
 /// ```
 ///
-/// with n states, l control inputs `u`, p white-noise inputs `w` of intensity (spectral
-/// density) `W` (p×p, symmetric PSD) and m outputs. Built by [`ContinuousSs::new`] (no noise)
+/// with n states, p control inputs `u`, q white-noise inputs `w` of intensity (spectral
+/// density) `W` (q×q, symmetric PSD) and m outputs. Built by [`ContinuousSs::new`] (no noise)
 /// and [`ContinuousSs::with_noise`]; every constructor checks shapes, finiteness, and that `W`
 /// is symmetric PSD. Deserialisation runs the same checks.
 ///
@@ -88,7 +88,7 @@ impl ContinuousSs {
         })
     }
 
-    /// A model without control input, `ẋ = A x`, `y = C x` (l = 0): the common start of a
+    /// A model without control input, `ẋ = A x`, `y = C x` (p = 0): the common start of a
     /// filtering model; add noise with [`ContinuousSs::with_noise`] and, if there is one, a
     /// control input with [`ContinuousSs::with_input`].
     ///
@@ -113,7 +113,7 @@ impl ContinuousSs {
         Self::new(a, DMatrix::zeros(n, 0), c, DMatrix::zeros(m, 0))
     }
 
-    /// Sets the control input `B·u` (n×l) with a zero feed-through `D` (m×l), replacing any
+    /// Sets the control input `B·u` (n×p) with a zero feed-through `D` (m×p), replacing any
     /// earlier input; [`ContinuousSs::with_feedthrough`] sets a non-zero `D` afterwards.
     ///
     /// # Errors
@@ -140,7 +140,7 @@ impl ContinuousSs {
         Ok(self)
     }
 
-    /// Sets the control feed-through `D` (m×l, l from the input set before).
+    /// Sets the control feed-through `D` (m×p, p from the input set before).
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] when `D` is not (rows of C)×(columns of B),
@@ -172,12 +172,12 @@ impl ContinuousSs {
     /// Adds the noise input `G·w` with white-noise intensity `W` (replacing any earlier one).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] when `G` has the wrong number of rows or `W` is not p×p,
+    /// [`Error::DimensionMismatch`] when `G` has the wrong number of rows or `W` is not q×q,
     /// [`Error::NonFiniteMatrix`], [`Error::NotSymmetric`], [`Error::NotPositiveSemiDefinite`].
     pub fn with_noise(mut self, g: DMatrix<f64>, w: DMatrix<f64>) -> Result<Self> {
         let n = self.a.nrows();
         validate::shape("G", &g, n, g.ncols(), "G must have as many rows as A")?;
-        validate::covariance("W", &w, g.ncols(), "W must be p×p with p = columns of G")?;
+        validate::covariance("W", &w, g.ncols(), "W must be q×q with q = columns of G")?;
         self.g = g;
         self.w = w;
         Ok(self)
@@ -187,7 +187,7 @@ impl ContinuousSs {
     pub fn a(&self) -> &DMatrix<f64> {
         &self.a
     }
-    /// Control input matrix `B` (n×l).
+    /// Control input matrix `B` (n×p).
     pub fn b(&self) -> &DMatrix<f64> {
         &self.b
     }
@@ -195,15 +195,15 @@ impl ContinuousSs {
     pub fn c(&self) -> &DMatrix<f64> {
         &self.c
     }
-    /// Feed-through `D` (m×l).
+    /// Feed-through `D` (m×p).
     pub fn d(&self) -> &DMatrix<f64> {
         &self.d
     }
-    /// Noise input matrix `G` (n×p).
+    /// Noise input matrix `G` (n×q).
     pub fn g(&self) -> &DMatrix<f64> {
         &self.g
     }
-    /// White-noise intensity `W` (p×p).
+    /// White-noise intensity `W` (q×q).
     pub fn w(&self) -> &DMatrix<f64> {
         &self.w
     }
@@ -211,11 +211,11 @@ impl ContinuousSs {
     pub fn n_states(&self) -> usize {
         self.a.nrows()
     }
-    /// Number of control inputs l.
+    /// Number of control inputs p.
     pub fn n_inputs(&self) -> usize {
         self.b.ncols()
     }
-    /// Number of noise inputs p.
+    /// Number of noise inputs q.
     pub fn n_noise(&self) -> usize {
         self.g.ncols()
     }
@@ -231,7 +231,7 @@ impl ContinuousSs {
 /// x_{k+1} = F·x_k + B·u_k + G·w_k,     y_k = H·x_k + D·u_k + J·w_k,     cov(w_k) = Q
 /// ```
 ///
-/// with n states, l control inputs, p noise inputs (`w_k` white, zero mean, covariance `Q`,
+/// with n states, p control inputs, q noise inputs (`w_k` white, zero mean, covariance `Q`,
 /// symmetric PSD) and m outputs. `J` is the noise feed-through (it arises from Tustin or from
 /// the paper's shaping filters, where the same `w_k` drives the state and the output: the
 /// cross-covariance of process and output noise is then `G·Q·Jᵀ`).
@@ -317,7 +317,7 @@ impl DiscreteSs {
         })
     }
 
-    /// A model without control input, `x_{k+1} = F x_k`, `y_k = H x_k` (l = 0); add noise
+    /// A model without control input, `x_{k+1} = F x_k`, `y_k = H x_k` (p = 0); add noise
     /// with [`DiscreteSs::with_noise`] and a control input with [`DiscreteSs::with_input`].
     ///
     /// # Errors
@@ -340,7 +340,7 @@ impl DiscreteSs {
         Self::new(f, DMatrix::zeros(n, 0), h, DMatrix::zeros(m, 0), dt)
     }
 
-    /// Sets the control input `B·u_k` (n×l) with a zero feed-through `D` (m×l), replacing
+    /// Sets the control input `B·u_k` (n×p) with a zero feed-through `D` (m×p), replacing
     /// any earlier input; [`DiscreteSs::with_feedthrough`] sets a non-zero `D` afterwards.
     ///
     /// # Errors
@@ -366,7 +366,7 @@ impl DiscreteSs {
         Ok(self)
     }
 
-    /// Sets the control feed-through `D` (m×l, l from the input set before).
+    /// Sets the control feed-through `D` (m×p, p from the input set before).
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] when `D` is not (rows of H)×(columns of B),
@@ -399,7 +399,7 @@ impl DiscreteSs {
     /// Adds the noise input: `G·w_k` in the state, `J·w_k` in the output, `cov(w_k) = Q`.
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`] for `G` (n×p), `J` (m×p) or `Q` (p×p),
+    /// [`Error::DimensionMismatch`] for `G` (n×q), `J` (m×q) or `Q` (q×q),
     /// [`Error::NonFiniteMatrix`], [`Error::NotSymmetric`], [`Error::NotPositiveSemiDefinite`].
     pub fn with_noise(mut self, g: DMatrix<f64>, j: DMatrix<f64>, q: DMatrix<f64>) -> Result<Self> {
         let n = self.f.nrows();
@@ -412,7 +412,7 @@ impl DiscreteSs {
             g.ncols(),
             "J must be (rows of H)×(columns of G)",
         )?;
-        validate::covariance("Q", &q, g.ncols(), "Q must be p×p with p = columns of G")?;
+        validate::covariance("Q", &q, g.ncols(), "Q must be q×q with q = columns of G")?;
         self.g = g;
         self.j = j;
         self.q = q;
@@ -423,7 +423,7 @@ impl DiscreteSs {
     pub fn f(&self) -> &DMatrix<f64> {
         &self.f
     }
-    /// Control input matrix `B` (n×l).
+    /// Control input matrix `B` (n×p).
     pub fn b(&self) -> &DMatrix<f64> {
         &self.b
     }
@@ -431,19 +431,19 @@ impl DiscreteSs {
     pub fn h(&self) -> &DMatrix<f64> {
         &self.h
     }
-    /// Control feed-through `D` (m×l).
+    /// Control feed-through `D` (m×p).
     pub fn d(&self) -> &DMatrix<f64> {
         &self.d
     }
-    /// Noise input matrix `G` (n×p).
+    /// Noise input matrix `G` (n×q).
     pub fn g(&self) -> &DMatrix<f64> {
         &self.g
     }
-    /// Noise feed-through `J` (m×p).
+    /// Noise feed-through `J` (m×q).
     pub fn j(&self) -> &DMatrix<f64> {
         &self.j
     }
-    /// Noise covariance `Q = cov(w_k)` (p×p).
+    /// Noise covariance `Q = cov(w_k)` (q×q).
     pub fn q(&self) -> &DMatrix<f64> {
         &self.q
     }
@@ -455,11 +455,11 @@ impl DiscreteSs {
     pub fn n_states(&self) -> usize {
         self.f.nrows()
     }
-    /// Number of control inputs l.
+    /// Number of control inputs p.
     pub fn n_inputs(&self) -> usize {
         self.b.ncols()
     }
-    /// Number of noise inputs p.
+    /// Number of noise inputs q.
     pub fn n_noise(&self) -> usize {
         self.g.ncols()
     }
