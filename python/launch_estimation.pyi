@@ -198,3 +198,31 @@ def dlqr(A: Array, B: Array, Q: Array, R: Array, N: Optional[Array] = None) -> F
 
 def care(A: Array, H: Array, Q: Array, R: Array) -> FilterResult:
     """The Kalman-Bucy filter's continuous algebraic Riccati equation: "P" and "K"."""
+
+def c2d(
+    A: Array,
+    B: Array,
+    C: Array,
+    D: Array,
+    dt: float,
+    method: str = "zoh",
+    G: Optional[Array] = None,
+    W: Optional[Array] = None,
+    noise: str = "van_loan",
+    omega: Optional[float] = None,
+) -> FilterResult:
+    """Discretise dx = (A x + B u) dt + G dbeta (cov dbeta = W dt), y = C x + D u.
+
+    method: "zoh", "tustin", "tustin_prewarp" (needs omega, rad/s), "forward_euler",
+    "backward_euler". Returns "F", "B", "H", "D", and with G and W: "G", "J", "Q"
+    (noise "van_loan": Q = int_0^dt e^{A t} G W G^T e^{A^T t} dt, G_d = I; or
+    "intensity_over_dt": Q = W / dt through the mapped G).
+    """
+
+def fuel_model(
+    channels: str = "level_and_tilt", realisation: str = "paper", dt: Optional[float] = None
+) -> dict[str, Any]:
+    """The paper's 7-state fuel-level model (default parameters): "F", "B" (noise input),
+    "H", "D", "Q" (noise covariance), "R", "S" (E[w_k v_k^T]), "Qw" (B Q B^T),
+    "known_input", "dt". channels: "level_and_tilt" or "level_only"; realisation: "paper",
+    "exact_tustin" or "zoh"."""

@@ -18,6 +18,7 @@ mod engine;
 mod kf;
 mod kf_core;
 mod linalg;
+mod model_fns;
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -56,6 +57,8 @@ fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(engine::dare, m)?)?;
     m.add_function(wrap_pyfunction!(engine::dlqr, m)?)?;
     m.add_function(wrap_pyfunction!(engine::care, m)?)?;
+    m.add_function(wrap_pyfunction!(model_fns::c2d, m)?)?;
+    m.add_function(wrap_pyfunction!(model_fns::fuel_model, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_test, m)?)?;
     Ok(())
 }
