@@ -226,3 +226,21 @@ def fuel_model(
     "H", "D", "Q" (noise covariance), "R", "S" (E[w_k v_k^T]), "Qw" (B Q B^T),
     "known_input", "dt". channels: "level_and_tilt" or "level_only"; realisation: "paper",
     "exact_tustin" or "zoh"."""
+
+def wls(
+    H: Array,
+    z: Array,
+    weights: Optional[Array] = None,
+    method: str = "qr",
+    scale_covariance: bool = False,
+    rank_tolerance: Optional[float] = None,
+    tikhonov: Optional[float] = None,
+    prior_mean: Optional[Array] = None,
+    operator: Optional[Array] = None,
+) -> dict[str, Any]:
+    """Weighted least squares min ||V^(1/2) (H x - z)||^2 (+ lambda ||L (x - x_p)||^2) by QR
+    of the whitened problem ("normal_equations" for comparison). weights V: None, a 1-d
+    array (diagonal) or a 2-d SPD matrix. Returns "x", "covariance", "residuals",
+    "weighted_sum_of_squares", "residual_variance", "singular_values",
+    "condition_weighted", "condition_normal", "condition_solved", "rank", "rank_tolerance".
+    A rank-deficient problem without tikhonov is a ValueError."""
