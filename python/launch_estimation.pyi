@@ -244,3 +244,36 @@ def wls(
     "weighted_sum_of_squares", "residual_variance", "singular_values",
     "condition_weighted", "condition_normal", "condition_solved", "rank", "rank_tolerance".
     A rank-deficient problem without tikhonov is a ValueError."""
+
+def ekf(
+    f: Any,
+    h: Any,
+    Q: Array,
+    R: Array,
+    x0: Array,
+    P0: Array,
+    zs: Union[Sequence[Any], npt.NDArray[Any]],
+    us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
+    iterations: int = 0,
+    tolerance: float = 1e-9,
+) -> FilterResult:
+    """Extended Kalman filter over callables f(x, u, k) -> (n,) and h(x, k) -> (m,), with
+    Jacobians by central differences; iterations > 0 for the iterated EKF. Returns the same
+    keys as ``filter``. An exception raised by f or h propagates unchanged."""
+
+def ukf(
+    f: Any,
+    h: Any,
+    Q: Array,
+    R: Array,
+    x0: Array,
+    P0: Array,
+    zs: Union[Sequence[Any], npt.NDArray[Any]],
+    us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
+    points: str = "merwe",
+    alpha: float = 1e-3,
+    beta: float = 2.0,
+    kappa: float = 0.0,
+) -> FilterResult:
+    """Unscented Kalman filter (Merwe's scaled sigma points or "cubature") over callables
+    f(x, u, k) and h(x, k). Returns the same keys as ``filter``."""

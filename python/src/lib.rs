@@ -19,6 +19,7 @@ mod kf;
 mod kf_core;
 mod linalg;
 mod model_fns;
+mod nonlinear;
 mod wls_fns;
 
 use pyo3::exceptions::PyRuntimeError;
@@ -61,6 +62,8 @@ fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(model_fns::c2d, m)?)?;
     m.add_function(wrap_pyfunction!(model_fns::fuel_model, m)?)?;
     m.add_function(wrap_pyfunction!(wls_fns::wls, m)?)?;
+    m.add_function(wrap_pyfunction!(nonlinear::ekf, m)?)?;
+    m.add_function(wrap_pyfunction!(nonlinear::ukf, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_test, m)?)?;
     Ok(())
 }

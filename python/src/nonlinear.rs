@@ -1,0 +1,249 @@
+//! The engine's nonlinear filters from Python: `ekf` (Jacobians by central differences) and
+//! `ukf` (Merwe or cubature sigma points) over Python callables f(x, u, k) and h(x, k), one
+//! call for the whole series. An exception raised by a callable is re-raised as it is; a
+//! return value of the wrong shape is a `ValueError` naming the callable.
+#![allow(non_snake_case)]
+
+use std::cell::RefCell;
+
+use kalman::DynDims;
+use kalman::faer::Mat;
+use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, Ukf};
+use numpy::ndarray::{Array1, Array2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::{array3_out, copy_finite, float_array, read_vector, shape_str, value_error};
+use crate::guard;
+
+/// A 2-d float array argument as a faer matrix.
+fn mat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Mat<f64>> {
+    let arr = float_array(obj, name)?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    let [r, c] = view.shape() else {
+        return Err(value_error(format!(
+            "{name} has shape {}, expected a 2-d array",
+            shape_str(view.shape())
+        )));
+    };
+    let (r, c) = (*r, *c);
+    let mut buf = vec![0.0; r * c];
+    copy_finite(&view, name, &mut buf)?;
+    Ok(Mat::from_fn(r, c, |i, j| buf[i * c + j]))
+}
+
+/// Calls `func(*args)` and reads its result as a vector of length `len` into `out`; on any
+/// failure keeps the first error in `slot` and writes NaN (which the engine then refuses).
+fn call_into<'py>(
+    slot: &RefCell<Option<PyErr>>,
+    name: &str,
+    len: usize,
+    out: &mut [f64],
+    call: impl FnOnce() -> PyResult<Bound<'py, PyAny>>,
+) {
+    if slot.borrow().is_some() {
+        out.fill(f64::NAN);
+        return;
+    }
+    let res = call().and_then(|v| read_vector(&v, name, len, true, false, out));
+    if let Err(e) = res {
+        *slot.borrow_mut() = Some(e);
+        out.fill(f64::NAN);
+    }
+}
+
+/// Which nonlinear filter to run.
+enum Kind {
+    Ekf(EkfUpdate),
+    Ukf(SigmaPoints),
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run<'py>(
+    py: Python<'py>,
+    kind: Kind,
+    context: &str,
+    f: &Bound<'py, PyAny>,
+    h: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    us: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    for (name, c) in [("f", f), ("h", h)] {
+        if !c.is_callable() {
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "{name} must be callable, not {}",
+                crate::convert::type_name(c)
+            )));
+        }
+    }
+    let (Q, R) = (mat(Q, "Q")?, mat(R, "R")?);
+    let (n, m) = (Q.nrows(), R.nrows());
+    let mut x0v = vec![0.0; n];
+    read_vector(x0, "x0", n, false, false, &mut x0v)?;
+    let P0 = mat(P0, "P0")?;
+    let (steps, z) = crate::batch::read_series(zs, "zs", m, true)?;
+    let (p, u) = match us {
+        Some(us) if !us.is_none() => {
+            let arr = float_array(us, "us")?;
+            let p = match arr.shape() {
+                [_, p] => *p,
+                [_] => 1,
+                s => {
+                    return Err(value_error(format!(
+                        "us has shape {}, expected (N, p)",
+                        shape_str(s)
+                    )));
+                }
+            };
+            let (k, u) = crate::batch::read_series(us, "us", p, false)?;
+            if k != steps {
+                return Err(value_error(format!("us has {k} steps but zs has {steps}")));
+            }
+            (p, Some(u))
+        }
+        _ => (0, None),
+    };
+    let err = |e: kalman::Error| value_error(format!("{context}: {e}"));
+    let dims = DynDims::new(n, m, p).map_err(err)?;
+    let slot: RefCell<Option<PyErr>> = RefCell::new(None);
+    let fcall = |x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]| {
+        call_into(&slot, "the value of f(x, u, k)", n, out, || {
+            let xa = PyArray1::from_slice(py, x);
+            let ua = u.map(|u| PyArray1::from_slice(py, u));
+            f.call1((xa, ua, k))
+        });
+    };
+    let hcall = |x: &[f64], k: usize, out: &mut [f64]| {
+        call_into(&slot, "the value of h(x, k)", m, out, || {
+            h.call1((PyArray1::from_slice(py, x), k))
+        });
+    };
+    let model = FnModel::new(dims, fcall, hcall, &Q, &R).map_err(err)?;
+    let nn = n * n;
+    let (mut xs, mut ps) = (vec![0.0; steps * n], vec![0.0; steps * nn]);
+    let (mut xp, mut pp) = (vec![0.0; steps * n], vec![0.0; steps * nn]);
+    let (mut ll, mut nis) = (vec![0.0; steps], vec![f64::NAN; steps]);
+    macro_rules! drive {
+        ($filter:expr) => {{
+            let mut flt = $filter;
+            for k in 0..steps {
+                let uk = u.as_ref().map(|u| &u[k * p..(k + 1) * p]);
+                let info = match flt.step(&z[k * m..(k + 1) * m], uk) {
+                    Ok(info) => info,
+                    Err(e) => {
+                        return Err(slot.borrow_mut().take().unwrap_or_else(|| err(e)));
+                    }
+                };
+                if let Some(e) = slot.borrow_mut().take() {
+                    return Err(e);
+                }
+                xs[k * n..(k + 1) * n].copy_from_slice(flt.state());
+                xp[k * n..(k + 1) * n].copy_from_slice(flt.predicted_state());
+                let (c, d) = (flt.covariance(), flt.predicted_covariance());
+                for i in 0..n {
+                    for j in 0..n {
+                        ps[k * nn + i * n + j] = c[(i, j)];
+                        pp[k * nn + i * n + j] = d[(i, j)];
+                    }
+                }
+                ll[k] = info.log_likelihood;
+                nis[k] = info.nis.unwrap_or(f64::NAN);
+            }
+        }};
+    }
+    match kind {
+        Kind::Ekf(update) => {
+            drive!(Ekf::new(dims, CentralDiff::new(model, dims), &x0v, &P0, update).map_err(err)?)
+        }
+        Kind::Ukf(points) => drive!(Ukf::new(dims, model, &x0v, &P0, points).map_err(err)?),
+    }
+    let o = PyDict::new(py);
+    let v2 = |v: Vec<f64>| {
+        PyArray2::from_owned_array(
+            py,
+            Array2::from_shape_vec((steps, n), v).unwrap_or_else(|_| Array2::zeros((0, n))),
+        )
+    };
+    o.set_item("x", v2(xs))?;
+    o.set_item("P", array3_out(py, ps, steps, n, n))?;
+    o.set_item("x_pred", v2(xp))?;
+    o.set_item("P_pred", array3_out(py, pp, steps, n, n))?;
+    o.set_item(
+        "log_likelihood",
+        PyArray1::from_owned_array(py, Array1::from_vec(ll)),
+    )?;
+    o.set_item("nis", PyArray1::from_owned_array(py, Array1::from_vec(nis)))?;
+    Ok(o)
+}
+
+/// ekf(f, h, Q, R, x0, P0, zs, us=None, iterations=0, tolerance=1e-9) → dict as `filter`:
+/// the extended Kalman filter with Jacobians by central differences; f(x, u, k) returns
+/// the next state (u is None without us), h(x, k) the predicted measurement. iterations
+/// > 0 selects the iterated EKF (Gauss–Newton updates, at most that many).
+#[pyfunction]
+#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, iterations = 0, tolerance = 1e-9))]
+pub(crate) fn ekf<'py>(
+    py: Python<'py>,
+    f: &Bound<'py, PyAny>,
+    h: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    us: Option<&Bound<'py, PyAny>>,
+    iterations: usize,
+    tolerance: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        let update = if iterations == 0 {
+            EkfUpdate::Extended
+        } else {
+            EkfUpdate::Iterated {
+                max_iterations: iterations,
+                tolerance,
+            }
+        };
+        run(py, Kind::Ekf(update), "ekf", f, h, Q, R, x0, P0, zs, us)
+    })
+}
+
+/// ukf(f, h, Q, R, x0, P0, zs, us=None, points="merwe", alpha=1e-3, beta=2.0, kappa=0.0)
+/// → dict as `filter`: the unscented Kalman filter with Merwe's scaled sigma points or
+/// the cubature rule (points="cubature").
+#[pyfunction]
+#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, points = "merwe", alpha = 1e-3, beta = 2.0, kappa = 0.0))]
+pub(crate) fn ukf<'py>(
+    py: Python<'py>,
+    f: &Bound<'py, PyAny>,
+    h: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    us: Option<&Bound<'py, PyAny>>,
+    points: &str,
+    alpha: f64,
+    beta: f64,
+    kappa: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        let points = match points {
+            "merwe" => SigmaPoints::Merwe { alpha, beta, kappa },
+            "cubature" => SigmaPoints::Cubature,
+            other => {
+                return Err(value_error(format!(
+                    "points = {other:?}; expected \"merwe\" or \"cubature\""
+                )));
+            }
+        };
+        run(py, Kind::Ukf(points), "ukf", f, h, Q, R, x0, P0, zs, us)
+    })
+}
