@@ -277,3 +277,24 @@ def ukf(
 ) -> FilterResult:
     """Unscented Kalman filter (Merwe's scaled sigma points or "cubature") over callables
     f(x, u, k) and h(x, k). Returns the same keys as ``filter``."""
+
+def fit(
+    F: Array,
+    H: Array,
+    Q: Array,
+    R: Array,
+    x0: Array,
+    P0: Array,
+    zs: Union[Sequence[Any], npt.NDArray[Any]],
+    method: str = "em",
+    q: str = "diag",
+    r: str = "diag",
+    free_x0: bool = False,
+    free_p0_diag: bool = False,
+    max_iter: Optional[int] = None,
+) -> dict[str, Any]:
+    """Learn Q and R (optionally x0 and a diagonal P0) from data by "em" (Shumway-Stoffer)
+    or "mle" (L-BFGS with the exact score). q, r: "fixed", "scalar", "diag" or "full".
+    F and H stay at the given values; the given Q, R, x0, P0 are the starting point.
+    Returns the fitted "F", "H", "Q", "R", "x0", "P0" and "loglik", "iterations",
+    "converged", "message", "boundary", "theta", "std_errors", "aic", "bic"."""

@@ -15,6 +15,7 @@
 mod batch;
 mod convert;
 mod engine;
+mod fit_fns;
 mod kf;
 mod kf_core;
 mod linalg;
@@ -64,6 +65,7 @@ fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(wls_fns::wls, m)?)?;
     m.add_function(wrap_pyfunction!(nonlinear::ekf, m)?)?;
     m.add_function(wrap_pyfunction!(nonlinear::ukf, m)?)?;
+    m.add_function(wrap_pyfunction!(fit_fns::fit, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_test, m)?)?;
     Ok(())
 }

@@ -1,0 +1,148 @@
+//! `kalman::fit` from Python: `fit` learns Q, R (and optionally x0 and a diagonal P0) of a
+//! linear Gaussian model from data by EM or maximum likelihood, with standard errors and
+//! information criteria; fit errors become `ValueError`s.
+#![allow(non_snake_case)]
+
+use kalman::faer::{Mat, MatRef};
+use kalman::fit::{EmOptions, Free, MleOptions, Series, StandardMap, Structure, System, em, mle};
+use numpy::ndarray::Array2;
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::{copy_finite, float_array, read_vector, shape_str, value_error};
+use crate::guard;
+
+fn mat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Mat<f64>> {
+    let arr = float_array(obj, name)?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    let [r, c] = view.shape() else {
+        return Err(value_error(format!(
+            "{name} has shape {}, expected a 2-d array",
+            shape_str(view.shape())
+        )));
+    };
+    let (r, c) = (*r, *c);
+    let mut buf = vec![0.0; r * c];
+    copy_finite(&view, name, &mut buf)?;
+    Ok(Mat::from_fn(r, c, |i, j| buf[i * c + j]))
+}
+
+fn out<'py>(py: Python<'py>, m: MatRef<'_, f64>) -> Bound<'py, PyArray2<f64>> {
+    PyArray2::from_owned_array(
+        py,
+        Array2::from_shape_fn((m.nrows(), m.ncols()), |(i, j)| m[(i, j)]),
+    )
+}
+
+fn structure(s: &str, name: &str) -> PyResult<Structure> {
+    Ok(match s {
+        "fixed" => Structure::Fixed,
+        "scalar" => Structure::Scalar,
+        "diag" => Structure::Diag,
+        "full" => Structure::Full,
+        other => {
+            return Err(value_error(format!(
+                "{name} = {other:?}; expected \"fixed\", \"scalar\", \"diag\" or \"full\""
+            )));
+        }
+    })
+}
+
+/// fit(F, H, Q, R, x0, P0, zs, method="em", q="diag", r="diag", free_x0=False,
+/// free_p0_diag=False, max_iter=None) → dict with the fitted "F", "H", "Q", "R", "x0",
+/// "P0", "loglik", "iterations", "converged", "message", "boundary" (parameters on a
+/// variance boundary), "theta", "std_errors" (observed information; None when singular),
+/// "aic", "bic". Q and R are freed as "scalar" (σ²·I), "diag", "full" (Cholesky with a
+/// log-diagonal) or kept "fixed"; F, H are kept at the given values; the given Q, R, x0,
+/// P0 are the starting point. method "em" (Shumway–Stoffer) or "mle" (L-BFGS with the
+/// exact score, Nelder–Mead fallback). zs: (N, m), NaN for missing entries.
+#[pyfunction]
+#[pyo3(signature = (F, H, Q, R, x0, P0, zs, method = "em", q = "diag", r = "diag", free_x0 = false, free_p0_diag = false, max_iter = None))]
+pub(crate) fn fit<'py>(
+    py: Python<'py>,
+    F: &Bound<'py, PyAny>,
+    H: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    method: &str,
+    q: &str,
+    r: &str,
+    free_x0: bool,
+    free_p0_diag: bool,
+    max_iter: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        let (F, H, Q, R, P0) = (
+            mat(F, "F")?,
+            mat(H, "H")?,
+            mat(Q, "Q")?,
+            mat(R, "R")?,
+            mat(P0, "P0")?,
+        );
+        let (n, m) = (F.nrows(), H.nrows());
+        let mut x0v = vec![0.0; n];
+        read_vector(x0, "x0", n, false, false, &mut x0v)?;
+        let err = |e: kalman::fit::FitError| value_error(format!("fit: {e}"));
+        let base = System::new(&F, &H, &Q, &R, &x0v, &P0).map_err(err)?;
+        let free = Free {
+            q: structure(q, "q")?,
+            r: structure(r, "r")?,
+            x0: free_x0,
+            p0_diag: free_p0_diag,
+        };
+        let map = StandardMap::new(base, free).map_err(err)?;
+        let (_, z) = crate::batch::read_series(zs, "zs", m, true)?;
+        let data = Series::new(&z, m).map_err(err)?;
+        let result = match method {
+            "em" => {
+                let mut opts = EmOptions::default();
+                if let Some(k) = max_iter {
+                    opts.max_iter = k;
+                }
+                em(&map, &data, &opts).map_err(err)?
+            }
+            "mle" => {
+                let mut opts = MleOptions::default();
+                if let Some(k) = max_iter {
+                    opts.max_iter = k as u64;
+                }
+                let theta0 = map.theta_of(map.base(), Some(&data));
+                mle(&map, theta0, &data, &opts).map_err(err)?
+            }
+            other => {
+                return Err(value_error(format!(
+                    "method = {other:?}; expected \"em\" or \"mle\""
+                )));
+            }
+        };
+        let s = &result.system;
+        let o = PyDict::new(py);
+        o.set_item("F", out(py, s.F.as_ref()))?;
+        o.set_item("H", out(py, s.H.as_ref()))?;
+        o.set_item("Q", out(py, s.Q.as_ref()))?;
+        o.set_item("R", out(py, s.R.as_ref()))?;
+        o.set_item("x0", PyArray1::from_slice(py, &s.x0))?;
+        o.set_item("P0", out(py, s.P0.as_ref()))?;
+        o.set_item("loglik", result.loglik)?;
+        o.set_item("iterations", result.iterations)?;
+        o.set_item("converged", result.converged)?;
+        o.set_item("message", result.message.replace('\n', " "))?;
+        o.set_item("boundary", result.boundary.clone())?;
+        o.set_item("theta", PyArray1::from_slice(py, &result.theta))?;
+        o.set_item(
+            "std_errors",
+            result
+                .std_errors
+                .as_ref()
+                .map(|v| PyArray1::from_slice(py, v)),
+        )?;
+        o.set_item("aic", result.aic)?;
+        o.set_item("bic", result.bic)?;
+        Ok(o)
+    })
+}
