@@ -34,6 +34,10 @@
 //! - [`nonlinear`]: the extended (also iterated) and unscented Kalman filters and their
 //!   Rauch–Tung–Striebel smoothers, with Jacobians by hand, by automatic differentiation
 //!   (feature `autodiff`) or by central differences.
+//! - [`diagnostics`]: is the model right? NIS with its χ² bands, innovation
+//!   autocorrelation and the Ljung–Box test, Welch's power spectral density.
+//! - [`fit`]: learning the model from data — exact log-likelihood and its gradient,
+//!   maximum likelihood, EM, standard errors.
 //! - [`schedule`]: the Monte Carlo mode — the data-independent gain sequence computed once
 //!   ([`schedule::GainSchedule`]) and many measurement streams run at the cost of the state
 //!   update alone; also the fixed-gain filter.
@@ -99,6 +103,7 @@
 
 mod consistency;
 pub mod continuous;
+pub mod diagnostics;
 mod error;
 mod filter;
 pub mod fit;
@@ -112,7 +117,7 @@ mod storage;
 #[cfg(feature = "proptest")]
 pub mod strategies;
 
-pub use consistency::{Nees, chi2_cdf, chi2_quantile, nees};
+pub use consistency::{Nees, chi2_cdf, chi2_quantile, chi2_sf, nees};
 pub use error::Error;
 pub use filter::{CovarianceForm, Filter, StepInfo};
 pub use kernels::{FAER_THRESHOLD, PARALLEL_THRESHOLD, RANK_TOL};

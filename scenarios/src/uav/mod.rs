@@ -10,8 +10,8 @@
 //!
 //! Layout (the same in every scenario): [`parameters`], [`simulation`] (design and one
 //! closed-loop run), [`records`] (`runs.csv`, the ground truth), [`summary`] (every number)
-//! and [`report`] (formatting only); [`spectrum`] holds the FFT, Welch PSD,
-//! autocorrelation and Ljung–Box test.
+//! and [`report`] (formatting only); the Welch PSD, autocorrelation and Ljung–Box test are
+//! `kalman::diagnostics`'.
 //!
 //! **Control law.** `kalman::Filter::step` updates with z_k and then predicts with u_k in
 //! one call, so u_k is computed before z_k is processed, from the one-step prediction
@@ -26,7 +26,6 @@ pub mod parameters;
 pub mod records;
 pub mod report;
 pub mod simulation;
-pub mod spectrum;
 pub mod summary;
 
 use std::path::Path;

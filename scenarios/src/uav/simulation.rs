@@ -4,6 +4,7 @@
 //! their records.
 
 use faer::{Mat, MatRef};
+use kalman::diagnostics as spectrum;
 use kalman::{CovarianceForm, FixedDims, FixedFilter, Model};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rand::RngExt;
@@ -11,7 +12,6 @@ use rand_distr::StandardNormal;
 
 use super::parameters::UavParams;
 use super::records::RunRecord;
-use super::spectrum;
 use crate::error::{Error, Result};
 use crate::montecarlo::{Shard, par_runs, run_rng};
 

@@ -2,6 +2,7 @@
 //! check, run 0's signals and spectra, and the Monte Carlo aggregates recomputed from the run
 //! records — every number the report shows.
 
+use kalman::diagnostics as spectrum;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
@@ -10,8 +11,7 @@ use super::records::RunRecord;
 use super::simulation::{
     Trace, arr22, continuous, design, kalman_err, model_err, simulate, to_faer,
 };
-use super::spectrum;
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// Monte Carlo aggregates, recomputed from the run records by both `run` and `merge`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -305,7 +305,8 @@ pub fn summarise(p: &UavParams, seed: u64, run_records: &[RunRecord]) -> Result<
     let fs = 1.0 / p.dt_s;
     let seg = p.welch_segment;
     let col = |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..trace.t.len()).map(f).collect() };
-    let welch = |x: &[f64]| spectrum::welch(x, fs, seg);
+    let welch =
+        |x: &[f64]| spectrum::welch(x, fs, seg).map_err(|e| Error::Compute(format!("welch: {e}")));
     let q11 = d.q[(0, 0)];
     let sigma = d.h[(0, 0)].powi(2) * d.p_prior[(0, 0)] + d.r;
     let mut spectra = Vec::new();

@@ -1,23 +1,41 @@
-//! Spectral and whiteness tools for the reports: an in-place radix-2 FFT, Welch's averaged
-//! periodogram (one-sided PSD in units²/Hz), the sample autocorrelation and the Ljung–Box
-//! portmanteau statistic.
+//! Spectra: an in-place radix-2 FFT and Welch's averaged periodogram (one-sided PSD).
 
 use std::f64::consts::PI;
 
-use crate::error::{Error, Result};
+use crate::Error;
 
-/// In-place iterative radix-2 decimation-in-time FFT, X_k = Σ x_n e^{−2πikn/N}, of the
+/// In-place iterative radix-2 decimation-in-time FFT, `X_k = Σ x_n e^{−2πikn/N}`, of the
 /// complex sequence (`re`, `im`).
 ///
 /// # Errors
-/// [`Error::Compute`] if the lengths differ or are not a power of two.
-pub fn fft(re: &mut [f64], im: &mut [f64]) -> Result<()> {
+/// [`Error::Shape`] naming `im` if the lengths differ; [`Error::Dimension`] naming `N` if
+/// the length is not a power of two.
+///
+/// # Example
+/// ```
+/// // The transform of a unit impulse is flat.
+/// let (mut re, mut im) = (vec![1.0, 0.0, 0.0, 0.0], vec![0.0; 4]);
+/// kalman::diagnostics::fft(&mut re, &mut im)?;
+/// assert!(re.iter().all(|v| (v - 1.0).abs() < 1e-15) && im.iter().all(|v| v.abs() < 1e-15));
+/// # Ok::<(), kalman::Error>(())
+/// ```
+pub fn fft(re: &mut [f64], im: &mut [f64]) -> Result<(), Error> {
     let n = re.len();
-    if im.len() != n || !n.is_power_of_two() {
-        return Err(Error::Compute(format!(
-            "fft: re has length {n}, im {}; both must be the same power of two",
-            im.len()
-        )));
+    if im.len() != n {
+        return Err(Error::Shape {
+            name: "im",
+            rows: im.len(),
+            cols: 1,
+            expected_rows: n,
+            expected_cols: 1,
+        });
+    }
+    if !n.is_power_of_two() {
+        return Err(Error::Dimension {
+            name: "N",
+            value: n,
+            rule: "the FFT length must be a power of two",
+        });
     }
     // Bit-reversal permutation.
     let mut j = 0;
@@ -67,27 +85,44 @@ pub struct Psd {
 
 /// Welch's method: Hann-windowed segments of `segment` samples (a power of two) with 50 %
 /// overlap, each with its mean removed, periodograms averaged, scaled to a one-sided density
-/// at sampling frequency `fs`: P(f_k) = c·|X_k|²/(fs·Σw²) with c = 2 except at 0 and fs/2.
+/// at sampling frequency `fs`: `P(f_k) = c·|X_k|²/(fs·Σw²)` with c = 2 except at 0 and fs/2
+/// (P. D. Welch, *The use of fast Fourier transform for the estimation of power spectra*,
+/// 1967). White noise of variance σ² has the level 2σ²/fs.
 ///
 /// # Errors
-/// [`Error::Compute`] for a segment length that is not a power of two ≥ 4, a signal shorter
-/// than one segment, or a non-positive `fs`.
-pub fn welch(x: &[f64], fs: f64, segment: usize) -> Result<Psd> {
+/// [`Error::InvalidOption`] naming `segment` (not a power of two ≥ 4) or `fs` (not finite
+/// and > 0); [`Error::Dimension`] naming `x` for a signal shorter than one segment.
+///
+/// # Example
+/// ```
+/// // A tone on a bin: the peak is at its frequency.
+/// let x: Vec<f64> = (0..1024).map(|i| (2.0 * std::f64::consts::PI * 0.25 * i as f64).sin()).collect();
+/// let p = kalman::diagnostics::welch(&x, 1.0, 64)?;
+/// let peak = (0..p.psd.len()).max_by(|&a, &b| p.psd[a].total_cmp(&p.psd[b])).unwrap_or(0);
+/// assert!((p.freq[peak] - 0.25).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
+pub fn welch(x: &[f64], fs: f64, segment: usize) -> Result<Psd, Error> {
     if segment < 4 || !segment.is_power_of_two() {
-        return Err(Error::Compute(format!(
-            "welch: segment length {segment} must be a power of two ≥ 4"
-        )));
+        return Err(Error::InvalidOption {
+            name: "segment",
+            value: segment as f64,
+            rule: "the Welch segment length must be a power of two ≥ 4",
+        });
     }
     if x.len() < segment {
-        return Err(Error::Compute(format!(
-            "welch: the signal has {} samples, fewer than one segment of {segment}",
-            x.len()
-        )));
+        return Err(Error::Dimension {
+            name: "x",
+            value: x.len(),
+            rule: "the signal is shorter than one Welch segment",
+        });
     }
     if !(fs.is_finite() && fs > 0.0) {
-        return Err(Error::Compute(format!(
-            "welch: sampling frequency {fs} must be > 0"
-        )));
+        return Err(Error::InvalidOption {
+            name: "fs",
+            value: fs,
+            rule: "the sampling frequency must be finite and > 0",
+        });
     }
     let w: Vec<f64> = (0..segment)
         .map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / segment as f64).cos())
@@ -129,37 +164,6 @@ pub fn welch(x: &[f64], fs: f64, segment: usize) -> Result<Psd> {
     })
 }
 
-/// Sample autocorrelation ρ_k, k = 0..=`max_lag`, of `x` about its mean (ρ₀ = 1; all zero for
-/// a constant signal).
-pub fn autocorrelation(x: &[f64], max_lag: usize) -> Vec<f64> {
-    let n = x.len();
-    let mean = x.iter().sum::<f64>() / n.max(1) as f64;
-    let c0: f64 = x.iter().map(|v| (v - mean) * (v - mean)).sum();
-    (0..=max_lag)
-        .map(|k| {
-            if c0 <= 0.0 || k >= n {
-                return 0.0;
-            }
-            let ck: f64 = (0..n - k).map(|i| (x[i] - mean) * (x[i + k] - mean)).sum();
-            ck / c0
-        })
-        .collect()
-}
-
-/// The Ljung–Box statistic Q = N(N+2)·Σ_{k=1}^{h} ρ_k²/(N−k): χ² with h degrees of freedom
-/// for a white sequence.
-pub fn ljung_box(x: &[f64], lags: usize) -> f64 {
-    let n = x.len() as f64;
-    let rho = autocorrelation(x, lags);
-    n * (n + 2.0)
-        * rho
-            .iter()
-            .enumerate()
-            .skip(1)
-            .map(|(k, r)| r * r / (n - k as f64))
-            .sum::<f64>()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -191,7 +195,14 @@ mod tests {
                 "bin {k}"
             );
         }
-        assert!(fft(&mut [0.0; 6], &mut [0.0; 6]).is_err());
+        assert!(matches!(
+            fft(&mut [0.0; 6], &mut [0.0; 6]),
+            Err(Error::Dimension { name: "N", .. })
+        ));
+        assert!(matches!(
+            fft(&mut [0.0; 4], &mut [0.0; 2]),
+            Err(Error::Shape { name: "im", .. })
+        ));
     }
 
     proptest::proptest! {
@@ -236,6 +247,21 @@ mod tests {
         let df = p.freq[1];
         let total: f64 = p.psd.iter().sum::<f64>() * df;
         assert!((total / (sigma * sigma) - 1.0).abs() < 0.05, "{total}");
+        assert!(matches!(
+            welch(&x, fs, 100),
+            Err(Error::InvalidOption {
+                name: "segment",
+                ..
+            })
+        ));
+        assert!(matches!(
+            welch(&x, 0.0, 256),
+            Err(Error::InvalidOption { name: "fs", .. })
+        ));
+        assert!(matches!(
+            welch(&x[..100], fs, 256),
+            Err(Error::Dimension { name: "x", .. })
+        ));
     }
 
     #[test]
@@ -256,20 +282,5 @@ mod tests {
         let power: f64 = p.psd[imax - 2..=imax + 2].iter().sum::<f64>() * df;
         // A Hann window spreads an on-bin tone over 3 bins; the density integrates to A²/2.
         assert!((power / (amp * amp / 2.0) - 1.0).abs() < 1e-6, "{power}");
-    }
-
-    #[test]
-    fn ljung_box_separates_white_from_correlated() {
-        let x = white(4000, 1.0, 3);
-        let q_white = ljung_box(&x, 20);
-        // χ²₂₀: 99.9 % quantile 45.3.
-        assert!(q_white < 45.3, "{q_white}");
-        let mut y = vec![0.0; 4000];
-        for i in 1..4000 {
-            y[i] = 0.5 * y[i - 1] + x[i];
-        }
-        assert!(ljung_box(&y, 20) > 500.0);
-        let rho = autocorrelation(&[2.0; 10], 3);
-        assert!(rho.iter().all(|r| r.abs() < 1e-15));
     }
 }
