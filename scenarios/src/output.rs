@@ -191,15 +191,24 @@ fn resolve(path: &Path) -> std::result::Result<PathBuf, Refusal> {
 /// # Errors
 /// [`Error::Usage`] (exit code 2) naming `--out` and, for a clash, the input.
 pub fn destination(out: &Path, inputs: &[(&str, &Path)]) -> Result<Destination> {
+    destination_of("--out", out, inputs)
+}
+
+/// [`destination`] for an output given by the option `option` (e.g. `--diagnostics`),
+/// which the messages name.
+///
+/// # Errors
+/// As [`destination`].
+pub fn destination_of(option: &str, out: &Path, inputs: &[(&str, &Path)]) -> Result<Destination> {
     if out.as_os_str() == "-" {
         return Ok(Destination::Stdout);
     }
     let target =
-        resolve(out).map_err(|why| Error::Usage(format!("--out {}: {why}", out.display())))?;
-    for (option, input) in inputs {
+        resolve(out).map_err(|why| Error::Usage(format!("{option} {}: {why}", out.display())))?;
+    for (input_option, input) in inputs {
         if same_file(&target, input) {
             return Err(Error::Usage(format!(
-                "--out {}: is the same file as {option} {}; refusing to overwrite an input",
+                "{option} {}: is the same file as {input_option} {}; refusing to overwrite an input",
                 out.display(),
                 input.display()
             )));

@@ -28,6 +28,7 @@
 #![allow(non_snake_case)]
 
 pub mod data;
+pub mod diagnostics;
 pub mod model_file;
 
 use std::path::{Path, PathBuf};
@@ -73,6 +74,17 @@ pub struct FilterArgs {
     /// Write every covariance entry Pi_j instead of the diagonal.
     #[arg(long)]
     pub full_covariance: bool,
+    /// Also write innovation diagnostics (JSON) of the forward pass: the log-likelihood, the
+    /// mean NIS with its χ² 95 % band, the fraction of steps whose NIS is outside its
+    /// per-step 95 % band, and each channel's standardised-innovation autocorrelation with
+    /// the Ljung–Box test (`-`: standard output, when --out is a file). Written only if the
+    /// estimates are.
+    #[arg(long, value_name = "DIAG.json")]
+    pub diagnostics: Option<PathBuf>,
+    /// Lags of the autocorrelation and the Ljung–Box test in --diagnostics.
+    #[arg(long, value_name = "H", default_value_t = 20, requires = "diagnostics",
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub diagnostics_lags: u32,
 }
 
 /// Discretisation method of `discretize --method`.
@@ -264,7 +276,8 @@ fn engine_filter(
 
 /// `scenarios filter`: streams the data CSV through the filter and the estimates to `--out`
 /// (memory independent of the CSV's length), or with `--smooth` keeps the pass and writes
-/// the RTS-smoothed estimates.
+/// the RTS-smoothed estimates; with `--diagnostics` also the innovation diagnostics of the
+/// forward pass ([`diagnostics`]; these keep one number per channel and row).
 ///
 /// # Errors
 /// [`Error::Invalid`] for a bad model or data file (nothing is written), [`Error::Read`] /
@@ -274,21 +287,83 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
         &args.out,
         &[("--model", &args.model), ("--data", &args.data)],
     )?;
+    let diag = diagnostics_destination(args, &dest)?;
     let model = model_file::load_discrete(&args.model)?;
     let mut kf = engine_filter(&args.model, &model, args.form)?;
+    let mut acc = diag
+        .as_ref()
+        .map(|_| diagnostics::collector(model.m()))
+        .transpose()?;
     let file = std::fs::File::open(&args.data).map_err(|source| Error::Read {
         path: args.data.clone(),
         source,
     })?;
     let mut reader = DataReader::new(&args.data, std::io::BufReader::with_capacity(1 << 16, file))?;
     check_columns(&args.model, &model, &reader)?;
-    if args.smooth {
-        return smooth(args, &dest, &model, &mut kf, &mut reader);
+    let diag_text = if args.smooth {
+        smooth(args, &dest, &model, &mut kf, &mut reader, acc.as_mut())?
+    } else {
+        stream(args, &dest, &model, &mut kf, &mut reader, acc.as_mut())?
+    };
+    // The estimates are in place; the diagnostics follow, whole or not at all.
+    match (diag, diag_text) {
+        (Some(d), Some(text)) => crate::output::write_bytes_to(&d, text.as_bytes()),
+        _ => Ok(()),
     }
+}
+
+/// Where `--diagnostics` goes: refused if it is an input, the same path as `--out`, or
+/// standard output while `--out` is too.
+fn diagnostics_destination(
+    args: &FilterArgs,
+    out: &crate::output::Destination,
+) -> Result<Option<crate::output::Destination>> {
+    let Some(path) = &args.diagnostics else {
+        return Ok(None);
+    };
+    let d = crate::output::destination_of(
+        "--diagnostics",
+        path,
+        &[
+            ("--model", &args.model),
+            ("--data", &args.data),
+            ("--out", &args.out),
+        ],
+    )?;
+    if d == *out {
+        return Err(Error::Usage(format!(
+            "--diagnostics {}: is the same destination as --out {}; give them different files",
+            path.display(),
+            args.out.display()
+        )));
+    }
+    Ok(Some(d))
+}
+
+/// The diagnostics text of a collected pass (`None` without `--diagnostics`).
+fn diagnostics_text(
+    args: &FilterArgs,
+    acc: Option<&mut kalman::diagnostics::Innovations>,
+) -> Result<Option<String>> {
+    acc.map(|a| diagnostics::json(a, args.diagnostics_lags as usize, &args.data))
+        .transpose()
+}
+
+/// Streams the filtered estimates to `dest`; returns the diagnostics text, computed before
+/// the estimates file is renamed into place, so that a too-short record for the
+/// diagnostics writes neither file.
+fn stream<R: std::io::Read>(
+    args: &FilterArgs,
+    dest: &crate::output::Destination,
+    model: &DiscreteModel,
+    kf: &mut kalman::Filter<kalman::Dyn>,
+    reader: &mut DataReader<R>,
+    mut acc: Option<&mut kalman::diagnostics::Innovations>,
+) -> Result<Option<String>> {
     let n = model.n();
     let out_name = PathBuf::from(dest.to_string());
     let out = out_name.as_path();
-    crate::output::write_to(&dest, |w| {
+    crate::output::write_to(dest, |w| {
         writeln!(w, "{}", data::estimates_header(n, args.full_covariance)).map_err(|source| {
             Error::Write {
                 path: out.to_path_buf(),
@@ -299,14 +374,27 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
         let mut P = vec![0.0; n * n];
         while reader.read_row(&mut row)? {
             remove_feedthrough(&model.D, &mut row);
-            let info = step(&mut kf, &reader, &row)?;
+            let info = step(kf, reader, &row)?;
+            if let Some(a) = acc.as_deref_mut() {
+                collect(a, kf, &info)?;
+            }
             copy_col_major(kf.covariance(), &mut P);
             // No measurement, no NIS: written as NaN.
             let nis = info.nis.unwrap_or(f64::NAN);
             data::write_estimate(w, out, row.t, kf.state(), &P, args.full_covariance, nis)?;
         }
-        Ok(())
+        diagnostics_text(args, acc)
     })
+}
+
+/// Adds a step to the diagnostics.
+fn collect(
+    acc: &mut kalman::diagnostics::Innovations,
+    kf: &kalman::Filter<kalman::Dyn>,
+    info: &kalman::StepInfo,
+) -> Result<()> {
+    acc.add(kf, info)
+        .map_err(|e| Error::Compute(format!("diagnostics: {e}")))
 }
 
 /// One filter step with data row `row` (update with z_k, then predict with u_k). A step
@@ -365,7 +453,8 @@ fn smooth<R: std::io::Read>(
     model: &DiscreteModel,
     kf: &mut kalman::Filter<kalman::DynDims>,
     reader: &mut DataReader<R>,
-) -> Result<()> {
+    mut acc: Option<&mut kalman::diagnostics::Innovations>,
+) -> Result<Option<String>> {
     let n = model.n();
     let mut rts = kalman::smoother::RtsSmoother::new();
     let mut times = Vec::new();
@@ -374,6 +463,9 @@ fn smooth<R: std::io::Read>(
     while reader.read_row(&mut row)? {
         remove_feedthrough(&model.D, &mut row);
         let info = step(kf, reader, &row)?;
+        if let Some(a) = acc.as_deref_mut() {
+            collect(a, kf, &info)?;
+        }
         rts.record(kf)
             .map_err(|e| Error::Compute(format!("smoother: {e}")))?;
         times.push(row.t);
@@ -388,6 +480,7 @@ fn smooth<R: std::io::Read>(
         )
     };
     drop(rts);
+    let text = diagnostics_text(args, acc)?;
     let out_name = PathBuf::from(dest.to_string());
     let out = out_name.as_path();
     crate::output::write_to(dest, |w| {
@@ -398,7 +491,7 @@ fn smooth<R: std::io::Read>(
             }
         })?;
         let Some(s) = &smoothed else {
-            return Ok(());
+            return Ok(text);
         };
         let mut x = vec![0.0; n];
         let mut P = vec![0.0; n * n];
@@ -409,7 +502,7 @@ fn smooth<R: std::io::Read>(
             copy_col_major(s.covariances[k].as_ref(), &mut P);
             data::write_estimate(w, out, t, &x, &P, args.full_covariance, nis)?;
         }
-        Ok(())
+        Ok(text)
     })
 }
 

@@ -6,6 +6,8 @@
 mod boom;
 #[path = "cli/common.rs"]
 mod common;
+#[path = "cli/diagnostics.rs"]
+mod diagnostics;
 #[path = "cli/fit.rs"]
 mod fit;
 #[path = "cli/fueling.rs"]

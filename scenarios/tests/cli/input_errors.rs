@@ -328,6 +328,8 @@ proptest! {
             form: scenarios::userdata::Form::Joseph,
             smooth: false,
             full_covariance: false,
+            diagnostics: None,
+            diagnostics_lags: 20,
         };
         let _ = std::fs::remove_file(&args.out);
         match scenarios::userdata::filter(&args) {
