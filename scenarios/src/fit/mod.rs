@@ -13,6 +13,8 @@
 //! `--allow-unconverged`.
 #![allow(non_snake_case)]
 
+pub mod shaping;
+
 use std::path::{Path, PathBuf};
 
 use faer::Mat;
