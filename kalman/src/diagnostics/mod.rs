@@ -87,6 +87,16 @@ pub fn ljung_box(x: &[f64], lags: usize) -> f64 {
 }
 
 /// A Ljung–Box test's outcome.
+///
+/// # Example
+/// ```
+/// // A white sequence is rarely rejected: p-value well above 1 %.
+/// let x: Vec<f64> = (0..200).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
+/// let lb = kalman::diagnostics::ljung_box_test(&x, 5, 0)?;
+/// assert_eq!((lb.lags, lb.dof), (5, 5));
+/// assert!((lb.p_value - kalman::chi2_sf(lb.statistic, 5)).abs() < 1e-15);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct LjungBox {
     /// Lags h summed.
@@ -180,6 +190,25 @@ pub struct Innovations {
 }
 
 /// Whiteness of one standardised innovation channel.
+///
+/// # Example
+/// ```
+/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+/// use kalman::diagnostics::Innovations;
+/// # fn main() -> Result<(), kalman::Error> {
+/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[0.5]], &[[1.0]], &[[1.0]], &[[1.0]])?;
+/// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
+/// let mut acc = Innovations::new(1, 0.95)?;
+/// for z in [0.3, -1.2, 0.8, 1.9, 0.4, -0.7, 0.1, -0.2] {
+///     let info = filter.step(&[z], None)?;
+///     acc.add(&filter, &info)?;
+/// }
+/// let ch = &acc.summary(3)?.channels[0];
+/// assert_eq!((ch.observed, ch.acf.len()), (8, 4));
+/// assert!((ch.acf[0] - 1.0).abs() < 1e-15 && (ch.acf_bound - 1.959_964 / 8f64.sqrt()).abs() < 1e-5);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChannelWhiteness {
     /// Steps at which the channel was observed.
@@ -194,6 +223,28 @@ pub struct ChannelWhiteness {
 }
 
 /// What [`Innovations::summary`] finds.
+///
+/// # Example
+/// ```
+/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+/// use kalman::diagnostics::Innovations;
+/// # fn main() -> Result<(), kalman::Error> {
+/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
+/// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
+/// let mut acc = Innovations::new(1, 0.95)?;
+/// let mut nis = 0.0;
+/// for z in [0.3, -1.2, 0.8, 1.9, 0.4, -0.7] {
+///     let info = filter.step(&[z], None)?;
+///     nis += info.nis.unwrap_or(0.0);
+///     acc.add(&filter, &info)?;
+/// }
+/// let s = acc.summary(2)?;
+/// // The mean NIS over the 6 measured steps, and a band around the χ²₆/6 mean of 1.
+/// assert!((s.nis_mean - nis / 6.0).abs() < 1e-12 && s.nis_dof == 6);
+/// assert!(s.nis_band.0 < 1.0 && 1.0 < s.nis_band.1);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct InnovationSummary {
     /// Steps added.

@@ -73,6 +73,16 @@ pub fn fft(re: &mut [f64], im: &mut [f64]) -> Result<(), Error> {
 }
 
 /// A one-sided power spectral density.
+///
+/// # Example
+/// ```
+/// // 1024 samples at 8 Hz in segments of 64: bins 0, 1/8, …, 4 Hz, 31 half-overlapping segments.
+/// let x: Vec<f64> = (0..1024).map(|i| ((i * 37) % 17) as f64).collect();
+/// let p = kalman::diagnostics::welch(&x, 8.0, 64)?;
+/// assert_eq!((p.freq.len(), p.psd.len(), p.segments), (33, 33, 31));
+/// assert!((p.freq[32] - 4.0).abs() < 1e-15);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Psd {
     /// Frequencies, Hz: 0, fs/L, …, fs/2 (L the segment length).
