@@ -356,7 +356,7 @@ fn stream<R: std::io::Read>(
     args: &FilterArgs,
     dest: &crate::output::Destination,
     model: &DiscreteModel,
-    kf: &mut kalman::Filter<kalman::Dyn>,
+    kf: &mut kalman::Filter<kalman::DynDims>,
     reader: &mut DataReader<R>,
     mut acc: Option<&mut kalman::diagnostics::Innovations>,
 ) -> Result<Option<String>> {
@@ -390,7 +390,7 @@ fn stream<R: std::io::Read>(
 /// Adds a step to the diagnostics.
 fn collect(
     acc: &mut kalman::diagnostics::Innovations,
-    kf: &kalman::Filter<kalman::Dyn>,
+    kf: &kalman::Filter<kalman::DynDims>,
     info: &kalman::StepInfo,
 ) -> Result<()> {
     acc.add(kf, info)

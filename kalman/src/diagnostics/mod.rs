@@ -157,10 +157,10 @@ pub fn ljung_box_test(x: &[f64], lags: usize, fitted: usize) -> Result<LjungBox,
 ///
 /// # Example
 /// ```
-/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
 /// use kalman::diagnostics::Innovations;
 /// # fn main() -> Result<(), kalman::Error> {
-/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[0.9]], &[[1.0]], &[[1.0]], &[[1.0]])?;
+/// let model = Model::new(DynDims::new(1, 1, 0)?, &[[0.9]], &[[1.0]], &[[1.0]], &[[1.0]])?;
 /// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
 /// let mut acc = Innovations::new(1, 0.95)?;
 /// for z in [0.3, -1.2, 0.8, f64::NAN, 1.9, 0.4, -0.7, 0.1] {
@@ -193,10 +193,10 @@ pub struct Innovations {
 ///
 /// # Example
 /// ```
-/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
 /// use kalman::diagnostics::Innovations;
 /// # fn main() -> Result<(), kalman::Error> {
-/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[0.5]], &[[1.0]], &[[1.0]], &[[1.0]])?;
+/// let model = Model::new(DynDims::new(1, 1, 0)?, &[[0.5]], &[[1.0]], &[[1.0]], &[[1.0]])?;
 /// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
 /// let mut acc = Innovations::new(1, 0.95)?;
 /// for z in [0.3, -1.2, 0.8, 1.9, 0.4, -0.7, 0.1, -0.2] {
@@ -226,10 +226,10 @@ pub struct ChannelWhiteness {
 ///
 /// # Example
 /// ```
-/// use kalman::{CovarianceForm, Dyn, Filter, Model};
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
 /// use kalman::diagnostics::Innovations;
 /// # fn main() -> Result<(), kalman::Error> {
-/// let model = Model::new(Dyn::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
+/// let model = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
 /// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
 /// let mut acc = Innovations::new(1, 0.95)?;
 /// let mut nis = 0.0;
@@ -409,7 +409,7 @@ impl Innovations {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{CovarianceForm, Dyn, Model};
+    use crate::{CovarianceForm, DynDims, Model};
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
 
@@ -550,7 +550,7 @@ mod tests {
     /// four times too large, and with a too-small Q.
     fn run(q: f64, r: f64, data: &[f64]) -> (InnovationSummary, f64) {
         let model = Model::new(
-            Dyn::new(1, 1, 0).expect("dims"),
+            DynDims::new(1, 1, 0).expect("dims"),
             &[[1.0]],
             &[[1.0]],
             &[[q]],
@@ -621,7 +621,7 @@ mod tests {
             })
         ));
         let model = Model::new(
-            Dyn::new(1, 2, 0).expect("dims"),
+            DynDims::new(1, 2, 0).expect("dims"),
             &[[1.0]],
             &[[1.0], [1.0]],
             &[[1.0]],

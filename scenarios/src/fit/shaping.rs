@@ -19,7 +19,7 @@ use argmin::solver::neldermead::NelderMead;
 use faer::Mat;
 use kalman::fit::{FitError, MleOptions, ParamMap, Series, System, mle};
 use model::nalgebra::DMatrix;
-use model::{DampedCosine, Exponential, IrregularRolling, ShapingFilter};
+use model::{DampedCosineShaping, ExponentialShaping, IrregularRollingShaping, ShapingFilter};
 
 use crate::error::{Error, Result};
 
@@ -60,9 +60,9 @@ impl Kind {
     /// The `model` filter with natural parameters `p`.
     fn filter(self, p: &[f64]) -> model::Result<Box<dyn ShapingFilter>> {
         Ok(match self {
-            Kind::Exponential => Box::new(Exponential::new(p[0], 1.0 / p[1])?),
-            Kind::IrregularRolling => Box::new(IrregularRolling::new(p[0], p[1], p[2])?),
-            Kind::DampedCosine => Box::new(DampedCosine::new(p[0], p[1], p[2])?),
+            Kind::Exponential => Box::new(ExponentialShaping::new(p[0], 1.0 / p[1])?),
+            Kind::IrregularRolling => Box::new(IrregularRollingShaping::new(p[0], p[1], p[2])?),
+            Kind::DampedCosine => Box::new(DampedCosineShaping::new(p[0], p[1], p[2])?),
         })
     }
 
@@ -154,7 +154,11 @@ impl ParamMap for ShapingMap {
             .kind
             .filter(&p)
             .and_then(|f| {
-                f.discretize(self.dt, model::Method::Zoh, model::NoiseConvention::VanLoan)
+                f.discretize(
+                    self.dt,
+                    model::Discretization::Zoh,
+                    model::NoiseConvention::VanLoan,
+                )
             })
             .map_err(bad)?;
         let Q = symmetric(&d.process_covariance());

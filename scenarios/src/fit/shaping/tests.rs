@@ -72,7 +72,7 @@ fn rolling(p: &[f64], dt: f64, r: f64, len: usize, g: &mut rand_chacha::ChaCha8R
         irregularity_per_s: p[1],
         period_s: 2.0 * std::f64::consts::PI / p[2],
     };
-    let mut proc = sensors::IrregularRolling::new(&cfg, dt).expect("valid");
+    let mut proc = sensors::IrregularRollingProcess::new(&cfg, dt).expect("valid");
     (0..len)
         .map(|_| {
             let v: f64 = StandardNormal.sample(g);
@@ -152,7 +152,7 @@ fn mle_recovers_exponential_and_damped_cosine_filters() {
         decay_per_s: 0.05,
         frequency_rad_s: 1.0,
     };
-    let mut p = sensors::DampedCosine::new(&cfg, dt).expect("valid");
+    let mut p = sensors::DampedCosineProcess::new(&cfg, dt).expect("valid");
     let z: Vec<f64> = (0..4000)
         .map(|_| {
             let v: f64 = StandardNormal.sample(&mut g);
