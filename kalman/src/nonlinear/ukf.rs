@@ -186,7 +186,6 @@ pub struct Ukf<D: NlDims, M> {
     zs: D::ZSig,
     dz: D::ZSig,
     l: D::Nn,
-    cross: D::Nn,
     gain: D::Nm,
     ht: D::Nm,
     rc: D::Mm,
@@ -236,7 +235,6 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             zs: D::ZSig::zeros(m * s),
             dz: D::ZSig::zeros(m * s),
             l: D::Nn::zeros(n * n),
-            cross: D::Nn::zeros(n * n),
             gain: D::Nm::zeros(n * m),
             ht: D::Nm::zeros(n * m),
             rc: D::Mm::zeros(m * m),
@@ -456,12 +454,11 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         }
         let pp = &mut self.c.pp.as_mut_slice()[..n * n];
         pp.copy_from_slice(&self.c.q.as_slice()[..n * n]);
-        let cross = &mut self.cross.as_mut_slice()[..n * n];
-        cross.fill(0.0);
+        // The cross-covariance C_k = Σ Wc_i dchi_i dy_iᵀ is formed only when a smoother asks
+        // for it (`cross_covariance`, from the deviations kept until the next step).
         for i in 0..s {
             let d = &dy[i * n..(i + 1) * n];
             rank1(pp, wc[i], d, d, n, n);
-            rank1(cross, wc[i], &dchi[i * n..(i + 1) * n], d, n, n);
         }
         symmetrise(pp, n);
         Ok(())
@@ -528,6 +525,23 @@ impl<D: NlDims, M> super::ForwardPass for Ukf<D, M> {
     /// `C_k = Σ Wc_i (χ_i ⊖ x_{k|k})(f(χ_i) ⊖ x_{k+1|k})ᵀ` of the last prediction.
     fn cross_covariance(&self, out: &mut [f64]) {
         let n = self.c.dims.n();
-        out[..n * n].copy_from_slice(&self.cross.as_slice()[..n * n]);
+        let s = 2 * n + 1;
+        let (wc, dchi, dy) = (
+            &self.wc.as_slice()[..s],
+            &self.dchi.as_slice()[..n * s],
+            &self.dy.as_slice()[..n * s],
+        );
+        let out = &mut out[..n * n];
+        out.fill(0.0);
+        for i in 0..s {
+            rank1(
+                out,
+                wc[i],
+                &dchi[i * n..(i + 1) * n],
+                &dy[i * n..(i + 1) * n],
+                n,
+                n,
+            );
+        }
     }
 }
