@@ -13,7 +13,8 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef};
 
 use crate::Error;
-use crate::model::check;
+use crate::MatrixInput;
+use crate::model::{check, owned};
 use crate::riccati::{factor_r, symmetrise};
 
 /// The Kalman–Bucy filter's covariance equation for a time-invariant continuous model.
@@ -106,11 +107,13 @@ impl KalmanBucy {
     /// [`Error::Shape`] / [`Error::NonFinite`] naming the matrix; [`Error::NotPositiveDefinite`]
     /// for R.
     pub fn new(
-        A: MatRef<'_, f64>,
-        H: MatRef<'_, f64>,
-        Q: MatRef<'_, f64>,
-        R: MatRef<'_, f64>,
+        A: impl MatrixInput,
+        H: impl MatrixInput,
+        Q: impl MatrixInput,
+        R: impl MatrixInput,
     ) -> Result<Self, Error> {
+        let (A, H, Q, R) = (owned(&A), owned(&H), owned(&Q), owned(&R));
+        let (A, H, Q, R) = (A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref());
         let n = A.nrows();
         let m = H.nrows();
         check("A", A, n, n)?;
@@ -333,7 +336,9 @@ impl KalmanBucy {
 /// assert!((e[(0, 1)] - 1.0).abs() < 1e-15 && (e[(1, 1)] - 1.0).abs() < 1e-15);
 /// # Ok::<(), kalman::Error>(())
 /// ```
-pub fn expm(A: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
+pub fn expm(A: impl MatrixInput) -> Result<Mat<f64>, Error> {
+    let A = owned(&A);
+    let A = A.as_ref();
     let n = A.nrows();
     check("A", A, n, n)?;
     const B: [f64; 14] = [
@@ -402,10 +407,12 @@ pub fn expm(A: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
 /// # Ok::<(), kalman::Error>(())
 /// ```
 pub fn van_loan(
-    A: MatRef<'_, f64>,
-    Q: MatRef<'_, f64>,
+    A: impl MatrixInput,
+    Q: impl MatrixInput,
     dt: f64,
 ) -> Result<(Mat<f64>, Mat<f64>), Error> {
+    let (A, Q) = (owned(&A), owned(&Q));
+    let (A, Q) = (A.as_ref(), Q.as_ref());
     let n = A.nrows();
     check("A", A, n, n)?;
     check("Q", Q, n, n)?;

@@ -87,16 +87,59 @@
 //!   control systems of an unmanned aerial vehicle with an optimal Kalman filter* (in
 //!   Russian, 2013): the UAV loop in the example of [`riccati::dlqr`].
 //!
+//! # nalgebra in, nalgebra out
+//! Every matrix argument of the public API — [`Model::new`], [`Filter::new`], the Riccati
+//! solvers ([`riccati::dare`], [`riccati::dlqr`], [`riccati::care`], …),
+//! [`continuous::expm`], the nonlinear filters — takes anything that implements
+//! [`MatrixInput`]: row-major arrays `[[f64; C]; R]`, faer matrices and, with the feature
+//! `nalgebra`, nalgebra matrices (`&DMatrix<f64>`, fixed-size `Matrix2<f64>`, views). Vectors
+//! are `&[f64]` (`dvector.as_slice()`). Results are faer matrices and slices; with the feature
+//! `nalgebra` one idiom brings any of them back: `.to_nalgebra()` from [`ToNalgebra`]
+//! (`filter.covariance().to_nalgebra()`, `steady.gain.to_nalgebra()`,
+//! `smoothed.covariances.to_nalgebra()`, `filter.state().to_nalgebra()`).
+//!
+#![cfg_attr(
+    feature = "nalgebra",
+    doc = r##"
+```
+use kalman::nalgebra::{DMatrix, dmatrix};
+use kalman::{CovarianceForm, DynDims, Filter, Model, ToNalgebra};
+# fn main() -> Result<(), kalman::Error> {
+let dt = 0.1;
+let f = dmatrix![1.0, dt; 0.0, 1.0];
+let h = dmatrix![1.0, 0.0];
+let q = dmatrix![1e-4, 0.0; 0.0, 1e-3];
+let r = dmatrix![0.01];
+let model = Model::new(DynDims::new(2, 1, 0)?, &f, &h, &q, &r)?;
+let mut filter = Filter::new(model, &[0.0, 1.0], &DMatrix::identity(2, 2), CovarianceForm::Joseph)?;
+let smoothed = filter.run_smoothed([[0.11], [0.19], [f64::NAN], [0.42]])?;
+let p: DMatrix<f64> = filter.covariance().to_nalgebra();
+let means: DMatrix<f64> = smoothed.means.to_nalgebra(); // column k is x_{k|N-1}
+// The RTS smoother ends where the filter ends.
+assert!((means.column(3) - filter.state().to_nalgebra()).norm() < 1e-12);
+assert!((&smoothed.covariances.to_nalgebra()[3] - &p).norm() < 1e-12);
+// The steady state of the same model, nalgebra in and out.
+let steady = kalman::riccati::dare(&f, &h, &q, &r, None)?;
+let k: DMatrix<f64> = steady.gain.to_nalgebra();
+assert_eq!(k.shape(), (2, 1));
+# Ok(())
+# }
+```
+"##
+)]
+//!
 //! # Versions of the types in this API and features
-//! Matrices are stored and returned as [`faer`] 0.24 types; inputs are anything that
-//! implements [`MatrixInput`] (row-major arrays and slices, faer matrices, and with the
-//! feature `nalgebra`, nalgebra 0.35 matrices). Both crates are re-exported
-//! (`kalman::faer`, and `kalman::nalgebra` with the feature), so a user does not need to add
-//! either dependency — or pick a matching version — to name their types.
+//! Matrices are stored and returned as [`faer`] 0.24 types. faer is re-exported
+//! (`kalman::faer`) and, with the feature, nalgebra 0.35 too (`kalman::nalgebra`), so a user
+//! does not need to add either dependency — or pick a matching version — to name their types.
+//! A nalgebra user enables one feature: `stochest-kalman = { version = "0.1", features =
+//! ["nalgebra"] }`.
 //!
 //! | feature | what it adds |
 //! |---|---|
-//! | `nalgebra` | nalgebra 0.35 matrices as inputs; `kalman::nalgebra` |
+//! | `nalgebra` | nalgebra 0.35 matrices as inputs, [`ToNalgebra`] for results; `kalman::nalgebra` |
+//! | `autodiff` | exact Jacobians for the nonlinear filters by forward-mode automatic differentiation |
+//! | `argmin` | maximum-likelihood fitting by L-BFGS and Nelder–Mead ([`fit`]) |
 //! | `proptest` | `kalman::strategies`: random consistent filter problems for property tests |
 //! | `parallel` | Rayon in faer's products above [`PARALLEL_THRESHOLD`] |
 #![deny(missing_docs)]
@@ -104,6 +147,8 @@
 mod consistency;
 pub mod continuous;
 pub mod diagnostics;
+#[cfg(feature = "nalgebra")]
+mod convert;
 mod error;
 mod filter;
 pub mod fit;
@@ -118,6 +163,8 @@ mod storage;
 pub mod strategies;
 
 pub use consistency::{Nees, chi2_cdf, chi2_quantile, chi2_sf, nees};
+#[cfg(feature = "nalgebra")]
+pub use convert::ToNalgebra;
 pub use error::Error;
 pub use filter::{CovarianceForm, Filter, StepInfo};
 pub use kernels::{FAER_THRESHOLD, PARALLEL_THRESHOLD, RANK_TOL};

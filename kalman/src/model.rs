@@ -101,6 +101,12 @@ impl<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>> Mat
     }
 }
 
+/// A faer copy of a matrix input (for the solvers that work on whole matrices: Riccati,
+/// matrix exponential, Kalman–Bucy).
+pub(crate) fn owned<T: MatrixInput + ?Sized>(a: &T) -> Mat<f64> {
+    Mat::from_fn(a.nrows(), a.ncols(), |i, j| a.at(i, j))
+}
+
 /// Checks that `a` is `rows`×`cols` with finite entries: [`Error::Shape`] or
 /// [`Error::NonFinite`] (the first bad entry in column-major order) naming `name`. The one
 /// shape/finiteness check of matrix inputs in the crate.

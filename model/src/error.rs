@@ -161,6 +161,11 @@ pub enum Error {
         /// Iterations spent.
         iterations: usize,
     },
+    /// The Kalman engine rejected the model built by `DiscreteSs::to_kalman` (feature
+    /// `kalman`).
+    #[cfg(feature = "kalman")]
+    #[error("kalman: {0}")]
+    Kalman(#[from] kalman::Error),
 }
 
 /// Short form of `Result<T, model::Error>`.

@@ -82,6 +82,7 @@
 #![deny(clippy::float_cmp)]
 
 pub mod analysis;
+pub mod bridge;
 pub mod compose;
 pub mod discretize;
 pub mod error;
@@ -97,6 +98,7 @@ pub use analysis::{
     discrete_lyapunov, eigenvalues, is_controllable, is_observable, markov_parameters, psd_factor,
     rank, spectral_abscissa, spectral_radius,
 };
+pub use bridge::FilterNoise;
 pub use compose::{
     append, connect, connect_continuous, feedback, parallel, select_outputs, series, stack,
 };

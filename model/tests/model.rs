@@ -4,6 +4,7 @@
 
 mod model {
     pub mod analysis;
+    pub mod bridge;
     pub mod compose;
     pub mod discretization;
     pub mod errors;

@@ -175,11 +175,6 @@ pub struct SteadyStateArgs {
     pub out: PathBuf,
 }
 
-/// A faer matrix from a nalgebra one.
-fn to_faer(m: &DMatrix<f64>) -> Mat<f64> {
-    Mat::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
-}
-
 /// A library error about the model in `path`, surfaced as an input error (exit code 2).
 fn model_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::invalid(path, format!("model: {e}"))
@@ -189,22 +184,14 @@ fn model_error(path: &Path, e: impl std::fmt::Display) -> Error {
 /// Q]]` are checked here by `kalman`.
 fn engine_model(path: &Path, m: &DiscreteModel) -> Result<kalman::Model<kalman::DynDims>> {
     let dims = kalman::DynDims::new(m.n(), m.m(), m.p()).map_err(|e| model_error(path, e))?;
-    let mut model = kalman::Model::new(
-        dims,
-        &to_faer(&m.F),
-        &to_faer(&m.H),
-        &to_faer(&m.Q),
-        &to_faer(&m.R),
-    )
-    .map_err(|e| model_error(path, e))?;
+    let mut model =
+        kalman::Model::new(dims, &m.F, &m.H, &m.Q, &m.R).map_err(|e| model_error(path, e))?;
     if m.p() > 0 {
-        model = model
-            .with_control(&to_faer(&m.B))
-            .map_err(|e| model_error(path, e))?;
+        model = model.with_control(&m.B).map_err(|e| model_error(path, e))?;
     }
     if let Some(S) = &m.S {
         model = model
-            .with_cross_covariance(&to_faer(S))
+            .with_cross_covariance(S)
             .map_err(|e| model_error(path, e))?;
     }
     Ok(model)
@@ -270,7 +257,7 @@ fn engine_filter(
         Form::Standard => kalman::CovarianceForm::Standard,
         Form::Sqrt => kalman::CovarianceForm::SquareRoot,
     };
-    kalman::Filter::new(engine_model(path, m)?, m.x0.as_slice(), &to_faer(P0), form)
+    kalman::Filter::new(engine_model(path, m)?, m.x0.as_slice(), P0, form)
         .map_err(|e| model_error(path, e))
 }
 
@@ -545,34 +532,29 @@ pub fn discretize(args: &DiscretizeArgs) -> Result<()> {
         }
         e => err(e),
     })?;
-    let file = discrete_file(&d, c.R.as_ref());
+    let file = discrete_file(&d, c.R.as_ref()).map_err(err)?;
     write_model(&dest, &file)
 }
 
-/// The discrete model file of a discretised system: `Q = G Q Gᵀ`, `S = G Q Jᵀ` (written
-/// only when non-zero) and `R = R_c + J Q Jᵀ` (written when `R_c` is given or `J ≠ 0`).
-fn discrete_file(d: &model::DiscreteSs, R: Option<&DMatrix<f64>>) -> DiscreteFile {
-    let nonzero = |m: &DMatrix<f64>| m.iter().any(|v| v.abs() > 0.0);
-    let S = d.cross_covariance();
-    let JQJ = d.output_noise_covariance();
-    let R = match R {
-        Some(r) => Some(r + &JQJ),
-        None if nonzero(&JQJ) => Some(JQJ),
-        None => None,
-    };
+/// The discrete model file of a discretised system, its noise in filter form by
+/// [`model::DiscreteSs::filter_noise`]: `Q = G Q Gᵀ`, `S = G Q Jᵀ` (written only when
+/// non-zero) and `R = R_c + J Q Jᵀ` (written when `R_c` is given or `J ≠ 0`).
+fn discrete_file(d: &model::DiscreteSs, R: Option<&DMatrix<f64>>) -> model::Result<DiscreteFile> {
+    let noise = d.filter_noise(R)?;
+    let written = R.is_some() || noise.r.iter().any(|v| v.abs() > 0.0);
     let p = d.n_inputs();
-    DiscreteFile {
+    Ok(DiscreteFile {
         dt: d.dt(),
         F: to_rows(d.f()),
         B: (p > 0).then(|| to_rows(d.b())),
         H: to_rows(d.h()),
         D: (p > 0).then(|| to_rows(d.d())),
-        Q: to_rows(&d.process_covariance()),
-        R: R.as_ref().map(to_rows),
-        S: nonzero(&S).then(|| to_rows(&S)),
+        Q: to_rows(&noise.q),
+        R: written.then(|| to_rows(&noise.r)),
+        S: noise.s.as_ref().map(to_rows),
         x0: None,
         P0: None,
-    }
+    })
 }
 
 /// Writes a discrete model as JSON, or TOML when the destination's name ends in `.toml`.
@@ -651,26 +633,14 @@ pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
     let model = model_file::load_discrete(path)?;
     // The engine's model checks symmetry and PSD of Q, R and the joint noise covariance.
     engine_model(path, &model)?;
-    let (F, H, Q, R) = (
-        to_faer(&model.F),
-        to_faer(&model.H),
-        to_faer(&model.Q),
-        to_faer(&model.R),
-    );
-    let S = model.S.as_ref().map(to_faer);
-    let ss = kalman::riccati::dare(
-        F.as_ref(),
-        H.as_ref(),
-        Q.as_ref(),
-        R.as_ref(),
-        S.as_ref().map(Mat::as_ref),
-    )
-    .map_err(|e| match e {
-        kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
-            Error::Compute(format!("{}: steady state: {e}", path.display()))
-        }
-        e => model_error(path, e),
-    })?;
+    let S = model.S.as_ref().map(|s| s as &dyn kalman::MatrixInput);
+    let ss =
+        kalman::riccati::dare(&model.F, &model.H, &model.Q, &model.R, S).map_err(|e| match e {
+            kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
+                Error::Compute(format!("{}: steady state: {e}", path.display()))
+            }
+            e => model_error(path, e),
+        })?;
     let m = |a: &Mat<f64>| Some(serde_json::json!(faer_rows(a.as_ref())));
     let text = json_object(&[
         ("P", m(&ss.prior)),

@@ -178,7 +178,21 @@ fn test(args: &[String]) -> Result<()> {
     let mut cmd = cargo();
     cmd.args(["test", "--workspace", "--all-features", "--doc"]);
     run(cmd)?;
+    downstream()?;
     python::test()
+}
+
+/// Builds and runs `tests/downstream`, a user's project outside the workspace that depends on
+/// the library crates by path with only the features a user enables. It shares the
+/// workspace's target directory, so only the project itself is compiled anew.
+fn downstream() -> Result<()> {
+    let target =
+        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root().join("target"), PathBuf::from);
+    let mut cmd = cargo();
+    cmd.args(["test", "--manifest-path"])
+        .arg(root().join("tests/downstream/Cargo.toml"))
+        .env("CARGO_TARGET_DIR", target);
+    run(cmd).context("the downstream user project (tests/downstream)")
 }
 
 fn reproduce(args: &[String]) -> Result<()> {

@@ -12,7 +12,8 @@ use super::{
     relative, spectral, symmetrise,
 };
 use crate::Error;
-use crate::model::check;
+use crate::MatrixInput;
+use crate::model::{check, owned};
 
 /// Steady state of the Kalman–Bucy filter: the stabilising P of the filter CARE
 /// A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0, where `Q` is the n×n process-noise intensity as it
@@ -37,22 +38,24 @@ use crate::model::check;
 /// assert!((ss.covariance[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-12);
 /// ```
 pub fn care(
-    A: MatRef<'_, f64>,
-    H: MatRef<'_, f64>,
-    Q: MatRef<'_, f64>,
-    R: MatRef<'_, f64>,
+    A: impl MatrixInput,
+    H: impl MatrixInput,
+    Q: impl MatrixInput,
+    R: impl MatrixInput,
 ) -> Result<ContinuousSteadyState, Error> {
     care_with(A, H, Q, R, &RiccatiOptions::default())
 }
 
 /// [`care`] with explicit options.
 pub fn care_with(
-    A: MatRef<'_, f64>,
-    H: MatRef<'_, f64>,
-    Q: MatRef<'_, f64>,
-    R: MatRef<'_, f64>,
+    A: impl MatrixInput,
+    H: impl MatrixInput,
+    Q: impl MatrixInput,
+    R: impl MatrixInput,
     opts: &RiccatiOptions,
 ) -> Result<ContinuousSteadyState, Error> {
+    let (A, H, Q, R) = (owned(&A), owned(&H), owned(&Q), owned(&R));
+    let (A, H, Q, R) = (A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref());
     let n = A.nrows();
     let m = H.nrows();
     check("A", A, n, n)?;
@@ -93,11 +96,13 @@ pub fn care_with(
 /// # Ok::<(), kalman::Error>(())
 /// ```
 pub fn clqr(
-    A: MatRef<'_, f64>,
-    B: MatRef<'_, f64>,
-    Q: MatRef<'_, f64>,
-    R: MatRef<'_, f64>,
+    A: impl MatrixInput,
+    B: impl MatrixInput,
+    Q: impl MatrixInput,
+    R: impl MatrixInput,
 ) -> Result<Lqr, Error> {
+    let (A, B, Q, R) = (owned(&A), owned(&B), owned(&Q), owned(&R));
+    let (A, B, Q, R) = (A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref());
     let n = A.nrows();
     let m = B.ncols();
     check("A", A, n, n)?;
@@ -124,12 +129,14 @@ pub fn clqr(
 /// Relative residual ‖A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q‖_F / ‖P‖_F of a candidate filter-CARE
 /// solution.
 pub fn care_residual(
-    A: MatRef<'_, f64>,
-    H: MatRef<'_, f64>,
-    Q: MatRef<'_, f64>,
-    R: MatRef<'_, f64>,
-    P: MatRef<'_, f64>,
+    A: impl MatrixInput,
+    H: impl MatrixInput,
+    Q: impl MatrixInput,
+    R: impl MatrixInput,
+    P: impl MatrixInput,
 ) -> f64 {
+    let (A, H, Q, R, P) = (owned(&A), owned(&H), owned(&Q), owned(&R), owned(&P));
+    let (A, H, Q, R, P) = (A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), P.as_ref());
     let HP = H * P;
     let corr = match R.llt(Side::Lower) {
         Ok(llt) => HP.transpose() * llt.solve(&HP),

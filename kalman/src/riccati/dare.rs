@@ -11,7 +11,8 @@ use super::{
     Lqr, Names, Pair, RiccatiOptions, Solved, SteadyState, all_finite, factor_r, relative,
     spectral, symmetrise,
 };
-use crate::model::check;
+use crate::MatrixInput;
+use crate::model::{check, owned};
 use crate::storage::Dims;
 use crate::{Error, Model};
 
@@ -35,11 +36,11 @@ use crate::{Error, Model};
 /// assert!((ss.gain[(0, 0)] - p / (p + 1.0)).abs() < 1e-12);
 /// ```
 pub fn dare(
-    F: MatRef<'_, f64>,
-    H: MatRef<'_, f64>,
-    Q: MatRef<'_, f64>,
-    R: MatRef<'_, f64>,
-    S: Option<MatRef<'_, f64>>,
+    F: impl MatrixInput,
+    H: impl MatrixInput,
+    Q: impl MatrixInput,
+    R: impl MatrixInput,
+    S: Option<&dyn MatrixInput>,
 ) -> Result<SteadyState, Error> {
     dare_with(F, H, Q, R, S, &RiccatiOptions::default())
 }
@@ -51,19 +52,35 @@ impl SteadyState {
     /// # Errors
     /// As [`dare`].
     pub fn of<D: Dims>(model: &Model<D>) -> Result<Self, Error> {
-        dare(model.f(), model.h(), model.q(), model.r(), model.s())
+        let s = model.s();
+        dare(
+            model.f(),
+            model.h(),
+            model.q(),
+            model.r(),
+            s.as_ref().map(|s| s as &dyn MatrixInput),
+        )
     }
 }
 
 /// [`dare`] with explicit options.
 pub fn dare_with(
-    F: MatRef<'_, f64>,
-    H: MatRef<'_, f64>,
-    Q: MatRef<'_, f64>,
-    R: MatRef<'_, f64>,
-    S: Option<MatRef<'_, f64>>,
+    F: impl MatrixInput,
+    H: impl MatrixInput,
+    Q: impl MatrixInput,
+    R: impl MatrixInput,
+    S: Option<&dyn MatrixInput>,
     opts: &RiccatiOptions,
 ) -> Result<SteadyState, Error> {
+    let (F, H, Q, R) = (owned(&F), owned(&H), owned(&Q), owned(&R));
+    let S = S.map(owned);
+    let (F, H, Q, R, S) = (
+        F.as_ref(),
+        H.as_ref(),
+        Q.as_ref(),
+        R.as_ref(),
+        S.as_ref().map(Mat::as_ref),
+    );
     let n = F.nrows();
     let m = H.nrows();
     check("F", F, n, n)?;
@@ -139,24 +156,33 @@ pub fn dare_with(
 /// assert!(rho < 1.0);
 /// ```
 pub fn dlqr(
-    A: MatRef<'_, f64>,
-    B: MatRef<'_, f64>,
-    Q: MatRef<'_, f64>,
-    R: MatRef<'_, f64>,
-    N: Option<MatRef<'_, f64>>,
+    A: impl MatrixInput,
+    B: impl MatrixInput,
+    Q: impl MatrixInput,
+    R: impl MatrixInput,
+    N: Option<&dyn MatrixInput>,
 ) -> Result<Lqr, Error> {
     dlqr_with(A, B, Q, R, N, &RiccatiOptions::default())
 }
 
 /// [`dlqr`] with explicit options.
 pub fn dlqr_with(
-    A: MatRef<'_, f64>,
-    B: MatRef<'_, f64>,
-    Q: MatRef<'_, f64>,
-    R: MatRef<'_, f64>,
-    N: Option<MatRef<'_, f64>>,
+    A: impl MatrixInput,
+    B: impl MatrixInput,
+    Q: impl MatrixInput,
+    R: impl MatrixInput,
+    N: Option<&dyn MatrixInput>,
     opts: &RiccatiOptions,
 ) -> Result<Lqr, Error> {
+    let (A, B, Q, R) = (owned(&A), owned(&B), owned(&Q), owned(&R));
+    let N = N.map(owned);
+    let (A, B, Q, R, N) = (
+        A.as_ref(),
+        B.as_ref(),
+        Q.as_ref(),
+        R.as_ref(),
+        N.as_ref().map(Mat::as_ref),
+    );
     let n = A.nrows();
     let m = B.ncols();
     check("A", A, n, n)?;
@@ -206,6 +232,27 @@ pub fn dlqr_with(
 /// candidate filter-DARE solution (0 when both the residual and P vanish). Used by the
 /// solvers' own check and by tests.
 pub fn dare_residual(
+    F: impl MatrixInput,
+    H: impl MatrixInput,
+    Q: impl MatrixInput,
+    R: impl MatrixInput,
+    S: Option<&dyn MatrixInput>,
+    P: impl MatrixInput,
+) -> f64 {
+    let (F, H, Q, R, P) = (owned(&F), owned(&H), owned(&Q), owned(&R), owned(&P));
+    let S = S.map(owned);
+    residual(
+        F.as_ref(),
+        H.as_ref(),
+        Q.as_ref(),
+        R.as_ref(),
+        S.as_ref().map(Mat::as_ref),
+        P.as_ref(),
+    )
+}
+
+/// [`dare_residual`] on faer views (the solvers' own check).
+pub(super) fn residual(
     F: MatRef<'_, f64>,
     H: MatRef<'_, f64>,
     Q: MatRef<'_, f64>,
@@ -354,14 +401,14 @@ fn discrete_dual(
         iterations += it;
         newton_steps = 20;
     }
-    let mut relative_residual = dare_residual(F, H, Q, R, S, X.as_ref());
+    let mut relative_residual = residual(F, H, Q, R, S, X.as_ref());
     for _ in 0..newton_steps {
         if relative_residual <= 1e-3 * opts.residual_tolerance {
             break;
         }
         match newton_polish(F, H, Q, R, S, &X) {
             Some(Xn) => {
-                let r = dare_residual(F, H, Q, R, S, Xn.as_ref());
+                let r = residual(F, H, Q, R, S, Xn.as_ref());
                 if r < relative_residual {
                     X = Xn;
                     relative_residual = r;

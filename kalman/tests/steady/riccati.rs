@@ -5,7 +5,7 @@
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side, mat};
 use kalman::riccati::{dare, dare_residual, dlqr};
-use kalman::{CovarianceForm, DynDims, Error, Filter, Model};
+use kalman::{CovarianceForm, DynDims, Error, Filter, MatrixInput, Model};
 use proptest::prelude::*;
 
 use super::common::{joint_noise, randn, rel, rho, rng, spd, with_radius};
@@ -50,7 +50,7 @@ proptest! {
         let H = randn(&mut g, m, n);
         let (Q, R, S) = joint_noise(&mut g, n, m);
         let S = cross.then_some(S);
-        let ss = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), S.as_ref().map(|s| s.as_ref()));
+        let ss = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), S.as_ref().map(|s| s as &dyn MatrixInput));
         let ss = match ss {
             Ok(ss) => ss,
             // A random H can make a mode nearly unobservable; then the typed PBH error is the
@@ -58,7 +58,7 @@ proptest! {
             Err(Error::NotDetectable { .. }) => return Ok(()),
             Err(e) => return Err(TestCaseError::fail(format!("{e}"))),
         };
-        let res = dare_residual(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), S.as_ref().map(|s| s.as_ref()), ss.prior.as_ref());
+        let res = dare_residual(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), S.as_ref().map(|s| s as &dyn MatrixInput), ss.prior.as_ref());
         prop_assert!(res < 1e-10, "residual {res:e}");
         prop_assert!(ss.relative_residual < 1e-10);
         let (P, _) = iterate_filter(&F, &H, &Q, &R, S.as_ref());

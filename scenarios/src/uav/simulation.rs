@@ -3,9 +3,8 @@
 //! itself on `kalman::FixedFilter<2, 1, 1>`, plus the campaign's slice of runs reduced to
 //! their records.
 
-use faer::{Mat, MatRef};
 use kalman::diagnostics as spectrum;
-use kalman::{CovarianceForm, FixedDims, FixedFilter, Model};
+use kalman::{CovarianceForm, FixedDims, FixedFilter, Model, ToNalgebra};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rand::RngExt;
 use rand_distr::StandardNormal;
@@ -14,14 +13,6 @@ use super::parameters::UavParams;
 use super::records::RunRecord;
 use crate::error::{Error, Result};
 use crate::montecarlo::{Shard, par_runs, run_rng};
-
-pub(super) fn to_faer(m: &DMatrix<f64>) -> Mat<f64> {
-    Mat::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
-}
-
-pub(super) fn to_na(m: MatRef<'_, f64>) -> DMatrix<f64> {
-    DMatrix::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
-}
 
 pub(super) fn arr22(m: &DMatrix<f64>) -> [[f64; 2]; 2] {
     [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]]
@@ -81,21 +72,15 @@ pub(super) fn design(p: &UavParams) -> Result<Design> {
     let r = p.measurement_variance;
     let [q1, q2] = p.lqr_state_weight;
     let lqr = kalman::riccati::dlqr(
-        to_faer(&f).as_ref(),
-        to_faer(&b).as_ref(),
+        &f,
+        &b,
         faer::mat![[q1, 0.0], [0.0, q2]].as_ref(),
         faer::mat![[p.lqr_input_weight]].as_ref(),
         None,
     )
     .map_err(kalman_err("discrete LQR"))?;
-    let ss = kalman::riccati::dare(
-        to_faer(&f).as_ref(),
-        to_faer(&h).as_ref(),
-        to_faer(&q).as_ref(),
-        faer::mat![[r]].as_ref(),
-        None,
-    )
-    .map_err(kalman_err("filter DARE"))?;
+    let ss = kalman::riccati::dare(&f, &h, &q, faer::mat![[r]].as_ref(), None)
+        .map_err(kalman_err("filter DARE"))?;
     // Reference feedforward: [[F − I, B], [H, 0]]·[N_x; N_u] = [0; 0; 1].
     let m = Matrix3::new(
         f[(0, 0)] - 1.0,
@@ -115,10 +100,10 @@ pub(super) fn design(p: &UavParams) -> Result<Design> {
             "uav: [[F − I, B], [H, 0]] is singular: the plant cannot hold a constant output",
         ))?;
     Ok(Design {
-        l: to_na(lqr.gain.as_ref()),
-        k: to_na(ss.gain.as_ref()),
-        k_pred: to_na(ss.predictor_gain.as_ref()),
-        p_prior: to_na(ss.prior.as_ref()),
+        l: lqr.gain.to_nalgebra(),
+        k: ss.gain.to_nalgebra(),
+        k_pred: ss.predictor_gain.to_nalgebra(),
+        p_prior: ss.prior.to_nalgebra(),
         f,
         b,
         h,

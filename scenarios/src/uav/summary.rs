@@ -8,9 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::parameters::UavParams;
 use super::records::RunRecord;
-use super::simulation::{
-    Trace, arr22, continuous, design, kalman_err, model_err, simulate, to_faer,
-};
+use super::simulation::{Trace, arr22, continuous, design, kalman_err, model_err, simulate};
 use crate::error::{Error, Result};
 
 /// Monte Carlo aggregates, recomputed from the run records by both `run` and `merge`.
@@ -183,16 +181,15 @@ fn norm2(a: [f64; 2]) -> f64 {
 
 fn kalman_bucy(p: &UavParams) -> Result<(KalmanBucyCheck, Vec<[f64; 3]>)> {
     let sys = continuous(p)?;
-    let a = to_faer(sys.a());
+    let a = sys.a();
     let gwg = sys.g() * sys.w() * sys.g().transpose();
-    let qc = to_faer(&gwg);
-    let h = to_faer(sys.c());
+    let qc = &gwg;
+    let h = sys.c();
     let rc = p.measurement_variance * p.dt_s;
     let rcm = faer::mat![[rc]];
-    let care = kalman::riccati::care(a.as_ref(), h.as_ref(), qc.as_ref(), rcm.as_ref())
-        .map_err(kalman_err("CARE"))?;
+    let care = kalman::riccati::care(a, h, qc, rcm.as_ref()).map_err(kalman_err("CARE"))?;
     let kc = [care.gain[(0, 0)], care.gain[(1, 0)]];
-    let kb = kalman::continuous::KalmanBucy::new(a.as_ref(), h.as_ref(), qc.as_ref(), rcm.as_ref())
+    let kb = kalman::continuous::KalmanBucy::new(a, h, qc, rcm.as_ref())
         .map_err(kalman_err("Kalman–Bucy"))?;
     let [p0, p1] = p.initial_covariance;
     let pinit = faer::mat![[p0, 0.0], [0.0, p1]];
@@ -231,14 +228,8 @@ fn kalman_bucy(p: &UavParams) -> Result<(KalmanBucyCheck, Vec<[f64; 3]>)> {
             model::NoiseConvention::VanLoan,
         )
         .map_err(model_err("discretisation"))?;
-        let ss = kalman::riccati::dare(
-            to_faer(d.f()).as_ref(),
-            to_faer(d.h()).as_ref(),
-            to_faer(d.q()).as_ref(),
-            faer::mat![[rc / dt]].as_ref(),
-            None,
-        )
-        .map_err(kalman_err("filter DARE"))?;
+        let ss = kalman::riccati::dare(d.f(), d.h(), d.q(), faer::mat![[rc / dt]].as_ref(), None)
+            .map_err(kalman_err("filter DARE"))?;
         let kd = [ss.gain[(0, 0)] / dt, ss.gain[(1, 0)] / dt];
         table.push(GainRow {
             dt_s: dt,
