@@ -56,7 +56,23 @@ pub struct RtsSmoother {
     steps: usize,
 }
 
-/// Output of [`RtsSmoother::smooth`].
+/// Output of [`RtsSmoother::smooth`] and [`Filter::run_smoothed`].
+///
+/// # Example
+/// ```
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
+///
+/// // A constant observed twice in unit noise, prior N(0, 1): every smoothed estimate is the
+/// // posterior of all data, mean (1 + 2)/3 = 1 and variance 1/3.
+/// let model = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.0]], &[[1.0]])?;
+/// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
+/// let s = filter.run_smoothed([[1.0], [2.0]])?;
+/// assert_eq!((s.means.nrows(), s.means.ncols(), s.covariances.len()), (1, 2, 2));
+/// for k in 0..2 {
+///     assert!((s.means[(0, k)] - 1.0).abs() < 1e-12 && (s.covariances[k][(0, 0)] - 1.0 / 3.0).abs() < 1e-12);
+/// }
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Smoothed {
     /// Smoothed means: column k is x_{k|N−1} (n×N).

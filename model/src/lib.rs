@@ -58,12 +58,45 @@
 //! # Ok::<(), model::Error>(())
 //! ```
 //!
+//! # To a Kalman filter
+//!
+//! Matrices go in and come out as nalgebra `DMatrix<f64>`. A discretised model's noise in
+//! the form a Kalman filter takes is [`DiscreteSs::filter_noise`] (`G Q Gᵀ`, `R_c + J Q Jᵀ`,
+//! and the cross-covariance `G Q Jᵀ` that Tustin or held noise brings); with the feature
+//! `kalman` (`stochest-model = { version = "0.1", features = ["kalman"] }`),
+//! [`DiscreteSs::to_kalman`] builds the ready `kalman::Model` in one call:
+//!
+#![cfg_attr(
+    feature = "kalman",
+    doc = r##"
+```
+use model::nalgebra::dmatrix;
+use model::{ContinuousSs, Discretization, NoiseConvention};
+use kalman::{CovarianceForm, Filter, ToNalgebra};
+
+// Constant velocity driven by white acceleration (intensity 0.1), position measured.
+let sys = ContinuousSs::autonomous(dmatrix![0.0, 1.0; 0.0, 0.0], dmatrix![1.0, 0.0])?
+    .with_noise(dmatrix![0.0; 1.0], dmatrix![0.1])?;
+let dt = 0.5;
+let disc = sys.discretize(dt, Discretization::Zoh, NoiseConvention::VanLoan)?;
+let mut filter = Filter::new(disc.to_kalman(Some(&dmatrix![0.25]))?, &[0.0, 0.0],
+    &dmatrix![1.0, 0.0; 0.0, 1.0], CovarianceForm::Joseph)?;
+filter.step(&[0.3], None)?;
+// nalgebra out; the model's Q is Van Loan's q·[[Δt³/3, Δt²/2], [Δt²/2, Δt]].
+let q = filter.model().q().to_nalgebra();
+assert!((q - dmatrix![dt.powi(3) / 3.0, dt * dt / 2.0; dt * dt / 2.0, dt] * 0.1).norm() < 1e-15);
+# Ok::<(), model::Error>(())
+```
+"##
+)]
+//!
 //! # Modules
 //!
 //! - [`ss`]: the model types; [`tf`]: transfer functions and realisations;
 //! - [`discretize`](mod@discretize): methods and noise conventions; [`compose`]: series, parallel, feedback,
 //!   `connect`; [`analysis`]: rank, stability, gains, responses, Lyapunov;
-//! - [`shaping`]: shaping filters; [`fuel`]: the paper's model;
+//! - [`shaping`]: shaping filters; [`fuel`]: the paper's model; [`bridge`]: to a Kalman
+//!   filter's noise form and model;
 //! - `strategies` (feature `proptest`): proptest strategies for users' property tests.
 //!
 //! # References

@@ -47,6 +47,16 @@ pub fn care(
 }
 
 /// [`care`] with explicit options.
+///
+/// # Example
+/// ```
+/// use kalman::riccati::{RiccatiOptions, care_with};
+///
+/// // ẋ = w, z = x + v, q = 4, r = 1: −P² + 4 = 0, P = 2, K = 2.
+/// let ss = care_with([[0.0]], [[1.0]], [[4.0]], [[1.0]], &RiccatiOptions::default())?;
+/// assert!((ss.covariance[(0, 0)] - 2.0).abs() < 1e-12 && (ss.gain[(0, 0)] - 2.0).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 pub fn care_with(
     A: impl MatrixInput,
     H: impl MatrixInput,
@@ -128,6 +138,15 @@ pub fn clqr(
 
 /// Relative residual ‖A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q‖_F / ‖P‖_F of a candidate filter-CARE
 /// solution.
+///
+/// # Example
+/// ```
+/// use kalman::riccati::care_residual;
+///
+/// // ẋ = −x + w, z = x + v, q = r = 1: P = √2 − 1 solves −2P − P² + 1 = 0.
+/// let p = 2f64.sqrt() - 1.0;
+/// assert!(care_residual([[-1.0]], [[1.0]], [[1.0]], [[1.0]], [[p]]) < 1e-15);
+/// ```
 pub fn care_residual(
     A: impl MatrixInput,
     H: impl MatrixInput,

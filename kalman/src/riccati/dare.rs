@@ -64,6 +64,17 @@ impl SteadyState {
 }
 
 /// [`dare`] with explicit options.
+///
+/// # Example
+/// ```
+/// use kalman::riccati::{RiccatiOptions, dare_with};
+///
+/// // A stricter residual check still accepts the scalar random walk, P = (1 + √5)/2.
+/// let opts = RiccatiOptions { residual_tolerance: 1e-13, ..RiccatiOptions::default() };
+/// let ss = dare_with([[1.0]], [[1.0]], [[1.0]], [[1.0]], None, &opts)?;
+/// assert!((ss.prior[(0, 0)] - (1.0 + 5f64.sqrt()) / 2.0).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 pub fn dare_with(
     F: impl MatrixInput,
     H: impl MatrixInput,
@@ -166,6 +177,17 @@ pub fn dlqr(
 }
 
 /// [`dlqr`] with explicit options.
+///
+/// # Example
+/// ```
+/// use kalman::riccati::{RiccatiOptions, dlqr_with};
+///
+/// // x_{k+1} = 2 x_k + u_k, cost Σ x² + u²: X = 2 + √5 (from X² − 4X − 1 = 0), L = 2X/(1 + X).
+/// let lqr = dlqr_with([[2.0]], [[1.0]], [[1.0]], [[1.0]], None, &RiccatiOptions::default())?;
+/// let x = 2.0 + 5f64.sqrt();
+/// assert!((lqr.cost[(0, 0)] - x).abs() < 1e-12 && (lqr.gain[(0, 0)] - 2.0 * x / (1.0 + x)).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 pub fn dlqr_with(
     A: impl MatrixInput,
     B: impl MatrixInput,
@@ -231,6 +253,17 @@ pub fn dlqr_with(
 /// Relative residual ‖F P Fᵀ + Q − (F P Hᵀ + S)(H P Hᵀ + R)⁻¹(⋯)ᵀ − P‖_F / ‖P‖_F of a
 /// candidate filter-DARE solution (0 when both the residual and P vanish). Used by the
 /// solvers' own check and by tests.
+///
+/// # Example
+/// ```
+/// use kalman::riccati::dare_residual;
+///
+/// // The golden ratio solves the scalar random walk's DARE p = p + 1 − p²/(p + 1); 2 does not.
+/// let p = (1.0 + 5f64.sqrt()) / 2.0;
+/// assert!(dare_residual([[1.0]], [[1.0]], [[1.0]], [[1.0]], None, [[p]]) < 1e-15);
+/// // At P = 2: residual 2 + 1 − 4/3 − 2 = −1/3, relative to ‖P‖ = 2.
+/// assert!((dare_residual([[1.0]], [[1.0]], [[1.0]], [[1.0]], None, [[2.0]]) - 1.0 / 6.0).abs() < 1e-15);
+/// ```
 pub fn dare_residual(
     F: impl MatrixInput,
     H: impl MatrixInput,
