@@ -287,7 +287,7 @@ pub(crate) fn dare<'py>(
             H.as_ref(),
             Q.as_ref(),
             R.as_ref(),
-            S.as_ref().map(|s| s.as_ref()),
+            S.as_ref().map(|s| s as &dyn kalman::MatrixInput),
         )
         .map_err(engine("dare"))?;
         let out = PyDict::new(py);
@@ -320,7 +320,7 @@ pub(crate) fn dlqr<'py>(
             B.as_ref(),
             Q.as_ref(),
             R.as_ref(),
-            N.as_ref().map(|s| s.as_ref()),
+            N.as_ref().map(|s| s as &dyn kalman::MatrixInput),
         )
         .map_err(engine("dlqr"))?;
         let out = PyDict::new(py);
