@@ -146,9 +146,9 @@ assert_eq!(k.shape(), (2, 1));
 
 mod consistency;
 pub mod continuous;
-pub mod diagnostics;
 #[cfg(feature = "nalgebra")]
 mod convert;
+pub mod diagnostics;
 mod error;
 mod filter;
 pub mod fit;
