@@ -27,7 +27,7 @@ use crate::model::{check, owned};
 /// A_γ = A_c − γI, V = A_γ + G A_γ⁻ᵀ Q: A₀ = I + 2γV⁻¹, G₀ = 2γ V⁻¹ G A_γ⁻ᵀ,
 /// H₀ = 2γ V⁻ᵀ Q A_γ⁻¹; the doubling then converges to X = P.
 ///
-/// Errors as [`dare`] with the continuous stability boundary (Re λ ≥ 0).
+/// Errors as [`dare`](super::dare) with the continuous stability boundary (Re λ ≥ 0).
 ///
 /// ```
 /// use faer::mat;
