@@ -21,7 +21,9 @@
 
 use nalgebra::DMatrix;
 
-use crate::error::{Error, Result};
+#[cfg(feature = "kalman")]
+use crate::error::Error;
+use crate::error::Result;
 use crate::ss::DiscreteSs;
 use crate::validate;
 
@@ -56,8 +58,9 @@ impl DiscreteSs {
     /// The filter-form noise covariances with sensor noise `r_c` (m×m; `None` for none).
     ///
     /// # Errors
-    /// [`Error::DimensionMismatch`], [`Error::NonFiniteMatrix`], [`Error::NotSymmetric`] or
-    /// [`Error::NotPositiveSemiDefinite`] naming `R` for a bad `r_c`.
+    /// [`crate::Error::DimensionMismatch`], [`crate::Error::NonFiniteMatrix`],
+    /// [`crate::Error::NotSymmetric`] or [`crate::Error::NotPositiveSemiDefinite`] naming `R`
+    /// for a bad `r_c`.
     ///
     /// # Example
     /// ```
