@@ -7,7 +7,7 @@
 //! the *prior state error* with v_k; for a prior x_{k|k−1} built by the prediction from
 //! step k − 1 it is the S of the step before: M_k = S_{k−1} (see the module docstring).
 //!
-//! Every entry point runs inside [`guard`]: errors are `ValueError`/`TypeError` with one
+//! Every entry point runs inside `guard`: errors are `ValueError`/`TypeError` with one
 //! line naming the argument, and a panic (a bug) becomes a `RuntimeError` instead of
 //! unwinding into the interpreter.
 #![deny(missing_docs)]
