@@ -286,3 +286,32 @@ pub(crate) fn array3_out(
     let arr = Array3::from_shape_vec((a, b, c), data).unwrap_or_else(|_| Array3::zeros((a, b, c)));
     PyArray3::from_owned_array(py, arr)
 }
+
+/// A 2-d float array argument as a faer matrix: any shape, finite entries (the engine checks
+/// shapes and the rest, naming the matrix).
+pub(crate) fn mat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<kalman::faer::Mat<f64>> {
+    let arr = float_array(obj, name)?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    let [r, c] = view.shape() else {
+        return Err(value_error(format!(
+            "{name} has shape {}, expected a 2-d array",
+            shape_str(view.shape())
+        )));
+    };
+    let (r, c) = (*r, *c);
+    let mut buf = vec![0.0; r * c];
+    copy_finite(&view, name, &mut buf)?;
+    Ok(kalman::faer::Mat::from_fn(r, c, |i, j| buf[i * c + j]))
+}
+
+/// A faer matrix as a new (r, c) array.
+pub(crate) fn faer_out<'py>(
+    py: Python<'py>,
+    m: kalman::faer::MatRef<'_, f64>,
+) -> Bound<'py, numpy::PyArray2<f64>> {
+    numpy::PyArray2::from_owned_array(
+        py,
+        numpy::ndarray::Array2::from_shape_fn((m.nrows(), m.ncols()), |(i, j)| m[(i, j)]),
+    )
+}

@@ -5,32 +5,15 @@
 //! engine's message, which names the matrix and the rule.
 #![allow(non_snake_case)]
 
-use kalman::faer::{Mat, MatRef};
+use kalman::faer::Mat;
 use kalman::{CovarianceForm, DynDims, Filter, Model, riccati, smoother::RtsSmoother};
 use numpy::ndarray::{Array1, Array2};
-use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{array3_out, copy_finite, float_array, shape_str, value_error};
+use crate::convert::{array3_out, faer_out, mat, value_error};
 use crate::guard;
-
-/// A 2-D float array argument as a faer matrix (finite entries; the engine checks the rest).
-fn mat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Mat<f64>> {
-    let arr = float_array(obj, name)?;
-    let ro = arr.readonly();
-    let view = ro.as_array();
-    let [r, c] = view.shape() else {
-        return Err(value_error(format!(
-            "{name} has shape {}, expected a 2-d array",
-            shape_str(view.shape())
-        )));
-    };
-    let (r, c) = (*r, *c);
-    let mut buf = vec![0.0; r * c];
-    copy_finite(&view, name, &mut buf)?;
-    Ok(Mat::from_fn(r, c, |i, j| buf[i * c + j]))
-}
 
 /// An optional matrix argument (`None` → absent).
 fn opt_mat(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<Mat<f64>>> {
@@ -50,13 +33,6 @@ fn vector(obj: &Bound<'_, PyAny>, name: &str, len: usize) -> PyResult<Vec<f64>> 
 /// Maps an engine error to a `ValueError` naming the function.
 fn engine(context: &str) -> impl Fn(kalman::Error) -> PyErr + '_ {
     move |e| value_error(format!("{context}: {e}"))
-}
-
-/// A faer matrix as a new (r, c) array.
-fn out_mat<'py>(py: Python<'py>, m: MatRef<'_, f64>) -> Bound<'py, PyArray2<f64>> {
-    let (r, c) = (m.nrows(), m.ncols());
-    let arr = Array2::from_shape_fn((r, c), |(i, j)| m[(i, j)]);
-    PyArray2::from_owned_array(py, arr)
 }
 
 /// The validated model and filter of `filter`/`smooth`.
@@ -291,11 +267,11 @@ pub(crate) fn dare<'py>(
         )
         .map_err(engine("dare"))?;
         let out = PyDict::new(py);
-        out.set_item("P", out_mat(py, ss.prior.as_ref()))?;
-        out.set_item("P_post", out_mat(py, ss.posterior.as_ref()))?;
-        out.set_item("K", out_mat(py, ss.gain.as_ref()))?;
-        out.set_item("K_pred", out_mat(py, ss.predictor_gain.as_ref()))?;
-        out.set_item("innovation_cov", out_mat(py, ss.innovation_cov.as_ref()))?;
+        out.set_item("P", faer_out(py, ss.prior.as_ref()))?;
+        out.set_item("P_post", faer_out(py, ss.posterior.as_ref()))?;
+        out.set_item("K", faer_out(py, ss.gain.as_ref()))?;
+        out.set_item("K_pred", faer_out(py, ss.predictor_gain.as_ref()))?;
+        out.set_item("innovation_cov", faer_out(py, ss.innovation_cov.as_ref()))?;
         Ok(out)
     })
 }
@@ -324,8 +300,8 @@ pub(crate) fn dlqr<'py>(
         )
         .map_err(engine("dlqr"))?;
         let out = PyDict::new(py);
-        out.set_item("K", out_mat(py, lqr.gain.as_ref()))?;
-        out.set_item("P", out_mat(py, lqr.cost.as_ref()))?;
+        out.set_item("K", faer_out(py, lqr.gain.as_ref()))?;
+        out.set_item("P", faer_out(py, lqr.cost.as_ref()))?;
         Ok(out)
     })
 }
@@ -345,8 +321,8 @@ pub(crate) fn care<'py>(
         let ss = riccati::care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref())
             .map_err(engine("care"))?;
         let out = PyDict::new(py);
-        out.set_item("P", out_mat(py, ss.covariance.as_ref()))?;
-        out.set_item("K", out_mat(py, ss.gain.as_ref()))?;
+        out.set_item("P", faer_out(py, ss.covariance.as_ref()))?;
+        out.set_item("K", faer_out(py, ss.gain.as_ref()))?;
         Ok(out)
     })
 }

@@ -3,38 +3,13 @@
 //! information criteria; fit errors become `ValueError`s.
 #![allow(non_snake_case)]
 
-use kalman::faer::{Mat, MatRef};
 use kalman::fit::{EmOptions, Free, MleOptions, Series, StandardMap, Structure, System, em, mle};
-use numpy::ndarray::Array2;
-use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{copy_finite, float_array, read_vector, shape_str, value_error};
+use crate::convert::{faer_out, mat, read_vector, value_error};
 use crate::guard;
-
-fn mat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Mat<f64>> {
-    let arr = float_array(obj, name)?;
-    let ro = arr.readonly();
-    let view = ro.as_array();
-    let [r, c] = view.shape() else {
-        return Err(value_error(format!(
-            "{name} has shape {}, expected a 2-d array",
-            shape_str(view.shape())
-        )));
-    };
-    let (r, c) = (*r, *c);
-    let mut buf = vec![0.0; r * c];
-    copy_finite(&view, name, &mut buf)?;
-    Ok(Mat::from_fn(r, c, |i, j| buf[i * c + j]))
-}
-
-fn out<'py>(py: Python<'py>, m: MatRef<'_, f64>) -> Bound<'py, PyArray2<f64>> {
-    PyArray2::from_owned_array(
-        py,
-        Array2::from_shape_fn((m.nrows(), m.ncols()), |(i, j)| m[(i, j)]),
-    )
-}
 
 fn structure(s: &str, name: &str) -> PyResult<Structure> {
     Ok(match s {
@@ -122,12 +97,12 @@ pub(crate) fn fit<'py>(
         };
         let s = &result.system;
         let o = PyDict::new(py);
-        o.set_item("F", out(py, s.F.as_ref()))?;
-        o.set_item("H", out(py, s.H.as_ref()))?;
-        o.set_item("Q", out(py, s.Q.as_ref()))?;
-        o.set_item("R", out(py, s.R.as_ref()))?;
+        o.set_item("F", faer_out(py, s.F.as_ref()))?;
+        o.set_item("H", faer_out(py, s.H.as_ref()))?;
+        o.set_item("Q", faer_out(py, s.Q.as_ref()))?;
+        o.set_item("R", faer_out(py, s.R.as_ref()))?;
         o.set_item("x0", PyArray1::from_slice(py, &s.x0))?;
-        o.set_item("P0", out(py, s.P0.as_ref()))?;
+        o.set_item("P0", faer_out(py, s.P0.as_ref()))?;
         o.set_item("loglik", result.loglik)?;
         o.set_item("iterations", result.iterations)?;
         o.set_item("converged", result.converged)?;

@@ -7,32 +7,14 @@
 use std::cell::RefCell;
 
 use kalman::DynDims;
-use kalman::faer::Mat;
 use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, Ukf};
 use numpy::ndarray::{Array1, Array2};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{array3_out, copy_finite, float_array, read_vector, shape_str, value_error};
+use crate::convert::{array3_out, float_array, mat, read_vector, shape_str, value_error};
 use crate::guard;
-
-/// A 2-d float array argument as a faer matrix.
-fn mat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Mat<f64>> {
-    let arr = float_array(obj, name)?;
-    let ro = arr.readonly();
-    let view = ro.as_array();
-    let [r, c] = view.shape() else {
-        return Err(value_error(format!(
-            "{name} has shape {}, expected a 2-d array",
-            shape_str(view.shape())
-        )));
-    };
-    let (r, c) = (*r, *c);
-    let mut buf = vec![0.0; r * c];
-    copy_finite(&view, name, &mut buf)?;
-    Ok(Mat::from_fn(r, c, |i, j| buf[i * c + j]))
-}
 
 /// Calls `func(*args)` and reads its result as a vector of length `len` into `out`; on any
 /// failure keeps the first error in `slot` and writes NaN (which the engine then refuses).
