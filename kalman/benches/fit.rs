@@ -64,9 +64,9 @@ fn bench(c: &mut Criterion) {
     eprintln!(
         "LLT 3000: ln L = {:.6}, R = {:.6}, Q = diag({:.6}, {:.6}), {} iterations, converged {}",
         fit.loglik,
-        fit.system.R[(0, 0)],
-        fit.system.Q[(0, 0)],
-        fit.system.Q[(1, 1)],
+        fit.system.r[(0, 0)],
+        fit.system.q[(0, 0)],
+        fit.system.q[(1, 1)],
         fit.iterations,
         fit.converged
     );
@@ -94,7 +94,7 @@ fn bench(c: &mut Criterion) {
             let mut f = Filter::new(
                 model.clone(),
                 &fit.system.x0,
-                &fit.system.P0,
+                &fit.system.p0,
                 CovarianceForm::Standard,
             )
             .expect("filter");

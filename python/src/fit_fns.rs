@@ -97,12 +97,12 @@ pub(crate) fn fit<'py>(
         };
         let s = &result.system;
         let o = PyDict::new(py);
-        o.set_item("F", faer_out(py, s.F.as_ref()))?;
-        o.set_item("H", faer_out(py, s.H.as_ref()))?;
-        o.set_item("Q", faer_out(py, s.Q.as_ref()))?;
-        o.set_item("R", faer_out(py, s.R.as_ref()))?;
+        o.set_item("F", faer_out(py, s.f.as_ref()))?;
+        o.set_item("H", faer_out(py, s.h.as_ref()))?;
+        o.set_item("Q", faer_out(py, s.q.as_ref()))?;
+        o.set_item("R", faer_out(py, s.r.as_ref()))?;
         o.set_item("x0", PyArray1::from_slice(py, &s.x0))?;
-        o.set_item("P0", faer_out(py, s.P0.as_ref()))?;
+        o.set_item("P0", faer_out(py, s.p0.as_ref()))?;
         o.set_item("loglik", result.loglik)?;
         o.set_item("iterations", result.iterations)?;
         o.set_item("converged", result.converged)?;

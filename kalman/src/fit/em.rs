@@ -567,13 +567,13 @@ pub fn em_step(
     let es = e_step(&Flat::new(&sys), data)?;
     let mut next = sys.clone();
     if free.q != Structure::Fixed && N > 1 {
-        next.Q = to_mat(
+        next.q = to_mat(
             &es.sq.iter().map(|v| v / (N - 1) as f64).collect::<Vec<_>>(),
             n,
         );
     }
     if free.r != Structure::Fixed {
-        next.R = to_mat(&es.sr.iter().map(|v| v / N as f64).collect::<Vec<_>>(), m);
+        next.r = to_mat(&es.sr.iter().map(|v| v / N as f64).collect::<Vec<_>>(), m);
     }
     if free.x0 {
         next.x0 = es.x0.clone();
@@ -581,7 +581,7 @@ pub fn em_step(
     if free.p0_diag {
         for i in 0..n {
             let d = es.x0[i] - next.x0[i];
-            next.P0[(i, i)] = es.P0[i + i * n] + d * d;
+            next.p0[(i, i)] = es.P0[i + i * n] + d * d;
         }
     }
     Ok((es.ll, map.theta_of(&next, Some(data))))

@@ -50,7 +50,7 @@
 //! let map = StandardMap::new(base, Free { q: Structure::Diag, r: Structure::Diag, ..Free::default() })?;
 //! let fit = em(&map, &data, &EmOptions::default())?;
 //! assert!(fit.converged);
-//! assert!(fit.system.Q[(0, 0)] > 0.0 && fit.system.R[(0, 0)] > 0.0);
+//! assert!(fit.system.q[(0, 0)] > 0.0 && fit.system.r[(0, 0)] > 0.0);
 //! # Ok(())
 //! # }
 //! ```
@@ -100,19 +100,19 @@ pub(crate) const LN_2PI: f64 = 1.837_877_066_409_345_5;
 #[derive(Clone, Debug, PartialEq)]
 pub struct System {
     /// Transition (n×n).
-    pub F: Mat<f64>,
+    pub f: Mat<f64>,
     /// Measurement (m×n).
-    pub H: Mat<f64>,
+    pub h: Mat<f64>,
     /// Process noise covariance (n×n).
-    pub Q: Mat<f64>,
+    pub q: Mat<f64>,
     /// Measurement noise covariance (m×m).
-    pub R: Mat<f64>,
+    pub r: Mat<f64>,
     /// Control matrix (n×p; p = 0 without input).
-    pub B: Mat<f64>,
+    pub b: Mat<f64>,
     /// Prior mean of the first state (length n).
     pub x0: Vec<f64>,
     /// Prior covariance of the first state (n×n).
-    pub P0: Mat<f64>,
+    pub p0: Mat<f64>,
 }
 
 fn to_mat(
@@ -175,13 +175,13 @@ impl System {
         }
         let x0v = to_mat("x0", &Mat::from_fn(x0.len(), 1, |i, _| x0[i]), n, 1)?;
         Ok(Self {
-            F: to_mat("F", F, n, n)?,
-            H: to_mat("H", H, m, n)?,
-            Q: to_mat("Q", Q, n, n)?,
-            R: to_mat("R", R, m, m)?,
-            B: Mat::zeros(n, 0),
+            f: to_mat("F", F, n, n)?,
+            h: to_mat("H", H, m, n)?,
+            q: to_mat("Q", Q, n, n)?,
+            r: to_mat("R", R, m, m)?,
+            b: Mat::zeros(n, 0),
             x0: (0..n).map(|i| x0v[(i, 0)]).collect(),
-            P0: to_mat("P0", P0, n, n)?,
+            p0: to_mat("P0", P0, n, n)?,
         })
     }
 
@@ -190,21 +190,21 @@ impl System {
     /// # Errors
     /// [`FitError::Model`] naming `B`.
     pub fn with_control(mut self, B: &impl MatrixInput) -> Result<Self, FitError> {
-        self.B = to_mat("B", B, self.n(), B.ncols())?;
+        self.b = to_mat("B", B, self.n(), B.ncols())?;
         Ok(self)
     }
 
     /// Number of states.
     pub fn n(&self) -> usize {
-        self.F.nrows()
+        self.f.nrows()
     }
     /// Number of measurements.
     pub fn m(&self) -> usize {
-        self.H.nrows()
+        self.h.nrows()
     }
     /// Number of control inputs.
     pub fn p(&self) -> usize {
-        self.B.ncols()
+        self.b.ncols()
     }
 
     /// The crate's validated [`Model`] of this system.
@@ -214,13 +214,13 @@ impl System {
     pub fn model(&self) -> Result<Model<DynDims>, crate::Error> {
         let model = Model::new(
             DynDims::new(self.n(), self.m(), self.p())?,
-            &self.F,
-            &self.H,
-            &self.Q,
-            &self.R,
+            &self.f,
+            &self.h,
+            &self.q,
+            &self.r,
         )?;
         if self.p() > 0 {
-            model.with_control(&self.B)
+            model.with_control(&self.b)
         } else {
             Ok(model)
         }
@@ -387,7 +387,7 @@ pub fn log_likelihood(
     form: CovarianceForm,
 ) -> Result<f64, FitError> {
     data.check(sys)?;
-    let mut filter = Filter::new(sys.model()?, &sys.x0, &sys.P0, form)?;
+    let mut filter = Filter::new(sys.model()?, &sys.x0, &sys.p0, form)?;
     let mut ll = 0.0;
     for k in 0..data.len() {
         let u = if data.p() > 0 { Some(data.u(k)) } else { None };

@@ -40,17 +40,17 @@ pub trait ParamMap {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Derivative {
     /// ∂F/∂θ_i.
-    pub F: Option<Mat<f64>>,
+    pub f: Option<Mat<f64>>,
     /// ∂H/∂θ_i.
-    pub H: Option<Mat<f64>>,
+    pub h: Option<Mat<f64>>,
     /// ∂Q/∂θ_i.
-    pub Q: Option<Mat<f64>>,
+    pub q: Option<Mat<f64>>,
     /// ∂R/∂θ_i.
-    pub R: Option<Mat<f64>>,
+    pub r: Option<Mat<f64>>,
     /// ∂x0/∂θ_i.
     pub x0: Option<Vec<f64>>,
     /// ∂P0/∂θ_i.
-    pub P0: Option<Mat<f64>>,
+    pub p0: Option<Mat<f64>>,
 }
 
 fn check_theta(theta: &[f64], len: usize) -> Result<(), FitError> {
@@ -98,12 +98,12 @@ fn central_differences<M: ParamMap + ?Sized>(
             .map(|(a, b)| (a - b) / (2.0 * h))
             .collect();
         out.push(Derivative {
-            F: d(&hi.F, &lo.F),
-            H: d(&hi.H, &lo.H),
-            Q: d(&hi.Q, &lo.Q),
-            R: d(&hi.R, &lo.R),
+            f: d(&hi.f, &lo.f),
+            h: d(&hi.h, &lo.h),
+            q: d(&hi.q, &lo.q),
+            r: d(&hi.r, &lo.r),
             x0: dx0.iter().any(|v| *v != 0.0).then_some(dx0),
-            P0: d(&hi.P0, &lo.P0),
+            p0: d(&hi.p0, &lo.p0),
         });
     }
     Ok(out)
@@ -201,7 +201,7 @@ pub struct Free {
 /// let map = StandardMap::new(base, Free { q: Structure::Full, r: Structure::Scalar, ..Free::default() })?;
 /// assert_eq!(map.n_params(), 4);
 /// let sys = map.system(&[0.0, 0.5, 0.0, 2.0_f64.ln()])?;
-/// assert!((sys.Q[(1, 0)] - 0.5).abs() < 1e-15 && (sys.R[(0, 0)] - 2.0).abs() < 1e-15);
+/// assert!((sys.q[(1, 0)] - 0.5).abs() < 1e-15 && (sys.r[(0, 0)] - 2.0).abs() < 1e-15);
 /// # Ok(())
 /// # }
 /// ```
@@ -216,13 +216,13 @@ pub struct StandardMap {
 #[derive(Clone, Debug, PartialEq)]
 pub struct MatrixStdErrors {
     /// Of Q's entries.
-    pub Q: Option<Mat<f64>>,
+    pub q: Option<Mat<f64>>,
     /// Of R's entries.
-    pub R: Option<Mat<f64>>,
+    pub r: Option<Mat<f64>>,
     /// Of x0's entries.
     pub x0: Option<Vec<f64>>,
     /// Of P0's diagonal.
-    pub P0: Option<Vec<f64>>,
+    pub p0: Option<Vec<f64>>,
 }
 
 fn cov_count(s: Structure, n: usize) -> usize {
@@ -363,15 +363,15 @@ impl StandardMap {
     /// sample variance of the data's observed channels (1 without data).
     pub fn theta_of(&self, sys: &System, data: Option<&Series<'_>>) -> Vec<f64> {
         let fallback = data.map_or(1.0, data_scale) * 0.1;
-        let mut t = theta_of(self.free.q, &sys.Q, fallback);
-        t.extend(theta_of(self.free.r, &sys.R, fallback));
+        let mut t = theta_of(self.free.q, &sys.q, fallback);
+        t.extend(theta_of(self.free.r, &sys.r, fallback));
         if self.free.x0 {
             t.extend_from_slice(&sys.x0);
         }
         if self.free.p0_diag {
             t.extend((0..sys.n()).map(|i| {
-                if sys.P0[(i, i)] > 0.0 {
-                    sys.P0[(i, i)].ln()
+                if sys.p0[(i, i)] > 0.0 {
+                    sys.p0[(i, i)].ln()
                 } else {
                     fallback.ln()
                 }
@@ -424,16 +424,16 @@ impl StandardMap {
                 .then(|| Mat::from_fn(dim, dim, |i, j| se(&|di| pick(di).map(|a| a[(i, j)]))))
         };
         Ok(MatrixStdErrors {
-            Q: mat_se(self.free.q, n, &|di| di.Q.as_ref()),
-            R: mat_se(self.free.r, m, &|di| di.R.as_ref()),
+            q: mat_se(self.free.q, n, &|di| di.q.as_ref()),
+            r: mat_se(self.free.r, m, &|di| di.r.as_ref()),
             x0: self.free.x0.then(|| {
                 (0..n)
                     .map(|i| se(&|di| di.x0.as_ref().map(|a| a[i])))
                     .collect()
             }),
-            P0: self.free.p0_diag.then(|| {
+            p0: self.free.p0_diag.then(|| {
                 (0..n)
-                    .map(|i| se(&|di| di.P0.as_ref().map(|a| a[(i, i)])))
+                    .map(|i| se(&|di| di.p0.as_ref().map(|a| a[(i, i)])))
                     .collect()
             }),
         })
@@ -504,16 +504,16 @@ impl ParamMap for StandardMap {
         let (n, m) = (self.base.n(), self.base.m());
         let mut s = self.base.clone();
         if self.free.q != Structure::Fixed {
-            s.Q = cov_from(self.free.q, tq, n, None);
+            s.q = cov_from(self.free.q, tq, n, None);
         }
         if self.free.r != Structure::Fixed {
-            s.R = cov_from(self.free.r, tr, m, None);
+            s.r = cov_from(self.free.r, tr, m, None);
         }
         if self.free.x0 {
             s.x0 = tx.to_vec();
         }
         if self.free.p0_diag {
-            s.P0 = Mat::from_fn(n, n, |i, j| if i == j { tp[i].exp() } else { 0.0 });
+            s.p0 = Mat::from_fn(n, n, |i, j| if i == j { tp[i].exp() } else { 0.0 });
         }
         Ok(s)
     }
@@ -525,13 +525,13 @@ impl ParamMap for StandardMap {
         let mut out = Vec::with_capacity(theta.len());
         for i in 0..tq.len() {
             out.push(Derivative {
-                Q: Some(cov_from(self.free.q, tq, n, Some(i))),
+                q: Some(cov_from(self.free.q, tq, n, Some(i))),
                 ..Derivative::default()
             });
         }
         for i in 0..tr.len() {
             out.push(Derivative {
-                R: Some(cov_from(self.free.r, tr, m, Some(i))),
+                r: Some(cov_from(self.free.r, tr, m, Some(i))),
                 ..Derivative::default()
             });
         }
@@ -548,7 +548,7 @@ impl ParamMap for StandardMap {
         if self.free.p0_diag {
             for i in 0..n {
                 out.push(Derivative {
-                    P0: Some(Mat::from_fn(n, n, |r, c| {
+                    p0: Some(Mat::from_fn(n, n, |r, c| {
                         if r == i && c == i { tp[i].exp() } else { 0.0 }
                     })),
                     ..Derivative::default()
@@ -597,7 +597,7 @@ impl ParamMap for StandardMap {
 ///     System::new(&[[phi]], &[[1.0]], &[[var * (1.0 - phi * phi)]], &[[0.01]], &[0.0], &[[var]])
 /// });
 /// let sys = map.system(&[0.0, 0.0]).unwrap();
-/// assert!((sys.F[(0, 0)] - (-0.1f64).exp()).abs() < 1e-15);
+/// assert!((sys.f[(0, 0)] - (-0.1f64).exp()).abs() < 1e-15);
 /// ```
 pub struct FnMap<S, D = fn(&[f64]) -> Result<Vec<Derivative>, FitError>>
 where

@@ -24,13 +24,13 @@ impl Flat {
             n: s.n(),
             m: s.m(),
             p: s.p(),
-            F: flat(&s.F),
-            H: flat(&s.H),
-            Q: flat(&s.Q),
-            R: flat(&s.R),
-            B: flat(&s.B),
+            F: flat(&s.f),
+            H: flat(&s.h),
+            Q: flat(&s.q),
+            R: flat(&s.r),
+            B: flat(&s.b),
             x0: s.x0.clone(),
-            P0: flat(&s.P0),
+            P0: flat(&s.p0),
         }
     }
 }
@@ -47,12 +47,12 @@ struct FlatDeriv {
 impl FlatDeriv {
     fn new(d: &Derivative) -> Self {
         Self {
-            F: d.F.as_ref().map(flat),
-            H: d.H.as_ref().map(flat),
-            Q: d.Q.as_ref().map(flat),
-            R: d.R.as_ref().map(flat),
+            F: d.f.as_ref().map(flat),
+            H: d.h.as_ref().map(flat),
+            Q: d.q.as_ref().map(flat),
+            R: d.r.as_ref().map(flat),
             x0: d.x0.clone(),
-            P0: d.P0.as_ref().map(flat),
+            P0: d.p0.as_ref().map(flat),
         }
     }
 }
@@ -78,11 +78,11 @@ fn check_deriv(d: &Derivative, s: &System) -> Result<(), FitError> {
         }
         Ok(())
     };
-    bad("dF", &d.F, n, n)?;
-    bad("dH", &d.H, m, n)?;
-    bad("dQ", &d.Q, n, n)?;
-    bad("dR", &d.R, m, m)?;
-    bad("dP0", &d.P0, n, n)?;
+    bad("dF", &d.f, n, n)?;
+    bad("dH", &d.h, m, n)?;
+    bad("dQ", &d.q, n, n)?;
+    bad("dR", &d.r, m, m)?;
+    bad("dP0", &d.p0, n, n)?;
     if let Some(x) = &d.x0
         && x.len() != n
     {

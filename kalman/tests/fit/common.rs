@@ -15,18 +15,18 @@ pub fn rng(seed: u64) -> ChaCha8Rng {
 pub fn simulate_diag(sys: &System, len: usize, rng: &mut ChaCha8Rng) -> Vec<f64> {
     let (n, m) = (sys.n(), sys.m());
     let mut x: Vec<f64> = (0..n)
-        .map(|i| sys.x0[i] + sys.P0[(i, i)].sqrt() * rng.sample::<f64, _>(StandardNormal))
+        .map(|i| sys.x0[i] + sys.p0[(i, i)].sqrt() * rng.sample::<f64, _>(StandardNormal))
         .collect();
     let mut z = Vec::with_capacity(len * m);
     for _ in 0..len {
         for r in 0..m {
-            let hx: f64 = (0..n).map(|c| sys.H[(r, c)] * x[c]).sum();
-            z.push(hx + sys.R[(r, r)].sqrt() * rng.sample::<f64, _>(StandardNormal));
+            let hx: f64 = (0..n).map(|c| sys.h[(r, c)] * x[c]).sum();
+            z.push(hx + sys.r[(r, r)].sqrt() * rng.sample::<f64, _>(StandardNormal));
         }
         let mut xn = vec![0.0; n];
         for r in 0..n {
-            xn[r] = (0..n).map(|c| sys.F[(r, c)] * x[c]).sum::<f64>()
-                + sys.Q[(r, r)].sqrt() * rng.sample::<f64, _>(StandardNormal);
+            xn[r] = (0..n).map(|c| sys.f[(r, c)] * x[c]).sum::<f64>()
+                + sys.q[(r, r)].sqrt() * rng.sample::<f64, _>(StandardNormal);
         }
         x = xn;
     }

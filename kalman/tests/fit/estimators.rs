@@ -96,7 +96,7 @@ fn em_honours_constraints_and_agrees_with_mle_with_missing_data() {
         fe.loglik
     );
     // Scalar R stays σ²·I.
-    let R = &fe.system.R;
+    let R = &fe.system.r;
     assert!(R[(0, 1)].abs() < 1e-300 && (R[(0, 0)] - R[(1, 1)]).abs() < 1e-15 * R[(0, 0)]);
 }
 
@@ -170,13 +170,13 @@ fn exponential_map(dt: f64, r: f64) -> impl ParamMap {
         let s = |a: f64| Some(Mat::from_fn(1, 1, |_, _| a));
         Ok(vec![
             Derivative {
-                Q: s(v * (1.0 - phi * phi)),
-                P0: s(v),
+                q: s(v * (1.0 - phi * phi)),
+                p0: s(v),
                 ..Derivative::default()
             },
             Derivative {
-                F: s(dphi),
-                Q: s(-2.0 * v * phi * dphi),
+                f: s(dphi),
+                q: s(-2.0 * v * phi * dphi),
                 ..Derivative::default()
             },
         ])

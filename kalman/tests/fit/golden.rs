@@ -53,13 +53,13 @@ fn likelihood_and_mle_match_statsmodels_unobserved_components() {
     assert!(fit.converged, "{}", fit.message);
     let cov = fit.covariance.as_ref().expect("covariance");
     let se = map.matrix_std_errors(&fit.theta, cov).expect("se");
-    let (Some(seq), Some(ser)) = (se.Q, se.R) else {
+    let (Some(seq), Some(ser)) = (se.q, se.r) else {
         panic!("Q and R are free")
     };
     let ours = [
-        ("sigma2.irregular", fit.system.R[(0, 0)], ser[(0, 0)]),
-        ("sigma2.level", fit.system.Q[(0, 0)], seq[(0, 0)]),
-        ("sigma2.trend", fit.system.Q[(1, 1)], seq[(1, 1)]),
+        ("sigma2.irregular", fit.system.r[(0, 0)], ser[(0, 0)]),
+        ("sigma2.level", fit.system.q[(0, 0)], seq[(0, 0)]),
+        ("sigma2.trend", fit.system.q[(1, 1)], seq[(1, 1)]),
     ];
     for (name, est, se) in ours {
         let (sm, sm_se) = (num(&g["params"][name]), num(&g["bse_hessian"][name]));

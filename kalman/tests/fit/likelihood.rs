@@ -43,9 +43,9 @@ fn na(a: &Mat<f64>) -> DMatrix<f64> {
 fn dense_log_density(sys: &System, z: &[f64], u: &[f64]) -> f64 {
     let (n, m, p) = (sys.n(), sys.m(), sys.p());
     let len = z.len() / m;
-    let (F, H, Q, R, B) = (na(&sys.F), na(&sys.H), na(&sys.Q), na(&sys.R), na(&sys.B));
+    let (F, H, Q, R, B) = (na(&sys.f), na(&sys.h), na(&sys.q), na(&sys.r), na(&sys.b));
     let mut mean = vec![DVector::from_column_slice(&sys.x0)];
-    let mut pi = vec![na(&sys.P0)];
+    let mut pi = vec![na(&sys.p0)];
     for k in 1..len {
         let uk = DVector::from_column_slice(&u[(k - 1) * p..k * p]);
         mean.push(&F * &mean[k - 1] + &B * uk);
@@ -199,17 +199,17 @@ fn gradient_matches_central_differences_for_f_and_h() {
     let sys0 = small_system(11);
     let build = move |t: &[f64]| {
         let mut s = sys0.clone();
-        s.F[(0, 0)] = t[0];
-        s.F[(1, 2)] = t[0] * t[1];
-        s.H[(1, 0)] = t[1];
-        s.Q[(2, 2)] = t[2].exp();
+        s.f[(0, 0)] = t[0];
+        s.f[(1, 2)] = t[0] * t[1];
+        s.h[(1, 0)] = t[1];
+        s.q[(2, 2)] = t[2].exp();
         Ok(s)
     };
     let deriv = |t: &[f64]| {
         let z3 = |f: &dyn Fn(usize, usize) -> f64| Mat::from_fn(3, 3, f);
         Ok(vec![
             Derivative {
-                F: Some(z3(&|i, j| {
+                f: Some(z3(&|i, j| {
                     if (i, j) == (0, 0) {
                         1.0
                     } else if (i, j) == (1, 2) {
@@ -221,8 +221,8 @@ fn gradient_matches_central_differences_for_f_and_h() {
                 ..Derivative::default()
             },
             Derivative {
-                F: Some(z3(&|i, j| if (i, j) == (1, 2) { t[0] } else { 0.0 })),
-                H: Some(Mat::from_fn(
+                f: Some(z3(&|i, j| if (i, j) == (1, 2) { t[0] } else { 0.0 })),
+                h: Some(Mat::from_fn(
                     2,
                     3,
                     |i, j| if (i, j) == (1, 0) { 1.0 } else { 0.0 },
@@ -230,7 +230,7 @@ fn gradient_matches_central_differences_for_f_and_h() {
                 ..Derivative::default()
             },
             Derivative {
-                Q: Some(z3(&|i, j| if (i, j) == (2, 2) { t[2].exp() } else { 0.0 })),
+                q: Some(z3(&|i, j| if (i, j) == (2, 2) { t[2].exp() } else { 0.0 })),
                 ..Derivative::default()
             },
         ])
@@ -260,10 +260,10 @@ fn gradient_matches_central_differences_for_f_and_h() {
 fn build_again(sys0: System) -> impl Fn(&[f64]) -> Result<System, kalman::fit::FitError> {
     move |t: &[f64]| {
         let mut s = sys0.clone();
-        s.F[(0, 0)] = t[0];
-        s.F[(1, 2)] = t[0] * t[1];
-        s.H[(1, 0)] = t[1];
-        s.Q[(2, 2)] = t[2].exp();
+        s.f[(0, 0)] = t[0];
+        s.f[(1, 2)] = t[0] * t[1];
+        s.h[(1, 0)] = t[1];
+        s.q[(2, 2)] = t[2].exp();
         Ok(s)
     }
 }

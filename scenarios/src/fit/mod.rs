@@ -180,11 +180,11 @@ fn fitted_file(model: &DiscreteModel, sys: &System) -> DiscreteFile {
         B: (p > 0).then(|| to_rows(&model.B)),
         H: to_rows(&model.H),
         D: (p > 0).then(|| to_rows(&model.D)),
-        Q: faer_rows(&sys.Q),
-        R: Some(faer_rows(&sys.R)),
+        Q: faer_rows(&sys.q),
+        R: Some(faer_rows(&sys.r)),
         S: None,
         x0: Some(sys.x0.clone()),
-        P0: Some(faer_rows(&sys.P0)),
+        P0: Some(faer_rows(&sys.p0)),
     }
 }
 
@@ -195,7 +195,7 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
                 .matrix_std_errors(&fit.theta, cov)
                 .map_err(|e| Error::Compute(e.to_string()))?;
             let n = map.base().n();
-            let p0 = se.P0.map(|d| {
+            let p0 = se.p0.map(|d| {
                 (0..n)
                     .map(|i| {
                         (0..n)
@@ -205,10 +205,10 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
                     .collect::<Vec<_>>()
             });
             let mut o = serde_json::Map::new();
-            if let Some(q) = se.Q {
+            if let Some(q) = se.q {
                 o.insert("Q".into(), json!(faer_rows(&q)));
             }
-            if let Some(r) = se.R {
+            if let Some(r) = se.r {
                 o.insert("R".into(), json!(faer_rows(&r)));
             }
             if let Some(x) = se.x0 {

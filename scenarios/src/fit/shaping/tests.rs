@@ -10,14 +10,14 @@ use sensors::Process;
 /// Autocovariance of the map's output at lag k from the system: H F^k P0 Hᵀ (+ r at 0).
 fn model_autocovariance(sys: &System, k: usize) -> f64 {
     let n = sys.n();
-    let mut m = sys.P0.clone();
+    let mut m = sys.p0.clone();
     for _ in 0..k {
-        m = &sys.F * &m;
+        m = &sys.f * &m;
     }
     let mut s = 0.0;
     for i in 0..n {
         for j in 0..n {
-            s += sys.H[(0, i)] * m[(i, j)] * sys.H[(0, j)];
+            s += sys.h[(0, i)] * m[(i, j)] * sys.h[(0, j)];
         }
     }
     s
