@@ -72,12 +72,21 @@ pub fn tails_section(sm: &Summary) -> String {
          An ullage sized on the standard deviation alone assumes a normal error; the table \
          gives the tail itself. Quantiles: linear interpolation between order statistics \
          (Hyndman–Fan type 7). The 1 %–99 % width of a normal error is 4.65σ; a wider one \
-         means heavier tails than the standard deviation suggests. Every ratio in this report \
-         is std(strategy)/std(relay) over the same runs, with a 95 % interval by the delta \
-         method: log r = ½(log s_a² − log s_b²), SE(log r) = √(Var(u_a − u_b)/(4n)) with \
+         means heavier tails than the standard deviation suggests. A ratio std(strategy)/\
+         std(relay) over the same runs has a 95 % interval by the delta method: \
+         log r = ½(log s_a² − log s_b²), SE(log r) = √(Var(u_a − u_b)/(4n)) with \
          u = (x − x̄)²/s² estimated from the runs themselves (heavy tails and the correlation \
-         of two strategies that see the same world are both in it), interval r·exp(±1.96·SE).\n",
-        m.amplitude_deg, sm.runs_per_point
+         of two strategies that see the same world are both in it), interval r·exp(±1.96·SE). \
+         A range over a sweep (max − min of the per-point random errors: growth with \
+         amplitude, variation with period, the invariance spread) and a ratio of two ranges \
+         are not smooth in the runs; their 95 % intervals are percentile-bootstrap ones: {} \
+         resamples of the run indices, one draw for every point of the sweep (run i of every \
+         point shares a random stream), the 2.5 % and 97.5 % quantiles of the recomputed \
+         statistic. A range of noisy estimates is biased upward by each point's own noise; \
+         its interval describes the range as estimated from these runs.\n",
+        m.amplitude_deg,
+        sm.runs_per_point,
+        super::statistics::RESAMPLES
     );
     s.push_str(
         "| strategy | std / relay [95 % CI] | 1 % | 5 % | 95 % | 99 % | mean ± 3σ | outside ± 3σ | 1–99 % width / σ |\n\

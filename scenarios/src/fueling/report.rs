@@ -7,7 +7,7 @@ use std::path::Path;
 use super::calibration_report;
 use super::parameters::FuelingParams;
 use super::records::{STRATEGIES, STRATEGY_LABELS};
-use super::statistics::RatioCi;
+use super::statistics::{BootCi, RatioCi};
 use super::summary::{Entry, NyquistNull, PAPER_KF1_RATIO, PerStrategy, Stat, Summary};
 use crate::error::Result;
 use crate::output;
@@ -196,6 +196,23 @@ fn ci(r: &RatioCi) -> String {
         format!("{:.2} [{:.2}, {:.2}]", r.ratio, r.lo, r.hi)
     } else {
         f2(r.ratio)
+    }
+}
+
+/// A bootstrap estimate with its 95 % interval, scaled by `scale`: `1.23 [0.98, 1.51]`.
+fn boot(b: &BootCi, scale: f64) -> String {
+    let digits = if scale > 1.0 { 0 } else { 2 };
+    if b.value.is_finite() && b.lo.is_finite() {
+        format!(
+            "{:.digits$} [{:.digits$}, {:.digits$}]",
+            b.value * scale,
+            b.lo * scale,
+            b.hi * scale
+        )
+    } else if b.value.is_finite() {
+        format!("{:.digits$}", b.value * scale)
+    } else {
+        "—".into()
     }
 }
 
@@ -421,14 +438,22 @@ pub fn report_md(sm: &Summary) -> String {
     let (lo, hi) = range(amp.iter().map(|e| e.stats.kf2.std_mm));
     let (lo1, hi1) = range(amp.iter().map(|e| e.stats.kf1.std_mm));
     let (rlo, rhi) = range(amp.iter().map(|e| e.stats.relay.std_mm));
+    let grow = &sm.margins.amplitude;
     let growth = format!(
-        "grows {} mm over the sweep against relay logic's {} mm ({:.0} %): far less \
-         sensitive, not invariant — with a floor quantizer the residual is the quantization \
-         error, and the rolling moves the damped surface across the marks at a rate the \
-         model's quantization noise (steps passed at the fill rate) does not describe",
-        f2(hi - lo),
-        f2(rhi - rlo),
-        100.0 * (hi - lo) / (rhi - rlo)
+        "grows {} mm over the sweep against relay logic's {} mm ({} %): {} — with a floor \
+         quantizer the residual is the quantization error, and the rolling moves the damped \
+         surface across the marks at a rate the model's quantization noise (steps passed at \
+         the fill rate) does not describe",
+        boot(&grow.range_mm.kf2, 1.0),
+        boot(&grow.range_mm.relay, 1.0),
+        boot(&grow.kf2_over_relay, 100.0),
+        if grow.kf2_over_relay.hi < 0.5 {
+            "far less sensitive, not invariant"
+        } else if grow.kf2_over_relay.value < 0.5 {
+            "less sensitive, not invariant"
+        } else {
+            "not invariant"
+        }
     );
     let _ = writeln!(
         s,
@@ -444,23 +469,30 @@ pub fn report_md(sm: &Summary) -> String {
     let pr = &sm.period_sweep;
     let (plo, phi) = range(pr.iter().map(|e| e.stats.kf2.std_mm));
     let (p1lo, p1hi) = range(pr.iter().map(|e| e.stats.kf1.std_mm));
+    let per = &sm.margins.period;
     let _ = writeln!(
         s,
-        "| two-channel random error vs rolling period | \"fully invariant\" | {}–{} mm (one-channel {}–{}) | {} |\n",
+        "| two-channel random error vs rolling period | \"fully invariant\" | {}–{} mm (one-channel {}–{}) | varies {} mm against the one-channel filter's {} mm ({} %): {} |\n",
         f2(plo),
         f2(phi),
         f2(p1lo),
         f2(p1hi),
-        if phi - plo < 0.5 * (p1hi - p1lo) {
-            format!(
-                "varies {} mm against the one-channel filter's {} mm: far less sensitive, not \
-                 strictly invariant (shorter periods move the surface across the marks faster)",
-                f2(phi - plo),
-                f2(p1hi - p1lo)
-            )
+        boot(&per.range_mm.kf2, 1.0),
+        boot(&per.range_mm.kf1, 1.0),
+        boot(&per.kf2_over_kf1, 100.0),
+        if per.kf2_over_kf1.hi < 0.5 {
+            "far less sensitive, not strictly invariant (shorter periods move the surface \
+             across the marks faster)"
+        } else if per.kf2_over_kf1.value < 0.5 {
+            "less sensitive (the interval reaches half the one-channel variation), not invariant"
         } else {
-            "not invariant at these parameters".to_string()
+            "not invariant at these parameters"
         }
+    );
+    s.push_str(
+        "Ranges over a sweep (max − min of the per-point random errors) and their ratios are \
+         given as estimate [95 % interval]: percentile bootstrap over the runs (see *Tails and \
+         intervals*).\n\n",
     );
 
     // --- explanation
@@ -494,16 +526,15 @@ pub fn report_md(sm: &Summary) -> String {
         p.step_mm,
         p.velocity_time_s,
     );
-    let kf2_best = sm
-        .step_sweep
-        .iter()
-        .map(|e| e.stats.kf2.std_mm / e.stats.relay.std_mm)
-        .fold(f64::INFINITY, f64::min);
-    let kf1_best = sm
-        .step_sweep
-        .iter()
-        .map(|e| e.stats.kf1.std_mm / e.stats.relay.std_mm)
-        .fold(f64::INFINITY, f64::min);
+    let best = |k: usize| {
+        sm.margins
+            .step
+            .iter()
+            .map(|m| *m.ratios.get(k))
+            .filter(|c| c.ratio.is_finite())
+            .min_by(|a, b| a.ratio.total_cmp(&b.ratio))
+    };
+    let (kf2_best, kf1_best) = (best(2), best(1));
     let steps: Vec<String> = sm
         .step_sweep
         .iter()
@@ -529,14 +560,20 @@ pub fn report_md(sm: &Summary) -> String {
          paper's choice to ignore S is the better one here.\n",
         r.amplitude_deg,
         steps.join("; "),
-        f2(kf2_best),
-        f2(kf1_best),
-        if kf1_best > PAPER_KF1_RATIO + 0.1 {
-            "so the paper's one-channel figure must rest on other values of the parameters it \
-             does not state, which no single sweep here reaches (the *Calibration* section \
-             searches them all together)"
-        } else {
-            "close to the paper's 0.40"
+        kf2_best.as_ref().map_or_else(|| f2(f64::NAN), ci),
+        kf1_best.as_ref().map_or_else(|| f2(f64::NAN), ci),
+        match kf1_best {
+            Some(c) if c.lo > PAPER_KF1_RATIO => format!(
+                "above the paper's {PAPER_KF1_RATIO:.2} beyond its interval, so the paper's \
+                 one-channel figure must rest on other values of the parameters it does not \
+                 state, which no single sweep here reaches (the *Calibration* section searches \
+                 them all together)"
+            ),
+            Some(c) if c.hi < PAPER_KF1_RATIO => {
+                format!("below the paper's {PAPER_KF1_RATIO:.2} beyond its interval")
+            }
+            Some(_) => format!("with the paper's {PAPER_KF1_RATIO:.2} inside its interval"),
+            None => "not available".to_string(),
         },
         f2(amp.first().map_or(f64::NAN, |e| e.stats.kf2_cross.std_mm)),
         f2(amp.first().map_or(f64::NAN, |e| e.stats.kf2.std_mm)),
@@ -630,7 +667,7 @@ pub fn report_md(sm: &Summary) -> String {
         let _ = write!(
             s,
             "{label} — spread (max − min) {} mm\n\n| A_max [°] \\ period [s] |",
-            f2(*inv.std_spread_mm.get(i))
+            boot(sm.margins.invariance.range_mm.get(i), 1.0)
         );
         for t in &inv.periods_s {
             let _ = write!(s, " {t} |");

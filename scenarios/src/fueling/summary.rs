@@ -279,7 +279,7 @@ pub fn summarise(
             .count()
     });
     let invariance_entries = all[6].clone();
-    let margins = statistics::margins(&sweeps, records, top_i);
+    let margins = statistics::margins(&sweeps, records, top_i, seed);
     let nyquist_null = level_nyquist_power(p, top_x, p.realisation.to_model())
         .filter(|&ours| ours < NYQUIST_NULL)
         .map(|ours| NyquistNull {
