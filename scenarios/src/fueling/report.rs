@@ -354,16 +354,24 @@ pub fn report_md(sm: &Summary) -> String {
          method over the runs (both strategies see the same runs; see *Tails and intervals*).\n\n",
     );
     s.push_str("| quantity | paper | ours | comment |\n|---|---|---|---|\n");
-    let cmp = |ours: f64, paper: f64| {
-        if (ours - paper).abs() <= 0.05 {
-            format!("matches within 0.05 ({:+.2}); see below", ours - paper)
-        } else if ours > paper {
+    // The paper prints its ratios to two digits ("≈ 0.40"): ours match when the 95 % interval
+    // meets the paper's value widened by that rounding and a little more (± 0.05).
+    let cmp = |ours: &RatioCi, paper: f64| {
+        if ours.lo <= paper + 0.05 && ours.hi >= paper - 0.05 {
             format!(
-                "{:.2} higher: see *Why the ratios differ* below",
-                ours - paper
+                "matches: the interval meets the paper's value ± 0.05 ({:+.2}); see below",
+                ours.ratio - paper
+            )
+        } else if ours.lo > paper + 0.05 {
+            format!(
+                "{:.2} higher, the whole interval above: see *Why the ratios differ* below",
+                ours.ratio - paper
             )
         } else {
-            format!("{:.2} lower (better than the paper)", paper - ours)
+            format!(
+                "{:.2} lower, the whole interval below (better than the paper)",
+                paper - ours.ratio
+            )
         }
     };
     let _ = writeln!(
@@ -371,14 +379,14 @@ pub fn report_md(sm: &Summary) -> String {
         "| random error, one-channel KF / relay logic | ≈ {:.2} | {} | {} |",
         r.paper_kf1,
         ci(&cis.kf1),
-        cmp(ratio.kf1, r.paper_kf1)
+        cmp(&cis.kf1, r.paper_kf1)
     );
     let _ = writeln!(
         s,
         "| random error, two-channel KF / relay logic | ≈ {:.2} | {} | {} |",
         r.paper_kf2,
         ci(&cis.kf2),
-        cmp(ratio.kf2, r.paper_kf2)
+        cmp(&cis.kf2, r.paper_kf2)
     );
     let phase = |on: bool| {
         sm.target_sweep
