@@ -3,7 +3,9 @@
 
 use faer::MatRef;
 
-use super::linalg::{joseph, mul, mul_nt, nis_logdet, pd_cholesky, right_solve, symmetrise};
+use super::linalg::{
+    joseph, mirror_lower, mul, mul_nt, nis_logdet, pd_cholesky, right_solve, symmetrise,
+};
 use super::{
     Core, Jacobians, LN_2PI, NlDims, StepInfo, compact_rows, compact_square, compact_vec, finite,
 };
@@ -68,6 +70,8 @@ pub struct Ekf<D: NlDims, M> {
     hc: D::Mn,
     rc: D::Mm,
     sig: D::Mm,
+    /// Reciprocals of the diagonal of the factor of Σ (in `sig`).
+    sinv: D::Mv,
     zh: D::Mv,
     ef: D::Mv,
     e: D::Mv,
@@ -127,6 +131,7 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
             hc: D::Mn::zeros(m * n),
             rc: D::Mm::zeros(m * m),
             sig: D::Mm::zeros(m * m),
+            sinv: D::Mv::zeros(m),
             zh: D::Mv::zeros(m),
             ef: D::Mv::zeros(m),
             e: D::Mv::zeros(m),
@@ -213,7 +218,8 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
                 *s += r;
             }
             symmetrise(sig, mo);
-            if let Err(pivot) = pd_cholesky(sig, mo, RANK_TOL) {
+            let sinv = &mut self.sinv.as_mut_slice()[..mo];
+            if let Err(pivot) = pd_cholesky(sig, mo, sinv, RANK_TOL) {
                 return Err(Error::SingularInnovation {
                     filter: name,
                     step: k,
@@ -222,7 +228,7 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
                     tol: RANK_TOL,
                 });
             }
-            right_solve(sig, mo, K, n, &mut self.tmpm.as_mut_slice()[..mo]);
+            right_solve(sig, sinv, mo, K, n);
             let dx = &mut self.dx.as_mut_slice()[..n];
             mul(dx, K, e, n, mo, 1, false);
             self.model.state_add(
@@ -230,7 +236,7 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
                 &self.dx.as_slice()[..n],
                 &mut self.xn.as_mut_slice()[..n],
             );
-            nis = nis_logdet(sig, mo, e, &mut self.tmpm.as_mut_slice()[..mo]);
+            nis = nis_logdet(sig, sinv, mo, e, &mut self.tmpm.as_mut_slice()[..mo]);
             info.iterations = it;
             if it == max_it {
                 break;
@@ -277,8 +283,17 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
         mul(t, F, &self.c.pf.as_slice()[..n * n], n, n, n, false);
         let pp = &mut self.c.pp.as_mut_slice()[..n * n];
         pp.copy_from_slice(&self.c.q.as_slice()[..n * n]);
-        mul_nt(pp, t, F, n, n, n, true);
-        symmetrise(pp, n);
+        // Q + (F P) Fᵀ on the lower triangle, mirrored.
+        for j in 0..n {
+            for i in j..n {
+                let mut s = pp[i + j * n];
+                for k in 0..n {
+                    s += t[i + k * n] * F[j + k * n];
+                }
+                pp[i + j * n] = s;
+            }
+        }
+        mirror_lower(pp, n);
         Ok(())
     }
 }

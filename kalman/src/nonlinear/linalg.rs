@@ -5,7 +5,7 @@
 
 /// `C = A·B (+ C if acc)`: `A` is `r`×`k`, `B` is `k`×`c`, `C` is `r`×`c` (leading
 /// dimensions equal to the row counts).
-#[inline]
+#[inline(always)]
 pub(crate) fn mul(C: &mut [f64], A: &[f64], B: &[f64], r: usize, k: usize, c: usize, acc: bool) {
     for j in 0..c {
         let col = &mut C[j * r..(j + 1) * r];
@@ -23,7 +23,7 @@ pub(crate) fn mul(C: &mut [f64], A: &[f64], B: &[f64], r: usize, k: usize, c: us
 }
 
 /// `C = A·Bᵀ (+ C if acc)`: `A` is `r`×`k`, `B` is `c`×`k`, `C` is `r`×`c`.
-#[inline]
+#[inline(always)]
 pub(crate) fn mul_nt(C: &mut [f64], A: &[f64], B: &[f64], r: usize, k: usize, c: usize, acc: bool) {
     for j in 0..c {
         let col = &mut C[j * r..(j + 1) * r];
@@ -41,7 +41,7 @@ pub(crate) fn mul_nt(C: &mut [f64], A: &[f64], B: &[f64], r: usize, k: usize, c:
 }
 
 /// `C = Aᵀ·B (+ C if acc)`: `A` is `k`×`r`, `B` is `k`×`c`, `C` is `r`×`c`.
-#[inline]
+#[inline(always)]
 pub(crate) fn mul_tn(C: &mut [f64], A: &[f64], B: &[f64], r: usize, k: usize, c: usize, acc: bool) {
     for j in 0..c {
         let b = &B[j * k..(j + 1) * k];
@@ -58,7 +58,7 @@ pub(crate) fn mul_tn(C: &mut [f64], A: &[f64], B: &[f64], r: usize, k: usize, c:
 }
 
 /// `C += w·a·bᵀ` (`a` an `r`-vector, `b` a `c`-vector, `C` `r`×`c`).
-#[inline]
+#[inline(always)]
 pub(crate) fn rank1(C: &mut [f64], w: f64, a: &[f64], b: &[f64], r: usize, c: usize) {
     for j in 0..c {
         let s = w * b[j];
@@ -69,7 +69,7 @@ pub(crate) fn rank1(C: &mut [f64], w: f64, a: &[f64], b: &[f64], r: usize, c: us
 }
 
 /// Replaces the square `n`×`n` `a` by `(a + aᵀ)/2`.
-#[inline]
+#[inline(always)]
 pub(crate) fn symmetrise(a: &mut [f64], n: usize) {
     for j in 0..n {
         for i in j + 1..n {
@@ -81,23 +81,27 @@ pub(crate) fn symmetrise(a: &mut [f64], n: usize) {
 }
 
 /// Largest absolute diagonal entry of the `n`×`n` `a`.
-#[inline]
+#[inline(always)]
 pub(crate) fn max_diag(a: &[f64], n: usize) -> f64 {
     (0..n).fold(0.0_f64, |s, i| s.max(a[i + i * n].abs()))
 }
 
 /// Lower Cholesky factor `L` (`L Lᵀ = a`) of the symmetric PSD `n`×`n` `a`, written to `L`
-/// (upper triangle zeroed). A pivot within `zero_tol·max_diag` of zero (or below it but
-/// above `−neg_tol·max_diag`) is a zero pivot: its column of `L` is zero (the semidefinite
-/// case). A pivot below `−neg_tol·max_diag` is returned as `Err(pivot)`.
-#[inline]
+/// (upper triangle zeroed), with the reciprocals of its diagonal in `inv` (the solves below
+/// multiply by them: no division in their dependency chains). A pivot within
+/// `zero_tol·max_diag` of zero (or below it but above `−neg_tol·max_diag`) is a zero pivot:
+/// its column of `L` is zero and its `inv` entry 0 (the semidefinite case). A pivot below
+/// `−neg_tol·max_diag` is returned as `Err(pivot)`.
+#[inline(always)]
 pub(crate) fn psd_cholesky(
     a: &[f64],
     n: usize,
     L: &mut [f64],
+    inv: &mut [f64],
     zero_tol: f64,
     neg_tol: f64,
 ) -> Result<(), f64> {
+    let (a, L, inv) = (&a[..n * n], &mut L[..n * n], &mut inv[..n]);
     let scale = max_diag(a, n);
     for j in 0..n {
         let mut d = a[j + j * n];
@@ -114,25 +118,30 @@ pub(crate) fn psd_cholesky(
             for i in j..n {
                 L[i + j * n] = 0.0;
             }
+            inv[j] = 0.0;
             continue;
         }
         let d = d.sqrt();
+        let r = 1.0 / d;
         L[j + j * n] = d;
+        inv[j] = r;
         for i in j + 1..n {
             let mut s = a[i + j * n];
             for k in 0..j {
                 s -= L[i + k * n] * L[j + k * n];
             }
-            L[i + j * n] = s / d;
+            L[i + j * n] = s * r;
         }
     }
     Ok(())
 }
 
-/// Lower Cholesky factor of a positive definite `n`×`n` `a` in place (lower triangle).
-/// Returns `Err(pivot)` for the first pivot at or below `tol·max_diag`.
-#[inline]
-pub(crate) fn pd_cholesky(a: &mut [f64], n: usize, tol: f64) -> Result<(), f64> {
+/// Lower Cholesky factor of a positive definite `n`×`n` `a` in place (lower triangle), with
+/// the reciprocals of its diagonal in `inv`. Returns `Err(pivot)` for the first pivot at or
+/// below `tol·max_diag`.
+#[inline(always)]
+pub(crate) fn pd_cholesky(a: &mut [f64], n: usize, inv: &mut [f64], tol: f64) -> Result<(), f64> {
+    let (a, inv) = (&mut a[..n * n], &mut inv[..n]);
     let scale = max_diag(a, n);
     for j in 0..n {
         let mut d = a[j + j * n];
@@ -143,29 +152,28 @@ pub(crate) fn pd_cholesky(a: &mut [f64], n: usize, tol: f64) -> Result<(), f64> 
             return Err(d);
         }
         let d = d.sqrt();
+        let r = 1.0 / d;
         a[j + j * n] = d;
+        inv[j] = r;
         for i in j + 1..n {
             let mut s = a[i + j * n];
             for k in 0..j {
                 s -= a[i + k * n] * a[j + k * n];
             }
-            a[i + j * n] = s / d;
+            a[i + j * n] = s * r;
         }
     }
     Ok(())
 }
 
-/// Solves `L y = b` in place (`L` lower `n`×`n`, leading dimension `n`); a zero pivot
-/// gives a zero component (the minimum-norm choice for a semidefinite factor).
-#[inline]
-pub(crate) fn forward(L: &[f64], n: usize, b: &mut [f64]) {
+/// Solves `L y = b` in place (`L` lower `n`×`n`, leading dimension `n`, `inv` the
+/// reciprocals of its diagonal); a zero pivot (`inv` 0) gives a zero component (the
+/// minimum-norm choice for a semidefinite factor).
+#[inline(always)]
+pub(crate) fn forward(L: &[f64], inv: &[f64], n: usize, b: &mut [f64]) {
+    let (L, inv, b) = (&L[..n * n], &inv[..n], &mut b[..n]);
     for j in 0..n {
-        let d = L[j + j * n];
-        if d == 0.0 {
-            b[j] = 0.0;
-            continue;
-        }
-        let y = b[j] / d;
+        let y = b[j] * inv[j];
         b[j] = y;
         for i in j + 1..n {
             b[i] -= L[i + j * n] * y;
@@ -174,61 +182,90 @@ pub(crate) fn forward(L: &[f64], n: usize, b: &mut [f64]) {
 }
 
 /// Solves `Lᵀ x = b` in place (`L` lower `n`×`n`); zero pivots as in [`forward`].
-#[inline]
-pub(crate) fn backward(L: &[f64], n: usize, b: &mut [f64]) {
+#[inline(always)]
+pub(crate) fn backward(L: &[f64], inv: &[f64], n: usize, b: &mut [f64]) {
+    let (L, inv, b) = (&L[..n * n], &inv[..n], &mut b[..n]);
     for j in (0..n).rev() {
-        let d = L[j + j * n];
-        if d == 0.0 {
-            b[j] = 0.0;
-            continue;
-        }
         let mut s = b[j];
         for i in j + 1..n {
             s -= L[i + j * n] * b[i];
         }
-        b[j] = s / d;
+        b[j] = s * inv[j];
     }
 }
 
-/// `B ← B (L Lᵀ)⁻¹` for the `rows`×`n` `B` (row by row: `L Lᵀ bᵢᵀ = bᵢᵀ`). `row` is an
-/// `n`-vector workspace.
-#[inline]
-pub(crate) fn right_solve(L: &[f64], n: usize, B: &mut [f64], rows: usize, row: &mut [f64]) {
-    for i in 0..rows {
-        for j in 0..n {
-            row[j] = B[i + j * rows];
+/// `B ← B (L Lᵀ)⁻¹` for the `rows`×`n` `B`, a column at a time (`Y Lᵀ = B`, then
+/// `X L = Y`): each column operation runs down all rows at once; zero pivots as in
+/// [`forward`].
+#[inline(always)]
+pub(crate) fn right_solve(L: &[f64], inv: &[f64], n: usize, B: &mut [f64], rows: usize) {
+    let (L, inv, B) = (&L[..n * n], &inv[..n], &mut B[..rows * n]);
+    // Y Lᵀ = B: Y_j = (B_j − Σ_{k<j} L_jk Y_k) / L_jj.
+    for j in 0..n {
+        let (done, rest) = B.split_at_mut(j * rows);
+        let bj = &mut rest[..rows];
+        for k in 0..j {
+            let l = L[j + k * n];
+            for (b, y) in bj.iter_mut().zip(&done[k * rows..(k + 1) * rows]) {
+                *b -= l * y;
+            }
         }
-        forward(L, n, &mut row[..n]);
-        backward(L, n, &mut row[..n]);
-        for j in 0..n {
-            B[i + j * rows] = row[j];
+        for b in bj.iter_mut() {
+            *b *= inv[j];
+        }
+    }
+    // X L = Y: X_j = (Y_j − Σ_{k>j} L_kj X_k) / L_jj.
+    for j in (0..n).rev() {
+        let (head, done) = B.split_at_mut((j + 1) * rows);
+        let bj = &mut head[j * rows..];
+        for k in j + 1..n {
+            let l = L[k + j * n];
+            for (b, x) in bj.iter_mut().zip(&done[(k - j - 1) * rows..(k - j) * rows]) {
+                *b -= l * x;
+            }
+        }
+        for b in bj.iter_mut() {
+            *b *= inv[j];
         }
     }
 }
 
 /// `B ← (L Lᵀ)⁻¹ B` for the `n`×`cols` `B`, column by column.
-#[inline]
-pub(crate) fn left_solve(L: &[f64], n: usize, B: &mut [f64], cols: usize) {
+#[inline(always)]
+pub(crate) fn left_solve(L: &[f64], inv: &[f64], n: usize, B: &mut [f64], cols: usize) {
     for j in 0..cols {
         let b = &mut B[j * n..(j + 1) * n];
-        forward(L, n, b);
-        backward(L, n, b);
+        forward(L, inv, n, b);
+        backward(L, inv, n, b);
     }
 }
 
 /// `eᵀ (L Lᵀ)⁻¹ e` and `log det (L Lᵀ)`; `tmp` is an `n`-vector workspace.
-#[inline]
-pub(crate) fn nis_logdet(L: &[f64], n: usize, e: &[f64], tmp: &mut [f64]) -> (f64, f64) {
+#[inline(always)]
+pub(crate) fn nis_logdet(
+    L: &[f64],
+    inv: &[f64],
+    n: usize,
+    e: &[f64],
+    tmp: &mut [f64],
+) -> (f64, f64) {
     tmp[..n].copy_from_slice(&e[..n]);
-    forward(L, n, &mut tmp[..n]);
+    forward(L, inv, n, &mut tmp[..n]);
     let nis = tmp[..n].iter().map(|v| v * v).sum();
-    let logdet = 2.0 * (0..n).map(|j| L[j + j * n].ln()).sum::<f64>();
+    // One logarithm of the product of the pivots, unless that product under- or overflows.
+    let prod = (0..n).map(|j| L[j + j * n]).product::<f64>();
+    let logdet = if prod.is_normal() {
+        2.0 * prod.ln()
+    } else {
+        2.0 * (0..n).map(|j| L[j + j * n].ln()).sum::<f64>()
+    };
     (nis, logdet)
 }
 
 /// Joseph form `P⁺ = A P Aᵀ + K R Kᵀ` with `A = I − K H` (`K` `n`×`mo`, `H` `mo`×`n`,
-/// `R` `mo`×`mo`), symmetrised. `A`, `T` are `n`×`n` and `KR` `n`×`mo` workspaces.
-#[inline]
+/// `R` `mo`×`mo`): the lower triangle is computed and mirrored, so the result is exactly
+/// symmetric. `A`, `T` are `n`×`n` and `KR` `n`×`mo` workspaces.
+#[inline(always)]
 pub(crate) fn joseph(
     P: &[f64],
     K: &[f64],
@@ -241,18 +278,57 @@ pub(crate) fn joseph(
     T: &mut [f64],
     KR: &mut [f64],
 ) {
+    let (K, H, R) = (&K[..n * mo], &H[..mo * n], &R[..mo * mo]);
+    let (A, T, KR, out) = (
+        &mut A[..n * n],
+        &mut T[..n * n],
+        &mut KR[..n * mo],
+        &mut out[..n * n],
+    );
     mul(A, K, H, n, mo, n, false);
-    for v in A[..n * n].iter_mut() {
+    for v in A.iter_mut() {
         *v = -*v;
     }
     for i in 0..n {
         A[i + i * n] += 1.0;
     }
     mul(T, A, P, n, n, n, false);
-    mul_nt(out, T, A, n, n, n, false);
     mul(KR, K, R, n, mo, mo, false);
-    mul_nt(out, KR, K, n, mo, n, true);
-    symmetrise(out, n);
+    for j in 0..n {
+        for i in j..n {
+            let mut s = 0.0;
+            for k in 0..n {
+                s += T[i + k * n] * A[j + k * n];
+            }
+            for a in 0..mo {
+                s += KR[i + a * n] * K[j + a * n];
+            }
+            out[i + j * n] = s;
+        }
+    }
+    mirror_lower(out, n);
+}
+
+/// Copies the lower triangle of the square `n`×`n` `a` to its upper triangle.
+#[inline(always)]
+pub(crate) fn mirror_lower(a: &mut [f64], n: usize) {
+    for j in 0..n {
+        for i in j + 1..n {
+            a[j + i * n] = a[i + j * n];
+        }
+    }
+}
+
+/// `C += w·a·aᵀ` on the lower triangle of the `r`×`r` `C` (mirror it afterwards).
+#[inline(always)]
+pub(crate) fn rank1_lower(C: &mut [f64], w: f64, a: &[f64], r: usize) {
+    let (C, a) = (&mut C[..r * r], &a[..r]);
+    for j in 0..r {
+        let s = w * a[j];
+        for i in j..r {
+            C[i + j * r] += s * a[i];
+        }
+    }
 }
 
 #[cfg(test)]
@@ -270,31 +346,63 @@ mod tests {
             }
         }
         a[4] += 1.0;
-        let mut L = [0.0; 9];
-        psd_cholesky(&a, 3, &mut L, 1e-12, 1e-10).expect("PSD");
+        let (mut L, mut inv) = ([0.0; 9], [0.0; 3]);
+        psd_cholesky(&a, 3, &mut L, &mut inv, 1e-12, 1e-10).expect("PSD");
         let mut r = [0.0; 9];
         mul_nt(&mut r, &L, &L, 3, 3, 3, false);
         for (x, y) in r.iter().zip(&a) {
             assert!((x - y).abs() < 1e-13 * 14.0);
         }
         a[8] -= 1e-3;
-        assert!(psd_cholesky(&a, 3, &mut L, 1e-12, 1e-10).is_err());
+        assert!(psd_cholesky(&a, 3, &mut L, &mut inv, 1e-12, 1e-10).is_err());
     }
 
     #[test]
     fn solves_invert_the_factor() {
         let a = [4.0, 2.0, 2.0, 3.0];
-        let mut L = a;
-        pd_cholesky(&mut L, 2, 1e-12).expect("PD");
+        let (mut L, mut inv) = (a, [0.0; 2]);
+        pd_cholesky(&mut L, 2, &mut inv, 1e-12).expect("PD");
         let mut B = [1.0, 0.0, 0.0, 1.0];
-        right_solve(&L, 2, &mut B, 2, &mut [0.0; 2]);
+        right_solve(&L, &inv, 2, &mut B, 2);
         // (a)⁻¹ = [[3, −2], [−2, 4]] / 8
-        let inv = [3.0 / 8.0, -0.25, -0.25, 0.5];
-        for (x, y) in B.iter().zip(&inv) {
+        let expect = [3.0 / 8.0, -0.25, -0.25, 0.5];
+        for (x, y) in B.iter().zip(&expect) {
             assert!((x - y).abs() < 1e-15);
         }
-        let (nis, logdet) = nis_logdet(&L, 2, &[1.0, 1.0], &mut [0.0; 2]);
+        let (nis, logdet) = nis_logdet(&L, &inv, 2, &[1.0, 1.0], &mut [0.0; 2]);
         assert!((nis - (3.0 - 4.0 + 4.0) / 8.0).abs() < 1e-15);
         assert!((logdet - 8.0_f64.ln()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn right_and_left_solves_reconstruct() {
+        // a = M Mᵀ + I (3×3, PD); X = B a⁻¹ must satisfy X a = B, Y = a⁻¹ Bᵀ must satisfy
+        // a Y = Bᵀ, to rounding (entries O(1), condition number < 30: 1e-13 is ample).
+        let m = [1.0, 0.5, -0.3, 0.2, 2.0, 0.7, -1.0, 0.1, 1.5];
+        let mut a = [0.0; 9];
+        mul_nt(&mut a, &m, &m, 3, 3, 3, false);
+        for i in 0..3 {
+            a[i + 3 * i] += 1.0;
+        }
+        let (mut L, mut inv) = (a, [0.0; 3]);
+        pd_cholesky(&mut L, 3, &mut inv, 1e-12).expect("PD");
+        let b = [1.0, -2.0, 0.5, 3.0, -1.0, 0.25]; // 2×3
+        let mut x = b;
+        right_solve(&L, &inv, 3, &mut x, 2);
+        let mut xa = [0.0; 6];
+        mul(&mut xa, &x, &a, 2, 3, 3, false);
+        let mut bt = [0.0; 6]; // 3×2
+        for i in 0..2 {
+            for j in 0..3 {
+                bt[j + 3 * i] = b[i + 2 * j];
+            }
+        }
+        let mut y = bt;
+        left_solve(&L, &inv, 3, &mut y, 2);
+        let mut ay = [0.0; 6];
+        mul(&mut ay, &a, &y, 3, 3, 2, false);
+        for (p, q) in xa.iter().zip(&b).chain(ay.iter().zip(&bt)) {
+            assert!((p - q).abs() < 1e-13, "{p} vs {q}");
+        }
     }
 }

@@ -143,7 +143,7 @@ impl<const N: usize, const M: usize, const P: usize> NlDims for FixedDims<N, M, 
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// [`crate::Error::ModelNonFinite`] for the first non-finite entry of `v`.
-#[inline]
+#[inline(always)]
 fn finite(function: &'static str, step: usize, v: &[f64]) -> Result<(), crate::Error> {
     match v.iter().position(|x| !x.is_finite()) {
         None => Ok(()),
@@ -248,7 +248,7 @@ impl<D: NlDims> Core<D> {
 
 /// Copies the rows `i` of the `rows`×`cols` matrix `src` where `z_i` is not NaN into the
 /// compact `mo`×`cols` matrix `dst` (`mo` = number of such rows).
-#[inline]
+#[inline(always)]
 fn compact_rows(src: &[f64], rows: usize, cols: usize, z: &[f64], mo: usize, dst: &mut [f64]) {
     for j in 0..cols {
         let mut r = 0;
@@ -262,7 +262,7 @@ fn compact_rows(src: &[f64], rows: usize, cols: usize, z: &[f64], mo: usize, dst
 }
 
 /// The observed-rows-and-columns block of the `m`×`m` matrix `src` into `dst` (`mo`×`mo`).
-#[inline]
+#[inline(always)]
 fn compact_square(src: &[f64], m: usize, z: &[f64], mo: usize, dst: &mut [f64]) {
     let mut c = 0;
     for j in 0..m {
@@ -281,7 +281,7 @@ fn compact_square(src: &[f64], m: usize, z: &[f64], mo: usize, dst: &mut [f64]) 
 }
 
 /// The non-NaN entries of `v` (indexed by the rows of `z`), in order, into `dst`.
-#[inline]
+#[inline(always)]
 fn compact_vec(v: &[f64], z: &[f64], dst: &mut [f64]) {
     let mut r = 0;
     for (vi, zi) in v.iter().zip(z) {

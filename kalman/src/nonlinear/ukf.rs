@@ -4,8 +4,8 @@
 use faer::{Mat, MatRef};
 
 use super::linalg::{
-    joseph, left_solve, mul, mul_tn, nis_logdet, pd_cholesky, psd_cholesky, rank1, right_solve,
-    symmetrise,
+    joseph, left_solve, mirror_lower, mul, mul_tn, nis_logdet, pd_cholesky, psd_cholesky, rank1,
+    rank1_lower, right_solve,
 };
 use super::{Core, LN_2PI, NlDims, NonlinearModel, StepInfo, compact_square, compact_vec, finite};
 use crate::storage::Buf;
@@ -118,13 +118,15 @@ impl SigmaPoints {
         crate::model::load("P", P, n, n, &mut p)?;
         let (mut wm, mut wc) = (vec![0.0; 2 * n + 1], vec![0.0; 2 * n + 1]);
         let c = self.weights(n, &mut wm, &mut wc)?;
-        let mut L = vec![0.0; n * n];
-        psd_cholesky(&p, n, &mut L, RANK_TOL, PSD_TOL).map_err(|pivot| Error::SigmaCovariance {
-            name: "P",
-            step: 0,
-            n,
-            pivot,
-            tol: PSD_TOL,
+        let (mut L, mut inv) = (vec![0.0; n * n], vec![0.0; n]);
+        psd_cholesky(&p, n, &mut L, &mut inv, RANK_TOL, PSD_TOL).map_err(|pivot| {
+            Error::SigmaCovariance {
+                name: "P",
+                step: 0,
+                n,
+                pivot,
+                tol: PSD_TOL,
+            }
         })?;
         Ok(Mat::from_fn(n, 2 * n + 1, |i, j| match j {
             0 => x[i],
@@ -186,6 +188,9 @@ pub struct Ukf<D: NlDims, M> {
     zs: D::ZSig,
     dz: D::ZSig,
     l: D::Nn,
+    /// Reciprocals of the diagonals of the factors of P (`l`) and of Σ (in `sig`).
+    linv: D::Nv,
+    sinv: D::Mv,
     gain: D::Nm,
     ht: D::Nm,
     rc: D::Mm,
@@ -235,6 +240,8 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             zs: D::ZSig::zeros(m * s),
             dz: D::ZSig::zeros(m * s),
             l: D::Nn::zeros(n * n),
+            linv: D::Nv::zeros(n),
+            sinv: D::Mv::zeros(m),
             gain: D::Nm::zeros(n * m),
             ht: D::Nm::zeros(n * m),
             rc: D::Mm::zeros(m * m),
@@ -278,7 +285,8 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         };
         let (x, P) = (&x.as_slice()[..n], &P.as_slice()[..n * n]);
         let L = &mut self.l.as_mut_slice()[..n * n];
-        psd_cholesky(P, n, L, RANK_TOL, PSD_TOL).map_err(|pivot| Error::SigmaCovariance {
+        let inv = &mut self.linv.as_mut_slice()[..n];
+        psd_cholesky(P, n, L, inv, RANK_TOL, PSD_TOL).map_err(|pivot| Error::SigmaCovariance {
             name,
             step: k,
             n,
@@ -356,16 +364,17 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         C.fill(0.0);
         for i in 0..s {
             let d = &dz[i * mo..(i + 1) * mo];
-            rank1(sig, wc[i], d, d, mo, mo);
+            rank1_lower(sig, wc[i], d, mo);
             rank1(C, wc[i], &dchi[i * n..(i + 1) * n], d, n, mo);
         }
-        symmetrise(sig, mo);
+        mirror_lower(sig, mo);
         // H̃ᵀ = P⁻¹ C by the factor of P (zero pivots give the minimum-norm choice), and
         // R̃ = Σ − Cᵀ H̃ᵀ, before Σ is factored in place.
         let L = &self.l.as_slice()[..n * n];
         let ht = &mut self.ht.as_mut_slice()[..n * mo];
         ht.copy_from_slice(C);
-        left_solve(L, n, ht, mo);
+        let linv = &self.linv.as_slice()[..n];
+        left_solve(L, linv, n, ht, mo);
         let rt = &mut self.rt.as_mut_slice()[..mo * mo];
         rt.copy_from_slice(sig);
         // R_c is no longer needed (copied into Σ): it holds Cᵀ H̃ᵀ.
@@ -374,8 +383,10 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         for (r, v) in rt.iter_mut().zip(ctht.iter()) {
             *r -= v;
         }
-        symmetrise(rt, mo);
-        if let Err(pivot) = pd_cholesky(sig, mo, RANK_TOL) {
+        // Σ and Cᵀ H̃ᵀ = Cᵀ P⁻¹ C are symmetric: R̃ too, up to rounding; make it exact.
+        mirror_lower(rt, mo);
+        let sinv = &mut self.sinv.as_mut_slice()[..mo];
+        if let Err(pivot) = pd_cholesky(sig, mo, sinv, RANK_TOL) {
             return Err(Error::SingularInnovation {
                 filter: "UKF",
                 step: k,
@@ -385,7 +396,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             });
         }
         let K = C;
-        right_solve(sig, mo, K, n, &mut self.tmpm.as_mut_slice()[..mo]);
+        right_solve(sig, sinv, mo, K, n);
         self.model.residual(z, zbar, col);
         let e = &mut self.e.as_mut_slice()[..mo];
         compact_vec(col, z, e);
@@ -413,7 +424,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             &mut self.t.as_mut_slice()[..n * n],
             ht,
         );
-        let nl = nis_logdet(sig, mo, e, &mut self.tmpm.as_mut_slice()[..mo]);
+        let nl = nis_logdet(sig, sinv, mo, e, &mut self.tmpm.as_mut_slice()[..mo]);
         info.nis = Some(nl.0);
         info.log_likelihood = -0.5 * (nl.0 + nl.1 + mo as f64 * LN_2PI);
         info.iterations = 1;
@@ -458,9 +469,9 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         // for it (`cross_covariance`, from the deviations kept until the next step).
         for i in 0..s {
             let d = &dy[i * n..(i + 1) * n];
-            rank1(pp, wc[i], d, d, n, n);
+            rank1_lower(pp, wc[i], d, n);
         }
-        symmetrise(pp, n);
+        mirror_lower(pp, n);
         Ok(())
     }
 }
