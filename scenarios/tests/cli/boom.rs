@@ -4,7 +4,7 @@
 //! and the tracking filters' rows, the noise Monte Carlo), the units/weights verdict in the
 //! report, shards that merge into the single run's files, and errors that name the key.
 
-use crate::common::{assert_same_files, fails, ok, read, run, scratch};
+use crate::common::{argv, assert_same_files, fails, ok, read, run, scratch};
 
 /// The full turn and all cases, with a coarse γ sweep (0, 5, …, 20°) and a small noise
 /// Monte Carlo to keep it fast.
@@ -28,11 +28,23 @@ fn case<'a>(
         .unwrap_or_else(|| panic!("no case {method} γ={gamma} {bias}"))
 }
 
+/// The keys of the JSON object `v`, sorted.
+fn sorted_keys(v: &serde_json::Value) -> Vec<&str> {
+    let mut k: Vec<&str> = v
+        .as_object()
+        .expect("object")
+        .keys()
+        .map(String::as_str)
+        .collect();
+    k.sort_unstable();
+    k
+}
+
 #[test]
 fn the_papers_conclusions_hold() {
     let dir = scratch("boom", "accept");
     std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
-    ok(&dir, &["boom", "--config", "small.toml", "--out", "out"]);
+    ok(&dir, &argv("boom --config small.toml --out out"));
     let out = dir.join("out");
     let s: serde_json::Value =
         serde_json::from_str(&read(&out.join("summary.json"))).expect("JSON");
@@ -50,13 +62,7 @@ fn the_papers_conclusions_hold() {
         "undefined_from_alpha_deg",
     ];
     for c in s["cases"].as_array().expect("cases") {
-        let mut k: Vec<&str> = c
-            .as_object()
-            .expect("object")
-            .keys()
-            .map(String::as_str)
-            .collect();
-        k.sort_unstable();
+        let k = sorted_keys(c);
         assert_eq!(k, keys);
     }
     // Six methods (three of the paper's, EKF, UKF, unscented RTS) × γ ∈ {0, 10} × {+, −}.
@@ -73,13 +79,7 @@ fn the_papers_conclusions_hold() {
     let mc = s["noise_mc"].as_array().expect("noise_mc");
     assert_eq!(mc.len(), 8);
     for r in mc {
-        let mut k: Vec<&str> = r
-            .as_object()
-            .expect("object")
-            .keys()
-            .map(String::as_str)
-            .collect();
-        k.sort_unstable();
+        let k = sorted_keys(r);
         assert_eq!(
             k,
             [
@@ -173,55 +173,11 @@ fn shards_merge_into_the_single_run() {
         "case_gammas_deg = [10.0]\n[sweep]\nfrom_deg = 8.0\nto_deg = 12.0\nstep_deg = 4.0\n[beyond]\nenabled = false\n[tracking]\nruns = 3\n",
     )
     .expect("write config");
-    ok(
-        &dir,
-        &[
-            "boom",
-            "--config",
-            "tiny.toml",
-            "--shard",
-            "1/2",
-            "--out",
-            "a",
-        ],
-    );
-    ok(
-        &dir,
-        &[
-            "boom",
-            "--config",
-            "tiny.toml",
-            "--shard",
-            "2/2",
-            "--out",
-            "b",
-        ],
-    );
-    ok(&dir, &["merge", "a", "b", "--out", "m"]);
-    ok(
-        &dir,
-        &[
-            "boom",
-            "--config",
-            "tiny.toml",
-            "--threads",
-            "1",
-            "--out",
-            "t1",
-        ],
-    );
-    ok(
-        &dir,
-        &[
-            "boom",
-            "--config",
-            "tiny.toml",
-            "--threads",
-            "2",
-            "--out",
-            "t2",
-        ],
-    );
+    ok(&dir, &argv("boom --config tiny.toml --shard 1/2 --out a"));
+    ok(&dir, &argv("boom --config tiny.toml --shard 2/2 --out b"));
+    ok(&dir, &argv("merge a b --out m"));
+    ok(&dir, &argv("boom --config tiny.toml --threads 1 --out t1"));
+    ok(&dir, &argv("boom --config tiny.toml --threads 2 --out t2"));
     // Every file of the merge equals the single run's; shards differ only in saying so.
     assert_same_files(&dir.join("t1"), &dir.join("m"));
     assert_same_files(&dir.join("t1"), &dir.join("t2"));
@@ -231,8 +187,8 @@ fn shards_merge_into_the_single_run() {
     assert_eq!((rows("a"), rows("b"), rows("m")), (1, 2, 3));
     // A shard of a differently configured campaign is refused.
     std::fs::write(dir.join("other.toml"), "case_gammas_deg = [5.0]\n[sweep]\nfrom_deg = 8.0\nto_deg = 12.0\nstep_deg = 4.0\n[beyond]\nenabled = false\n[tracking]\nruns = 3\n").expect("write");
-    ok(&dir, &["boom", "--config", "other.toml", "--out", "c"]);
-    let err = fails(&dir, &["merge", "a", "c", "--out", "bad"]);
+    ok(&dir, &argv("boom --config other.toml --out c"));
+    let err = fails(&dir, &argv("merge a c --out bad"));
     assert!(err.contains("another campaign"), "{err}");
     assert!(!dir.join("bad").exists(), "a failed merge writes nothing");
 }
@@ -241,7 +197,7 @@ fn shards_merge_into_the_single_run() {
 fn bad_configuration_is_named() {
     let dir = scratch("boom", "errors");
     std::fs::write(dir.join("bad.toml"), "[limits]\nalpha_deg = 0.0\n").expect("write");
-    let out = run(&dir, &["boom", "--config", "bad.toml", "--out", "o"]);
+    let out = run(&dir, &argv("boom --config bad.toml --out o"));
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -249,7 +205,7 @@ fn bad_configuration_is_named() {
         "{err}"
     );
     std::fs::write(dir.join("typo.toml"), "[estimator]\nunits = \"Degree\"\n").expect("write");
-    let out = run(&dir, &["boom", "--config", "typo.toml", "--out", "o"]);
+    let out = run(&dir, &argv("boom --config typo.toml --out o"));
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("units"));
     assert!(!dir.join("o").exists());

@@ -15,6 +15,30 @@ pub fn scratch(family: &str, name: &str) -> PathBuf {
     dir
 }
 
+/// A command line written as on a shell (words split at white space; no quoting), as the
+/// argument list the helpers below take: `ok(&dir, &argv("merge a b --out m"))`.
+pub fn argv(line: &'static str) -> Vec<&'static str> {
+    line.split_whitespace().collect()
+}
+
+/// [`argv`] with each `{}` word replaced by the next of `values`, in order:
+/// `argv_with("filter --model m.toml --form {}", &[form])`.
+pub fn argv_with<'a>(line: &'static str, values: &[&'a str]) -> Vec<&'a str> {
+    let mut values = values.iter();
+    let words: Vec<&'a str> = line
+        .split_whitespace()
+        .map(|w| {
+            if w == "{}" {
+                values.next().copied().expect("a value for every {}")
+            } else {
+                w
+            }
+        })
+        .collect();
+    assert!(values.next().is_none(), "a {{}} for every value");
+    words
+}
+
 /// Runs the built `scenarios` binary in `dir` with `args`.
 pub fn run(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_scenarios"))
@@ -157,6 +181,27 @@ pub fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
             (e.file_name().to_string_lossy().into_owned(), bytes)
         })
         .collect()
+}
+
+/// Makes `path` a character device like `/dev/null` (`minor` "3") or `/dev/full` ("7") —
+/// a node made here, never the system's own, so a regression that replaced it cannot break
+/// the machine. Without the right to mknod, a link to the real one, which such a user cannot
+/// replace anyway.
+pub fn device_node(path: &Path, minor: &str) {
+    let made = Command::new("mknod")
+        .arg(path)
+        .args(["c", "1", minor])
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !made {
+        let real = if minor == "7" {
+            "/dev/full"
+        } else {
+            "/dev/null"
+        };
+        std::os::unix::fs::symlink(real, path).expect("link");
+    }
 }
 
 /// A scalar random walk with a prior, and a discrete JSON and a continuous model beside it.

@@ -9,7 +9,7 @@ use std::path::Path;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::common::{fails, ok, read, run, scratch};
+use crate::common::{argv, argv_with, fails, ok, read, run, scratch};
 
 const MODEL: &str =
     "dt = 1\nF = [[0.95]]\nH = [[1]]\nQ = [[0.5]]\nR = [[2]]\nx0 = [0]\nP0 = [[4]]\n";
@@ -90,19 +90,10 @@ fn diagnostics_match_an_independent_filter_and_the_likelihood() {
     let dir = scratch("diag", "match");
     let z = simulate(&dir);
     let lags = LAGS.to_string();
-    let args = [
-        "filter",
-        "--model",
-        "m.toml",
-        "--data",
-        "z.csv",
-        "--out",
-        "est.csv",
-        "--diagnostics",
-        "d.json",
-        "--diagnostics-lags",
-        &lags,
-    ];
+    let args = argv_with(
+        "filter --model m.toml --data z.csv --out est.csv --diagnostics d.json --diagnostics-lags {}",
+        &[&lags],
+    );
     ok(&dir, &args);
     let d = json(&dir.join("d.json"));
     let (nu, nis, ll_hand) = by_hand(&z, 0.95, 0.5, 2.0);
@@ -209,17 +200,7 @@ fn a_wrong_model_is_flagged() {
     .expect("model");
     ok(
         &dir,
-        &[
-            "filter",
-            "--model",
-            "small_q.toml",
-            "--data",
-            "z.csv",
-            "--out",
-            "est.csv",
-            "--diagnostics",
-            "d.json",
-        ],
+        &argv("filter --model small_q.toml --data z.csv --out est.csv --diagnostics d.json"),
     );
     let d = json(&dir.join("d.json"));
     assert_eq!(d["nis"]["mean_in_band"], false, "{d}");
@@ -246,9 +227,7 @@ fn refusals_leave_no_file() {
     let dir = scratch("diag", "refuse");
     simulate(&dir);
     let before = listing(&dir);
-    let base = [
-        "filter", "--model", "m.toml", "--data", "z.csv", "--out", "est.csv",
-    ];
+    let base = argv("filter --model m.toml --data z.csv --out est.csv");
     let with = |extra: &[&'static str]| -> Vec<&'static str> {
         base.iter().chain(extra).copied().collect()
     };
@@ -268,11 +247,11 @@ fn refusals_leave_no_file() {
         (&["--diagnostics", "."][..], "--diagnostics ."),
         (&["--diagnostics-lags", "3"][..], "--diagnostics"),
         (
-            &["--diagnostics", "d.json", "--diagnostics-lags", "0"][..],
+            &argv("--diagnostics d.json --diagnostics-lags 0")[..],
             "--diagnostics-lags",
         ),
         (
-            &["--diagnostics", "d.json", "--diagnostics-lags", "600"][..],
+            &argv("--diagnostics d.json --diagnostics-lags 600")[..],
             "599 observed",
         ),
     ] {
@@ -287,34 +266,14 @@ fn refusals_leave_no_file() {
     // Both on standard output would interleave.
     let err = fails(
         &dir,
-        &[
-            "filter",
-            "--model",
-            "m.toml",
-            "--data",
-            "z.csv",
-            "--out",
-            "-",
-            "--diagnostics",
-            "-",
-        ],
+        &argv("filter --model m.toml --data z.csv --out - --diagnostics -"),
     );
     assert!(err.contains("same destination as --out"), "{err}");
     // A data error writes neither file.
     std::fs::write(dir.join("bad.csv"), "t,z1\n0,1\n1,x\n").expect("bad data");
     let err = fails(
         &dir,
-        &[
-            "filter",
-            "--model",
-            "m.toml",
-            "--data",
-            "bad.csv",
-            "--out",
-            "e2.csv",
-            "--diagnostics",
-            "d2.json",
-        ],
+        &argv("filter --model m.toml --data bad.csv --out e2.csv --diagnostics d2.json"),
     );
     assert!(err.contains("bad.csv"), "{err}");
     assert!(!dir.join("e2.csv").exists() && !dir.join("d2.json").exists());

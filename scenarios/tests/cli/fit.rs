@@ -9,7 +9,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
-use super::common::{fails, ok, read, run, scratch};
+use super::common::{argv, argv_with, fails, ok, read, run, scratch};
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
@@ -53,21 +53,10 @@ fn fit_then_filter_round_trip_and_the_summary_matches_the_library() {
         );
         ok(
             &dir,
-            &[
-                "fit",
-                "--model",
-                "m.json",
-                "--data",
-                "z.csv",
-                "--free",
-                "Q:scalar,R:diag",
-                "--method",
-                method,
-                "--out",
-                &out,
-                "--summary",
-                &summary,
-            ],
+            &argv_with(
+                "fit --model m.json --data z.csv --free Q:scalar,R:diag --method {} --out {} --summary {}",
+                &[method, &out, &summary],
+            ),
         );
         let s = json(&dir.join(&summary));
         assert_eq!(s["converged"], serde_json::Value::Bool(true), "{s}");
@@ -76,9 +65,7 @@ fn fit_then_filter_round_trip_and_the_summary_matches_the_library() {
         // The fitted file is a model file `filter` reads as is …
         ok(
             &dir,
-            &[
-                "filter", "--model", &out, "--data", "z.csv", "--out", "est.csv",
-            ],
+            &argv_with("filter --model {} --data z.csv --out est.csv", &[&out]),
         );
         // … and the summary's log-likelihood is the library's on the fitted model.
         let m =
@@ -142,9 +129,7 @@ fn fit_bad_inputs_are_one_line_errors() {
     // An unknown item (a usage error reported by the argument parser).
     let out = run(
         &dir,
-        &[
-            "fit", "--model", "m.json", "--data", "z.csv", "--free", "F:diag", "--out", "o.json",
-        ],
+        &argv("fit --model m.json --data z.csv --free F:diag --out o.json"),
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
@@ -158,9 +143,7 @@ fn fit_bad_inputs_are_one_line_errors() {
     write(&dir, "z2.csv", "t,z1,z2\n0,1,\n1,2,\n2,1.5,\n3,2.5,\n");
     let err = fails(
         &dir,
-        &[
-            "fit", "--model", "m2.json", "--data", "z2.csv", "--free", "R:diag", "--out", "o.json",
-        ],
+        &argv("fit --model m2.json --data z2.csv --free R:diag --out o.json"),
     );
     assert!(
         err.contains("cannot be identified") && err.contains("channel 1"),
@@ -170,29 +153,15 @@ fn fit_bad_inputs_are_one_line_errors() {
     write(&dir, "z3.csv", "t,z1\n0,\n1,NaN\n2,\n");
     let err = fails(
         &dir,
-        &[
-            "fit", "--model", "m.json", "--data", "z3.csv", "--free", "Q:diag", "--out", "o.json",
-        ],
+        &argv("fit --model m.json --data z3.csv --free Q:diag --out o.json"),
     );
     assert!(err.contains("no measurement"), "{err}");
     // Not converged: exit code 1, one line saying what to try; nothing written.
     let out = run(
         &dir,
-        &[
-            "fit",
-            "--model",
-            "m.json",
-            "--data",
-            "z.csv",
-            "--free",
-            "Q:scalar,R:diag",
-            "--method",
-            "em",
-            "--max-iter",
-            "2",
-            "--out",
-            "o.json",
-        ],
+        &argv(
+            "fit --model m.json --data z.csv --free Q:scalar,R:diag --method em --max-iter 2 --out o.json",
+        ),
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
@@ -205,24 +174,9 @@ fn fit_bad_inputs_are_one_line_errors() {
     // … unless allowed.
     ok(
         &dir,
-        &[
-            "fit",
-            "--model",
-            "m.json",
-            "--data",
-            "z.csv",
-            "--free",
-            "Q:scalar,R:diag",
-            "--method",
-            "em",
-            "--max-iter",
-            "2",
-            "--allow-unconverged",
-            "--out",
-            "o.json",
-            "--summary",
-            "s.json",
-        ],
+        &argv(
+            "fit --model m.json --data z.csv --free Q:scalar,R:diag --method em --max-iter 2 --allow-unconverged --out o.json --summary s.json",
+        ),
     );
     assert_eq!(
         json(&dir.join("s.json"))["converged"],

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::common::{assert_same_files, fails, ok, read, run, scratch, summary};
+use crate::common::{argv, argv_with, assert_same_files, fails, ok, read, run, scratch, summary};
 
 /// One amplitude sweep of three points and one point for each other sweep, no calibration
 /// search: the smallest campaign that exercises every output but the calibration's.
@@ -28,7 +28,7 @@ fn one_degree_reproduces_the_papers_orderings() {
     let config = format!("{SMALL}runs_per_point = 300\nsweep_runs_per_point = 2\n")
         .replace("[0.0, 0.5, 1.0]", "[0.5, 1.0]");
     std::fs::write(dir.join("small.toml"), config).expect("write config");
-    ok(&dir, &["fueling", "--config", "small.toml", "--out", "out"]);
+    ok(&dir, &argv("fueling --config small.toml --out out"));
     let out = dir.join("out");
     let s = summary(&out);
     assert_eq!(s["scenario"], "fueling");
@@ -106,7 +106,7 @@ fn exact_tustin_report_explains_the_filter_with_s() {
     )
     .replace("[0.0, 0.5, 1.0]", "[0.5, 1.0]");
     std::fs::write(dir.join("et.toml"), config).expect("write config");
-    ok(&dir, &["fueling", "--config", "et.toml", "--out", "out"]);
+    ok(&dir, &argv("fueling --config et.toml --out out"));
     let out = dir.join("out");
     let report = read(&out.join("report.md"));
     for needle in [
@@ -141,18 +141,18 @@ fn threads_and_shards_give_the_same_files() {
     let config = SMALL.replace("calibration.search = \"off\"\n", tiny);
     std::fs::write(dir.join("small.toml"), config).expect("write config");
     let with = |extra: &[&str]| {
-        let mut a = vec!["fueling", "--config", "small.toml", "--runs", "24"];
+        let mut a = argv("fueling --config small.toml --runs 24");
         a.extend_from_slice(extra);
         if !extra.contains(&"--seed") {
             a.extend_from_slice(&["--seed", "7"]);
         }
         ok(&dir, &a);
     };
-    with(&["--threads", "1", "--out", "t1"]);
-    with(&["--threads", "2", "--out", "t2"]);
+    with(&argv("--threads 1 --out t1"));
+    with(&argv("--threads 2 --out t2"));
     assert_same_files(&dir.join("t1"), &dir.join("t2"));
-    with(&["--shard", "1/2", "--out", "s1"]);
-    with(&["--shard", "2/2", "--out", "s2"]);
+    with(&argv("--shard 1/2 --out s1"));
+    with(&argv("--shard 2/2 --out s2"));
     let whole = read(&dir.join("t1/summary.json"));
     let half = read(&dir.join("s1/summary.json"));
     assert!(half.contains("\"shard\": \"1/2\""), "a shard says so");
@@ -163,41 +163,33 @@ fn threads_and_shards_give_the_same_files() {
         !dir.join("s1/calibration.toml").exists(),
         "a shard skips the calibration"
     );
-    ok(&dir, &["merge", "s1", "s2", "--out", "merged"]);
+    ok(&dir, &argv("merge s1 s2 --out merged"));
     // Every file of the merge, not only the summary, equals the single run's.
     assert_same_files(&dir.join("t1"), &dir.join("merged"));
     // calibration.toml is a configuration the scenario accepts, with the best set in it.
     let best = summary(&dir.join("t1"))["calibration"]["best"]["params"]["step_mm"]
         .as_f64()
         .expect("best step");
-    let rerun = [
-        "fueling",
-        "--config",
-        "t1/calibration.toml",
-        "--runs",
-        "4",
-        "--out",
-        "re",
-    ];
+    let rerun = argv("fueling --config t1/calibration.toml --runs 4 --out re");
     ok(&dir, &rerun);
     let params = &summary(&dir.join("re"))["params"];
     assert_eq!(params["step_mm"].as_f64(), Some(best));
     assert_eq!(params["calibration"]["search"], "off");
     // A different seed changes the result (the check above could not pass vacuously).
-    with(&["--seed", "8", "--out", "other"]);
+    with(&argv("--seed 8 --out other"));
     assert_ne!(whole, read(&dir.join("other/summary.json")));
 
     // A shard given twice, a missing shard, or a shard of another campaign is an error
     // naming the problem, and a failed merge writes nothing.
-    let err = fails(&dir, &["merge", "s1", "s1", "--out", "bad"]);
+    let err = fails(&dir, &argv("merge s1 s1 --out bad"));
     assert!(err.contains("more than one shard"), "{err}");
-    let err = fails(&dir, &["merge", "s1", "--out", "bad"]);
+    let err = fails(&dir, &argv("merge s1 --out bad"));
     // The directories given and the runs no directory holds (12–23 of 24 in shard 2/2).
     assert!(
         err.contains("shard is missing") && err.contains("s1") && err.contains("12–23"),
         "{err}"
     );
-    let err = fails(&dir, &["merge", "s1", "other", "--out", "bad"]);
+    let err = fails(&dir, &argv("merge s1 other --out bad"));
     assert!(err.contains("another campaign"), "{err}");
     assert!(!dir.join("bad").exists(), "a failed merge writes nothing");
     let _ = std::fs::remove_dir_all(&dir);
@@ -220,19 +212,10 @@ fn a_damaged_record_is_refused_naming_the_file_and_line() {
         let shard = format!("{k}/2");
         ok(
             &dir,
-            &[
-                "fueling",
-                "--config",
-                "small.toml",
-                "--runs",
-                "6",
-                "--seed",
-                "5",
-                "--shard",
-                &shard,
-                "--out",
-                k,
-            ],
+            &argv_with(
+                "fueling --config small.toml --runs 6 --seed 5 --shard {} --out {}",
+                &[&shard, k],
+            ),
         );
     }
     let file = "runs_amplitude.csv";
@@ -241,7 +224,7 @@ fn a_damaged_record_is_refused_naming_the_file_and_line() {
     // Cut inside the last number (no final newline): the values that remain still parse.
     copy_dir(&dir.join("2"), &dir.join("cut"));
     std::fs::write(dir.join("cut").join(file), &text[..text.len() - 4]).expect("write");
-    let err = fails(&dir, &["merge", "1", "cut", "--out", "bad"]);
+    let err = fails(&dir, &argv("merge 1 cut --out bad"));
     assert!(
         err.contains(file) && err.contains(&format!("line {lines}")),
         "{err}"
@@ -254,7 +237,7 @@ fn a_damaged_record_is_refused_naming_the_file_and_line() {
         .map(|l| format!("{l}\n"))
         .collect();
     std::fs::write(dir.join("short").join(file), short).expect("write");
-    let err = fails(&dir, &["merge", "1", "short", "--out", "bad"]);
+    let err = fails(&dir, &argv("merge 1 short --out bad"));
     assert!(err.contains(file) && err.contains("rows"), "{err}");
     // One digit changed: same length, same lines.
     copy_dir(&dir.join("2"), &dir.join("flip"));
@@ -264,10 +247,10 @@ fn a_damaged_record_is_refused_naming_the_file_and_line() {
     let mut bytes = text.into_bytes();
     bytes[at] += 1;
     std::fs::write(dir.join("flip").join(file), bytes).expect("write");
-    let err = fails(&dir, &["merge", "1", "flip", "--out", "bad"]);
+    let err = fails(&dir, &argv("merge 1 flip --out bad"));
     assert!(err.contains(file) && err.contains("checksum"), "{err}");
     assert!(!dir.join("bad").exists(), "a failed merge writes nothing");
-    ok(&dir, &["merge", "1", "2", "--out", "good"]);
+    ok(&dir, &argv("merge 1 2 --out good"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -284,7 +267,7 @@ fn bad_configuration_exits_2_naming_the_key() {
         ("calibration.search = \"longer\"\n", "longer"),
     ] {
         std::fs::write(dir.join("bad.toml"), text).expect("write config");
-        let out = run(&dir, &["fueling", "--config", "bad.toml", "--out", "out"]);
+        let out = run(&dir, &argv("fueling --config bad.toml --out out"));
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{text}: {err}");
         assert!(
@@ -293,7 +276,7 @@ fn bad_configuration_exits_2_naming_the_key() {
         );
         assert!(!dir.join("out").exists(), "{text}: nothing written");
     }
-    let out = run(&dir, &["fueling", "--runs", "1", "--out", "out"]);
+    let out = run(&dir, &argv("fueling --runs 1 --out out"));
     assert_eq!(out.status.code(), Some(2));
     let _ = std::fs::remove_dir_all(&dir);
 }

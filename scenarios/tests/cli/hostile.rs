@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use crate::common::{run, scratch};
+use crate::common::{device_node, run, scratch};
 
 /// The files every row starts from: a scalar random walk (TOML and JSON), a continuous
 /// model, a good data CSV, a shard directory, and an existing output that must survive.
@@ -486,22 +486,7 @@ fn prepare(dir: &Path, r: &Row) {
             assert!(ok, "mkfifo");
         }
         Setup::Dir(name) => std::fs::create_dir(dir.join(name)).expect("dir"),
-        Setup::Device(name, minor) => {
-            let made = std::process::Command::new("mknod")
-                .arg(dir.join(name))
-                .args(["c", "1", minor])
-                .stderr(std::process::Stdio::null())
-                .status()
-                .is_ok_and(|s| s.success());
-            if !made {
-                let real = if minor == "7" {
-                    "/dev/full"
-                } else {
-                    "/dev/null"
-                };
-                std::os::unix::fs::symlink(real, dir.join(name)).expect("link");
-            }
-        }
+        Setup::Device(name, minor) => device_node(&dir.join(name), minor),
     }
 }
 

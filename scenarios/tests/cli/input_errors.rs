@@ -19,53 +19,37 @@ fn csv_errors_name_file_line_and_column() {
         "m.json",
         r#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#,
     );
-    let filter = [
-        "filter", "--model", "m.json", "--data", "z.csv", "--out", "est.csv",
-    ];
-    write(&dir, "z.csv", "t,z1\n0,1\n1,x2\n");
-    refused(
-        &dir,
-        &filter,
-        &["z.csv: line 3, column 2 (z1): `x2` is not a number"],
-        2,
-    );
-    write(&dir, "z.csv", "t,z1\n0,1\n1\n");
-    refused(
-        &dir,
-        &filter,
-        &["z.csv: line 3, column 2 (z1): missing field"],
-        2,
-    );
-    write(&dir, "z.csv", "t,z1\n0,1\n1,2,3\n");
-    refused(&dir, &filter, &["z.csv: line 3, column 3: extra field"], 2);
-    write(&dir, "z.csv", "t,z1\n1,1\n0,2\n");
-    refused(
-        &dir,
-        &filter,
-        &["z.csv: line 3, column 1 (t)", "must increase"],
-        2,
-    );
-    write(&dir, "z.csv", "t,y1\n");
-    refused(
-        &dir,
-        &filter,
-        &["z.csv: line 1, column 2", "expected `z1`"],
-        2,
-    );
-    write(&dir, "z.csv", "t,z1,z2\n0,1,2\n");
-    refused(
-        &dir,
-        &filter,
-        &["z.csv: line 1", "2 measurement columns", "m = 1"],
-        2,
-    );
-    write(&dir, "z.csv", "t,z1,u1\n0,1,2\n");
-    refused(
-        &dir,
-        &filter,
-        &["z.csv: line 1", "control columns", "p = 0"],
-        2,
-    );
+    let filter = argv("filter --model m.json --data z.csv --out est.csv");
+    for (csv, expect) in [
+        (
+            "t,z1\n0,1\n1,x2\n",
+            &["z.csv: line 3, column 2 (z1): `x2` is not a number"][..],
+        ),
+        (
+            "t,z1\n0,1\n1\n",
+            &["z.csv: line 3, column 2 (z1): missing field"],
+        ),
+        (
+            "t,z1\n0,1\n1,2,3\n",
+            &["z.csv: line 3, column 3: extra field"],
+        ),
+        (
+            "t,z1\n1,1\n0,2\n",
+            &["z.csv: line 3, column 1 (t)", "must increase"],
+        ),
+        ("t,y1\n", &["z.csv: line 1, column 2", "expected `z1`"]),
+        (
+            "t,z1,z2\n0,1,2\n",
+            &["z.csv: line 1", "2 measurement columns", "m = 1"],
+        ),
+        (
+            "t,z1,u1\n0,1,2\n",
+            &["z.csv: line 1", "control columns", "p = 0"],
+        ),
+    ] {
+        write(&dir, "z.csv", csv);
+        refused(&dir, &filter, expect, 2);
+    }
     // An error far into the file, after thousands of estimates were streamed out: the
     // output file must still not appear (whole or nothing).
     let mut csv = String::from("t,z1\n");
@@ -90,66 +74,72 @@ fn model_errors_name_matrix_and_rule() {
     let dir = scratch("ud", "modelerr");
     write(&dir, "z.csv", "t,z1\n0,1\n");
     let inputs = 2;
-    let filter = [
-        "filter", "--model", "m.toml", "--data", "z.csv", "--out", "est.csv",
-    ];
+    let filter = argv("filter --model m.toml --data z.csv --out est.csv");
     let base = "dt = 1\nF = [[1, 0], [0, 1]]\nH = [[1, 0]]\nQ = [[1, 0], [0, 1]]\nR = [[1]]\nP0 = [[1, 0], [0, 1]]\n";
-    let case = |text: String, expect: &[&str]| {
-        write(&dir, "m.toml", &text);
+    // Each row: a replacement in the valid model, what the one-line refusal must say.
+    for (from, to, expect) in [
+        // Shape.
+        (
+            "H = [[1, 0]]",
+            "H = [[1, 0, 0]]",
+            &["m.toml", "matrix H is 1×3, expected 1×2", "shape"][..],
+        ),
+        (
+            "R = [[1]]",
+            "R = [[1], [2]]",
+            &["matrix R is 2×1, expected 1×1", "shape"],
+        ),
+        (
+            "F = [[1, 0], [0, 1]]",
+            "F = [[1, 0], [0]]",
+            &["matrix F: row 2 has 1 entries", "shape"],
+        ),
+        // NaN.
+        (
+            "Q = [[1, 0], [0, 1]]",
+            "Q = [[1, 0], [0, nan]]",
+            &["matrix Q has NaN at row 2, column 2", "NaN"],
+        ),
+        // Not symmetric (checked by the engine, which names the matrix).
+        (
+            "Q = [[1, 0], [0, 1]]",
+            "Q = [[1, 0.5], [0, 1]]",
+            &["m.toml", "Q (2x2) is not symmetric"],
+        ),
+        (
+            "P0 = [[1, 0], [0, 1]]",
+            "P0 = [[1, 0.5], [0, 1]]",
+            &["P0 (2x2) is not symmetric"],
+        ),
+        // Not PSD.
+        (
+            "R = [[1]]",
+            "R = [[-1]]",
+            &["m.toml", "R (1x1) is not positive semidefinite"],
+        ),
+        (
+            "Q = [[1, 0], [0, 1]]",
+            "Q = [[1, 2], [2, 1]]",
+            &["Q (2x2) is not positive semidefinite"],
+        ),
+        // Syntax (with line and column), a missing P0.
+        (
+            "R = [[1]]",
+            "R = [[1,,]]",
+            &["m.toml", "invalid TOML model at line 5"],
+        ),
+        ("P0 = [[1, 0], [0, 1]]\n", "", &["matrix P0 is missing"]),
+    ] {
+        write(&dir, "m.toml", &base.replace(from, to));
         refused(&dir, &filter, expect, inputs);
-    };
-    // Shape.
-    case(
-        base.replace("H = [[1, 0]]", "H = [[1, 0, 0]]"),
-        &["m.toml", "matrix H is 1×3, expected 1×2", "shape"],
-    );
-    case(
-        base.replace("R = [[1]]", "R = [[1], [2]]"),
-        &["matrix R is 2×1, expected 1×1", "shape"],
-    );
-    case(
-        base.replace("F = [[1, 0], [0, 1]]", "F = [[1, 0], [0]]"),
-        &["matrix F: row 2 has 1 entries", "shape"],
-    );
-    // NaN.
-    case(
-        base.replace("Q = [[1, 0], [0, 1]]", "Q = [[1, 0], [0, nan]]"),
-        &["matrix Q has NaN at row 2, column 2", "NaN"],
-    );
-    // Not symmetric (checked by the engine, which names the matrix).
-    case(
-        base.replace("Q = [[1, 0], [0, 1]]", "Q = [[1, 0.5], [0, 1]]"),
-        &["m.toml", "Q (2x2) is not symmetric"],
-    );
-    case(
-        base.replace("P0 = [[1, 0], [0, 1]]", "P0 = [[1, 0.5], [0, 1]]"),
-        &["P0 (2x2) is not symmetric"],
-    );
-    // Not PSD.
-    case(
-        base.replace("R = [[1]]", "R = [[-1]]"),
-        &["m.toml", "R (1x1) is not positive semidefinite"],
-    );
-    case(
-        base.replace("Q = [[1, 0], [0, 1]]", "Q = [[1, 2], [2, 1]]"),
-        &["Q (2x2) is not positive semidefinite"],
-    );
-    // Syntax (with line and column), unknown keys, a missing P0, an unknown extension.
-    case(
-        base.replace("R = [[1]]", "R = [[1,,]]"),
-        &["m.toml", "invalid TOML model at line 5"],
-    );
-    case(format!("{base}Rr = 1\n"), &["unknown field `Rr`", "line 7"]);
-    case(
-        base.replace("P0 = [[1, 0], [0, 1]]\n", ""),
-        &["matrix P0 is missing"],
-    );
+    }
+    // An unknown key, an unknown extension.
+    write(&dir, "m.toml", &format!("{base}Rr = 1\n"));
+    refused(&dir, &filter, &["unknown field `Rr`", "line 7"], inputs);
     write(&dir, "m.yaml", base);
     refused(
         &dir,
-        &[
-            "filter", "--model", "m.yaml", "--data", "z.csv", "--out", "est.csv",
-        ],
+        &argv("filter --model m.yaml --data z.csv --out est.csv"),
         &["m.yaml", ".json or .toml"],
         3,
     );
@@ -159,25 +149,16 @@ fn model_errors_name_matrix_and_rule() {
     write(&dir, "m.json", "{\"dt\": 1,\n \"F\": [[1, ]]}");
     refused(
         &dir,
-        &[
-            "filter", "--model", "m.json", "--data", "z.csv", "--out", "est.csv",
-        ],
+        &argv("filter --model m.json --data z.csv --out est.csv"),
         &["m.json", "invalid JSON model", "line 2 column"],
         2,
     );
     // Continuous models: shape, NaN, Qc not symmetric / not PSD, a singular Tustin map.
     let disc = |m: &'static str| {
-        [
-            "discretize",
-            "--model",
-            m,
-            "--dt",
-            "0.5",
-            "--method",
-            "tustin",
-            "--out",
-            "d.json",
-        ]
+        argv_with(
+            "discretize --model {} --dt 0.5 --method tustin --out d.json",
+            &[m],
+        )
     };
     let cont = |text: &str, expect: &[&str]| {
         write(&dir, "c.json", text);
@@ -208,16 +189,7 @@ fn model_errors_name_matrix_and_rule() {
     write(&dir, "c.json", r#"{"A": [[-1]], "C": [[1]]}"#);
     refused(
         &dir,
-        &[
-            "discretize",
-            "--model",
-            "c.json",
-            "--dt=-1",
-            "--method",
-            "zoh",
-            "--out",
-            "d.json",
-        ],
+        &argv("discretize --model c.json --dt=-1 --method zoh --out d.json"),
         &["--dt -1"],
         3,
     );
@@ -357,21 +329,14 @@ fn argument_errors_are_one_line_naming_the_argument() {
     let dir = scratch("ud", "args");
     write(&dir, "c.json", CONT_JSON);
     let disc = |dt: &'static str| {
-        [
-            "discretize",
-            "--model",
-            "c.json",
-            "--dt",
-            dt,
-            "--method",
-            "zoh",
-            "--out",
-            "d.json",
-        ]
+        argv_with(
+            "discretize --model c.json --dt {} --method zoh --out d.json",
+            &[dt],
+        )
     };
     usage_error(
         &dir,
-        &["fueling", "--shard", "5/4", "--out", "r"],
+        &argv("fueling --shard 5/4 --out r"),
         "--shard 5/4: K must be between 1 and N",
     );
     usage_error(
@@ -392,19 +357,17 @@ fn argument_errors_are_one_line_naming_the_argument() {
     );
     usage_error(
         &dir,
-        &["fueling", "--runs", "-3", "--out", "r"],
+        &argv("fueling --runs -3 --out r"),
         "--runs -3: expected a whole number",
     );
     usage_error(
         &dir,
-        &["fueling", "--threads", "0", "--out", "r"],
+        &argv("fueling --threads 0 --out r"),
         "--threads 0: must be at least 1",
     );
     usage_error(
         &dir,
-        &[
-            "filter", "--model", "m.json", "--data", "z.csv", "--out", "e.csv", "--form", "bad",
-        ],
+        &argv("filter --model m.json --data z.csv --out e.csv --form bad"),
         "--form bad: expected joseph, standard or sqrt",
     );
     usage_error(
@@ -464,7 +427,7 @@ fn shard_out_of_range_is_refused() {
     ] {
         usage_error(
             &dir,
-            &["fueling", "--shard", shard, "--out", "r"],
+            &argv_with("fueling --shard {} --out r", &[shard]),
             &format!("--shard {shard}: {why}"),
         );
     }
@@ -475,9 +438,7 @@ fn shard_out_of_range_is_refused() {
 fn json_model_errors_name_the_key_path_and_a_bom_is_accepted() {
     let dir = scratch("ud", "json");
     write(&dir, "z.csv", "t,z1\n0,1\n1,2\n");
-    let filter = [
-        "filter", "--model", "m.json", "--data", "z.csv", "--out", "est.csv",
-    ];
+    let filter = argv("filter --model m.json --data z.csv --out est.csv");
     // As Python's json.dump writes non-finite floats.
     for (bad, key, token) in [
         (r#""Q": [[NaN]]"#, "key Q[0][0]", "NaN"),
@@ -521,17 +482,10 @@ fn discretize_computes_only_what_is_asked() {
     let dir = scratch("ud", "disc-only");
     write(&dir, "c.json", r#"{"A": [[1000]], "C": [[1]]}"#);
     let disc = |dt: &'static str, method: &'static str| {
-        [
-            "discretize",
-            "--model",
-            "c.json",
-            "--dt",
-            dt,
-            "--method",
-            method,
-            "--out",
-            "d.json",
-        ]
+        argv_with(
+            "discretize --model c.json --dt {} --method {} --out d.json",
+            &[dt, method],
+        )
     };
     // Forward Euler with no noise needs no exponential: F = 1 + A·dt, Q = 0.
     ok(&dir, &disc("1", "euler"));
@@ -560,31 +514,22 @@ fn discretize_computes_only_what_is_asked() {
 fn csv_truncated_last_line_and_unbalanced_quote_are_one_line_errors() {
     let dir = scratch("ud", "csv-trunc");
     write(&dir, "m.toml", WALK_TOML);
-    let filter = [
-        "filter", "--model", "m.toml", "--data", "z.csv", "--out", "est.csv",
-    ];
+    let filter = argv("filter --model m.toml --data z.csv --out est.csv");
     // `4,5.25` cut to `4,5.` would read as 5: a last line with no newline is refused.
-    write(&dir, "z.csv", "t,z1\n0,1\n4,5.");
-    refused(
-        &dir,
-        &filter,
-        &["z.csv: line 3: the last line has no final newline"],
-        2,
-    );
-    write(&dir, "z.csv", "t,z1");
-    refused(
-        &dir,
-        &filter,
-        &["z.csv: line 1: the last line has no final newline"],
-        2,
-    );
-    write(&dir, "z.csv", "t,z1\n0,\"1\n1,2\n2,3\n");
-    refused(
-        &dir,
-        &filter,
-        &["z.csv: line 2, column 2 (z1): unbalanced quote"],
-        2,
-    );
+    for (csv, expect) in [
+        (
+            "t,z1\n0,1\n4,5.",
+            "z.csv: line 3: the last line has no final newline",
+        ),
+        ("t,z1", "z.csv: line 1: the last line has no final newline"),
+        (
+            "t,z1\n0,\"1\n1,2\n2,3\n",
+            "z.csv: line 2, column 2 (z1): unbalanced quote",
+        ),
+    ] {
+        write(&dir, "z.csv", csv);
+        refused(&dir, &filter, &[expect], 2);
+    }
     // CRLF endings and a final blank line are whole files.
     write(&dir, "z.csv", "t,z1\r\n0,1\r\n4,5\r\n\r\n");
     ok(&dir, &filter);
@@ -614,9 +559,7 @@ fn diverging_filter_is_refused_naming_the_row() {
         &["--form", "sqrt"],
         &["--smooth"],
     ] {
-        let mut args = vec![
-            "filter", "--model", "m.json", "--data", "z.csv", "--out", "est.csv",
-        ];
+        let mut args = argv("filter --model m.json --data z.csv --out est.csv");
         args.extend_from_slice(extra);
         let out = run(&dir, &args);
         let err = String::from_utf8_lossy(&out.stderr);

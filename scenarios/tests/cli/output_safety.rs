@@ -18,15 +18,7 @@ fn out_that_is_an_input_is_refused() {
     std::fs::hard_link(dir.join("track.csv"), dir.join("hard.csv")).expect("hard link");
     let before = snapshot(&dir);
     let filter = |out: &'static str, smooth: bool| {
-        let mut a = vec![
-            "filter",
-            "--model",
-            "m.toml",
-            "--data",
-            "track.csv",
-            "--out",
-            out,
-        ];
+        let mut a = argv_with("filter --model m.toml --data track.csv --out {}", &[out]);
         if smooth {
             a.push("--smooth");
         }
@@ -40,21 +32,11 @@ fn out_that_is_an_input_is_refused() {
         (filter("hard.csv", false), "--data track.csv"),
         (filter("m.toml", false), "--model m.toml"),
         (
-            vec!["steady-state", "--model", "m.json", "--out", "m.json"],
+            argv("steady-state --model m.json --out m.json"),
             "--model m.json",
         ),
         (
-            vec![
-                "discretize",
-                "--model",
-                "c.json",
-                "--dt",
-                "0.1",
-                "--method",
-                "zoh",
-                "--out",
-                "./c.json",
-            ],
+            argv("discretize --model c.json --dt 0.1 --method zoh --out ./c.json"),
             "--model c.json",
         ),
     ];
@@ -79,24 +61,11 @@ fn device_nodes_links_and_standard_output_as_out() {
     let filter = |out: &str| {
         run(
             &dir,
-            &[
-                "filter", "--model", "m.toml", "--data", "z.csv", "--out", out,
-            ],
+            &argv_with("filter --model m.toml --data z.csv --out {}", &[out]),
         )
     };
-    // Device nodes made here (copies of /dev/null and /dev/full), never the system's own: a
-    // regression that replaced them must not break the machine. Without the right to mknod,
-    // links to the real ones, which such a user cannot replace anyway.
     for (name, minor) in [("null", "3"), ("full", "7")] {
-        let made = Command::new("mknod")
-            .arg(dir.join(name))
-            .args(["c", "1", minor])
-            .stderr(std::process::Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success());
-        if !made {
-            std::os::unix::fs::symlink(format!("/dev/{name}"), dir.join(name)).expect("link");
-        }
+        device_node(&dir.join(name), minor);
     }
     let status = Command::new("mkfifo")
         .arg(dir.join("fifo"))
@@ -138,15 +107,7 @@ fn device_nodes_links_and_standard_output_as_out() {
     // The reference output, to a plain new file.
     ok(
         &dir,
-        &[
-            "filter",
-            "--model",
-            "m.toml",
-            "--data",
-            "z.csv",
-            "--out",
-            "plain.csv",
-        ],
+        &argv("filter --model m.toml --data z.csv --out plain.csv"),
     );
     let plain = std::fs::read(dir.join("plain.csv")).expect("plain");
     // A link to a regular file: the file is replaced whole, the link stays a link.
@@ -166,17 +127,8 @@ fn device_nodes_links_and_standard_output_as_out() {
     assert!(out.status.success());
     assert_eq!(out.stdout, plain);
     for args in [
-        vec!["steady-state", "--model", "m.toml", "--out"],
-        vec![
-            "discretize",
-            "--model",
-            "c.json",
-            "--dt",
-            "0.1",
-            "--method",
-            "zoh",
-            "--out",
-        ],
+        argv("steady-state --model m.toml --out"),
+        argv("discretize --model c.json --dt 0.1 --method zoh --out"),
     ] {
         let mut to_file = args.clone();
         to_file.push("file.json");
@@ -210,15 +162,7 @@ fn interrupt_mid_write(signal: &str) {
     assert!(status.success());
     let child = Command::new(env!("CARGO_BIN_EXE_scenarios"))
         .current_dir(&dir)
-        .args([
-            "filter",
-            "--model",
-            "m.toml",
-            "--data",
-            "z.csv",
-            "--out",
-            "sub/est.csv",
-        ])
+        .args(argv("filter --model m.toml --data z.csv --out sub/est.csv"))
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("spawn");
@@ -279,9 +223,7 @@ fn failing_run_leaves_no_directory() {
     for out in ["new/sub/est.csv", "new/est.csv"] {
         refused(
             &dir,
-            &[
-                "filter", "--model", "m.toml", "--data", "bad.csv", "--out", out,
-            ],
+            &argv_with("filter --model m.toml --data bad.csv --out {}", &[out]),
             &["bad.csv: line 4"],
             2,
         );
@@ -291,30 +233,14 @@ fn failing_run_leaves_no_directory() {
     write(&dir, "bad.toml", "dt = 1\n");
     refused(
         &dir,
-        &[
-            "filter",
-            "--model",
-            "bad.toml",
-            "--data",
-            "good.csv",
-            "--out",
-            "new/est.csv",
-        ],
+        &argv("filter --model bad.toml --data good.csv --out new/est.csv"),
         &["bad.toml"],
         4,
     );
     // A successful run creates it.
     ok(
         &dir,
-        &[
-            "filter",
-            "--model",
-            "m.toml",
-            "--data",
-            "good.csv",
-            "--out",
-            "new/sub/est.csv",
-        ],
+        &argv("filter --model m.toml --data good.csv --out new/sub/est.csv"),
     );
     assert!(dir.join("new/sub/est.csv").is_file());
 }
@@ -327,15 +253,7 @@ fn io_failures_exit_with_code_one() {
     write(&dir, "z.csv", "t,z1\n0,1\n");
     let out = run(
         &dir,
-        &[
-            "filter",
-            "--model",
-            "m.toml",
-            "--data",
-            "z.csv",
-            "--out",
-            "/proc/est.csv",
-        ],
+        &argv("filter --model m.toml --data z.csv --out /proc/est.csv"),
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");

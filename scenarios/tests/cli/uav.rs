@@ -4,7 +4,7 @@
 //! `--shard` + `merge`, duplicated or missing shards refused by name, and configuration
 //! errors that name the key.
 
-use crate::common::{assert_same_files, fails, ok, read, run, scratch, summary};
+use crate::common::{argv, assert_same_files, fails, ok, read, run, scratch, summary};
 
 /// 1024 steps per run (256 s: 25 Welch segments of 64), the SPEC's plant, noise and gains.
 const SMALL: &str = "steps = 1024\nwelch_segment = 64\n";
@@ -13,18 +13,7 @@ const SMALL: &str = "steps = 1024\nwelch_segment = 64\n";
 fn closed_loop_is_stable_white_and_better_than_the_sensor() {
     let dir = scratch("uav", "accept");
     std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
-    ok(
-        &dir,
-        &[
-            "uav",
-            "--config",
-            "small.toml",
-            "--runs",
-            "8",
-            "--out",
-            "out",
-        ],
-    );
+    ok(&dir, &argv("uav --config small.toml --runs 8 --out out"));
     let out = dir.join("out");
     let s = summary(&out);
     let num = |k: &str| {
@@ -71,15 +60,7 @@ fn closed_loop_is_stable_white_and_better_than_the_sensor() {
 fn threads_and_shards_give_the_same_files() {
     let dir = scratch("uav", "shards");
     std::fs::write(dir.join("small.toml"), SMALL).expect("write config");
-    let base = [
-        "uav",
-        "--config",
-        "small.toml",
-        "--runs",
-        "6",
-        "--seed",
-        "9",
-    ];
+    let base = argv("uav --config small.toml --runs 6 --seed 9");
     let with = |extra: &[&str]| -> Vec<String> {
         base.iter().chain(extra).map(|s| (*s).to_string()).collect()
     };
@@ -88,11 +69,11 @@ fn threads_and_shards_give_the_same_files() {
         let refs: Vec<&str> = args.iter().map(String::as_str).collect();
         ok(&dir, &refs);
     };
-    go(&["--threads", "1", "--out", "t1"]);
-    go(&["--threads", "2", "--out", "t2"]);
-    go(&["--shard", "1/2", "--out", "s1"]);
-    go(&["--shard", "2/2", "--out", "s2"]);
-    ok(&dir, &["merge", "s1", "s2", "--out", "merged"]);
+    go(&argv("--threads 1 --out t1"));
+    go(&argv("--threads 2 --out t2"));
+    go(&argv("--shard 1/2 --out s1"));
+    go(&argv("--shard 2/2 --out s2"));
+    ok(&dir, &argv("merge s1 s2 --out merged"));
     let one = read(&dir.join("t1/summary.json"));
     assert_same_files(&dir.join("t1"), &dir.join("t2"));
     // Every file of the merge equals the single run's, `runs.csv` with all six runs included.
@@ -101,13 +82,13 @@ fn threads_and_shards_give_the_same_files() {
     // A shard alone is not the whole campaign.
     assert_ne!(one, read(&dir.join("s1/summary.json")));
     // Merging one shard twice is refused (run duplicated).
-    let err = fails(&dir, &["merge", "s1", "s1", "--out", "bad"]);
+    let err = fails(&dir, &argv("merge s1 s1 --out bad"));
     assert!(
         err.contains("run 0") && err.contains("more than one shard"),
         "{err}"
     );
     // A missing shard: the directories given and the runs none of them holds.
-    let err = fails(&dir, &["merge", "s1", "--out", "bad"]);
+    let err = fails(&dir, &argv("merge s1 --out bad"));
     assert!(
         err.contains("s1") && err.contains("runs 3–5 of the 6") && err.contains("runs.csv"),
         "{err}"
@@ -119,12 +100,12 @@ fn threads_and_shards_give_the_same_files() {
 fn bad_configuration_is_named() {
     let dir = scratch("uav", "errors");
     std::fs::write(dir.join("bad.toml"), "dt_s = -0.25\n").expect("write");
-    let out = run(&dir, &["uav", "--config", "bad.toml", "--out", "o"]);
+    let out = run(&dir, &argv("uav --config bad.toml --out o"));
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("dt_s") && err.contains("bad.toml"), "{err}");
     std::fs::write(dir.join("typo.toml"), "stepz = 10\n").expect("write");
-    let out = run(&dir, &["uav", "--config", "typo.toml", "--out", "o"]);
+    let out = run(&dir, &argv("uav --config typo.toml --out o"));
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("stepz"));
     assert!(!dir.join("o").join("summary.json").exists());

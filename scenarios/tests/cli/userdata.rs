@@ -31,10 +31,10 @@ fn filter_scalar_by_hand() {
     for form in ["joseph", "standard", "sqrt"] {
         ok(
             &dir,
-            &[
-                "filter", "--model", "m.toml", "--data", "z.csv", "--out", "est.csv", "--form",
-                form,
-            ],
+            &argv_with(
+                "filter --model m.toml --data z.csv --out est.csv --form {}",
+                &[form],
+            ),
         );
         let (header, rows) = read_csv(&dir.join("est.csv"));
         assert_eq!(header, "t,x1,P1_1,nis");
@@ -175,18 +175,10 @@ fn filter_two_state_with_control_feedthrough_cross_covariance_and_gaps() {
     for form in ["joseph", "standard", "sqrt"] {
         ok(
             &dir,
-            &[
-                "filter",
-                "--model",
-                "m.json",
-                "--data",
-                "z.csv",
-                "--out",
-                "est.csv",
-                "--form",
-                form,
-                "--full-covariance",
-            ],
+            &argv_with(
+                "filter --model m.json --data z.csv --out est.csv --form {} --full-covariance",
+                &[form],
+            ),
         );
         let (header, rows) = read_csv(&dir.join("est.csv"));
         assert_eq!(header, "t,x1,x2,P1_1,P1_2,P2_1,P2_2,nis");
@@ -213,9 +205,7 @@ fn filter_two_state_with_control_feedthrough_cross_covariance_and_gaps() {
     // The diagonal-only layout holds the same numbers.
     ok(
         &dir,
-        &[
-            "filter", "--model", "m.json", "--data", "z.csv", "--out", "diag.csv",
-        ],
+        &argv("filter --model m.json --data z.csv --out diag.csv"),
     );
     let (header, rows) = read_csv(&dir.join("diag.csv"));
     assert_eq!(header, "t,x1,x2,P1_1,P2_2,nis");
@@ -240,9 +230,7 @@ fn filter_streams_a_long_csv() {
     write(&dir, "z.csv", &csv);
     ok(
         &dir,
-        &[
-            "filter", "--model", "m.json", "--data", "z.csv", "--out", "est.csv",
-        ],
+        &argv("filter --model m.json --data z.csv --out est.csv"),
     );
     let (_, rows) = read_csv(&dir.join("est.csv"));
     assert_eq!(rows.len(), 20_000);
@@ -316,19 +304,10 @@ fn smooth_against_textbook_rts() {
     for form in ["joseph", "sqrt"] {
         ok(
             &dir,
-            &[
-                "filter",
-                "--model",
-                "m.json",
-                "--data",
-                "z.csv",
-                "--out",
-                "s.csv",
-                "--smooth",
-                "--full-covariance",
-                "--form",
-                form,
-            ],
+            &argv_with(
+                "filter --model m.json --data z.csv --out s.csv --smooth --full-covariance --form {}",
+                &[form],
+            ),
         );
         let (header, rows) = read_csv(&dir.join("s.csv"));
         assert_eq!(header, "t,x1,x2,P1_1,P1_2,P2_1,P2_2,nis");
@@ -354,15 +333,11 @@ fn smooth_against_textbook_rts() {
     // Smoothing never increases the variance, and the last row is the filtered one.
     ok(
         &dir,
-        &[
-            "filter", "--model", "m.json", "--data", "z.csv", "--out", "f.csv",
-        ],
+        &argv("filter --model m.json --data z.csv --out f.csv"),
     );
     ok(
         &dir,
-        &[
-            "filter", "--model", "m.json", "--data", "z.csv", "--out", "s.csv", "--smooth",
-        ],
+        &argv("filter --model m.json --data z.csv --out s.csv --smooth"),
     );
     let (_, f) = read_csv(&dir.join("f.csv"));
     let (_, s) = read_csv(&dir.join("s.csv"));
@@ -372,6 +347,26 @@ fn smooth_against_textbook_rts() {
     assert!(close(f[N - 1][1], s[N - 1][1], 1e-12));
 }
 
+/// The scalar model x' = f x + w, z = x + v with var w = q, var v = 1, Δt = 1, as TOML.
+fn scalar_toml(f: f64, q: f64) -> String {
+    format!("dt = 1\nF = [[{f}]]\nH = [[1]]\nQ = [[{q}]]\nR = [[1]]\n")
+}
+
+/// Runs `steady-state` on the scalar model file `name` into `ss.json` and checks its P, K
+/// and P_post against the closed forms `expect`: a converged doubling solution agrees with
+/// them to round-off, 1e-12. Returns the file read.
+fn steady_scalar(dir: &Path, name: &str, expect: [f64; 3]) -> serde_json::Value {
+    ok(
+        dir,
+        &argv_with("steady-state --model {} --out ss.json", &[name]),
+    );
+    let ss = read_json(&dir.join("ss.json"));
+    for (key, want) in ["P", "K", "P_post"].into_iter().zip(expect) {
+        assert!(close(mat(&ss[key])[0][0], want, 1e-12), "{key}: {ss}");
+    }
+    ss
+}
+
 #[test]
 fn steady_state_exists_when_only_off_circle_modes_are_unreached() {
     let dir = scratch("ud", "steady-exist");
@@ -379,30 +374,15 @@ fn steady_state_exists_when_only_off_circle_modes_are_unreached() {
     // detectable and the mode is off the unit circle, so the DARE has a stabilising
     // solution. P = 4P/(P + 1) gives P = 3 (the other root, 0, leaves F − KH = 2); then
     // K = P/(P + 1) = 0.75 and P_post = P − P²/(P + 1) = 0.75. Closed forms: 1e-12.
-    write(
-        &dir,
-        "u.toml",
-        "dt = 1\nF = [[2]]\nH = [[1]]\nQ = [[0]]\nR = [[1]]\n",
-    );
-    ok(
-        &dir,
-        &["steady-state", "--model", "u.toml", "--out", "ss.json"],
-    );
-    let ss = read_json(&dir.join("ss.json"));
-    assert!(close(mat(&ss["P"])[0][0], 3.0, 1e-12), "{ss}");
-    assert!(close(mat(&ss["K"])[0][0], 0.75, 1e-12), "{ss}");
-    assert!(close(mat(&ss["P_post"])[0][0], 0.75, 1e-12), "{ss}");
+    write(&dir, "u.toml", &scalar_toml(2.0, 0.0));
+    steady_scalar(&dir, "u.toml", [3.0, 0.75, 0.75]);
     // F = 1 with Q = 0: the unreached mode sits on the unit circle, where no stabilising
     // solution exists (the gain decays like 1/k and never settles): refused by name.
     std::fs::remove_file(dir.join("ss.json")).expect("remove");
-    write(
-        &dir,
-        "c.toml",
-        "dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[0]]\nR = [[1]]\n",
-    );
+    write(&dir, "c.toml", &scalar_toml(1.0, 0.0));
     refused(
         &dir,
-        &["steady-state", "--model", "c.toml", "--out", "ss.json"],
+        &argv("steady-state --model c.toml --out ss.json"),
         &["c.toml", "is not stabilisable"],
         2,
     );
@@ -412,21 +392,9 @@ fn steady_state_exists_when_only_off_circle_modes_are_unreached() {
 fn steady_state_against_iterated_riccati() {
     let dir = scratch("ud", "steady");
     // Scalar random walk, q = r = 1: P = (1 + √5)/2, K = P/(P + 1), P_post = P/(P + 1).
-    write(
-        &dir,
-        "rw.toml",
-        "dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\n",
-    );
-    ok(
-        &dir,
-        &["steady-state", "--model", "rw.toml", "--out", "ss.json"],
-    );
-    let ss = read_json(&dir.join("ss.json"));
+    write(&dir, "rw.toml", &scalar_toml(1.0, 1.0));
     let p = (1.0 + 5f64.sqrt()) / 2.0;
-    // A converged doubling solution agrees with the closed form to round-off: 1e-12.
-    assert!(close(mat(&ss["P"])[0][0], p, 1e-12), "{ss}");
-    assert!(close(mat(&ss["K"])[0][0], p / (p + 1.0), 1e-12));
-    assert!(close(mat(&ss["P_post"])[0][0], p / (p + 1.0), 1e-12));
+    let ss = steady_scalar(&dir, "rw.toml", [p, p / (p + 1.0), p / (p + 1.0)]);
     assert!(ss["residual"].as_f64().expect("residual") < 1e-12);
     // A 2-state model with cross-covariance: iterate the correlated-noise Riccati recursion
     // P ← F P Fᵀ + Q − (F P Hᵀ + S)(H P Hᵀ + R)⁻¹(…)ᵀ here until it stops moving.
@@ -456,10 +424,7 @@ fn steady_state_against_iterated_riccati() {
     let sig = &H * &P * H.transpose() + &R;
     let K = &P * H.transpose() * sig.clone().try_inverse().expect("Σ");
     let Ppost = &P - &K * &sig * K.transpose();
-    ok(
-        &dir,
-        &["steady-state", "--model", "m.json", "--out", "ss.json"],
-    );
+    ok(&dir, &argv("steady-state --model m.json --out ss.json"));
     let ss = read_json(&dir.join("ss.json"));
     let (gp, gk, gpp) = (mat(&ss["P"]), mat(&ss["K"]), mat(&ss["P_post"]));
     // The iteration contracts geometrically (closed-loop radius < 0.95): after 5000 steps
@@ -483,7 +448,7 @@ fn steady_state_against_iterated_riccati() {
     std::fs::remove_file(dir.join("ss.json")).expect("remove");
     refused(
         &dir,
-        &["steady-state", "--model", "nd.json", "--out", "ss.json"],
+        &argv("steady-state --model nd.json --out ss.json"),
         &["nd.json", "(F, H) is not detectable"],
         3,
     );
@@ -495,7 +460,7 @@ fn steady_state_against_iterated_riccati() {
     );
     refused(
         &dir,
-        &["steady-state", "--model", "nd.json", "--out", "ss.json"],
+        &argv("steady-state --model nd.json --out ss.json"),
         &["nd.json", "Q (1x1) is not positive semidefinite"],
         3,
     );
@@ -567,9 +532,7 @@ fn filter_memory_does_not_grow_with_the_csv() {
     write(&dir, "small.csv", &rows(20_000));
     write(&dir, "big.csv", &rows(100_000));
     let args = |data: &'static str, smooth: bool| {
-        let mut a = vec![
-            "filter", "--model", "m.json", "--data", data, "--out", "est.csv",
-        ];
+        let mut a = argv_with("filter --model m.json --data {} --out est.csv", &[data]);
         if smooth {
             a.push("--smooth");
         }
@@ -608,17 +571,7 @@ fn discretize_against_closed_forms() {
     let dt: f64 = 0.2;
     ok(
         &dir,
-        &[
-            "discretize",
-            "--model",
-            "di.json",
-            "--dt",
-            "0.2",
-            "--method",
-            "zoh",
-            "--out",
-            "d.json",
-        ],
+        &argv("discretize --model di.json --dt 0.2 --method zoh --out d.json"),
     );
     let d = read_json(&dir.join("d.json"));
     let q = 2.0;
@@ -647,9 +600,7 @@ fn discretize_against_closed_forms() {
     write(&dir, "z.csv", "t,z1,u1\n0,1,0\n0.2,1.1,0\n");
     ok(
         &dir,
-        &[
-            "filter", "--model", "d0.json", "--data", "z.csv", "--out", "e.csv",
-        ],
+        &argv("filter --model d0.json --data z.csv --out e.csv"),
     );
 
     // First-order lag ẋ = −a x + w: Tustin F = (1 − aΔt/2)/(1 + aΔt/2); pre-warped at ω:
@@ -665,19 +616,10 @@ fn discretize_against_closed_forms() {
     let f_of = |method: &str, noise: &str| {
         ok(
             &dir,
-            &[
-                "discretize",
-                "--model",
-                "lag.toml",
-                "--dt",
-                "0.2",
-                "--method",
-                method,
-                "--noise",
-                noise,
-                "--out",
-                "l.json",
-            ],
+            &argv_with(
+                "discretize --model lag.toml --dt 0.2 --method {} --noise {} --out l.json",
+                &[method, noise],
+            ),
         );
         let d = read_json(&dir.join("l.json"));
         (mat(&d["F"])[0][0], mat(&d["Q"])[0][0], d)
