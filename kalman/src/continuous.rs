@@ -15,7 +15,7 @@ use faer::{Mat, MatRef};
 use crate::Error;
 use crate::MatrixInput;
 use crate::model::{check, owned};
-use crate::riccati::{factor_r, symmetrise};
+use crate::riccati::{Coupling, Inputs, factor_r, symmetrise, symmetrised, weighted_gram};
 
 /// The Kalman–Bucy filter's covariance equation for a time-invariant continuous model.
 ///
@@ -112,25 +112,19 @@ impl KalmanBucy {
         Q: impl MatrixInput,
         R: impl MatrixInput,
     ) -> Result<Self, Error> {
-        let (A, H, Q, R) = (owned(&A), owned(&H), owned(&Q), owned(&R));
-        let (A, H, Q, R) = (A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref());
-        let n = A.nrows();
-        let m = H.nrows();
-        check("A", A, n, n)?;
-        check("H", H, m, n)?;
-        check("Q", Q, n, n)?;
-        check("R", R, m, m)?;
-        let llt = factor_r(R, "the Kalman-Bucy gain needs R^-1")?;
-        let mut G = H.transpose() * llt.solve(H);
-        symmetrise(&mut G);
-        let mut Qs = Q.to_owned();
-        symmetrise(&mut Qs);
+        let m = Inputs::new(
+            ["A", "H", "Q", "R"],
+            Coupling::Measurement,
+            [&A, &H, &Q, &R],
+            None,
+        )?;
+        let llt = factor_r(m.r.as_ref(), "the Kalman-Bucy gain needs R^-1")?;
         Ok(Self {
-            A: A.to_owned(),
-            H: H.to_owned(),
-            Q: Qs,
-            R: R.to_owned(),
-            G,
+            G: weighted_gram(m.c.as_ref(), &llt),
+            Q: symmetrised(m.q.as_ref()),
+            A: m.a,
+            H: m.c,
+            R: m.r,
         })
     }
 

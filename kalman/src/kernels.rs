@@ -255,29 +255,27 @@ pub(crate) fn jacobi_eigen(a: &mut [f64], n: usize, v: &mut [f64], w: &mut [f64]
                 let t = if theta == 0.0 { 1.0 } else { t };
                 let c = 1.0 / (t * t + 1.0).sqrt();
                 let s = t * c;
-                for k in 0..n {
-                    let akp = a[k + p * n];
-                    let akq = a[k + q * n];
-                    a[k + p * n] = c * akp - s * akq;
-                    a[k + q * n] = s * akp + c * akq;
-                }
-                for k in 0..n {
-                    let apk = a[p + k * n];
-                    let aqk = a[q + k * n];
-                    a[p + k * n] = c * apk - s * aqk;
-                    a[q + k * n] = s * apk + c * aqk;
-                }
-                for k in 0..n {
-                    let vkp = v[k + p * n];
-                    let vkq = v[k + q * n];
-                    v[k + p * n] = c * vkp - s * vkq;
-                    v[k + q * n] = s * vkp + c * vkq;
-                }
+                // A ← Jᵀ A J (columns, then rows p and q), V ← V J.
+                rotate(a, n, |k| (k + p * n, k + q * n), c, s);
+                rotate(a, n, |k| (p + k * n, q + k * n), c, s);
+                rotate(v, n, |k| (k + p * n, k + q * n), c, s);
             }
         }
     }
     for i in 0..n {
         w[i] = a[i + i * n];
+    }
+}
+
+/// The plane rotation (c, s) applied to the pairs `(x[i], x[j])` with `(i, j) = at(k)`,
+/// `k < n`: `x_i ← c x_i − s x_j`, `x_j ← s x_i + c x_j`.
+#[inline(always)]
+fn rotate(x: &mut [f64], n: usize, at: impl Fn(usize) -> (usize, usize), c: f64, s: f64) {
+    for k in 0..n {
+        let (i, j) = at(k);
+        let (xi, xj) = (x[i], x[j]);
+        x[i] = c * xi - s * xj;
+        x[j] = s * xi + c * xj;
     }
 }
 

@@ -413,7 +413,9 @@ mod tests {
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
 
-    fn white(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
+    /// `n` independent N(0, σ²) samples from a generator seeded with `seed` (shared with
+    /// the spectrum tests).
+    pub(super) fn white(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         (0..n)
             .map(|_| sigma * Distribution::<f64>::sample(&StandardNormal, &mut rng))

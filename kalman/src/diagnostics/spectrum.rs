@@ -176,16 +176,8 @@ pub fn welch(x: &[f64], fs: f64, segment: usize) -> Result<Psd, Error> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::white;
     use super::*;
-    use rand::SeedableRng;
-    use rand_distr::{Distribution, StandardNormal};
-
-    fn white(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        (0..n)
-            .map(|_| sigma * Distribution::<f64>::sample(&StandardNormal, &mut rng))
-            .collect::<Vec<f64>>()
-    }
 
     #[test]
     fn fft_matches_direct_dft() {

@@ -8,12 +8,12 @@ use faer::{Mat, MatRef, Side};
 use super::checks::{Modes, marginal_modes, pbh, psd_sqrt};
 use super::sda::sda;
 use super::{
-    ContinuousSteadyState, Lqr, Names, Pair, RiccatiOptions, Solved, all_finite, factor_r,
-    relative, spectral, symmetrise,
+    ContinuousSteadyState, Coupling, Inputs, Lqr, Names, Pair, RiccatiOptions, Solved, all_finite,
+    factor_r, relative, spectral, symmetrise, symmetrised, weighted_gram,
 };
 use crate::Error;
 use crate::MatrixInput;
-use crate::model::{check, owned};
+use crate::model::owned;
 
 /// Steady state of the Kalman–Bucy filter: the stabilising P of the filter CARE
 /// A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0, where `Q` is the n×n process-noise intensity as it
@@ -64,14 +64,13 @@ pub fn care_with(
     R: impl MatrixInput,
     opts: &RiccatiOptions,
 ) -> Result<ContinuousSteadyState, Error> {
-    let (A, H, Q, R) = (owned(&A), owned(&H), owned(&Q), owned(&R));
-    let (A, H, Q, R) = (A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref());
-    let n = A.nrows();
-    let m = H.nrows();
-    check("A", A, n, n)?;
-    check("H", H, m, n)?;
-    check("Q", Q, n, n)?;
-    check("R", R, m, m)?;
+    let m = Inputs::new(
+        ["A", "H", "Q", "R"],
+        Coupling::Measurement,
+        [&A, &H, &Q, &R],
+        None,
+    )?;
+    let (A, H, Q, R) = (m.a.as_ref(), m.c.as_ref(), m.q.as_ref(), m.r.as_ref());
     let names = Names {
         equation: "filter CARE",
         detect: Pair::Detect("(A, H)"),
@@ -111,14 +110,13 @@ pub fn clqr(
     Q: impl MatrixInput,
     R: impl MatrixInput,
 ) -> Result<Lqr, Error> {
-    let (A, B, Q, R) = (owned(&A), owned(&B), owned(&Q), owned(&R));
-    let (A, B, Q, R) = (A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref());
-    let n = A.nrows();
-    let m = B.ncols();
-    check("A", A, n, n)?;
-    check("B", B, n, m)?;
-    check("Q", Q, n, n)?;
-    check("R", R, m, m)?;
+    let m = Inputs::new(
+        ["A", "B", "Q", "R"],
+        Coupling::Input,
+        [&A, &B, &Q, &R],
+        None,
+    )?;
+    let (A, B, Q, R) = (m.a.as_ref(), m.c.as_ref(), m.q.as_ref(), m.r.as_ref());
     let names = Names {
         equation: "LQR CARE",
         detect: Pair::Stab("(A, B)"),
@@ -188,10 +186,8 @@ fn continuous_dual(
             return Err(names.stab.error(re, im));
         }
     }
-    let mut G = H.transpose() * llt.solve(H);
-    symmetrise(&mut G);
-    let mut Hc = Q.to_owned();
-    symmetrise(&mut Hc);
+    let G = weighted_gram(H, &llt);
+    let Hc = symmetrised(Q);
     let Ac = A.transpose().to_owned();
     // γ ≥ ‖ℋ‖_F > ρ(ℋ): ℋ − γI is non-singular, so the Cayley transform exists.
     let gamma = 1.01

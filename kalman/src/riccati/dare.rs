@@ -8,11 +8,11 @@ use faer::{Mat, MatRef, Side};
 use super::checks::{Modes, marginal_modes, pbh, psd_sqrt};
 use super::sda::sda;
 use super::{
-    Lqr, Names, Pair, RiccatiOptions, Solved, SteadyState, all_finite, factor_r, relative,
-    spectral, symmetrise,
+    Coupling, Inputs, Lqr, Names, Pair, RiccatiOptions, Solved, SteadyState, all_finite, factor_r,
+    relative, spectral, symmetrise, symmetrised, weighted_gram,
 };
 use crate::MatrixInput;
-use crate::model::{check, owned};
+use crate::model::owned;
 use crate::storage::Dims;
 use crate::{Error, Model};
 
@@ -83,24 +83,20 @@ pub fn dare_with(
     S: Option<&dyn MatrixInput>,
     opts: &RiccatiOptions,
 ) -> Result<SteadyState, Error> {
-    let (F, H, Q, R) = (owned(&F), owned(&H), owned(&Q), owned(&R));
-    let S = S.map(owned);
-    let (F, H, Q, R, S) = (
-        F.as_ref(),
-        H.as_ref(),
-        Q.as_ref(),
-        R.as_ref(),
-        S.as_ref().map(Mat::as_ref),
+    let inputs = Inputs::new(
+        ["F", "H", "Q", "R"],
+        Coupling::Measurement,
+        [&F, &H, &Q, &R],
+        S.map(|S| ("S", S)),
+    )?;
+    let (F, H, Q, R) = (
+        inputs.a.as_ref(),
+        inputs.c.as_ref(),
+        inputs.q.as_ref(),
+        inputs.r.as_ref(),
     );
-    let n = F.nrows();
+    let S = inputs.cross.as_ref().map(Mat::as_ref);
     let m = H.nrows();
-    check("F", F, n, n)?;
-    check("H", H, m, n)?;
-    check("Q", Q, n, n)?;
-    check("R", R, m, m)?;
-    if let Some(S) = S {
-        check("S", S, n, m)?;
-    }
     let names = Names {
         equation: "filter DARE",
         detect: Pair::Detect("(F, H)"),
@@ -196,24 +192,20 @@ pub fn dlqr_with(
     N: Option<&dyn MatrixInput>,
     opts: &RiccatiOptions,
 ) -> Result<Lqr, Error> {
-    let (A, B, Q, R) = (owned(&A), owned(&B), owned(&Q), owned(&R));
-    let N = N.map(owned);
-    let (A, B, Q, R, N) = (
-        A.as_ref(),
-        B.as_ref(),
-        Q.as_ref(),
-        R.as_ref(),
-        N.as_ref().map(Mat::as_ref),
+    let inputs = Inputs::new(
+        ["A", "B", "Q", "R"],
+        Coupling::Input,
+        [&A, &B, &Q, &R],
+        N.map(|N| ("N", N)),
+    )?;
+    let (A, B, Q, R) = (
+        inputs.a.as_ref(),
+        inputs.c.as_ref(),
+        inputs.q.as_ref(),
+        inputs.r.as_ref(),
     );
-    let n = A.nrows();
+    let N = inputs.cross.as_ref().map(Mat::as_ref);
     let m = B.ncols();
-    check("A", A, n, n)?;
-    check("B", B, n, m)?;
-    check("Q", Q, n, n)?;
-    check("R", R, m, m)?;
-    if let Some(N) = N {
-        check("N", N, n, m)?;
-    }
     let names = Names {
         equation: "LQR DARE",
         // Detectability of (Aᵀ, Bᵀ) is stabilisability of (A, B), and stabilisability of
@@ -401,10 +393,8 @@ fn discrete_dual(
             return Err(names.stab.error(re, im));
         }
     }
-    let mut G = H.transpose() * llt.solve(H);
-    symmetrise(&mut G);
-    let mut Qs = Qt.clone();
-    symmetrise(&mut Qs);
+    let G = weighted_gram(H, &llt);
+    let Qs = symmetrised(Qt.as_ref());
     let (mut X, mut iterations) = sda(
         Ft.transpose().to_owned(),
         G.clone(),

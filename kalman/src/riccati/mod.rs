@@ -37,10 +37,11 @@ mod sda;
 #[cfg(test)]
 mod tests;
 
-use faer::linalg::solvers::Llt;
+use faer::linalg::solvers::{Llt, Solve};
 use faer::{Mat, MatRef, Side};
 
-use crate::Error;
+use crate::model::{check, owned};
+use crate::{Error, MatrixInput};
 
 pub use care::{care, care_residual, care_with, clqr};
 pub use dare::{dare, dare_residual, dare_with, dlqr, dlqr_with};
@@ -205,6 +206,71 @@ fn relative(num: f64, den: f64) -> f64 {
     } else {
         f64::INFINITY
     }
+}
+
+/// How the second matrix of a Riccati problem meets the state: a measurement matrix (m×n,
+/// the filter form's H) or an input matrix (n×m, the control form's B).
+#[derive(Clone, Copy)]
+pub(crate) enum Coupling {
+    Measurement,
+    Input,
+}
+
+/// The matrices of a Riccati problem, copied once from the caller's inputs and checked for
+/// shape and finiteness: `a` (n×n), `c` (m×n or n×m by its [`Coupling`]), `q` (n×n), `r`
+/// (m×m) and the optional cross term (n×m).
+pub(crate) struct Inputs {
+    pub(crate) a: Mat<f64>,
+    pub(crate) c: Mat<f64>,
+    pub(crate) q: Mat<f64>,
+    pub(crate) r: Mat<f64>,
+    pub(crate) cross: Option<Mat<f64>>,
+}
+
+impl Inputs {
+    /// Copies and checks the inputs; `names` are (a, c, q, r) as the caller's equation
+    /// writes them, and the cross term comes with its own name. The first bad matrix is
+    /// reported ([`Error::Shape`] / [`Error::NonFinite`]).
+    pub(crate) fn new(
+        names: [&'static str; 4],
+        coupling: Coupling,
+        [a, c, q, r]: [&dyn MatrixInput; 4],
+        cross: Option<(&'static str, &dyn MatrixInput)>,
+    ) -> Result<Self, Error> {
+        let (a, c, q, r) = (owned(a), owned(c), owned(q), owned(r));
+        let n = a.nrows();
+        let (m, c_shape) = match coupling {
+            Coupling::Measurement => (c.nrows(), (c.nrows(), n)),
+            Coupling::Input => (c.ncols(), (n, c.ncols())),
+        };
+        check(names[0], a.as_ref(), n, n)?;
+        check(names[1], c.as_ref(), c_shape.0, c_shape.1)?;
+        check(names[2], q.as_ref(), n, n)?;
+        check(names[3], r.as_ref(), m, m)?;
+        let cross = match cross {
+            Some((name, s)) => {
+                let s = owned(s);
+                check(name, s.as_ref(), n, m)?;
+                Some(s)
+            }
+            None => None,
+        };
+        Ok(Self { a, c, q, r, cross })
+    }
+}
+
+/// Hᵀ R⁻¹ H from the Cholesky factor of R, symmetrised.
+pub(crate) fn weighted_gram(H: MatRef<'_, f64>, r_llt: &Llt<f64>) -> Mat<f64> {
+    let mut G = H.transpose() * r_llt.solve(H);
+    symmetrise(&mut G);
+    G
+}
+
+/// A symmetrised copy of `M`.
+pub(crate) fn symmetrised(M: MatRef<'_, f64>) -> Mat<f64> {
+    let mut S = M.to_owned();
+    symmetrise(&mut S);
+    S
 }
 
 /// The Cholesky factor of the positive definite `R`, or [`Error::NotPositiveDefinite`]

@@ -11,21 +11,26 @@ use rand::RngExt;
 
 use super::common::{min_eig, randn, rng, spd, with_radius};
 
-fn smooth<D: Dims>(
-    dims: D,
-    F: &Mat<f64>,
-    H: &Mat<f64>,
-    Q: &Mat<f64>,
-    R: &Mat<f64>,
-    x0: &[f64],
-    P0: &Mat<f64>,
-    zs: &[Vec<f64>],
-) -> (Smoothed, Vec<Mat<f64>>) {
-    let model = Model::new(dims, F, H, Q, R).expect("model");
-    let mut f = Filter::new(model, x0, P0, CovarianceForm::Joseph).expect("filter");
+/// A linear-Gaussian smoothing problem: the model, the prior of x_0 and the measurements
+/// (NaN = missing).
+struct Problem {
+    F: Mat<f64>,
+    H: Mat<f64>,
+    Q: Mat<f64>,
+    R: Mat<f64>,
+    x0: Vec<f64>,
+    P0: Mat<f64>,
+    zs: Vec<Vec<f64>>,
+}
+
+/// The RTS smoother's output on `pr` with the filter on storage `dims`, and the filtered
+/// covariances P_{k|k}.
+fn smooth<D: Dims>(dims: D, pr: &Problem) -> (Smoothed, Vec<Mat<f64>>) {
+    let model = Model::new(dims, &pr.F, &pr.H, &pr.Q, &pr.R).expect("model");
+    let mut f = Filter::new(model, &pr.x0, &pr.P0, CovarianceForm::Joseph).expect("filter");
     let mut s = RtsSmoother::new();
     let mut filtered = Vec::new();
-    for z in zs {
+    for z in &pr.zs {
         f.step(z, None).expect("step");
         s.record(&f).expect("record");
         filtered.push(f.covariance().to_owned());
@@ -35,15 +40,16 @@ fn smooth<D: Dims>(
 
 /// Batch least squares over x_0..x_{N−1}: prior, measurement and dynamics residuals weighted
 /// by P0⁻¹, R⁻¹, Q⁻¹. Returns (solution n×N, inverse information blocks).
-fn batch(
-    F: &Mat<f64>,
-    H: &Mat<f64>,
-    Q: &Mat<f64>,
-    R: &Mat<f64>,
-    x0: &[f64],
-    P0: &Mat<f64>,
-    zs: &[Vec<f64>],
-) -> (Mat<f64>, Vec<Mat<f64>>) {
+fn batch(pr: &Problem) -> (Mat<f64>, Vec<Mat<f64>>) {
+    let Problem {
+        F,
+        H,
+        Q,
+        R,
+        x0,
+        P0,
+        zs,
+    } = pr;
     let (n, N) = (F.nrows(), zs.len());
     let inv = |A: &Mat<f64>| {
         A.llt(Side::Lower)
@@ -99,12 +105,6 @@ fn batch(
 
 #[test]
 fn smoothed_means_equal_batch_least_squares_on_both_paths() {
-    let F = mat![[1.0, 0.5], [0.0, 0.9]];
-    let H = mat![[1.0, 0.0]];
-    let Q = mat![[0.01, 0.002], [0.002, 0.05]];
-    let R = mat![[0.3]];
-    let P0 = mat![[2.0, 0.1], [0.1, 1.0]];
-    let x0 = [0.5, -0.2];
     let mut g = rng(11);
     let zs: Vec<Vec<f64>> = (0..12)
         .map(|k| {
@@ -115,18 +115,19 @@ fn smoothed_means_equal_batch_least_squares_on_both_paths() {
             }]
         })
         .collect();
-    let (lsx, lsP) = batch(&F, &H, &Q, &R, &x0, &P0, &zs);
-    let (dyn_s, filtered) = smooth(
-        DynDims::new(2, 1, 0).expect("dims"),
-        &F,
-        &H,
-        &Q,
-        &R,
-        &x0,
-        &P0,
-        &zs,
-    );
-    let (fix_s, _) = smooth(FixedDims::<2, 1>::new(), &F, &H, &Q, &R, &x0, &P0, &zs);
+    let pr = Problem {
+        F: mat![[1.0, 0.5], [0.0, 0.9]],
+        H: mat![[1.0, 0.0]],
+        Q: mat![[0.01, 0.002], [0.002, 0.05]],
+        R: mat![[0.3]],
+        x0: vec![0.5, -0.2],
+        P0: mat![[2.0, 0.1], [0.1, 1.0]],
+        zs,
+    };
+    let zs = &pr.zs;
+    let (lsx, lsP) = batch(&pr);
+    let (dyn_s, filtered) = smooth(DynDims::new(2, 1, 0).expect("dims"), &pr);
+    let (fix_s, _) = smooth(FixedDims::<2, 1>::new(), &pr);
     // Tolerance: both sides are backward-stable solves of a well-conditioned (cond ~1e3)
     // problem with values O(1): 1e-10 leaves a wide margin over ~1e-13 round-off.
     for k in 0..zs.len() {
@@ -166,8 +167,9 @@ proptest! {
         let R = spd(&mut g, m, 0.05);
         let P0 = spd(&mut g, n, 0.5);
         let zs: Vec<Vec<f64>> = (0..20).map(|_| (0..m).map(|_| g.random_range(-1.0..1.0)).collect()).collect();
-        let (s, filtered) = smooth(DynDims::new(n, m, 0).expect("dims"), &F, &H, &Q, &R, &vec![0.0; n], &P0, &zs);
-        for k in 0..zs.len() {
+        let pr = Problem { F, H, Q, R, x0: vec![0.0; n], P0, zs };
+        let (s, filtered) = smooth(DynDims::new(n, m, 0).expect("dims"), &pr);
+        for k in 0..pr.zs.len() {
             let d = &filtered[k] - &s.covariances[k];
             prop_assert!(min_eig(&d) >= -1e-10 * filtered[k].norm_l2(), "step {k}");
             prop_assert!(min_eig(&s.covariances[k]) >= -1e-10 * filtered[k].norm_l2());
