@@ -211,6 +211,31 @@ pub enum Realisation {
     Zoh,
 }
 
+impl Realisation {
+    /// How each of the five blocks of [`FuelParams::blocks`] is mapped by Tustin: the
+    /// paper's numerator variant for the rolling (`Delay`) and quantization (`Drop`) filters
+    /// under [`Realisation::Paper`], the exact map (`None`) otherwise. Not used by
+    /// [`Realisation::Zoh`], which discretises the cascade as a whole.
+    ///
+    /// ```
+    /// use model::{PaperVariant, Realisation};
+    /// assert_eq!(Realisation::Paper.tustin_variants()[2], Some(PaperVariant::Delay));
+    /// assert_eq!(Realisation::ExactTustin.tustin_variants(), [None; 5]);
+    /// ```
+    pub fn tustin_variants(self) -> [Option<PaperVariant>; 5] {
+        match self {
+            Realisation::Paper => [
+                None,
+                None,
+                Some(PaperVariant::Delay),
+                None,
+                Some(PaperVariant::Drop),
+            ],
+            Realisation::ExactTustin | Realisation::Zoh => [None; 5],
+        }
+    }
+}
+
 /// The discrete fuel-level model in Mazurenko's convention:
 ///
 /// ```text
@@ -423,16 +448,7 @@ impl FuelParams {
         let w = wiring();
         let (a, bfull, hfull, dfull) = match realisation {
             Realisation::Paper | Realisation::ExactTustin => {
-                let variants = match realisation {
-                    Realisation::Paper => [
-                        None,
-                        None,
-                        Some(PaperVariant::Delay),
-                        None,
-                        Some(PaperVariant::Drop),
-                    ],
-                    _ => [None; 5],
-                };
+                let variants = realisation.tustin_variants();
                 let mut ds: Vec<DiscreteSs> = Vec::with_capacity(5);
                 for (tf, v) in blocks.iter().zip(variants) {
                     let dtf = match v {

@@ -6,6 +6,60 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::validate;
 
+/// The names and shape rules of a state-space quadruple (state, input, output and
+/// feed-through matrices): the continuous (A, B, C, D) and discrete (F, B, H, D) models
+/// follow the same rules under their own names.
+struct Notation {
+    state: &'static str,
+    output: &'static str,
+    input_rule: &'static str,
+    output_rule: &'static str,
+    feedthrough_rule: &'static str,
+}
+
+const CONTINUOUS: Notation = Notation {
+    state: "A",
+    output: "C",
+    input_rule: "B must have as many rows as A",
+    output_rule: "C must have as many columns as A",
+    feedthrough_rule: "D must be (rows of C)×(columns of B)",
+};
+
+const DISCRETE: Notation = Notation {
+    state: "F",
+    output: "H",
+    input_rule: "B must have as many rows as F",
+    output_rule: "H must have as many columns as F",
+    feedthrough_rule: "D must be (rows of H)×(columns of B)",
+};
+
+impl Notation {
+    /// Checks the quadruple (square state matrix, then input, output, feed-through); returns n.
+    fn check(
+        &self,
+        state: &DMatrix<f64>,
+        b: &DMatrix<f64>,
+        output: &DMatrix<f64>,
+        d: &DMatrix<f64>,
+    ) -> Result<usize> {
+        let n = validate::square(self.state, state)?;
+        self.check_input(n, b)?;
+        validate::shape(self.output, output, output.nrows(), n, self.output_rule)?;
+        self.check_feedthrough(output.nrows(), b.ncols(), d)?;
+        Ok(n)
+    }
+
+    /// The input matrix B has n rows.
+    fn check_input(&self, n: usize, b: &DMatrix<f64>) -> Result<()> {
+        validate::shape("B", b, n, b.ncols(), self.input_rule)
+    }
+
+    /// The feed-through D is m×p.
+    fn check_feedthrough(&self, m: usize, p: usize, d: &DMatrix<f64>) -> Result<()> {
+        validate::shape("D", d, m, p, self.feedthrough_rule)
+    }
+}
+
 /// A continuous-time linear model
 ///
 /// ```text
@@ -68,16 +122,7 @@ impl ContinuousSs {
     /// [`Error::NotSquare`] for a non-square `A`, [`Error::DimensionMismatch`] when `B`, `C`
     /// or `D` disagree with `A` and each other, [`Error::NonFiniteMatrix`] for NaN/∞.
     pub fn new(a: DMatrix<f64>, b: DMatrix<f64>, c: DMatrix<f64>, d: DMatrix<f64>) -> Result<Self> {
-        let n = validate::square("A", &a)?;
-        validate::shape("B", &b, n, b.ncols(), "B must have as many rows as A")?;
-        validate::shape("C", &c, c.nrows(), n, "C must have as many columns as A")?;
-        validate::shape(
-            "D",
-            &d,
-            c.nrows(),
-            b.ncols(),
-            "D must be (rows of C)×(columns of B)",
-        )?;
+        let n = CONTINUOUS.check(&a, &b, &c, &d)?;
         Ok(Self {
             g: DMatrix::zeros(n, 0),
             w: DMatrix::zeros(0, 0),
@@ -133,8 +178,7 @@ impl ContinuousSs {
     /// # Ok::<(), model::Error>(())
     /// ```
     pub fn with_input(mut self, b: DMatrix<f64>) -> Result<Self> {
-        let n = self.a.nrows();
-        validate::shape("B", &b, n, b.ncols(), "B must have as many rows as A")?;
+        CONTINUOUS.check_input(self.a.nrows(), &b)?;
         self.d = DMatrix::zeros(self.c.nrows(), b.ncols());
         self.b = b;
         Ok(self)
@@ -158,13 +202,7 @@ impl ContinuousSs {
     /// # Ok::<(), model::Error>(())
     /// ```
     pub fn with_feedthrough(mut self, d: DMatrix<f64>) -> Result<Self> {
-        validate::shape(
-            "D",
-            &d,
-            self.c.nrows(),
-            self.b.ncols(),
-            "D must be (rows of C)×(columns of B)",
-        )?;
+        CONTINUOUS.check_feedthrough(self.c.nrows(), self.b.ncols(), &d)?;
         self.d = d;
         Ok(self)
     }
@@ -294,16 +332,7 @@ impl DiscreteSs {
         dt: f64,
     ) -> Result<Self> {
         validate::positive("dt", dt)?;
-        let n = validate::square("F", &f)?;
-        validate::shape("B", &b, n, b.ncols(), "B must have as many rows as F")?;
-        validate::shape("H", &h, h.nrows(), n, "H must have as many columns as F")?;
-        validate::shape(
-            "D",
-            &d,
-            h.nrows(),
-            b.ncols(),
-            "D must be (rows of H)×(columns of B)",
-        )?;
+        let n = DISCRETE.check(&f, &b, &h, &d)?;
         let m = h.nrows();
         Ok(Self {
             g: DMatrix::zeros(n, 0),
@@ -359,8 +388,7 @@ impl DiscreteSs {
     /// # Ok::<(), model::Error>(())
     /// ```
     pub fn with_input(mut self, b: DMatrix<f64>) -> Result<Self> {
-        let n = self.f.nrows();
-        validate::shape("B", &b, n, b.ncols(), "B must have as many rows as F")?;
+        DISCRETE.check_input(self.f.nrows(), &b)?;
         self.d = DMatrix::zeros(self.h.nrows(), b.ncols());
         self.b = b;
         Ok(self)
@@ -385,13 +413,7 @@ impl DiscreteSs {
     /// # Ok::<(), model::Error>(())
     /// ```
     pub fn with_feedthrough(mut self, d: DMatrix<f64>) -> Result<Self> {
-        validate::shape(
-            "D",
-            &d,
-            self.h.nrows(),
-            self.b.ncols(),
-            "D must be (rows of H)×(columns of B)",
-        )?;
+        DISCRETE.check_feedthrough(self.h.nrows(), self.b.ncols(), &d)?;
         self.d = d;
         Ok(self)
     }

@@ -65,6 +65,41 @@ pub fn spd_matrix(n: usize, cond: f64) -> impl Strategy<Value = DMatrix<f64>> {
     })
 }
 
+/// (n, l, m) with 1 ≤ n ≤ `max_states`, 1 ≤ l ≤ `max_inputs`, 1 ≤ m ≤ `max_outputs`.
+fn sizes(
+    max_states: usize,
+    max_inputs: usize,
+    max_outputs: usize,
+) -> impl Strategy<Value = (usize, usize, usize)> {
+    (
+        1..=max_states.max(1),
+        1..=max_inputs.max(1),
+        1..=max_outputs.max(1),
+    )
+}
+
+/// (B, C, D, G, noise covariance) of [`io_matrices`].
+type IoMatrices = (
+    DMatrix<f64>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+);
+
+/// The input, output, feed-through and noise matrices of a model with n states, l control
+/// and l noise inputs and m outputs: B (n×l), C (m×n), D (m×l), G (n×l) with entries in
+/// [−1, 1], and an SPD noise covariance (l×l, condition ≤ 10).
+fn io_matrices(n: usize, l: usize, m: usize) -> impl Strategy<Value = IoMatrices> {
+    (
+        matrix(n, l, -1.0, 1.0),
+        matrix(m, n, -1.0, 1.0),
+        matrix(m, l, -1.0, 1.0),
+        matrix(n, l, -1.0, 1.0),
+        spd_matrix(l, 10.0),
+    )
+}
+
 /// A random stable continuous model with 1..=`max_states` states, 1..=`max_inputs` control
 /// inputs, 1..=`max_outputs` outputs and as many noise inputs as control inputs (W SPD with
 /// condition ≤ 10).
@@ -86,24 +121,16 @@ pub fn stable_continuous(
     max_inputs: usize,
     max_outputs: usize,
 ) -> impl Strategy<Value = ContinuousSs> {
-    (
-        1..=max_states.max(1),
-        1..=max_inputs.max(1),
-        1..=max_outputs.max(1),
-    )
+    sizes(max_states, max_inputs, max_outputs)
         .prop_flat_map(|(n, l, m)| {
             (
                 matrix(n, n, -1.0, 1.0),
                 matrix(n, n, -1.0, 1.0),
                 0.1..1.0f64,
-                matrix(n, l, -1.0, 1.0),
-                matrix(m, n, -1.0, 1.0),
-                matrix(m, l, -1.0, 1.0),
-                matrix(n, l, -1.0, 1.0),
-                spd_matrix(l, 10.0),
+                io_matrices(n, l, m),
             )
         })
-        .prop_filter_map("valid model", |(mm, k, eps, b, c, d, g, w)| {
+        .prop_filter_map("valid model", |(mm, k, eps, (b, c, d, g, w))| {
             let n = mm.nrows();
             let a = -(&mm * mm.transpose() / n as f64 + DMatrix::<f64>::identity(n, n) * eps)
                 + (&k - k.transpose()) * 0.5;
@@ -129,24 +156,16 @@ pub fn stable_discrete(
     max_inputs: usize,
     max_outputs: usize,
 ) -> impl Strategy<Value = DiscreteSs> {
-    (
-        1..=max_states.max(1),
-        1..=max_inputs.max(1),
-        1..=max_outputs.max(1),
-    )
+    sizes(max_states, max_inputs, max_outputs)
         .prop_flat_map(|(n, l, m)| {
             (
                 matrix(n, n, -1.0, 1.0),
                 0.0..0.95f64,
-                matrix(n, l, -1.0, 1.0),
-                matrix(m, n, -1.0, 1.0),
-                matrix(m, l, -1.0, 1.0),
-                matrix(n, l, -1.0, 1.0),
-                spd_matrix(l, 10.0),
+                io_matrices(n, l, m),
                 0.01..1.0f64,
             )
         })
-        .prop_filter_map("valid model", |(mm, r, b, c, d, g, q, dt)| {
+        .prop_filter_map("valid model", |(mm, r, (b, c, d, g, q), dt)| {
             let norm = mm.clone().svd(false, false).singular_values.max();
             if norm <= 1e-6 {
                 return None;

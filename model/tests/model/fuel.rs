@@ -227,18 +227,8 @@ fn r_is_singular_without_gyro_noise_and_regular_with_it() {
 
 /// Impulse response of one block, discretised on its own, by its difference equation.
 fn block_responses(p: &FuelParams, real: Realisation, len: usize) -> [Vec<f64>; 5] {
-    use model::PaperVariant;
     let blocks = p.blocks().expect("valid");
-    let variants = match real {
-        Realisation::Paper => [
-            None,
-            None,
-            Some(PaperVariant::Delay),
-            None,
-            Some(PaperVariant::Drop),
-        ],
-        _ => [None; 5],
-    };
+    let variants = real.tustin_variants();
     let mut out: Vec<Vec<f64>> = Vec::new();
     for (tf, v) in blocks.iter().zip(variants) {
         let d = match v {
