@@ -373,6 +373,12 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 /// # Errors
 /// As [`write_with`].
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> {
+    write_atomic(path, csv_text(header, rows).as_bytes())
+}
+
+/// The text of a CSV file: the header, then one line per row with Rust's shortest
+/// round-trip formatting of every value (so the file reads back to the same `f64`s).
+pub fn csv_text(header: &[&str], rows: &[Vec<f64>]) -> String {
     let mut text = header.join(",");
     text.push('\n');
     for row in rows {
@@ -384,7 +390,7 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<()> 
         }
         text.push('\n');
     }
-    write_atomic(path, text.as_bytes())
+    text
 }
 
 /// Copies every regular, non-hidden file of directory `from` into `to` (each written whole or

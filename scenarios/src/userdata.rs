@@ -287,10 +287,18 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
     })?;
     let mut reader = DataReader::new(&args.data, std::io::BufReader::with_capacity(1 << 16, file))?;
     check_columns(&args.model, &model, &reader)?;
+    let pass = Pass {
+        args,
+        dest: &dest,
+        model: &model,
+        kf: &mut kf,
+        reader: &mut reader,
+        acc: acc.as_mut(),
+    };
     let diag_text = if args.smooth {
-        smooth(args, &dest, &model, &mut kf, &mut reader, acc.as_mut())?
+        smooth(pass)?
     } else {
-        stream(args, &dest, &model, &mut kf, &mut reader, acc.as_mut())?
+        stream(pass)?
     };
     // The estimates are in place; the diagnostics follow, whole or not at all.
     match (diag, diag_text) {
@@ -336,17 +344,29 @@ fn diagnostics_text(
         .transpose()
 }
 
+/// One forward pass of `filter`: the options, where the estimates go, the model, its
+/// filter, the data and, with `--diagnostics`, the innovation accumulator.
+struct Pass<'a, R: std::io::Read> {
+    args: &'a FilterArgs,
+    dest: &'a crate::output::Destination,
+    model: &'a DiscreteModel,
+    kf: &'a mut kalman::Filter<kalman::DynDims>,
+    reader: &'a mut DataReader<R>,
+    acc: Option<&'a mut kalman::diagnostics::Innovations>,
+}
+
 /// Streams the filtered estimates to `dest`; returns the diagnostics text, computed before
 /// the estimates file is renamed into place, so that a too-short record for the
 /// diagnostics writes neither file.
-fn stream<R: std::io::Read>(
-    args: &FilterArgs,
-    dest: &crate::output::Destination,
-    model: &DiscreteModel,
-    kf: &mut kalman::Filter<kalman::DynDims>,
-    reader: &mut DataReader<R>,
-    mut acc: Option<&mut kalman::diagnostics::Innovations>,
-) -> Result<Option<String>> {
+fn stream<R: std::io::Read>(pass: Pass<'_, R>) -> Result<Option<String>> {
+    let Pass {
+        args,
+        dest,
+        model,
+        kf,
+        reader,
+        mut acc,
+    } = pass;
     let n = model.n();
     let out_name = PathBuf::from(dest.to_string());
     let out = out_name.as_path();
@@ -434,14 +454,15 @@ fn copy_col_major(m: faer::MatRef<'_, f64>, out: &mut [f64]) {
 /// (3n² + 2n numbers per row, plus the smoothed n×n covariance and mean per row: measured
 /// 2 kB per row at n = 7), then the backward pass, then writes. The `nis` column is the
 /// forward pass's.
-fn smooth<R: std::io::Read>(
-    args: &FilterArgs,
-    dest: &crate::output::Destination,
-    model: &DiscreteModel,
-    kf: &mut kalman::Filter<kalman::DynDims>,
-    reader: &mut DataReader<R>,
-    mut acc: Option<&mut kalman::diagnostics::Innovations>,
-) -> Result<Option<String>> {
+fn smooth<R: std::io::Read>(pass: Pass<'_, R>) -> Result<Option<String>> {
+    let Pass {
+        args,
+        dest,
+        model,
+        kf,
+        reader,
+        mut acc,
+    } = pass;
     let n = model.n();
     let mut rts = kalman::smoother::RtsSmoother::new();
     let mut times = Vec::new();

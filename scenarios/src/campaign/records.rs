@@ -46,22 +46,7 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
-/// The text of a record file: the header, then one line per row with Rust's shortest
-/// round-trip formatting of every value (so the file reads back to the same `f64`s).
-pub fn csv_text(header: &[&str], rows: &[Vec<f64>]) -> String {
-    let mut text = header.join(",");
-    text.push('\n');
-    for row in rows {
-        for (i, v) in row.iter().enumerate() {
-            if i > 0 {
-                text.push(',');
-            }
-            text.push_str(&v.to_string());
-        }
-        text.push('\n');
-    }
-    text
-}
+pub use crate::output::csv_text;
 
 /// The check of a record file's text.
 pub fn check_of(name: &str, text: &str) -> FileCheck {

@@ -73,6 +73,16 @@ fn rolling(p: &[f64], dt: f64, r: f64, len: usize, g: &mut rand_chacha::ChaCha8R
         period_s: 2.0 * std::f64::consts::PI / p[2],
     };
     let mut proc = sensors::IrregularRollingProcess::new(&cfg, dt).expect("valid");
+    observed(&mut proc, r, len, g)
+}
+
+/// `len` samples of `proc` plus white noise of variance r.
+fn observed(
+    proc: &mut impl Process,
+    r: f64,
+    len: usize,
+    g: &mut rand_chacha::ChaCha8Rng,
+) -> Vec<f64> {
     (0..len)
         .map(|_| {
             let v: f64 = StandardNormal.sample(g);
@@ -132,12 +142,7 @@ fn mle_recovers_exponential_and_damped_cosine_filters() {
     };
     let mut p = sensors::ExpCorrelated::new(&cfg, dt).expect("valid");
     let r: f64 = 0.1;
-    let z: Vec<f64> = (0..4000)
-        .map(|_| {
-            let v: f64 = StandardNormal.sample(&mut g);
-            p.next(&mut g) + r.sqrt() * v
-        })
-        .collect();
+    let z = observed(&mut p, r, 4000, &mut g);
     let map = ShapingMap {
         kind: Kind::Exponential,
         dt,
@@ -153,12 +158,7 @@ fn mle_recovers_exponential_and_damped_cosine_filters() {
         frequency_rad_s: 1.0,
     };
     let mut p = sensors::DampedCosineProcess::new(&cfg, dt).expect("valid");
-    let z: Vec<f64> = (0..4000)
-        .map(|_| {
-            let v: f64 = StandardNormal.sample(&mut g);
-            p.next(&mut g) + r.sqrt() * v
-        })
-        .collect();
+    let z = observed(&mut p, r, 4000, &mut g);
     let map = ShapingMap {
         kind: Kind::DampedCosine,
         dt,
