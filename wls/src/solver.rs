@@ -254,6 +254,20 @@ pub(crate) fn check_finite<R: Dim, C: Dim, S: Storage<f64, R, C>>(
     Ok(())
 }
 
+/// Checks that each named scalar is finite: [`Error::NonFinite`] naming the first that is
+/// not (as the single entry at row 0, column 0).
+pub(crate) fn check_finite_scalars(values: &[(&'static str, f64)]) -> Result<()> {
+    match values.iter().find(|(_, v)| !v.is_finite()) {
+        Some(&(name, value)) => Err(Error::NonFinite {
+            name,
+            row: 0,
+            col: 0,
+            value,
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Checks that a vector has `len` entries.
 fn check_len(name: &'static str, v: &DVector<f64>, len: usize, what: &str) -> Result<()> {
     if v.len() == len {

@@ -5,6 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::solver::check_finite_scalars;
 
 /// Which inversion the estimator uses.
 ///
@@ -293,14 +294,7 @@ impl BoomConfig {
         positive("g", self.g)?;
         positive("sensor_radius", self.sensor_radius)?;
         positive("dt", self.dt)?;
-        if !self.sensor_offset_angle.is_finite() {
-            return Err(Error::NonFinite {
-                name: "sensor_offset_angle",
-                row: 0,
-                col: 0,
-                value: self.sensor_offset_angle,
-            });
-        }
+        check_finite_scalars(&[("sensor_offset_angle", self.sensor_offset_angle)])?;
         if !self.mounting_tolerance.is_finite() || self.mounting_tolerance < 0.0 {
             return Err(Error::InvalidParameter {
                 name: "mounting_tolerance",

@@ -8,7 +8,8 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::solver::check_finite_scalars;
 
 use super::config::{
     AngleRecovery, AxWeightLaw, BoomConfig, BoomMethod, BoomSolver, Estimate, RateWeight,
@@ -188,19 +189,10 @@ impl BoomEstimator {
     /// # Errors
     /// Non-finite inputs.
     pub fn set_state(&mut self, angle: f64, angular_acceleration: f64) -> Result<()> {
-        for (name, value) in [
+        check_finite_scalars(&[
             ("angle", angle),
             ("angular_acceleration", angular_acceleration),
-        ] {
-            if !value.is_finite() {
-                return Err(Error::NonFinite {
-                    name,
-                    row: 0,
-                    col: 0,
-                    value,
-                });
-            }
-        }
+        ])?;
         let beta = angle - self.config.sensor_offset_angle;
         self.state = Some(State {
             s: beta.sin(),
@@ -393,16 +385,7 @@ impl BoomEstimator {
     /// # Errors
     /// [`Error::NonFinite`] if any reading is NaN or infinite (the state is left unchanged).
     pub fn update(&mut self, a_x: f64, a_y: f64, a_z: f64) -> Result<Estimate> {
-        for (name, value) in [("a_x", a_x), ("a_y", a_y), ("a_z", a_z)] {
-            if !value.is_finite() {
-                return Err(Error::NonFinite {
-                    name,
-                    row: 0,
-                    col: 0,
-                    value,
-                });
-            }
-        }
+        check_finite_scalars(&[("a_x", a_x), ("a_y", a_y), ("a_z", a_z)])?;
         let cfg = &self.config;
         let gamma = cfg.sensor_offset_angle;
         let mounting_ok = a_z.abs() <= cfg.mounting_tolerance;

@@ -324,26 +324,22 @@ fn mounting_check_and_invalid_inputs() {
     }];
     let meas = ideal_accelerometer(9.8, 25.0);
     let cfg = BoomConfig::default();
-    assert!(matches!(
+    let sweep = |gammas: &[f64]| {
         sweep_gamma(
             &tr,
             &cfg,
             &meas,
             &[ErrorVariant::plus(0.02)],
-            &[],
-            Limits::paper()
-        ),
+            gammas,
+            Limits::paper(),
+        )
+    };
+    assert!(matches!(
+        sweep(&[]),
         Err(Error::Shape { name: "gammas", .. })
     ));
     assert!(matches!(
-        sweep_gamma(
-            &tr,
-            &cfg,
-            &meas,
-            &[ErrorVariant::plus(0.02)],
-            &[0.1, 0.05],
-            Limits::paper()
-        ),
+        sweep(&[0.1, 0.05]),
         Err(Error::InvalidParameter { name: "gammas", .. })
     ));
     let bad = Limits {
