@@ -8,7 +8,7 @@ use numpy::{
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyFloat, PyInt};
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt};
 
 /// A `ValueError` with a one-line message.
 pub(crate) fn value_error(msg: impl Into<String>) -> PyErr {
@@ -290,6 +290,13 @@ pub(crate) fn array3_out(
 /// A 2-d float array argument as a faer matrix: any shape, finite entries (the engine checks
 /// shapes and the rest, naming the matrix).
 pub(crate) fn mat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<kalman::faer::Mat<f64>> {
+    let (r, c, buf) = rows_2d(obj, name)?;
+    Ok(kalman::faer::Mat::from_fn(r, c, |i, j| buf[i * c + j]))
+}
+
+/// A 2-d float array argument with finite entries as (rows, columns, row-major entries):
+/// what [`mat`] and the nalgebra readers build their matrices from.
+pub(crate) fn rows_2d(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(usize, usize, Vec<f64>)> {
     let arr = float_array(obj, name)?;
     let ro = arr.readonly();
     let view = ro.as_array();
@@ -302,7 +309,7 @@ pub(crate) fn mat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<kalman::faer::
     let (r, c) = (*r, *c);
     let mut buf = vec![0.0; r * c];
     copy_finite(&view, name, &mut buf)?;
-    Ok(kalman::faer::Mat::from_fn(r, c, |i, j| buf[i * c + j]))
+    Ok((r, c, buf))
 }
 
 /// A faer matrix as a new (r, c) array.
@@ -314,4 +321,87 @@ pub(crate) fn faer_out<'py>(
         py,
         numpy::ndarray::Array2::from_shape_fn((m.nrows(), m.ncols()), |(i, j)| m[(i, j)]),
     )
+}
+
+/// What `filter`, `ekf` and `ukf` return for a series of `steps` steps of an n-state
+/// filter, filled step by step: x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k} (row-major), the
+/// log-likelihood and the NIS (NaN with no measurement).
+pub(crate) struct FilterRecord {
+    steps: usize,
+    n: usize,
+    xs: Vec<f64>,
+    ps: Vec<f64>,
+    xp: Vec<f64>,
+    pp: Vec<f64>,
+    ll: Vec<f64>,
+    nis: Vec<f64>,
+}
+
+impl FilterRecord {
+    /// An empty record of `steps` steps of an n-state filter.
+    pub(crate) fn new(steps: usize, n: usize) -> Self {
+        let nn = n * n;
+        Self {
+            steps,
+            n,
+            xs: vec![0.0; steps * n],
+            ps: vec![0.0; steps * nn],
+            xp: vec![0.0; steps * n],
+            pp: vec![0.0; steps * nn],
+            ll: vec![0.0; steps],
+            nis: vec![f64::NAN; steps],
+        }
+    }
+
+    /// Stores step k: the filtered and predicted means and covariances, the step's
+    /// log-likelihood and its NIS (`None`: no measurement).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn set(
+        &mut self,
+        k: usize,
+        x: &[f64],
+        P: kalman::faer::MatRef<'_, f64>,
+        x_pred: &[f64],
+        P_pred: kalman::faer::MatRef<'_, f64>,
+        log_likelihood: f64,
+        nis: Option<f64>,
+    ) {
+        let (n, nn) = (self.n, self.n * self.n);
+        self.xs[k * n..(k + 1) * n].copy_from_slice(x);
+        self.xp[k * n..(k + 1) * n].copy_from_slice(x_pred);
+        for i in 0..n {
+            for j in 0..n {
+                self.ps[k * nn + i * n + j] = P[(i, j)];
+                self.pp[k * nn + i * n + j] = P_pred[(i, j)];
+            }
+        }
+        self.ll[k] = log_likelihood;
+        self.nis[k] = nis.unwrap_or(f64::NAN);
+    }
+
+    /// The dict "x" (N, n), "P" (N, n, n), "x_pred", "P_pred", "log_likelihood" (N,),
+    /// "nis" (N,).
+    pub(crate) fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+        let (steps, n) = (self.steps, self.n);
+        let out = PyDict::new(py);
+        let v2 = |v: Vec<f64>| {
+            PyArray2::from_owned_array(
+                py,
+                Array2::from_shape_vec((steps, n), v).unwrap_or_else(|_| Array2::zeros((0, n))),
+            )
+        };
+        out.set_item("x", v2(self.xs))?;
+        out.set_item("P", array3_out(py, self.ps, steps, n, n))?;
+        out.set_item("x_pred", v2(self.xp))?;
+        out.set_item("P_pred", array3_out(py, self.pp, steps, n, n))?;
+        out.set_item(
+            "log_likelihood",
+            PyArray1::from_owned_array(py, Array1::from_vec(self.ll)),
+        )?;
+        out.set_item(
+            "nis",
+            PyArray1::from_owned_array(py, Array1::from_vec(self.nis)),
+        )?;
+        Ok(out)
+    }
 }

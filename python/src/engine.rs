@@ -12,7 +12,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{array3_out, faer_out, mat, value_error};
+use crate::convert::{FilterRecord, array3_out, faer_out, mat, value_error};
 use crate::guard;
 
 /// An optional matrix argument (`None` → absent).
@@ -145,44 +145,23 @@ pub(crate) fn filter<'py>(
         };
         let (mut f, n, m, p) = build(&args, form, "filter")?;
         let (steps, z, u) = series(zs, us, m, p)?;
-        let nn = n * n;
-        let (mut xs, mut ps) = (vec![0.0; steps * n], vec![0.0; steps * nn]);
-        let (mut xp, mut pp) = (vec![0.0; steps * n], vec![0.0; steps * nn]);
-        let (mut ll, mut nis) = (vec![0.0; steps], vec![f64::NAN; steps]);
+        let mut rec = FilterRecord::new(steps, n);
         for k in 0..steps {
             let uk = u.as_ref().map(|u| &u[k * p..(k + 1) * p]);
             let info = f
                 .step(&z[k * m..(k + 1) * m], uk)
                 .map_err(engine("filter"))?;
-            xs[k * n..(k + 1) * n].copy_from_slice(f.state());
-            xp[k * n..(k + 1) * n].copy_from_slice(f.predicted_state());
-            let (c, d) = (f.covariance(), f.predicted_covariance());
-            for i in 0..n {
-                for j in 0..n {
-                    ps[k * nn + i * n + j] = c[(i, j)];
-                    pp[k * nn + i * n + j] = d[(i, j)];
-                }
-            }
-            ll[k] = info.log_likelihood;
-            nis[k] = info.nis.unwrap_or(f64::NAN);
+            rec.set(
+                k,
+                f.state(),
+                f.covariance(),
+                f.predicted_state(),
+                f.predicted_covariance(),
+                info.log_likelihood,
+                info.nis,
+            );
         }
-        let out = PyDict::new(py);
-        let v2 = |v: Vec<f64>| {
-            PyArray2::from_owned_array(
-                py,
-                Array2::from_shape_vec((steps, n), v).unwrap_or_else(|_| Array2::zeros((0, n))),
-            )
-        };
-        out.set_item("x", v2(xs))?;
-        out.set_item("P", array3_out(py, ps, steps, n, n))?;
-        out.set_item("x_pred", v2(xp))?;
-        out.set_item("P_pred", array3_out(py, pp, steps, n, n))?;
-        out.set_item(
-            "log_likelihood",
-            PyArray1::from_owned_array(py, Array1::from_vec(ll)),
-        )?;
-        out.set_item("nis", PyArray1::from_owned_array(py, Array1::from_vec(nis)))?;
-        Ok(out)
+        rec.into_dict(py)
     })
 }
 

@@ -9,23 +9,12 @@ use numpy::{PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{copy_finite, float_array, shape_str, value_error};
+use crate::convert::{rows_2d, value_error};
 use crate::guard;
 
 /// A 2-d float array argument as an nalgebra matrix (finite entries).
 fn dmat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<DMatrix<f64>> {
-    let arr = float_array(obj, name)?;
-    let ro = arr.readonly();
-    let view = ro.as_array();
-    let [r, c] = view.shape() else {
-        return Err(value_error(format!(
-            "{name} has shape {}, expected a 2-d array",
-            shape_str(view.shape())
-        )));
-    };
-    let (r, c) = (*r, *c);
-    let mut buf = vec![0.0; r * c];
-    copy_finite(&view, name, &mut buf)?;
+    let (r, c, buf) = rows_2d(obj, name)?;
     Ok(DMatrix::from_row_slice(r, c, &buf))
 }
 

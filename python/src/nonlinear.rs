@@ -13,7 +13,7 @@ use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{array3_out, float_array, mat, read_vector, shape_str, value_error};
+use crate::convert::{FilterRecord, float_array, mat, read_vector, shape_str, value_error};
 use crate::guard;
 
 /// Calls `func(*args)` and reads its result as a vector of length `len` into `out`; on any
@@ -107,10 +107,7 @@ fn run<'py>(
         });
     };
     let model = FnModel::new(dims, fcall, hcall, &Q, &R).map_err(err)?;
-    let nn = n * n;
-    let (mut xs, mut ps) = (vec![0.0; steps * n], vec![0.0; steps * nn]);
-    let (mut xp, mut pp) = (vec![0.0; steps * n], vec![0.0; steps * nn]);
-    let (mut ll, mut nis) = (vec![0.0; steps], vec![f64::NAN; steps]);
+    let mut rec = FilterRecord::new(steps, n);
     macro_rules! drive {
         ($filter:expr) => {{
             let mut flt = $filter;
@@ -125,17 +122,15 @@ fn run<'py>(
                 if let Some(e) = slot.borrow_mut().take() {
                     return Err(e);
                 }
-                xs[k * n..(k + 1) * n].copy_from_slice(flt.state());
-                xp[k * n..(k + 1) * n].copy_from_slice(flt.predicted_state());
-                let (c, d) = (flt.covariance(), flt.predicted_covariance());
-                for i in 0..n {
-                    for j in 0..n {
-                        ps[k * nn + i * n + j] = c[(i, j)];
-                        pp[k * nn + i * n + j] = d[(i, j)];
-                    }
-                }
-                ll[k] = info.log_likelihood;
-                nis[k] = info.nis.unwrap_or(f64::NAN);
+                rec.set(
+                    k,
+                    flt.state(),
+                    flt.covariance(),
+                    flt.predicted_state(),
+                    flt.predicted_covariance(),
+                    info.log_likelihood,
+                    info.nis,
+                );
             }
         }};
     }
@@ -145,23 +140,7 @@ fn run<'py>(
         }
         Kind::Ukf(points) => drive!(Ukf::new(dims, model, &x0v, &P0, points).map_err(err)?),
     }
-    let o = PyDict::new(py);
-    let v2 = |v: Vec<f64>| {
-        PyArray2::from_owned_array(
-            py,
-            Array2::from_shape_vec((steps, n), v).unwrap_or_else(|_| Array2::zeros((0, n))),
-        )
-    };
-    o.set_item("x", v2(xs))?;
-    o.set_item("P", array3_out(py, ps, steps, n, n))?;
-    o.set_item("x_pred", v2(xp))?;
-    o.set_item("P_pred", array3_out(py, pp, steps, n, n))?;
-    o.set_item(
-        "log_likelihood",
-        PyArray1::from_owned_array(py, Array1::from_vec(ll)),
-    )?;
-    o.set_item("nis", PyArray1::from_owned_array(py, Array1::from_vec(nis)))?;
-    Ok(o)
+    rec.into_dict(py)
 }
 
 /// ekf(f, h, Q, R, x0, P0, zs, us=None, iterations=0, tolerance=1e-9) → dict as `filter`:
