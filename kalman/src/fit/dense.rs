@@ -37,29 +37,14 @@ pub(crate) fn gemm(
     }
 }
 
-/// In-place lower Cholesky of the `n×n` matrix `a` (upper triangle zeroed). `false` if a
-/// pivot is not positive.
+/// In-place lower Cholesky of the `n×n` matrix `a` (upper triangle zeroed): the filter's
+/// kernel with a zero pivot tolerance. `false` if a pivot is not positive.
 pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
-    for j in 0..n {
-        let mut d = a[j + j * n];
-        for l in 0..j {
-            d -= a[j + l * n] * a[j + l * n];
-        }
-        if d.is_nan() || d <= 0.0 {
-            return false;
-        }
-        let d = d.sqrt();
-        a[j + j * n] = d;
-        for i in j + 1..n {
-            let mut s = a[i + j * n];
-            for l in 0..j {
-                s -= a[i + l * n] * a[j + l * n];
-            }
-            a[i + j * n] = s / d;
-        }
-        for i in 0..j {
-            a[i + j * n] = 0.0;
-        }
+    if !crate::kernels::cholesky(a, n, 0.0) {
+        return false;
+    }
+    for j in 1..n {
+        a[j * n..j * n + j].fill(0.0);
     }
     true
 }
