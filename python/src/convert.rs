@@ -360,9 +360,9 @@ impl FilterRecord {
         &mut self,
         k: usize,
         x: &[f64],
-        P: kalman::faer::MatRef<'_, f64>,
+        p: kalman::faer::MatRef<'_, f64>,
         x_pred: &[f64],
-        P_pred: kalman::faer::MatRef<'_, f64>,
+        p_pred: kalman::faer::MatRef<'_, f64>,
         log_likelihood: f64,
         nis: Option<f64>,
     ) {
@@ -371,8 +371,8 @@ impl FilterRecord {
         self.xp[k * n..(k + 1) * n].copy_from_slice(x_pred);
         for i in 0..n {
             for j in 0..n {
-                self.ps[k * nn + i * n + j] = P[(i, j)];
-                self.pp[k * nn + i * n + j] = P_pred[(i, j)];
+                self.ps[k * nn + i * n + j] = p[(i, j)];
+                self.pp[k * nn + i * n + j] = p_pred[(i, j)];
             }
         }
         self.ll[k] = log_likelihood;

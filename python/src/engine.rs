@@ -7,8 +7,8 @@
 
 use kalman::faer::Mat;
 use kalman::{CovarianceForm, DynDims, Filter, Model, riccati, smoother::RtsSmoother};
-use numpy::ndarray::{Array1, Array2};
-use numpy::{PyArray1, PyArray2};
+use numpy::PyArray2;
+use numpy::ndarray::Array2;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 

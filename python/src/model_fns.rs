@@ -4,8 +4,8 @@
 
 use model::nalgebra::DMatrix;
 use model::{Channels, ContinuousSs, Discretization, FuelParams, NoiseConvention, Realisation};
+use numpy::PyArray2;
 use numpy::ndarray::Array2;
-use numpy::{PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 

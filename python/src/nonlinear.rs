@@ -8,8 +8,7 @@ use std::cell::RefCell;
 
 use kalman::DynDims;
 use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, Ukf};
-use numpy::ndarray::{Array1, Array2};
-use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
