@@ -160,21 +160,31 @@ def write(name, p, rows):
         w.writerows(rows)
 
 
+def with_prior(filt, p):
+    """Sets a FilterPy filter's prior (x0, P0) and noise covariances (Q, R) from problem p."""
+    filt.x = p.x0.copy()
+    filt.P = p.P0.copy()
+    filt.Q = p.Q.copy()
+    filt.R = p.R.copy()
+    return filt
+
+
+def record_update(rows, k, z, filt, m):
+    """Records step k after the filter's update, with its NIS (NaN without a measurement)."""
+    nis = float(filt.y @ np.linalg.solve(filt.S, filt.y)) if z is not None else float("nan")
+    record(rows, k, z, filt.x, filt.P, nis, m)
+
+
 def run_ekf(p, zs):
     class Ekf(ExtendedKalmanFilter):
         def predict_x(self, u=0):
             self.x = p.f(self.x)
 
-    ekf = Ekf(dim_x=p.n, dim_z=p.m)
-    ekf.x = p.x0.copy()
-    ekf.P = p.P0.copy()
-    ekf.Q = p.Q.copy()
-    ekf.R = p.R.copy()
+    ekf = with_prior(Ekf(dim_x=p.n, dim_z=p.m), p)
     rows = []
     for k, z in enumerate(zs):
         ekf.update(z, HJacobian=p.hjac, Hx=p.h, residual=p.residual)
-        nis = float(ekf.y @ np.linalg.solve(ekf.S, ekf.y)) if z is not None else float("nan")
-        record(rows, k, z, ekf.x, ekf.P, nis, p.m)
+        record_update(rows, k, z, ekf, p.m)
         ekf.F = p.fjac(ekf.x)
         ekf.predict()
     return rows
@@ -185,16 +195,12 @@ def run_ukf(p, zs, alpha, beta, kappa):
     ukf = UnscentedKalmanFilter(dim_x=p.n, dim_z=p.m, dt=p.dt, hx=p.h,
                                 fx=lambda x, dt: p.f(x), points=pts,
                                 residual_z=p.residual)
-    ukf.x = p.x0.copy()
-    ukf.P = p.P0.copy()
-    ukf.Q = p.Q.copy()
-    ukf.R = p.R.copy()
+    with_prior(ukf, p)
     rows = []
     for k, z in enumerate(zs):
         ukf.sigmas_f = pts.sigma_points(ukf.x, ukf.P)  # redraw from the prior
         ukf.update(z)
-        nis = float(ukf.y @ np.linalg.solve(ukf.S, ukf.y)) if z is not None else float("nan")
-        record(rows, k, z, ukf.x, ukf.P, nis, p.m)
+        record_update(rows, k, z, ukf, p.m)
         ukf.predict()
     return rows
 
