@@ -14,7 +14,7 @@ import launch_estimation as le
 from problems import problem, setup
 
 TOL = 1e-10
-SIZES = [(1, 1, 0), (2, 1, 1), (3, 2, 0), (4, 3, 2), (7, 2, 1), (5, 5, 0)]
+SIZES = [(1, 1, 0), (2, 1, 1), (3, 2, 0), (4, 3, 2), (7, 2, 1), (5, 5, 0), (9, 2, 0), (10, 4, 1)]
 
 
 def close(a, b, what):
