@@ -110,27 +110,7 @@ pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result
     }
 
     // Nominal turn (paper Fig. 2): α_n, ε_n and the variation dε of eq. (4).
-    let (g, r, da) = (
-        s.params.gravity_mps2,
-        s.params.sensor_radius_m,
-        s.params.limiting_error_mps2,
-    );
-    let nominal: Vec<Vec<f64>> = c
-        .trajectory
-        .iter()
-        .map(|p| {
-            let d_eps = (da + p.alpha.tan() * da) / r;
-            let d_alpha = da / (g * p.alpha.cos());
-            vec![
-                p.t,
-                deg(p.alpha),
-                deg(p.omega),
-                deg(p.epsilon),
-                deg(d_alpha),
-                deg(d_eps),
-            ]
-        })
-        .collect();
+    let nominal = &c.nominal;
     output::write_csv(
         &dir.join("nominal.csv"),
         &[
@@ -141,10 +121,10 @@ pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result
             "d_alpha_eq4_deg",
             "d_eps_eq4_deg_s2",
         ],
-        &nominal,
+        nominal,
     )?;
     let col = |k: usize, scale: f64, clip: f64| -> Vec<(f64, f64)> {
-        decimate(&nominal, k, 4)
+        decimate(nominal, k, 4)
             .into_iter()
             .map(|(t, y)| (t, (y * scale).min(clip)))
             .collect()
@@ -673,9 +653,8 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
              the paper ignores it. Noise: white, σ = {} m/s² per axis, on top of ±Δa (one \
              realisation from the campaign seed). Feasible γ window with the centripetal \
              term: {}.\n",
-            s.cruise_rate_rad_s.powi(2) * s.params.sensor_radius_m,
-            s.cruise_rate_rad_s.powi(2) * s.params.sensor_radius_m
-                / s.params.limiting_error_mps2.max(f64::MIN_POSITIVE),
+            s.centripetal_mps2,
+            s.centripetal_over_limit,
             s.params.beyond.noise_std_mps2,
             s.feasible_gamma_deg_centripetal
                 .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°"))

@@ -231,6 +231,10 @@ pub struct BoomSummary {
     pub turn_duration_s: f64,
     /// Cruise rate, rad/s.
     pub cruise_rate_rad_s: f64,
+    /// The centripetal acceleration ω²r at the sensor at the cruise rate, m/s².
+    pub centripetal_mps2: f64,
+    /// `centripetal_mps2` in units of the limiting error Δa.
+    pub centripetal_over_limit: f64,
     /// The sensor's range clips the "+" variant's a_y (g·cos α + ε·r + Δa > range) up to this
     /// nominal α, degrees (γ = 0); null if it never does.
     pub saturated_until_alpha_deg: Option<f64>,
@@ -295,6 +299,31 @@ pub struct Computed {
     pub tracking_runs: Vec<(Method, f64, TurnRun, TurnRun)>,
     /// The nominal turn.
     pub trajectory: Vec<TrajectoryPoint>,
+    /// The nominal turn in degrees with the variations of eq. (4) at Δa: rows t, α, ω, ε,
+    /// dα, dε (s, °, °/s, °/s², °, °/s²).
+    pub nominal: Vec<Vec<f64>>,
+}
+
+/// The rows of [`Computed::nominal`]: the variations of eq. (4) that a reading error Δa
+/// causes at each point, dα = Δa/(g·cos α) and dε = (Δa + tan α·Δa)/r.
+fn nominal_rows(params: &BoomParams, points: &[TrajectoryPoint]) -> Vec<Vec<f64>> {
+    let (g, r, da) = (
+        params.gravity_mps2,
+        params.sensor_radius_m,
+        params.limiting_error_mps2,
+    );
+    points
+        .iter()
+        .map(|p| {
+            let d_eps = (da + p.alpha.tan() * da) / r;
+            let d_alpha = da / (g * p.alpha.cos());
+            [p.t, p.alpha, p.omega, p.epsilon, d_alpha, d_eps]
+                .into_iter()
+                .enumerate()
+                .map(|(i, x)| if i == 0 { x } else { x.to_degrees() })
+                .collect()
+        })
+        .collect()
 }
 
 /// Computes every number of the outputs (the scenario is deterministic: the noisy
@@ -586,6 +615,9 @@ pub fn summarise(
             deceleration_deg_s2: trajectory.deceleration_deg_s2,
             turn_duration_s: last,
             cruise_rate_rad_s: cruise,
+            centripetal_mps2: cruise.powi(2) * params.sensor_radius_m,
+            centripetal_over_limit: cruise.powi(2) * params.sensor_radius_m
+                / params.limiting_error_mps2.max(f64::MIN_POSITIVE),
             saturated_until_alpha_deg,
             cases,
             tracking: TrackingSummary {
@@ -614,6 +646,7 @@ pub fn summarise(
         },
         case_runs,
         tracking_runs,
+        nominal: nominal_rows(params, &points),
         trajectory: points,
     })
 }

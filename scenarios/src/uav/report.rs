@@ -325,7 +325,7 @@ fn report(s: &UavSummary) -> String {
         mc.rms_ratio,
         s.tracking_mean_last_quarter,
         p.step_amplitude,
-        100.0 * (1.0 - mc.rms_ratio.powi(2))
+        100.0 * mc.noise_power_removed
     );
     if let Some(w) = s.psd_nodes.first() {
         let _ = writeln!(
@@ -334,24 +334,25 @@ fn report(s: &UavSummary) -> String {
             w.mean_level,
             w.white_level.unwrap_or(f64::NAN),
             w.high_band_level,
-            w.mean_level / w.white_level.unwrap_or(f64::NAN)
+            w.level_over_white.unwrap_or(f64::NAN)
         );
     }
     if let Some(z) = s.psd_nodes.get(1) {
         let _ = writeln!(
             r,
             "| Fig. 5: sensor output z is the signal buried in noise | z's spectrum: the loop's low-frequency power over the noise floor 2R/fs = {:.3} m²/Hz (upper half band {:.3}) | same picture |",
-            2.0 * p.measurement_variance * p.dt_s,
-            z.high_band_level
+            s.measurement_noise_floor, z.high_band_level
         );
     }
-    if let (Some(z), Some(x)) = (s.psd_nodes.get(1), s.psd_nodes.get(2)) {
+    if let (Some(z), Some(x), Some(att)) = (
+        s.psd_nodes.get(1),
+        s.psd_nodes.get(2),
+        s.high_band_attenuation,
+    ) {
         let _ = writeln!(
             r,
             "| Fig. 3: control signal at the filter input (node 2) and output (node 3) | upper half band (f > fs/4): x̂ {:.3e} m²/Hz vs z {:.3e} m²/Hz ({:.0}× less) | the filter is a low-pass in the loop, as the paper's figure shows |",
-            x.high_band_level,
-            z.high_band_level,
-            z.high_band_level / x.high_band_level
+            x.high_band_level, z.high_band_level, att
         );
     }
     if let Some(e) = s.psd_nodes.get(3) {

@@ -20,6 +20,8 @@ pub struct Aggregate {
     pub rms_measurement_error: f64,
     /// Their ratio.
     pub rms_ratio: f64,
+    /// 1 − rms_ratio²: the fraction of the measurement noise power the filter removes.
+    pub noise_power_removed: f64,
     /// Σ Q over the runs (χ² with h·runs degrees of freedom for white innovations).
     pub pooled_ljung_box_q: f64,
     /// Degrees of freedom h·runs.
@@ -47,6 +49,7 @@ fn aggregate(p: &UavParams, records: &[RunRecord]) -> Aggregate {
         rms_estimation_error: est,
         rms_measurement_error: meas,
         rms_ratio: est / meas,
+        noise_power_removed: 1.0 - (est / meas).powi(2),
         pooled_ljung_box_q: q,
         pooled_dof: dof,
         pooled_bound: bound,
@@ -74,6 +77,8 @@ pub struct PsdNode {
     /// The level a white sequence of the theoretical variance would have (2σ²/fs), if the
     /// node should be white.
     pub white_level: Option<f64>,
+    /// `mean_level / white_level` (1 for a white node at its theoretical variance).
+    pub level_over_white: Option<f64>,
 }
 
 /// K_d/Δt against the Kalman–Bucy gain at one Δt.
@@ -157,6 +162,11 @@ pub struct UavSummary {
     pub innovation_acf_outside_fraction: f64,
     /// Spectrum nodes.
     pub psd_nodes: Vec<PsdNode>,
+    /// The measurement noise's PSD level 2R/fs, m²/Hz (the floor of the sensor output z).
+    pub measurement_noise_floor: f64,
+    /// The sensor output's upper-half-band level over the estimate's (how much the filter
+    /// attenuates f > fs/4), if both nodes are present.
+    pub high_band_attenuation: Option<f64>,
     /// Kalman–Bucy vs discrete gains.
     pub kalman_bucy: KalmanBucyCheck,
     /// Per-run records (this shard's runs, or all).
@@ -367,6 +377,7 @@ pub fn summarise(p: &UavParams, seed: u64, run_records: &[RunRecord]) -> Result<
                 mean_level,
                 high_band_level,
                 white_level: white,
+                level_over_white: white.map(|w| mean_level / w),
             },
             labels,
             ps,
@@ -412,6 +423,11 @@ pub fn summarise(p: &UavParams, seed: u64, run_records: &[RunRecord]) -> Result<
         tracking_mean_last_quarter: tracking,
         innovation_acf_outside_fraction: acf_outside,
         psd_nodes: spectra.iter().map(|s| s.0.clone()).collect(),
+        measurement_noise_floor: 2.0 * p.measurement_variance * p.dt_s,
+        high_band_attenuation: match (spectra.get(1), spectra.get(2)) {
+            (Some(z), Some(x)) => Some(z.0.high_band_level / x.0.high_band_level),
+            _ => None,
+        },
         kalman_bucy: kb,
         run_records: run_records.to_vec(),
     };
