@@ -2,9 +2,10 @@
 //! (regularised incomplete gamma function, quantiles by bisection).
 #![allow(non_snake_case)]
 
-use faer::{MatRef, Side};
+use faer::Side;
 
-use crate::Error;
+use crate::model::{check, owned};
+use crate::{Error, MatrixInput};
 
 /// ln Γ(x) for x > 0 (Lanczos, g = 7, 9 terms; relative error below 1e-14).
 fn ln_gamma(x: f64) -> f64 {
@@ -182,17 +183,17 @@ pub fn chi2_quantile(prob: f64, dof: usize) -> f64 {
 /// [`Error::Shape`] naming `x_est` or `P`; [`Error::NotPositiveSemidefinite`] naming `P`
 /// if it is not positive definite.
 ///
+/// `P` is any [`MatrixInput`]: an array, a faer matrix or view (the filter's
+/// `covariance()`), or with the feature `nalgebra` a nalgebra matrix.
+///
 /// # Example
 /// ```
-/// use faer::mat;
-///
 /// // Error (1, 2) against P = diag(1, 4): 1²/1 + 2²/4 = 2.
-/// let p = mat![[1.0, 0.0], [0.0, 4.0]];
-/// let e = kalman::nees(&[1.0, 2.0], &[0.0, 0.0], p.as_ref())?;
+/// let e = kalman::nees(&[1.0, 2.0], &[0.0, 0.0], [[1.0, 0.0], [0.0, 4.0]])?;
 /// assert!((e - 2.0).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
-pub fn nees(x_true: &[f64], x_est: &[f64], P: MatRef<'_, f64>) -> Result<f64, Error> {
+pub fn nees(x_true: &[f64], x_est: &[f64], P: impl MatrixInput) -> Result<f64, Error> {
     let n = x_true.len();
     if x_est.len() != n {
         return Err(Error::Shape {
@@ -203,15 +204,8 @@ pub fn nees(x_true: &[f64], x_est: &[f64], P: MatRef<'_, f64>) -> Result<f64, Er
             expected_cols: 1,
         });
     }
-    if P.nrows() != n || P.ncols() != n {
-        return Err(Error::Shape {
-            name: "P",
-            rows: P.nrows(),
-            cols: P.ncols(),
-            expected_rows: n,
-            expected_cols: n,
-        });
-    }
+    check("P", &P, n, n)?;
+    let P = owned(&P);
     let llt = P
         .llt(Side::Lower)
         .map_err(|_| Error::NotPositiveSemidefinite {
@@ -270,7 +264,12 @@ impl Nees {
     ///
     /// # Errors
     /// As [`nees`].
-    pub fn add(&mut self, x_true: &[f64], x_est: &[f64], P: MatRef<'_, f64>) -> Result<f64, Error> {
+    pub fn add(
+        &mut self,
+        x_true: &[f64],
+        x_est: &[f64],
+        P: impl MatrixInput,
+    ) -> Result<f64, Error> {
         if x_true.len() != self.n {
             return Err(Error::Shape {
                 name: "x_true",
@@ -344,5 +343,32 @@ mod tests {
             nees(&[1.0; 3], &[0.0; 3], bad.as_ref()),
             Err(Error::NotPositiveSemidefinite { name: "P", .. })
         ));
+    }
+
+    #[test]
+    fn nees_takes_arrays_and_names_a_wrong_shape() {
+        // P = [[2, 1], [1, 2]], e = (1, −1): P e = e, so eᵀP⁻¹e = eᵀe = 2 exactly.
+        let v = nees(&[1.0, -1.0], &[0.0, 0.0], [[2.0, 1.0], [1.0, 2.0]]);
+        assert!(matches!(v, Ok(x) if (x - 2.0).abs() < 1e-12));
+        assert!(matches!(
+            nees(&[1.0, -1.0], &[0.0, 0.0], [[1.0]]),
+            Err(Error::Shape {
+                name: "P",
+                rows: 1,
+                expected_rows: 2,
+                ..
+            })
+        ));
+    }
+
+    #[cfg(feature = "nalgebra")]
+    #[test]
+    fn nees_takes_nalgebra_and_agrees_with_an_explicit_solve() {
+        let p = nalgebra::dmatrix![4.0, 1.0, 0.0; 1.0, 3.0, 0.5; 0.0, 0.5, 2.0];
+        let e = nalgebra::dvector![0.3, -1.2, 0.7];
+        // Independent: eᵀ (P⁻¹ e) by nalgebra's LU, not the Cholesky path under test.
+        let expected = e.dot(&p.clone().lu().solve(&e).expect("nonsingular"));
+        let got = nees(e.as_slice(), &[0.0; 3], &p).expect("SPD");
+        assert!((got - expected).abs() < 1e-12 * expected);
     }
 }

@@ -24,6 +24,10 @@
 //! ```
 
 use faer::{Mat, MatRef};
+use nalgebra::DMatrix;
+
+use crate::riccati::{ContinuousSteadyState, Lqr, SteadyState};
+use crate::smoother::Smoothed;
 
 /// Conversion of a result of this crate into the nalgebra type a nalgebra user works with:
 /// matrices to `DMatrix<f64>`, vectors (`[f64]`) to `DVector<f64>`, lists of matrices to
@@ -103,9 +107,122 @@ impl<T: ToNalgebra> ToNalgebra for Option<T> {
     }
 }
 
+/// The whole smoothed track in nalgebra: `means` a `DMatrix` (column k is x_{k|N−1}),
+/// `covariances` a `Vec<DMatrix>`.
+impl ToNalgebra for Smoothed {
+    type Output = Smoothed<DMatrix<f64>>;
+    fn to_nalgebra(&self) -> Self::Output {
+        Smoothed {
+            means: self.means.to_nalgebra(),
+            covariances: self.covariances.to_nalgebra(),
+        }
+    }
+}
+
+/// Every matrix of the steady state in nalgebra; counts and residual as they are.
+impl ToNalgebra for SteadyState {
+    type Output = SteadyState<DMatrix<f64>>;
+    fn to_nalgebra(&self) -> Self::Output {
+        SteadyState {
+            prior: self.prior.to_nalgebra(),
+            posterior: self.posterior.to_nalgebra(),
+            gain: self.gain.to_nalgebra(),
+            predictor_gain: self.predictor_gain.to_nalgebra(),
+            innovation_cov: self.innovation_cov.to_nalgebra(),
+            iterations: self.iterations,
+            relative_residual: self.relative_residual,
+        }
+    }
+}
+
+/// Gain and cost in nalgebra.
+impl ToNalgebra for Lqr {
+    type Output = Lqr<DMatrix<f64>>;
+    fn to_nalgebra(&self) -> Self::Output {
+        Lqr {
+            gain: self.gain.to_nalgebra(),
+            cost: self.cost.to_nalgebra(),
+            iterations: self.iterations,
+            relative_residual: self.relative_residual,
+        }
+    }
+}
+
+/// Covariance and gain in nalgebra.
+impl ToNalgebra for ContinuousSteadyState {
+    type Output = ContinuousSteadyState<DMatrix<f64>>;
+    fn to_nalgebra(&self) -> Self::Output {
+        ContinuousSteadyState {
+            covariance: self.covariance.to_nalgebra(),
+            gain: self.gain.to_nalgebra(),
+            iterations: self.iterations,
+            relative_residual: self.relative_residual,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Entry-by-entry equality of a faer and a nalgebra matrix (a copy must be exact).
+    fn same(a: &Mat<f64>, b: &DMatrix<f64>) -> bool {
+        a.nrows() == b.nrows()
+            && a.ncols() == b.ncols()
+            && (0..a.nrows())
+                .all(|i| (0..a.ncols()).all(|j| a[(i, j)].to_bits() == b[(i, j)].to_bits()))
+    }
+
+    #[test]
+    fn result_structs_convert_every_matrix_and_keep_the_scalars() {
+        let f = nalgebra::dmatrix![1.0, 0.5; 0.0, 1.0];
+        let (h, q, r) = (
+            nalgebra::dmatrix![1.0, 0.0],
+            DMatrix::identity(2, 2) * 0.1,
+            nalgebra::dmatrix![0.4],
+        );
+        let ss = crate::riccati::dare(&f, &h, &q, &r, None).expect("solvable");
+        let na = ss.to_nalgebra();
+        assert!(
+            same(&ss.prior, &na.prior)
+                && same(&ss.posterior, &na.posterior)
+                && same(&ss.gain, &na.gain)
+        );
+        assert!(
+            same(&ss.predictor_gain, &na.predictor_gain)
+                && same(&ss.innovation_cov, &na.innovation_cov)
+        );
+        assert_eq!(
+            (na.iterations, na.relative_residual.to_bits()),
+            (ss.iterations, ss.relative_residual.to_bits())
+        );
+        let b = nalgebra::dmatrix![0.125; 0.5];
+        let lqr = crate::riccati::dlqr(&f, &b, &q, &r, None).expect("solvable");
+        let lna = lqr.to_nalgebra();
+        assert!(
+            same(&lqr.gain, &lna.gain)
+                && same(&lqr.cost, &lna.cost)
+                && lna.iterations == lqr.iterations
+        );
+        let a = nalgebra::dmatrix![-1.0];
+        let one = nalgebra::dmatrix![1.0];
+        let cs = crate::riccati::care(&a, &one, &one, &one).expect("solvable");
+        let cna = cs.to_nalgebra();
+        assert!(same(&cs.covariance, &cna.covariance) && same(&cs.gain, &cna.gain));
+        let smoothed = Smoothed {
+            means: Mat::from_fn(2, 3, |i, j| (10 * i + j) as f64),
+            covariances: vec![Mat::from_fn(2, 2, |i, j| (i + 2 * j) as f64); 3],
+        };
+        let sna = smoothed.to_nalgebra();
+        assert!(same(&smoothed.means, &sna.means) && sna.covariances.len() == 3);
+        assert!(
+            smoothed
+                .covariances
+                .iter()
+                .zip(&sna.covariances)
+                .all(|(a, b)| same(a, b))
+        );
+    }
 
     #[test]
     fn matrices_and_vectors_keep_every_entry_in_place() {

@@ -95,22 +95,30 @@
 //! `nalgebra`, nalgebra matrices (`&DMatrix<f64>`, fixed-size `Matrix2<f64>`, views). Vectors
 //! are `&[f64]` (`dvector.as_slice()`). Results are faer matrices and slices; with the feature
 //! `nalgebra` one idiom brings any of them back: `.to_nalgebra()` from [`ToNalgebra`]
-//! (`filter.covariance().to_nalgebra()`, `steady.gain.to_nalgebra()`,
-//! `smoothed.covariances.to_nalgebra()`, `filter.state().to_nalgebra()`).
+//! (`filter.covariance().to_nalgebra()`, `filter.state().to_nalgebra()`), and on the result
+//! structs it converts every matrix at once (`dare(…)?.to_nalgebra().gain`,
+//! `model.smooth(…)?.to_nalgebra().means`). [`Model::from_matrices`] reads the dimensions off
+//! the matrices, [`Model::smooth`] filters a whole series with gaps and smooths it in one call.
 //!
 #![cfg_attr(
     feature = "nalgebra",
     doc = r##"
 ```
-use kalman::nalgebra::{DMatrix, dmatrix};
-use kalman::{CovarianceForm, DynDims, Filter, Model, ToNalgebra};
+use kalman::nalgebra::{DMatrix, dmatrix, dvector};
+use kalman::{CovarianceForm, Filter, Model, ToNalgebra};
 # fn main() -> Result<(), kalman::Error> {
 let dt = 0.1;
 let f = dmatrix![1.0, dt; 0.0, 1.0];
 let h = dmatrix![1.0, 0.0];
 let q = dmatrix![1e-4, 0.0; 0.0, 1e-3];
 let r = dmatrix![0.01];
-let model = Model::new(DynDims::new(2, 1, 0)?, &f, &h, &q, &r)?;
+// The dimensions are read off the matrices (n = 2 from F, m = 1 from H).
+let model = Model::from_matrices(&f, &h, &q, &r)?;
+// The offline path in one call: filter with gaps (NaN), RTS-smooth, nalgebra out.
+let zs = dvector![0.11, 0.19, f64::NAN, 0.42];
+let s = model.smooth(&[0.0, 1.0], &DMatrix::identity(2, 2), &zs)?.to_nalgebra();
+assert_eq!((s.means.ncols(), s.covariances.len()), (4, 4));
+// Or step by step, keeping the filter.
 let mut filter = Filter::new(model, &[0.0, 1.0], &DMatrix::identity(2, 2), CovarianceForm::Joseph)?;
 let smoothed = filter.run_smoothed([[0.11], [0.19], [f64::NAN], [0.42]])?;
 let p: DMatrix<f64> = filter.covariance().to_nalgebra();
@@ -119,8 +127,8 @@ let means: DMatrix<f64> = smoothed.means.to_nalgebra(); // column k is x_{k|N-1}
 assert!((means.column(3) - filter.state().to_nalgebra()).norm() < 1e-12);
 assert!((&smoothed.covariances.to_nalgebra()[3] - &p).norm() < 1e-12);
 // The steady state of the same model, nalgebra in and out.
-let steady = kalman::riccati::dare(&f, &h, &q, &r, None)?;
-let k: DMatrix<f64> = steady.gain.to_nalgebra();
+let steady = kalman::riccati::dare(&f, &h, &q, &r, None)?.to_nalgebra();
+let k: &DMatrix<f64> = &steady.gain;
 assert_eq!(k.shape(), (2, 1));
 # Ok(())
 # }

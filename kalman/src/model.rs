@@ -4,7 +4,7 @@
 use faer::{Mat, MatRef, Side};
 
 use crate::Error;
-use crate::storage::{Buf, Dims, FIXED_MAX};
+use crate::storage::{Buf, Dims, DynDims, FIXED_MAX};
 
 /// Symmetry tolerance of covariance inputs: `|A_ij − A_ji| ≤ SYMMETRY_TOL·max|A|` (loose
 /// enough for matrices computed as products such as `D Q Dᵀ`, tight enough to catch a
@@ -397,11 +397,19 @@ impl<D: Dims> Model<D> {
         Ok(self)
     }
 
-    /// Adds the control matrix `B` (n×p) of the known input `u_k`.
+    /// Adds the control matrix `B` (n×p) of the known input `u_k`. A dynamic-size model built
+    /// without inputs (p = 0, e.g. by [`Model::from_matrices`]) takes p from `B`'s columns;
+    /// otherwise `B` must have the p columns the dimensions say.
     ///
     /// # Errors
     /// [`Error::Shape`]/[`Error::NonFinite`] naming `B`.
     pub fn with_control(mut self, B: &impl MatrixInput) -> Result<Self, Error> {
+        if self.dims.p() == 0 && B.ncols() > 0 {
+            if let Some(dims) = self.dims.with_inputs(B.ncols()) {
+                self.dims = dims;
+                self.B = D::Np::zeros(self.dims.n() * B.ncols());
+            }
+        }
         let (n, p) = (self.dims.n(), self.dims.p());
         load("B", B, n, p, self.B.as_mut_slice())?;
         Ok(self)
@@ -488,6 +496,38 @@ impl<D: Dims> Model<D> {
     }
 }
 
+impl Model<DynDims> {
+    /// A dynamic-size model whose dimensions are read off the matrices: n from `F`'s rows,
+    /// m from `H`'s rows, no control input (add one with [`Model::with_control`], which then
+    /// takes p from `B`). The same checks as [`Model::new`], so a matrix of the wrong shape
+    /// is still refused by name.
+    ///
+    /// # Errors
+    /// As [`Model::new`]; [`Error::Dimension`] if `F` or `H` has no rows.
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::{Dims, Model};
+    ///
+    /// let dt = 0.5;
+    /// let model = Model::from_matrices(&[[1.0, dt], [0.0, 1.0]], &[[1.0, 0.0]], &[[1e-3, 0.0], [0.0, 1e-2]], &[[0.1]])?
+    ///     .with_control(&[[dt * dt / 2.0], [dt]])?;
+    /// assert_eq!((model.dims().n(), model.dims().m(), model.dims().p()), (2, 1, 1));
+    /// // H with three columns does not fit two states.
+    /// let bad = Model::from_matrices(&[[1.0, dt], [0.0, 1.0]], &[[1.0, 0.0, 0.0]], &[[1.0, 0.0], [0.0, 1.0]], &[[1.0]]);
+    /// assert!(matches!(bad, Err(kalman::Error::Shape { name: "H", .. })));
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    pub fn from_matrices(
+        F: &impl MatrixInput,
+        H: &impl MatrixInput,
+        Q: &impl MatrixInput,
+        R: &impl MatrixInput,
+    ) -> Result<Self, Error> {
+        Self::new(DynDims::new(F.nrows(), H.nrows(), 0)?, F, H, Q, R)
+    }
+}
+
 fn check_dims<D: Dims>(dims: &D) -> Result<(), Error> {
     for (name, v) in [("n", dims.n()), ("m", dims.m())] {
         if v == 0 {
@@ -537,5 +577,71 @@ impl<D: Dims> ModelSource<D> for [Model<D>] {
 impl<D: Dims> ModelSource<D> for Vec<Model<D>> {
     fn model(&self, k: usize) -> Option<&Model<D>> {
         self.as_slice().model(k)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::FixedDims;
+
+    const F: [[f64; 2]; 2] = [[1.0, 0.5], [0.0, 1.0]];
+    const H: [[f64; 2]; 1] = [[1.0, 0.0]];
+    const Q: [[f64; 2]; 2] = [[0.02, 0.01], [0.01, 0.04]];
+    const R: [[f64; 1]; 1] = [[0.3]];
+
+    #[test]
+    fn from_matrices_reads_the_dimensions_and_stores_the_same_model_as_new() {
+        let inferred = Model::from_matrices(&F, &H, &Q, &R).expect("valid");
+        let explicit =
+            Model::new(DynDims::new(2, 1, 0).expect("dims"), &F, &H, &Q, &R).expect("valid");
+        assert_eq!(inferred.dims(), explicit.dims());
+        for (a, b) in [(inferred.f(), explicit.f()), (inferred.q(), explicit.q())] {
+            assert_eq!((a.nrows(), a.ncols()), (b.nrows(), b.ncols()));
+            assert!((a - b).norm_max() < f64::MIN_POSITIVE);
+        }
+        // Q with the wrong shape is still refused by name: n comes from F, not from Q.
+        let bad = Model::from_matrices(&F, &H, &[[1.0]], &R);
+        assert!(matches!(
+            bad,
+            Err(Error::Shape {
+                name: "Q",
+                expected_rows: 2,
+                ..
+            })
+        ));
+        let empty = Model::from_matrices(&Mat::<f64>::zeros(0, 0), &H, &Q, &R);
+        assert!(matches!(empty, Err(Error::Dimension { name: "n", .. })));
+    }
+
+    #[test]
+    fn with_control_takes_p_from_b_only_where_p_is_free() {
+        let b = [[0.125, 1.0], [0.5, 0.0]];
+        let model = Model::from_matrices(&F, &H, &Q, &R)
+            .and_then(|m| m.with_control(&b))
+            .expect("valid");
+        assert_eq!(model.dims().p(), 2);
+        assert!((model.b()[(0, 1)] - 1.0).abs() < f64::MIN_POSITIVE);
+        // Declared p = 1: a two-column B is a shape error, as before.
+        let declared =
+            Model::new(DynDims::new(2, 1, 1).expect("dims"), &F, &H, &Q, &R).expect("valid");
+        assert!(matches!(
+            declared.with_control(&b),
+            Err(Error::Shape {
+                name: "B",
+                expected_cols: 1,
+                ..
+            })
+        ));
+        // The fixed path's p is part of the type.
+        let fixed = Model::new(FixedDims::<2, 1, 0>::new(), &F, &H, &Q, &R).expect("valid");
+        assert!(matches!(
+            fixed.with_control(&b),
+            Err(Error::Shape {
+                name: "B",
+                expected_cols: 0,
+                ..
+            })
+        ));
     }
 }

@@ -21,7 +21,7 @@ use faer::{Mat, MatRef, Side};
 use crate::filter::diverged;
 use crate::riccati::symmetrise;
 use crate::storage::Dims;
-use crate::{Error, Filter, Model, RANK_TOL};
+use crate::{CovarianceForm, Error, Filter, MatrixInput, Model, RANK_TOL};
 
 /// Recorder and backward pass of the RTS smoother (offline: it stores every step). The
 /// common path is one call, [`Filter::run_smoothed`]; record by hand (below) to pass control
@@ -73,12 +73,15 @@ pub struct RtsSmoother {
 /// }
 /// # Ok::<(), kalman::Error>(())
 /// ```
+///
+/// `M` is the matrix type: faer's `Mat<f64>` as returned, nalgebra's `DMatrix<f64>` after
+/// `.to_nalgebra()` (feature `nalgebra`).
 #[derive(Debug, Clone)]
-pub struct Smoothed {
+pub struct Smoothed<M = Mat<f64>> {
     /// Smoothed means: column k is x_{k|N−1} (n×N).
-    pub means: Mat<f64>,
+    pub means: M,
     /// Smoothed covariances P_{k|N−1}, one n×n matrix per step.
-    pub covariances: Vec<Mat<f64>>,
+    pub covariances: Vec<M>,
 }
 
 impl RtsSmoother {
@@ -235,6 +238,54 @@ impl<D: Dims> Filter<D> {
     }
 }
 
+impl<D: Dims> Model<D> {
+    /// The offline path in one call: filters the measurements — `z` with one row per step
+    /// and one column per measurement (N×m; a nalgebra `DVector` of N scalar measurements
+    /// with the feature `nalgebra`), NaN entries missing, no control input — from the prior
+    /// `N(x0, P0)` in the Joseph form, and returns the Rauch–Tung–Striebel smoothed means
+    /// and covariances of every step. The same as [`Filter::new`] followed by
+    /// [`Filter::run_smoothed`], without keeping the filter; with the feature `nalgebra`,
+    /// `.to_nalgebra()` on the result gives a `DMatrix` of means (column k is x_{k|N−1}) and
+    /// a `Vec<DMatrix>` of covariances.
+    ///
+    /// # Errors
+    /// [`Error::Shape`] naming `z` if it does not have m columns; otherwise as
+    /// [`Filter::new`] (naming `x0` or `P0`) and [`Filter::run_smoothed`].
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::Model;
+    ///
+    /// // A constant observed as 1, (missing), 3 in unit noise, prior N(0, 100): every
+    /// // smoothed mean is the posterior mean of the constant, (1 + 3)/(2 + 1/100).
+    /// let model = Model::from_matrices(&[[1.0]], &[[1.0]], &[[0.0]], &[[1.0]])?;
+    /// let s = model.smooth(&[0.0], &[[100.0]], &[[1.0], [f64::NAN], [3.0]])?;
+    /// let mean = 4.0 / 2.01;
+    /// assert!((0..3).all(|k| (s.means[(0, k)] - mean).abs() < 1e-12));
+    /// assert!((s.covariances[1][(0, 0)] - 1.0 / 2.01).abs() < 1e-12);
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    pub fn smooth(
+        &self,
+        x0: &[f64],
+        P0: &impl MatrixInput,
+        z: &impl MatrixInput,
+    ) -> Result<Smoothed, Error> {
+        let m = self.dims.m();
+        if z.ncols() != m {
+            return Err(Error::Shape {
+                name: "z",
+                rows: z.nrows(),
+                cols: z.ncols(),
+                expected_rows: z.nrows(),
+                expected_cols: m,
+            });
+        }
+        let rows = (0..z.nrows()).map(|k| (0..m).map(|j| z.at(k, j)).collect::<Vec<_>>());
+        Filter::new(self.clone(), x0, P0, CovarianceForm::Joseph)?.run_smoothed(rows)
+    }
+}
+
 fn push(v: &mut Vec<f64>, M: MatRef<'_, f64>) {
     for j in 0..M.ncols() {
         for i in 0..M.nrows() {
@@ -284,7 +335,45 @@ pub(crate) fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f6
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{CovarianceForm, DynDims};
+    use crate::DynDims;
+
+    #[test]
+    fn model_smooth_is_the_batch_posterior_across_a_gap_and_names_a_bad_prior() {
+        // Random walk, q = r = 1, prior N(0, 1), z = (1, missing, 3). Batch information
+        // matrix of (x0, x1, x2): prior 1 + measurement 1 on x0 and x2, dynamics
+        // [[1, −1], [−1, 1]] per transition:
+        // Λ = [[3, −1, 0], [−1, 2, −1], [0, −1, 2]], η = (1, 0, 3), det Λ = 7; the smoothed
+        // means are Λ⁻¹η and the variances Λ⁻¹'s diagonal.
+        let model = Model::from_matrices(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]]).expect("valid");
+        let s = model
+            .smooth(&[0.0], &[[1.0]], &[[1.0], [f64::NAN], [3.0]])
+            .expect("runs");
+        // Λ⁻¹ = adj(Λ)/7 with adj = [[3, 2, 1], [2, 6, 3], [1, 3, 5]].
+        let inv = [[3.0, 2.0, 1.0], [2.0, 6.0, 3.0], [1.0, 3.0, 5.0]];
+        for k in 0..3 {
+            let mean = (inv[k][0] * 1.0 + inv[k][2] * 3.0) / 7.0;
+            assert!((s.means[(0, k)] - mean).abs() < 1e-12, "mean {k}");
+            assert!(
+                (s.covariances[k][(0, 0)] - inv[k][k] / 7.0).abs() < 1e-12,
+                "var {k}"
+            );
+        }
+        let bad = model.smooth(&[0.0], &[[-1.0]], &[[1.0]]);
+        assert!(matches!(
+            bad,
+            Err(Error::NotPositiveSemidefinite { name: "P0", .. })
+        ));
+        let wide = model.smooth(&[0.0], &[[1.0]], &[[1.0, 2.0]]);
+        assert!(matches!(
+            wide,
+            Err(Error::Shape {
+                name: "z",
+                cols: 2,
+                expected_cols: 1,
+                ..
+            })
+        ));
+    }
 
     #[test]
     fn scalar_random_walk_two_steps() {

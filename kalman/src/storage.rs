@@ -94,6 +94,14 @@ pub(crate) mod sealed {
         type Mo: Buf<Option<usize>>;
         /// Per-state optional indices.
         type No: Buf<Option<usize>>;
+        /// The same dimensions with `p` control inputs, where the path can change p after
+        /// construction (the dynamic one); `None` where p is part of the type.
+        fn with_inputs(self, _p: usize) -> Option<Self>
+        where
+            Self: Sized,
+        {
+            None
+        }
     }
 
     impl Storage for super::DynDims {
@@ -108,6 +116,9 @@ pub(crate) mod sealed {
         type Mi = Vec<usize>;
         type Mo = Vec<Option<usize>>;
         type No = Vec<Option<usize>>;
+        fn with_inputs(self, p: usize) -> Option<Self> {
+            Some(super::DynDims { p, ..self })
+        }
     }
 
     impl<const N: usize, const M: usize, const P: usize> Storage for super::FixedDims<N, M, P> {

@@ -85,6 +85,25 @@ pub struct Tikhonov {
     pub operator: Option<DMatrix<f64>>,
 }
 
+impl Tikhonov {
+    /// Ridge regression: λ‖x‖² (prior mean 0, operator the identity). λ is checked by
+    /// [`solve`] (finite, ≥ 0).
+    ///
+    /// ```
+    /// use wls::solver::Tikhonov;
+    /// let t = Tikhonov::ridge(1e-6);
+    /// assert_eq!(t, Tikhonov { lambda: 1e-6, prior_mean: None, operator: None });
+    /// ```
+    #[must_use]
+    pub fn ridge(lambda: f64) -> Self {
+        Self {
+            lambda,
+            prior_mean: None,
+            operator: None,
+        }
+    }
+}
+
 /// Prior information as extra weighted measurement rows: P x ≈ p with weight V_p.
 ///
 /// ```
@@ -138,6 +157,27 @@ pub struct SolveOptions {
     pub tikhonov: Option<Tikhonov>,
     /// Prior information as extra rows.
     pub prior: Option<PriorRows>,
+}
+
+impl SolveOptions {
+    /// The default options with ridge regularisation λ‖x‖² ([`Tikhonov::ridge`]): the one
+    /// value a regularised fit needs.
+    ///
+    /// ```
+    /// use wls::nalgebra::{DMatrix, dvector};
+    /// use wls::solver::{SolveOptions, Weights, solve};
+    /// // Ridge on H = I: x = z/(1 + λ).
+    /// let sol = solve(&DMatrix::identity(2, 2), &dvector![2.0, 4.0], &Weights::Identity, &SolveOptions::ridge(1.0))?;
+    /// assert!((sol.x - dvector![1.0, 2.0]).norm() < 1e-12);
+    /// # Ok::<(), wls::Error>(())
+    /// ```
+    #[must_use]
+    pub fn ridge(lambda: f64) -> Self {
+        Self {
+            tikhonov: Some(Tikhonov::ridge(lambda)),
+            ..Self::default()
+        }
+    }
 }
 
 /// The result of [`solve`].

@@ -101,19 +101,22 @@ impl Default for RiccatiOptions {
 /// assert!((ss.posterior[(0, 0)] - p / (p + 1.0)).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
+///
+/// `M` is the matrix type: faer's `Mat<f64>` as returned, nalgebra's `DMatrix<f64>` after
+/// `.to_nalgebra()` (feature `nalgebra`).
 #[derive(Debug, Clone)]
-pub struct SteadyState {
+pub struct SteadyState<M = Mat<f64>> {
     /// Steady-state prior covariance P = lim P_{k|k−1} (n×n), the DARE solution.
-    pub prior: Mat<f64>,
+    pub prior: M,
     /// Steady-state posterior covariance P_{k|k} = P − K Σ Kᵀ (n×n).
-    pub posterior: Mat<f64>,
+    pub posterior: M,
     /// Filter (update) gain K = P Hᵀ Σ⁻¹ (n×m): x_{k|k} = x_{k|k−1} + K (z_k − H x_{k|k−1}).
-    pub gain: Mat<f64>,
+    pub gain: M,
     /// One-step predictor gain K_p = (F P Hᵀ + S) Σ⁻¹ (n×m):
     /// x_{k+1|k} = F x_{k|k−1} + B u_k + K_p (z_k − H x_{k|k−1}).
-    pub predictor_gain: Mat<f64>,
+    pub predictor_gain: M,
     /// Steady-state innovation covariance Σ = H P Hᵀ + R (m×m).
-    pub innovation_cov: Mat<f64>,
+    pub innovation_cov: M,
     /// Doubling steps used.
     pub iterations: usize,
     /// ‖DARE residual‖_F / ‖P‖_F (0 when P = 0).
@@ -133,13 +136,16 @@ pub struct SteadyState {
 /// assert!((lqr.cost[(0, 0)] - x).abs() < 1e-12 && (lqr.gain[(0, 0)] - x / (1.0 + x)).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
+///
+/// `M` is the matrix type: faer's `Mat<f64>` as returned, nalgebra's `DMatrix<f64>` after
+/// `.to_nalgebra()` (feature `nalgebra`).
 #[derive(Debug, Clone)]
-pub struct Lqr {
+pub struct Lqr<M = Mat<f64>> {
     /// State-feedback gain L = (R + BᵀXB)⁻¹(BᵀXA + Nᵀ) (m×n) for discrete problems, or
     /// L = R⁻¹(BᵀX + Nᵀ) for continuous ones; the control is u = −L x.
-    pub gain: Mat<f64>,
+    pub gain: M,
     /// Cost-to-go matrix X (n×n, symmetric PSD), the Riccati solution.
-    pub cost: Mat<f64>,
+    pub cost: M,
     /// Doubling steps used.
     pub iterations: usize,
     /// ‖Riccati residual‖_F / ‖X‖_F.
@@ -158,12 +164,15 @@ pub struct Lqr {
 /// assert!((ss.gain[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
+///
+/// `M` is the matrix type: faer's `Mat<f64>` as returned, nalgebra's `DMatrix<f64>` after
+/// `.to_nalgebra()` (feature `nalgebra`).
 #[derive(Debug, Clone)]
-pub struct ContinuousSteadyState {
+pub struct ContinuousSteadyState<M = Mat<f64>> {
     /// P solving A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0 (n×n).
-    pub covariance: Mat<f64>,
+    pub covariance: M,
     /// Kalman–Bucy gain K = P Hᵀ R⁻¹ (n×m).
-    pub gain: Mat<f64>,
+    pub gain: M,
     /// Doubling steps used.
     pub iterations: usize,
     /// ‖CARE residual‖_F / ‖P‖_F.

@@ -9,31 +9,27 @@ kf.F = np.array([[1.0, dt], [0.0, 1.0]])
 kf.H = np.array([[1.0, 0.0]])
 kf.Q = np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]]) * 0.01
 kf.R = np.array([[0.25]])
-kf.x = np.zeros(2)
-kf.P = np.eye(2) * 10.0
+p0 = np.eye(2) * 10.0
+kf.x, kf.P = np.zeros(2), p0.copy()
 zs = [1.1, 2.0, None, 3.9, 5.1, None, None, 8.0, 9.1, 9.9]
-mu, cov, _, _ = kf.batch_filter(zs)
+mu, cov, _, _ = kf.batch_filter(zs, update_first=True)
 xs, Ps, _, _ = kf.rts_smoother(mu, cov)
-for k, z in enumerate(zs):
-    print(k, z, xs[k], Ps[k][0, 0])
-# Independent check: the batch posterior from the information matrix.
-n = len(zs)
-qi, ri = np.linalg.inv(kf.Q), np.linalg.inv(kf.R)
-info, eta = np.zeros((2 * n, 2 * n)), np.zeros(2 * n)
-def add(i, j, m):
-    info[2 * i:2 * i + 2, 2 * j:2 * j + 2] += m
-add(0, 0, np.linalg.inv(np.eye(2) * 10.0))
-for k in range(n - 1):
-    add(k, k, kf.F.T @ qi @ kf.F)
-    add(k, k + 1, -kf.F.T @ qi)
-    add(k + 1, k, -qi @ kf.F)
-    add(k + 1, k + 1, qi)
-for k, z in enumerate(zs):
-    if z is not None:
-        add(k, k, kf.H.T @ ri @ kf.H)
-        eta[2 * k:2 * k + 2] += (kf.H.T @ ri)[:, 0] * z
-batch_cov = np.linalg.inv(info)
+# Independent check: the batch posterior from its information matrix
+# Λ = DᵀWD + seen ⊗ HᵀR⁻¹H and vector η = z ⊗ HᵀR⁻¹ (missing z as 0).
+n, inv = len(zs), np.linalg.inv
+shift, first = np.eye(n, k=-1), np.diag([1.0] + [0.0] * (n - 1))
+seen = np.diag([float(z is not None) for z in zs])
+d = np.eye(2 * n) - np.kron(shift, kf.F)
+w = np.kron(first, inv(p0)) + np.kron(np.eye(n) - first, inv(kf.Q))
+info = d.T @ w @ d + np.kron(seen, kf.H.T @ inv(kf.R) @ kf.H)
+z0 = np.array([0.0 if z is None else z for z in zs])
+eta = np.kron(z0, (kf.H.T @ inv(kf.R))[:, 0])
+batch_cov = inv(info)
 batch_mean = batch_cov @ eta
 for k in range(n):
-    assert np.linalg.norm(xs[k] - batch_mean[2 * k:2 * k + 2]) < 1e-9 * (1 + np.linalg.norm(xs[k]))
-    assert np.linalg.norm(Ps[k] - batch_cov[2 * k:2 * k + 2, 2 * k:2 * k + 2]) < 1e-9 * np.linalg.norm(Ps[k])
+    x, p = xs[k], Ps[k]
+    print(k, zs[k], x, p[0, 0])
+    assert np.linalg.norm(x - batch_mean[2 * k : 2 * k + 2]) < 1e-9 * (1 + np.linalg.norm(x))
+    assert np.linalg.norm(
+        p - batch_cov[2 * k : 2 * k + 2, 2 * k : 2 * k + 2]
+    ) < 1e-9 * np.linalg.norm(p)

@@ -5,8 +5,7 @@ import numpy as np
 t = np.arange(40) / 39.0
 h = np.vander(t, 8, increasing=True)
 truth = 1.0 / (1.0 + np.arange(8))
-noise = 1e-4 * ((7 * np.arange(40)) % 11) - 5e-4
-z = h @ truth + noise
+z = h @ truth + 1e-4 * ((7 * np.arange(40)) % 11) - 5e-4
 plain, *_ = np.linalg.lstsq(h, z, rcond=None)
 lam = 1e-6
 h_reg = np.vstack([h, np.sqrt(lam) * np.eye(8)])

@@ -577,3 +577,31 @@ fn weight_checks_do_not_depend_on_units() {
     }
     assert!((wls::SYMMETRY_TOL - 1e-10).abs() < 1e-25);
 }
+
+#[test]
+fn ridge_options_solve_the_regularised_normal_equations() {
+    let mut rng = ChaCha8Rng::seed_from_u64(31);
+    let h = uniform(&mut rng, 12, 4, -1.0, 1.0);
+    let z = DVector::from_fn(12, |i, _| (i as f64).sin());
+    let lambda = 0.3;
+    let sol = solve(&h, &z, &Weights::Identity, &SolveOptions::ridge(lambda)).expect("ridge");
+    // Independent: (HᵀH + λI) x = Hᵀz by LU; κ of that matrix is small here (λ = 0.3 with
+    // entries of H in [−1, 1]), so 1e-10 relative is far above round-off.
+    let normal = h.transpose() * &h + DMatrix::identity(4, 4) * lambda;
+    let x = normal
+        .lu()
+        .solve(&(h.transpose() * &z))
+        .expect("nonsingular");
+    assert!((&sol.x - &x).norm() < 1e-10 * x.norm());
+    assert_eq!(
+        SolveOptions::ridge(lambda).tikhonov,
+        Some(Tikhonov::ridge(lambda))
+    );
+    assert!(matches!(
+        solve(&h, &z, &Weights::Identity, &SolveOptions::ridge(-1.0)),
+        Err(Error::InvalidParameter {
+            name: "tikhonov.lambda",
+            ..
+        })
+    ));
+}
