@@ -10,10 +10,12 @@
 //! the ground truth), [`summary`] (every number, from the records alone) and [`report`]
 //! (CSV, SVG and `report.md`, formatting only). [`statistics`] gives every ratio its interval
 //! and every strategy its tail; [`calibration`] searches [`search`]'s box for the parameters the paper does not
-//! state (its own simulations, not sharded). [`Fueling`] ties them to the campaign.
+//! state (its own simulations, not sharded); [`learned`] fits the paper's model back to one
+//! simulated record (not sharded either). [`Fueling`] ties them to the campaign.
 
 pub mod calibration;
 pub mod calibration_report;
+pub mod learned;
 pub mod parameters;
 pub mod records;
 pub mod report;
@@ -99,6 +101,7 @@ impl Scenario for Fueling {
                 threads,
                 (summary::PAPER_KF1_RATIO, summary::PAPER_KF2_RATIO),
             )?;
+            summary.learned = Some(learned::learn_back(params, seed)?);
         }
         Ok(summary)
     }

@@ -594,6 +594,9 @@ pub fn report_md(sm: &Summary) -> String {
     if let Some(c) = &sm.calibration {
         s.push_str(&calibration_report::section(c, p));
     }
+    if let Some(l) = &sm.learned {
+        s.push_str(&calibration_report::learned_section(l));
+    }
 
     // --- Fig. 1
     let _ = writeln!(

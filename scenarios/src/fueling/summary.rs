@@ -128,6 +128,9 @@ pub struct Summary {
     /// The search over the unstated parameters (absent when off, and in a shard).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub calibration: Option<Calibration>,
+    /// The paper's model fitted back to one simulated record (absent in a shard).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub learned: Option<super::learned::LearnedBack>,
     /// The invariance table's points as sweep entries (`invariance.csv`).
     #[serde(skip)]
     pub invariance_entries: Vec<Entry>,
@@ -318,6 +321,7 @@ pub fn summarise(
         runs_without_stop,
         margins,
         calibration: None,
+        learned: None,
         invariance_entries,
         nyquist_null,
     })
