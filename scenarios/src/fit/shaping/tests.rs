@@ -223,3 +223,66 @@ fn wald_intervals_of_an_irregular_rolling_fit_cover_at_the_nominal_rate() {
         );
     }
 }
+
+#[test]
+fn the_shaping_maps_gradient_matches_central_differences() {
+    // The score recursion's gradient through every shaping map (whose matrix derivatives
+    // are central differences of the discretisation, step 1e-6 relative, error ≈ 1e-10
+    // relative) against central differences of ln L itself at h = 1e-4, away from the
+    // optimum. Their error is the truncation h²/6·∂³ln L, estimated from the same
+    // differences at 2h (four times as large: |D(2h) − D(h)|/3), plus ln L's round-off
+    // over h: a sum of N terms, at most N·ε·max(|ln L|, N) — the bound asserted, ×3.
+    use kalman::fit::log_likelihood_gradient;
+    let dt = 0.1;
+    let z = rolling(
+        &[1.0, 0.08, 2.0 * std::f64::consts::PI / 10.0],
+        dt,
+        0.01,
+        500,
+        &mut rng(21),
+    );
+    let data = Series::new(&z, 1).expect("series");
+    let n = z.len() as f64;
+    for (kind, p) in [
+        (Kind::Exponential, vec![1.0, 0.1]),
+        (Kind::IrregularRolling, vec![1.0, 0.08, 0.6]),
+        (Kind::DampedCosine, vec![1.0, 0.1, 0.7]),
+    ] {
+        for noise in [Noise::Known(0.01), Noise::Free] {
+            let map = ShapingMap { kind, dt, noise };
+            let theta: Vec<f64> = map
+                .theta_of(&p, 0.02)
+                .iter()
+                .enumerate()
+                .map(|(i, t)| t + 0.2 * ((i + 1) as f64).sin())
+                .collect();
+            let (ll, g) = log_likelihood_gradient(&map, &theta, &data).expect("gradient");
+            let lnl = |t: &[f64]| log_likelihood_gradient(&map, t, &data).expect("ln L").0;
+            let central = |i: usize, h: f64| {
+                let mut t = theta.clone();
+                t[i] += h;
+                let up = lnl(&t);
+                t[i] -= 2.0 * h;
+                (up - lnl(&t)) / (2.0 * h)
+            };
+            let h = 1e-4;
+            let round_off = n * f64::EPSILON * ll.abs().max(n) / h;
+            for i in 0..theta.len() {
+                let (d1, d2) = (central(i, h), central(i, 2.0 * h));
+                let truncation = (d2 - d1).abs() / 3.0;
+                let err = (g[i] - d1).abs();
+                assert!(
+                    err <= 3.0 * (truncation + round_off),
+                    "{kind:?} {noise:?} ∂/∂θ[{i}]: exact {} vs central {d1} (error {err:.2e}, \
+                     truncation {truncation:.2e}, round-off {round_off:.2e})",
+                    g[i]
+                );
+                // Not vacuous: the gradient is far from zero here, well above that error.
+                assert!(
+                    g[i].abs() > 1e3 * (truncation + round_off),
+                    "{kind:?} θ[{i}]"
+                );
+            }
+        }
+    }
+}
