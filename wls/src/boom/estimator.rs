@@ -383,7 +383,8 @@ impl BoomEstimator {
     /// Processes one cycle's accelerometer reading (m/s², sensor axes).
     ///
     /// # Errors
-    /// [`Error::NonFinite`] if any reading is NaN or infinite (the state is left unchanged).
+    /// [`Error::NonFinite`](crate::Error::NonFinite) if any reading is NaN or infinite (the
+    /// state is left unchanged).
     pub fn update(&mut self, a_x: f64, a_y: f64, a_z: f64) -> Result<Estimate> {
         check_finite_scalars(&[("a_x", a_x), ("a_y", a_y), ("a_z", a_z)])?;
         let cfg = &self.config;
