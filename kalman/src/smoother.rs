@@ -239,7 +239,7 @@ impl<D: Dims> Filter<D> {
 }
 
 impl<D: Dims> Model<D> {
-    /// The offline path in one call: filters the measurements — `z` with one row per step
+    /// The offline path in one call: filters the `measurements` — one row per step
     /// and one column per measurement (N×m; a nalgebra `DVector` of N scalar measurements
     /// with the feature `nalgebra`), NaN entries missing, no control input — from the prior
     /// `N(x0, P0)` in the Joseph form, and returns the Rauch–Tung–Striebel smoothed means
@@ -249,7 +249,7 @@ impl<D: Dims> Model<D> {
     /// a `Vec<DMatrix>` of covariances.
     ///
     /// # Errors
-    /// [`Error::Shape`] naming `z` if it does not have m columns; otherwise as
+    /// [`Error::Shape`] naming `measurements` if they do not have m columns; otherwise as
     /// [`Filter::new`] (naming `x0` or `P0`) and [`Filter::run_smoothed`].
     ///
     /// # Example
@@ -269,12 +269,13 @@ impl<D: Dims> Model<D> {
         &self,
         x0: &[f64],
         P0: &impl MatrixInput,
-        z: &impl MatrixInput,
+        measurements: &impl MatrixInput,
     ) -> Result<Smoothed, Error> {
         let m = self.dims.m();
+        let z = measurements;
         if z.ncols() != m {
             return Err(Error::Shape {
-                name: "z",
+                name: "measurements",
                 rows: z.nrows(),
                 cols: z.ncols(),
                 expected_rows: z.nrows(),
@@ -367,7 +368,7 @@ mod tests {
         assert!(matches!(
             wide,
             Err(Error::Shape {
-                name: "z",
+                name: "measurements",
                 cols: 2,
                 expected_cols: 1,
                 ..
