@@ -116,15 +116,7 @@ pub(crate) fn check(
     rows: usize,
     cols: usize,
 ) -> Result<(), Error> {
-    if a.nrows() != rows || a.ncols() != cols {
-        return Err(Error::Shape {
-            name,
-            rows: a.nrows(),
-            cols: a.ncols(),
-            expected_rows: rows,
-            expected_cols: cols,
-        });
-    }
+    check_shape(name, &a, rows, cols)?;
     for j in 0..cols {
         for i in 0..rows {
             if !a.at(i, j).is_finite() {
@@ -137,6 +129,25 @@ pub(crate) fn check(
                 });
             }
         }
+    }
+    Ok(())
+}
+
+/// The shape half of [`check`]: [`Error::Shape`] naming `name` unless `a` is `rows`×`cols`.
+pub(crate) fn check_shape(
+    name: &'static str,
+    a: &impl MatrixInput,
+    rows: usize,
+    cols: usize,
+) -> Result<(), Error> {
+    if a.nrows() != rows || a.ncols() != cols {
+        return Err(Error::Shape {
+            name,
+            rows: a.nrows(),
+            cols: a.ncols(),
+            expected_rows: rows,
+            expected_cols: cols,
+        });
     }
     Ok(())
 }

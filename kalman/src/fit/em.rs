@@ -182,23 +182,7 @@ pub(crate) fn e_step(s: &Flat, data: &Series<'_>) -> Result<EStep, FitError> {
                 &mut xp[(k + 1) * n..(k + 2) * n],
                 &mut Pp[(k + 1) * nn..(k + 2) * nn],
             );
-            gemm(xn, n, 1, n, 1.0, &s.F, n, false, &xk, n, false, 0.0);
-            if data.p() > 0 {
-                gemm(
-                    xn,
-                    n,
-                    1,
-                    s.p,
-                    1.0,
-                    &s.B,
-                    n,
-                    false,
-                    data.u(k),
-                    s.p,
-                    false,
-                    1.0,
-                );
-            }
+            s.predict_mean(xn, &xk, data.u(k));
             gemm(&mut tn, n, n, n, 1.0, &s.F, n, false, &Pk, n, false, 0.0);
             gemm(Pn, n, n, n, 1.0, &tn, n, false, &s.F, n, true, 0.0);
             for (a, q) in Pn.iter_mut().zip(&s.Q) {
@@ -268,25 +252,7 @@ pub(crate) fn e_step(s: &Flat, data: &Series<'_>) -> Result<EStep, FitError> {
         symmetrise(&mut Ps_prev, n);
         // E[w wᵀ] with w = x_{k+1} − F x_k − B u_k:
         // r rᵀ + P_{k+1|N} − F Cᵀ − C Fᵀ + F P_{k|N} Fᵀ, r the smoothed residual.
-        gemm(
-            &mut w, n, 1, n, 1.0, &s.F, n, false, &xs_prev, n, false, 0.0,
-        );
-        if data.p() > 0 {
-            gemm(
-                &mut w,
-                n,
-                1,
-                s.p,
-                1.0,
-                &s.B,
-                n,
-                false,
-                data.u(k),
-                s.p,
-                false,
-                1.0,
-            );
-        }
+        s.predict_mean(&mut w, &xs_prev, data.u(k));
         for i in 0..n {
             w[i] = xs[i] - w[i];
         }

@@ -121,32 +121,8 @@ fn to_mat(
     r: usize,
     c: usize,
 ) -> Result<Mat<f64>, FitError> {
-    if a.nrows() != r || a.ncols() != c {
-        return Err(crate::Error::Shape {
-            name,
-            rows: a.nrows(),
-            cols: a.ncols(),
-            expected_rows: r,
-            expected_cols: c,
-        }
-        .into());
-    }
-    let m = Mat::from_fn(r, c, |i, j| a.at(i, j));
-    for j in 0..c {
-        for i in 0..r {
-            if !m[(i, j)].is_finite() {
-                return Err(crate::Error::NonFinite {
-                    name,
-                    rows: r,
-                    cols: c,
-                    row: i,
-                    col: j,
-                }
-                .into());
-            }
-        }
-    }
-    Ok(m)
+    crate::model::check(name, a, r, c)?;
+    Ok(Mat::from_fn(r, c, |i, j| a.at(i, j)))
 }
 
 impl System {

@@ -19,6 +19,18 @@ pub(crate) struct Flat {
 }
 
 impl Flat {
+    /// `xn = F x + B u`; `u` is empty when the data have no input columns (u = 0, which a
+    /// model with B accepts), else of length p.
+    pub(crate) fn predict_mean(&self, xn: &mut [f64], x: &[f64], u: &[f64]) {
+        let n = self.n;
+        gemm(xn, n, 1, n, 1.0, &self.F, n, false, x, n, false, 0.0);
+        if !u.is_empty() {
+            gemm(
+                xn, n, 1, self.p, 1.0, &self.B, n, false, u, self.p, false, 1.0,
+            );
+        }
+    }
+
     pub(crate) fn new(s: &System) -> Self {
         Self {
             n: s.n(),
@@ -57,6 +69,34 @@ impl FlatDeriv {
     }
 }
 
+/// The prediction's part of the covariance derivative, written to `dPn`:
+/// F ∂P Fᵀ + ∂F P Fᵀ + F P ∂Fᵀ + ∂Q, with `FP` = F P (a filtered P) and `tn` an n×n scratch.
+fn predict_dP(
+    dPn: &mut [f64],
+    tn: &mut [f64],
+    F: &[f64],
+    dP: &[f64],
+    di: &FlatDeriv,
+    FP: &[f64],
+    n: usize,
+) {
+    gemm(tn, n, n, n, 1.0, F, n, false, dP, n, false, 0.0);
+    gemm(dPn, n, n, n, 1.0, tn, n, false, F, n, true, 0.0);
+    if let Some(df) = &di.F {
+        gemm(tn, n, n, n, 1.0, df, n, false, FP, n, true, 0.0);
+        for r in 0..n {
+            for c in 0..n {
+                dPn[r + c * n] += tn[r + c * n] + tn[c + r * n];
+            }
+        }
+    }
+    if let Some(dq) = &di.Q {
+        for (a, b) in dPn.iter_mut().zip(dq) {
+            *a += b;
+        }
+    }
+}
+
 fn check_deriv(d: &Derivative, s: &System) -> Result<(), FitError> {
     let (n, m) = (s.n(), s.m());
     let bad = |name: &'static str,
@@ -64,17 +104,8 @@ fn check_deriv(d: &Derivative, s: &System) -> Result<(), FitError> {
                r: usize,
                c: usize|
      -> Result<(), FitError> {
-        if let Some(a) = a
-            && (a.nrows() != r || a.ncols() != c)
-        {
-            return Err(crate::Error::Shape {
-                name,
-                rows: a.nrows(),
-                cols: a.ncols(),
-                expected_rows: r,
-                expected_cols: c,
-            }
-            .into());
+        if let Some(a) = a {
+            crate::model::check_shape(name, a, r, c)?;
         }
         Ok(())
     };
@@ -188,23 +219,7 @@ fn score(s: &Flat, d: &[FlatDeriv], data: &Series<'_>, grad: &mut [f64]) -> Resu
         // FP = F P
         gemm(&mut FP, n, n, n, 1.0, &s.F, n, false, &P, n, false, 0.0);
         // xn = F x + B u
-        gemm(&mut xn, n, 1, n, 1.0, &s.F, n, false, &x, n, false, 0.0);
-        if data.p() > 0 {
-            gemm(
-                &mut xn,
-                n,
-                1,
-                s.p,
-                1.0,
-                &s.B,
-                n,
-                false,
-                data.u(k),
-                s.p,
-                false,
-                1.0,
-            );
-        }
+        s.predict_mean(&mut xn, &x, data.u(k));
         // Pn = F P Fᵀ + Q
         gemm(&mut Pn, n, n, n, 1.0, &FP, n, false, &s.F, n, true, 0.0);
         for (a, q) in Pn.iter_mut().zip(&s.Q) {
@@ -431,21 +446,7 @@ fn score(s: &Flat, d: &[FlatDeriv], data: &Series<'_>, grad: &mut [f64]) -> Resu
                 );
                 // dP' = dF P Fᵀ + F P dFᵀ + F dP Fᵀ + dQ − dM Gᵀ − G dMᵀ + G dΣ Gᵀ
                 let dPn = &mut dPb[i];
-                gemm(&mut tn, n, n, n, 1.0, &s.F, n, false, &dP[i], n, false, 0.0);
-                gemm(dPn, n, n, n, 1.0, &tn, n, false, &s.F, n, true, 0.0);
-                if let Some(df) = &di.F {
-                    gemm(&mut tn, n, n, n, 1.0, df, n, false, &FP, n, true, 0.0);
-                    for r in 0..n {
-                        for c in 0..n {
-                            dPn[r + c * n] += tn[r + c * n] + tn[c + r * n];
-                        }
-                    }
-                }
-                if let Some(dq) = &di.Q {
-                    for (a, b) in dPn.iter_mut().zip(dq) {
-                        *a += b;
-                    }
-                }
+                predict_dP(dPn, &mut tn, &s.F, &dP[i], di, &FP, n);
                 gemm(
                     &mut tn,
                     n,
@@ -532,21 +533,7 @@ fn score(s: &Flat, d: &[FlatDeriv], data: &Series<'_>, grad: &mut [f64]) -> Resu
                     gemm(dxn, n, 1, n, 1.0, df, n, false, &x, n, false, 1.0);
                 }
                 let dPn = &mut dPb[i];
-                gemm(&mut tn, n, n, n, 1.0, &s.F, n, false, &dP[i], n, false, 0.0);
-                gemm(dPn, n, n, n, 1.0, &tn, n, false, &s.F, n, true, 0.0);
-                if let Some(df) = &di.F {
-                    gemm(&mut tn, n, n, n, 1.0, df, n, false, &FP, n, true, 0.0);
-                    for r in 0..n {
-                        for c in 0..n {
-                            dPn[r + c * n] += tn[r + c * n] + tn[c + r * n];
-                        }
-                    }
-                }
-                if let Some(dq) = &di.Q {
-                    for (a, b) in dPn.iter_mut().zip(dq) {
-                        *a += b;
-                    }
-                }
+                predict_dP(dPn, &mut tn, &s.F, &dP[i], di, &FP, n);
             }
         }
         symmetrise(&mut Pn, n);

@@ -1,6 +1,6 @@
 //! Seeded simulation and the local-linear-trend model shared by the fitting tests.
 
-use kalman::fit::System;
+use kalman::fit::{Fit, Free, MleOptions, Series, StandardMap, Structure, System, mle};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -69,4 +69,24 @@ pub fn binomial_band(n: usize, p: f64) -> (usize, usize) {
         hi -= 1;
     }
     (lo, hi)
+}
+
+/// The map freeing Q and R of `base` with structures `q`, `r`, and its converged maximum
+/// likelihood fit on `data` from `base` (default options).
+pub fn mle_qr(base: &System, q: Structure, r: Structure, data: &Series) -> (StandardMap, Fit) {
+    let free = Free {
+        q,
+        r,
+        ..Free::default()
+    };
+    let map = StandardMap::new(base.clone(), free).expect("map");
+    let fit = mle(
+        &map,
+        map.theta_of(base, Some(data)),
+        data,
+        &MleOptions::default(),
+    )
+    .expect("mle");
+    assert!(fit.converged, "{}", fit.message);
+    (map, fit)
 }

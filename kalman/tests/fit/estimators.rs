@@ -7,7 +7,7 @@ use kalman::fit::{
     Structure, System, em, mle,
 };
 
-use super::common::{binomial_band, llt, rng, simulate_diag};
+use super::common::{binomial_band, llt, mle_qr, rng, simulate_diag};
 
 #[test]
 fn mle_and_em_reach_the_same_optimum_on_a_local_linear_trend() {
@@ -117,23 +117,7 @@ fn wald_intervals_of_q_and_r_cover_at_the_nominal_rate() {
         let data = Series::new(&z, 1).expect("series");
         let base =
             System::new(&[[1.0]], &[[1.0]], &[[0.5]], &[[0.5]], &[0.0], &[[1.0]]).expect("base");
-        let map = StandardMap::new(
-            base.clone(),
-            Free {
-                q: Structure::Scalar,
-                r: Structure::Scalar,
-                ..Free::default()
-            },
-        )
-        .expect("map");
-        let fit = mle(
-            &map,
-            map.theta_of(&base, Some(&data)),
-            &data,
-            &MleOptions::default(),
-        )
-        .expect("mle");
-        assert!(fit.converged, "{}", fit.message);
+        let (_, fit) = mle_qr(&base, Structure::Scalar, Structure::Scalar, &data);
         let se = fit.std_errors.expect("standard errors");
         cover[0] += usize::from(wald_covers(fit.theta[0], se[0], q.ln()));
         cover[1] += usize::from(wald_covers(fit.theta[1], se[1], r.ln()));

@@ -2,9 +2,9 @@
 //! trend) on the same data, stored by `tests/golden/make_statsmodels_llt.py`.
 
 use kalman::CovarianceForm;
-use kalman::fit::{Free, MleOptions, Series, StandardMap, Structure, log_likelihood, mle};
+use kalman::fit::{Series, Structure, log_likelihood};
 
-use super::common::llt;
+use super::common::{llt, mle_qr};
 
 fn golden() -> serde_json::Value {
     let text = include_str!("../golden/statsmodels_llt.json");
@@ -34,23 +34,7 @@ fn likelihood_and_mle_match_statsmodels_unobserved_components() {
     );
     // The MLE.
     let base = llt(1.0, 1.0, 1.0, x0, p0);
-    let map = StandardMap::new(
-        base.clone(),
-        Free {
-            q: Structure::Diag,
-            r: Structure::Diag,
-            ..Free::default()
-        },
-    )
-    .expect("map");
-    let fit = mle(
-        &map,
-        map.theta_of(&base, Some(&data)),
-        &data,
-        &MleOptions::default(),
-    )
-    .expect("mle");
-    assert!(fit.converged, "{}", fit.message);
+    let (map, fit) = mle_qr(&base, Structure::Diag, Structure::Diag, &data);
     let cov = fit.covariance.as_ref().expect("covariance");
     let se = map.matrix_std_errors(&fit.theta, cov).expect("se");
     let (Some(seq), Some(ser)) = (se.q, se.r) else {

@@ -196,15 +196,7 @@ fn gradient_matches_central_differences_standard_map() {
 #[test]
 fn gradient_matches_central_differences_for_f_and_h() {
     // θ enters F and H (exact derivatives given) and Q: exercises the ∂F, ∂H terms.
-    let sys0 = small_system(11);
-    let build = move |t: &[f64]| {
-        let mut s = sys0.clone();
-        s.f[(0, 0)] = t[0];
-        s.f[(1, 2)] = t[0] * t[1];
-        s.h[(1, 0)] = t[1];
-        s.q[(2, 2)] = t[2].exp();
-        Ok(s)
-    };
+    let build = build_from(small_system(11));
     let deriv = |t: &[f64]| {
         let z3 = |f: &dyn Fn(usize, usize) -> f64| Mat::from_fn(3, 3, f);
         Ok(vec![
@@ -245,7 +237,7 @@ fn gradient_matches_central_differences_for_f_and_h() {
     }
     // The central-difference fallback of FnMap::new agrees with the exact derivatives to
     // its own truncation (1e-12 relative on the matrices) — far inside 1e-6.
-    let fallback = FnMap::new(3, build_again(small_system(11)));
+    let fallback = FnMap::new(3, build_from(small_system(11)));
     let (z, u) = series_data(12, 9, true);
     let data = Series::new(&z, 2)
         .and_then(|s| s.with_inputs(&u, 1))
@@ -257,7 +249,8 @@ fn gradient_matches_central_differences_for_f_and_h() {
     }
 }
 
-fn build_again(sys0: System) -> impl Fn(&[f64]) -> Result<System, kalman::fit::FitError> {
+/// The system of θ for the F, H test: F₀₀ = θ₀, F₁₂ = θ₀θ₁, H₁₀ = θ₁, Q₂₂ = e^θ₂ in `sys0`.
+fn build_from(sys0: System) -> impl Fn(&[f64]) -> Result<System, kalman::fit::FitError> {
     move |t: &[f64]| {
         let mut s = sys0.clone();
         s.f[(0, 0)] = t[0];
