@@ -35,11 +35,66 @@ pub enum Error {
     /// A command-line value is invalid.
     #[error("{0}")]
     Usage(String),
-    /// A computation failed on valid input (a library error surfaced as is). Kept for the
-    /// command-line modules that still use it; the paper scenarios use the typed variants
-    /// below.
+    /// A computation failed on valid input, described in words. Superseded by the typed
+    /// variants below, which name the stage and carry the library's error.
     #[error("{0}")]
     Compute(String),
+    /// The `kalman` crate rejected a computation on the model of a user's file.
+    #[error("{}: {context}: {source}", path.display())]
+    KalmanOnFile {
+        /// The model file.
+        path: PathBuf,
+        /// What was being computed.
+        context: &'static str,
+        /// The library's error.
+        source: kalman::Error,
+    },
+    /// A model fit failed.
+    #[error("{context}: {source}")]
+    Fit {
+        /// Which fit or which part of it.
+        context: &'static str,
+        /// The fitting library's error.
+        source: kalman::fit::FitError,
+    },
+    /// A fit stopped before converging and `--allow-unconverged` was not given.
+    #[error("fit: not converged ({message}); rerun with --allow-unconverged to write it anyway")]
+    FitNotConverged {
+        /// The optimiser's reason for stopping.
+        message: String,
+    },
+    /// An optimiser (argmin) failed to set up or to run.
+    #[error("{stage}: {source}")]
+    Optimiser {
+        /// Which search.
+        stage: &'static str,
+        /// argmin's error.
+        source: argmin::core::Error,
+    },
+    /// A search finished without evaluating a single candidate, so it has no best one.
+    #[error("{stage}: the search evaluated no candidate")]
+    NothingEvaluated {
+        /// Which search.
+        stage: &'static str,
+    },
+    /// The autocorrelation fit was given fewer observed samples than it needs.
+    #[error(
+        "autocorrelation fit: {observed} observed samples for {lags} lags (needs at least lags + 2, and lags ≥ 1)"
+    )]
+    TooFewSamples {
+        /// Observed (non-missing) samples.
+        observed: usize,
+        /// Lags asked for.
+        lags: usize,
+    },
+    /// A model could not be written as TOML.
+    #[error("{dest}: cannot serialise: {source}")]
+    SerialiseToml {
+        /// Where it was to be written (a file or stdout).
+        dest: String,
+        /// The TOML writer's error.
+        source: toml::ser::Error,
+    },
     /// The `model` crate rejected a computation on valid input.
     #[error("{context}: {source}")]
     Model {
@@ -139,6 +194,13 @@ impl Error {
         match self {
             Error::Write { .. }
             | Error::Compute(_)
+            | Error::KalmanOnFile { .. }
+            | Error::Fit { .. }
+            | Error::FitNotConverged { .. }
+            | Error::Optimiser { .. }
+            | Error::NothingEvaluated { .. }
+            | Error::TooFewSamples { .. }
+            | Error::SerialiseToml { .. }
             | Error::Model { .. }
             | Error::Kalman { .. }
             | Error::Wls { .. }

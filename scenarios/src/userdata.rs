@@ -400,8 +400,15 @@ fn collect(
     kf: &kalman::Filter<kalman::DynDims>,
     info: &kalman::StepInfo,
 ) -> Result<()> {
-    acc.add(kf, info)
-        .map_err(|e| Error::Compute(format!("diagnostics: {e}")))
+    acc.add(kf, info).map_err(diagnostics::diagnostics_error)
+}
+
+/// The library's refusal of a smoother step or of the backward pass.
+fn smoother_error(source: kalman::Error) -> Error {
+    Error::Kalman {
+        context: "smoother",
+        source,
+    }
 }
 
 /// One filter step with data row `row` (update with z_k, then predict with u_k). A step
@@ -474,18 +481,14 @@ fn smooth<R: std::io::Read>(pass: Pass<'_, R>) -> Result<Option<String>> {
         if let Some(a) = acc.as_deref_mut() {
             collect(a, kf, &info)?;
         }
-        rts.record(kf)
-            .map_err(|e| Error::Compute(format!("smoother: {e}")))?;
+        rts.record(kf).map_err(smoother_error)?;
         times.push(row.t);
         nis.push(info.nis.unwrap_or(f64::NAN));
     }
     let smoothed = if times.is_empty() {
         None
     } else {
-        Some(
-            rts.smooth()
-                .map_err(|e| Error::Compute(format!("smoother: {e}")))?,
-        )
+        Some(rts.smooth().map_err(smoother_error)?)
     };
     drop(rts);
     let text = diagnostics_text(args, acc)?;
@@ -588,8 +591,10 @@ pub(crate) fn write_model(dest: &crate::output::Destination, file: &DiscreteFile
         crate::output::Destination::Stdout => false,
     };
     if is_toml {
-        let text = toml::to_string(file)
-            .map_err(|e| Error::Compute(format!("{dest}: cannot serialise: {e}")))?;
+        let text = toml::to_string(file).map_err(|source| Error::SerialiseToml {
+            dest: dest.to_string(),
+            source,
+        })?;
         crate::output::write_bytes_to(dest, text.as_bytes())
     } else {
         crate::output::write_bytes_to(dest, model_json(file).as_bytes())
@@ -646,8 +651,8 @@ fn faer_rows(m: faer::MatRef<'_, f64>) -> model_file::Rows {
 ///
 /// # Errors
 /// [`Error::Invalid`] for a bad model, or one that has no steady state (not detectable, not
-/// stabilisable, R not positive definite); [`Error::Compute`] if the solver does not converge
-/// or its residual check fails; [`Error::Write`].
+/// stabilisable, R not positive definite); [`Error::KalmanOnFile`] (context "steady state")
+/// if the solver does not converge or its residual check fails; [`Error::Write`].
 pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
     let path = args.model.as_path();
     let dest = crate::output::destination(&args.out, &[("--model", path)])?;
@@ -658,7 +663,11 @@ pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
     let ss =
         kalman::riccati::dare(&model.F, &model.H, &model.Q, &model.R, S).map_err(|e| match e {
             kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
-                Error::Compute(format!("{}: steady state: {e}", path.display()))
+                Error::KalmanOnFile {
+                    path: path.to_path_buf(),
+                    context: "steady state",
+                    source: e,
+                }
             }
             e => model_error(path, e),
         })?;

@@ -167,7 +167,10 @@ fn fit_error(args: &FitArgs, e: FitError) -> Error {
             Error::invalid(&args.data, e.to_string())
         }
         FitError::Model(_) => Error::invalid(&args.model, e.to_string()),
-        other => Error::Compute(format!("fit: {other}")),
+        source => Error::Fit {
+            context: "fit",
+            source,
+        },
     }
 }
 
@@ -193,7 +196,10 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
         Some(cov) => {
             let se = map
                 .matrix_std_errors(&fit.theta, cov)
-                .map_err(|e| Error::Compute(e.to_string()))?;
+                .map_err(|source| Error::Fit {
+                    context: "fit: standard errors of the matrices",
+                    source,
+                })?;
             let n = map.base().n();
             let p0 = se.p0.map(|d| {
                 (0..n)
@@ -241,8 +247,8 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
 /// # Errors
 /// [`Error::Usage`] for an empty `--free`; [`Error::Invalid`] for a bad model or data file,
 /// a model with `S`, no measurement, a free matrix the data cannot identify;
-/// [`Error::Compute`] for a fit that fails or (without `--allow-unconverged`) does not
-/// converge; [`Error::Write`].
+/// [`Error::Fit`] for a fit that fails, [`Error::FitNotConverged`] for one that (without
+/// `--allow-unconverged`) does not converge; [`Error::Write`].
 pub fn fit(args: &FitArgs) -> Result<()> {
     if args.free == Free::default() {
         return Err(fit_error(args, FitError::NothingFree));
@@ -307,10 +313,9 @@ pub fn fit(args: &FitArgs) -> Result<()> {
     }
     .map_err(|e| fit_error(args, e))?;
     if !result.converged && !args.allow_unconverged {
-        return Err(Error::Compute(format!(
-            "fit: not converged ({}); rerun with --allow-unconverged to write it anyway",
-            result.message
-        )));
+        return Err(Error::FitNotConverged {
+            message: result.message,
+        });
     }
     let summary = summary_json(args, &map, &result)?;
     crate::userdata::write_model(&dest, &fitted_file(&model, &result.system))?;

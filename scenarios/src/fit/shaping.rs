@@ -69,11 +69,14 @@ impl Kind {
     /// The correlation function `R(τ)` at natural parameters `p` (`model`'s).
     ///
     /// # Errors
-    /// [`Error::Compute`] for parameters the filter refuses.
+    /// [`Error::Model`] (context "shaping filter") for parameters the filter refuses.
     pub fn correlation(self, p: &[f64], tau: f64) -> Result<f64> {
         Ok(self
             .filter(p)
-            .map_err(|e| Error::Compute(format!("shaping filter: {e}")))?
+            .map_err(|source| Error::Model {
+                context: "shaping filter",
+                source,
+            })?
             .correlation(tau))
     }
 }
@@ -217,9 +220,12 @@ pub const MLE_OPTIONS: MleOptions = MleOptions {
 /// `start` (and `r0` when the noise is free).
 ///
 /// # Errors
-/// [`Error::Compute`] naming what the fit refused.
+/// [`Error::Fit`] (context "shaping-filter fit") with the fitting library's error.
 pub fn fit_mle(map: &ShapingMap, z: &[f64], start: &[f64], r0: f64) -> Result<ShapingFit> {
-    let err = |e: FitError| Error::Compute(format!("shaping-filter fit: {e}"));
+    let err = |source: FitError| Error::Fit {
+        context: "shaping-filter fit",
+        source,
+    };
     let data = Series::new(z, 1).map_err(err)?;
     let fit = mle(map, map.theta_of(start, r0), &data, &MLE_OPTIONS).map_err(err)?;
     let values: Vec<f64> = fit.theta.iter().map(|t| t.exp()).collect();
@@ -243,15 +249,16 @@ pub fn fit_mle(map: &ShapingMap, z: &[f64], start: &[f64], r0: f64) -> Result<Sh
 /// Nelder–Mead from `start` (natural parameters).
 ///
 /// # Errors
-/// [`Error::Compute`] if the signal has fewer than `max_lag + 2` observed samples or the
-/// optimiser fails.
+/// [`Error::TooFewSamples`] if the signal has fewer than `max_lag + 2` observed samples;
+/// [`Error::Optimiser`] if Nelder–Mead fails; [`Error::NothingEvaluated`] if it ends without
+/// a best point.
 pub fn fit_acf(kind: Kind, z: &[f64], dt: f64, max_lag: usize, start: &[f64]) -> Result<Vec<f64>> {
     let observed: Vec<f64> = z.iter().copied().filter(|v| !v.is_nan()).collect();
     if observed.len() < max_lag + 2 || max_lag == 0 {
-        return Err(Error::Compute(format!(
-            "autocorrelation fit: {} observed samples for {max_lag} lags",
-            observed.len()
-        )));
+        return Err(Error::TooFewSamples {
+            observed: observed.len(),
+            lags: max_lag,
+        });
     }
     let mean = observed.iter().sum::<f64>() / observed.len() as f64;
     let var = observed.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / observed.len() as f64;
@@ -272,16 +279,23 @@ pub fn fit_acf(kind: Kind, z: &[f64], dt: f64, max_lag: usize, start: &[f64]) ->
     }
     let solver = NelderMead::new(simplex)
         .with_sd_tolerance(1e-10)
-        .map_err(|e| Error::Compute(format!("autocorrelation fit: {e}")))?;
+        .map_err(acf_error)?;
     let res = Executor::new(problem, solver)
         .configure(|s| s.max_iters(4000))
         .run()
-        .map_err(|e| Error::Compute(format!("autocorrelation fit: {e}")))?;
-    let best = res
-        .state
-        .best_param
-        .ok_or_else(|| Error::Compute("autocorrelation fit: no estimate".into()))?;
+        .map_err(acf_error)?;
+    let best = res.state.best_param.ok_or(Error::NothingEvaluated {
+        stage: "autocorrelation fit",
+    })?;
     Ok(best.iter().map(|t| t.exp()).collect())
+}
+
+/// The optimiser's failure in the autocorrelation fit.
+fn acf_error(source: argmin::core::Error) -> Error {
+    Error::Optimiser {
+        stage: "autocorrelation fit",
+        source,
+    }
 }
 
 struct AcfCost {

@@ -374,7 +374,8 @@ pub const TOLERANCE: f64 = 0.05;
 /// (one-channel, two-channel; `None` when the search is off).
 ///
 /// # Errors
-/// [`Error::Compute`] if the worker pool or the optimiser fails.
+/// [`Error::Threads`] if the worker pool cannot start; [`Error::Optimiser`] if Nelder–Mead
+/// fails; [`Error::NothingEvaluated`] if the search evaluated no parameter set.
 pub fn calibrate(
     params: &FuelingParams,
     seed: u64,
@@ -454,7 +455,10 @@ fn calibrate_with(
         }
         let solver = NelderMead::new(simplex)
             .with_sd_tolerance(1e-4)
-            .map_err(|e| Error::Compute(format!("Nelder–Mead: {e}")))?;
+            .map_err(|source| Error::Optimiser {
+                stage: "Nelder–Mead",
+                source,
+            })?;
         Executor::new(
             Refine {
                 ev: &ev,
@@ -465,7 +469,10 @@ fn calibrate_with(
         )
         .configure(|s| s.max_iters(plan.refine_iterations))
         .run()
-        .map_err(|e| Error::Compute(format!("Nelder–Mead refinement: {e}")))?;
+        .map_err(|source| Error::Optimiser {
+            stage: "Nelder–Mead refinement",
+            source,
+        })?;
         if let Some(e) = ev.error.take() {
             return Err(e);
         }
@@ -478,7 +485,9 @@ fn calibrate_with(
             _ => Some(e),
         })
         .cloned()
-        .ok_or_else(|| Error::Compute("the calibration evaluated no set".into()))?;
+        .ok_or(Error::NothingEvaluated {
+            stage: "calibration",
+        })?;
     let mut sens_units = Vec::new();
     for k in 0..BOX.len() {
         for sign in [-1.0, 1.0] {

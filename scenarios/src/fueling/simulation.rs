@@ -400,8 +400,8 @@ fn step_level<const M: usize>(
 /// Runs the campaign's slice of every sweep.
 ///
 /// # Errors
-/// [`Error::Compute`] if a filter or sensor rejects a point (never for validated parameters)
-/// or the worker pool cannot start.
+/// [`Error::Kalman`] / [`Error::Sensors`] if a filter or sensor rejects a point (never for
+/// validated parameters); [`Error::Threads`] if the worker pool cannot start.
 pub fn simulate(
     params: &FuelingParams,
     seed: u64,

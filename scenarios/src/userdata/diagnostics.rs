@@ -13,9 +13,18 @@ pub const CONFIDENCE: f64 = 0.95;
 /// The collector for a filter with `m` channels.
 ///
 /// # Errors
-/// [`Error::Compute`] if the library refuses (m = 0 cannot come from a parsed model).
+/// [`Error::Kalman`] (context "diagnostics") if the library refuses (m = 0 cannot come
+/// from a parsed model).
 pub fn collector(m: usize) -> Result<Innovations> {
-    Innovations::new(m, CONFIDENCE).map_err(|e| Error::Compute(format!("diagnostics: {e}")))
+    Innovations::new(m, CONFIDENCE).map_err(diagnostics_error)
+}
+
+/// The library's refusal of a diagnostics computation.
+pub(crate) fn diagnostics_error(source: kalman::Error) -> Error {
+    Error::Kalman {
+        context: "diagnostics",
+        source,
+    }
 }
 
 /// The diagnostics JSON of a collected pass with `lags` lags.
@@ -33,7 +42,7 @@ pub fn json(acc: &Innovations, lags: usize, data: &Path) -> Result<String> {
                  (use fewer lags or a longer record)"
             ),
         ),
-        e => Error::Compute(format!("diagnostics: {e}")),
+        e => diagnostics_error(e),
     })?;
     Ok(layout(&s))
 }
@@ -78,4 +87,22 @@ fn layout(s: &InnovationSummary) -> String {
     let mut text = serde_json::to_string_pretty(&v).unwrap_or_else(|_| v.to_string());
     text.push('\n');
     text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_refused_collector_is_a_typed_kalman_error() {
+        // m = 0 channels: the library refuses; the error names the stage and keeps the
+        // library's variant for a caller to match.
+        match collector(0) {
+            Err(Error::Kalman {
+                context: "diagnostics",
+                source: kalman::Error::Dimension { .. },
+            }) => {}
+            other => panic!("expected Error::Kalman for diagnostics, got {other:?}"),
+        }
+    }
 }

@@ -171,6 +171,23 @@ fn fit_bad_inputs_are_one_line_errors() {
     );
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(!dir.join("o.json").exists());
+    // The same run through the library: a typed error a caller can match, with the
+    // optimiser's reason.
+    let args = scenarios::fit::FitArgs {
+        model: dir.join("m.json"),
+        data: dir.join("z.csv"),
+        free: scenarios::fit::parse_free("Q:scalar,R:diag").expect("free"),
+        method: scenarios::fit::FitMethod::Em,
+        out: dir.join("o.json"),
+        summary: None,
+        allow_unconverged: false,
+        max_iter: Some(2),
+    };
+    match scenarios::fit::fit(&args) {
+        Err(e @ scenarios::error::Error::FitNotConverged { .. }) => assert_eq!(e.exit_code(), 1),
+        other => panic!("expected FitNotConverged, got {other:?}"),
+    }
+    assert!(!dir.join("o.json").exists());
     // … unless allowed.
     ok(
         &dir,

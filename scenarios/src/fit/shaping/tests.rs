@@ -286,3 +286,25 @@ fn the_shaping_maps_gradient_matches_central_differences() {
         }
     }
 }
+
+#[test]
+fn autocorrelation_fit_of_a_short_signal_is_a_typed_error() {
+    // 6 samples, one missing: 5 observed, and 4 lags need at least 6.
+    let z = [1.0, -0.5, f64::NAN, 0.3, 0.2, -0.1];
+    let e = fit_acf(Kind::Exponential, &z, 1.0, 4, &[1.0, 0.1]).expect_err("too short");
+    assert!(
+        matches!(
+            e,
+            Error::TooFewSamples {
+                observed: 5,
+                lags: 4
+            }
+        ),
+        "{e:?}"
+    );
+    assert_eq!(e.exit_code(), 1);
+    assert!(
+        e.to_string().contains("5 observed samples for 4 lags"),
+        "{e}"
+    );
+}
