@@ -306,8 +306,12 @@ pub fn summarise(p: &UavParams, seed: u64, run_records: &[RunRecord]) -> Result<
     let fs = 1.0 / p.dt_s;
     let seg = p.welch_segment;
     let col = |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..trace.t.len()).map(f).collect() };
-    let welch =
-        |x: &[f64]| spectrum::welch(x, fs, seg).map_err(|e| Error::Compute(format!("welch: {e}")));
+    let welch = |x: &[f64]| {
+        spectrum::welch(x, fs, seg).map_err(|source| Error::Kalman {
+            context: "welch",
+            source,
+        })
+    };
     let q11 = d.q[(0, 0)];
     let sigma = d.h[(0, 0)].powi(2) * d.p_prior[(0, 0)] + d.r;
     let mut spectra = Vec::new();
