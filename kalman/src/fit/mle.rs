@@ -1,6 +1,8 @@
 //! Maximum likelihood by L-BFGS on `−ln L` with the exact gradient (argmin), with a
 //! Nelder–Mead fallback.
 
+use std::cell::RefCell;
+
 use argmin::core::{CostFunction, Executor, Gradient, State, TerminationReason};
 use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::neldermead::NelderMead;
@@ -31,18 +33,53 @@ impl Default for MleOptions {
 }
 
 /// `−ln L / n_obs` and its gradient (scaled so that the optimiser's tolerances do not depend
-/// on the series length).
+/// on the series length). One score recursion gives both, and argmin asks for them
+/// separately — the line search for the cost and then the gradient at each trial point,
+/// L-BFGS for the gradient at the accepted point again — so the last few evaluations are
+/// kept and a repeated θ costs nothing.
 struct Problem<'a, M: ParamMap + ?Sized> {
     map: &'a M,
     data: &'a Series<'a>,
     scale: f64,
+    memo: RefCell<Vec<Evaluation>>,
+}
+
+/// θ with `ln L` and `∇ ln L` there.
+type Evaluation = (Vec<f64>, f64, Vec<f64>);
+
+/// Evaluations kept by [`Problem`] (the line search's last trials and L-BFGS's point).
+const MEMO: usize = 4;
+
+impl<'a, M: ParamMap + ?Sized> Problem<'a, M> {
+    fn new(map: &'a M, data: &'a Series<'a>, scale: f64) -> Self {
+        Self {
+            map,
+            data,
+            scale,
+            memo: RefCell::new(Vec::with_capacity(MEMO)),
+        }
+    }
+
+    /// `(ln L, ∇ ln L)` at `p`, from the memo when `p` was evaluated lately.
+    fn eval(&self, p: &[f64]) -> Result<(f64, Vec<f64>), FitError> {
+        if let Some((_, ll, g)) = self.memo.borrow().iter().find(|(t, _, _)| t == p) {
+            return Ok((*ll, g.clone()));
+        }
+        let (ll, g) = log_likelihood_gradient(self.map, p, self.data)?;
+        let mut memo = self.memo.borrow_mut();
+        if memo.len() == MEMO {
+            memo.remove(0);
+        }
+        memo.push((p.to_vec(), ll, g.clone()));
+        Ok((ll, g))
+    }
 }
 
 impl<M: ParamMap + ?Sized> CostFunction for Problem<'_, M> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, argmin::core::Error> {
-        match log_likelihood_gradient(self.map, p, self.data) {
+        match self.eval(p) {
             Ok((ll, _)) if ll.is_finite() => Ok(-ll * self.scale),
             Ok(_) => Ok(f64::INFINITY),
             Err(e) => Err(argmin::core::Error::msg(e.to_string())),
@@ -54,7 +91,8 @@ impl<M: ParamMap + ?Sized> Gradient for Problem<'_, M> {
     type Param = Vec<f64>;
     type Gradient = Vec<f64>;
     fn gradient(&self, p: &Vec<f64>) -> Result<Vec<f64>, argmin::core::Error> {
-        let (_, g) = log_likelihood_gradient(self.map, p, self.data)
+        let (_, g) = self
+            .eval(p)
             .map_err(|e| argmin::core::Error::msg(e.to_string()))?;
         Ok(g.into_iter().map(|v| -v * self.scale).collect())
     }
@@ -211,7 +249,7 @@ pub fn mle<M: ParamMap + ?Sized>(
     // The likelihood must be defined at the start.
     log_likelihood_gradient(map, &theta0, data)?;
     let scale = 1.0 / data.observed() as f64;
-    let mk = || Problem { map, data, scale };
+    let mk = || Problem::new(map, data, scale);
     let mut notes = Vec::new();
     let mut iterations = 0;
     let theta = match lbfgs(mk(), theta0.clone(), opts.max_iter, opts.grad_tol) {
