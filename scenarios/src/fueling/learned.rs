@@ -169,8 +169,11 @@ fn record(p: &FuelingParams, seed: u64) -> Result<(Vec<f64>, Vec<f64>)> {
     Ok((tilt, level))
 }
 
-fn compute(e: FitError) -> Error {
-    Error::Compute(format!("learning the model back: {e}"))
+fn compute(source: FitError) -> Error {
+    Error::Fit {
+        context: "learning the model back",
+        source,
+    }
 }
 
 /// The fill model for θ = (ln σ², ln T_a); inputs u_k = (Δt·V_c, (1 − a)·R·α_k).
@@ -202,7 +205,7 @@ fn fill_map(dt: f64, t_y: f64, delta: f64, h0: f64) -> impl kalman::fit::ParamMa
 /// Fits the record of `seed` and sets the fits beside the truth.
 ///
 /// # Errors
-/// [`Error::Compute`] if a fit fails outright (not for an unconverged one, which the
+/// [`Error::Fit`] (or the shaping fit's errors) if a fit fails outright (not for an unconverged one, which the
 /// section reports).
 pub fn learn_back(p: &FuelingParams, seed: u64) -> Result<LearnedBack> {
     let w = p.world(p.max_amplitude_deg, Swept::Nothing).fuel;
