@@ -152,6 +152,58 @@ impl RtsSmoother {
     /// fallback for a singular P_{k+1|k} fails; [`Error::Diverged`] naming the step if a
     /// smoothed mean or variance is not finite.
     pub fn smooth(&self) -> Result<Smoothed, Error> {
+        let n = self.n;
+        let recorded = Recorded {
+            n,
+            steps: self.steps,
+            xf: &self.xf,
+            pf: &self.pf,
+            xp: &self.xp,
+            pp: &self.pp,
+            ct: &self.ct,
+        };
+        recorded.backward(|k, means, P| {
+            let x_bad = diverged((0..n).map(|i| means[(i, k)])).map(|v| ("x_{k|N}", v));
+            let p_bad = diverged((0..n).map(|i| P[(i, i)])).map(|v| ("P_{k|N}", v));
+            match x_bad.or(p_bad) {
+                Some((what, value)) => Err(Error::Diverged {
+                    step: k,
+                    what,
+                    value,
+                }),
+                None => Ok(()),
+            }
+        })
+    }
+}
+
+/// A recorded forward pass, step after step column-major: filtered means `xf` (n each) and
+/// covariances `pf` (n×n), predicted `xp`, `pp`, and the cross-covariances `ct` (C_k =
+/// cov(x_k, x_{k+1}) given z_0..z_k, n×n). The linear and the unscented RTS smoothers share
+/// its backward pass.
+pub(crate) struct Recorded<'a> {
+    pub(crate) n: usize,
+    pub(crate) steps: usize,
+    pub(crate) xf: &'a [f64],
+    pub(crate) pf: &'a [f64],
+    pub(crate) xp: &'a [f64],
+    pub(crate) pp: &'a [f64],
+    pub(crate) ct: &'a [f64],
+}
+
+impl Recorded<'_> {
+    /// The RTS backward pass: J_k = C_k P_{k+1|k}⁺ (a PSD solve), x_{k|N} = x_{k|k} +
+    /// J_k (x_{k+1|N} − x_{k+1|k}), P_{k|N} = P_{k|k} + J_k (P_{k+1|N} − P_{k+1|k}) J_kᵀ
+    /// (symmetrised). `check(k, means, P_{k|N})` runs at each step before P_{k|N} is stored
+    /// (the means of steps k..N already in place); its error ends the pass.
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] if nothing was recorded; [`Error::Factorisation`] if the eigen
+    /// fallback for a singular P_{k+1|k} fails; `check`'s error.
+    pub(crate) fn backward(
+        &self,
+        mut check: impl FnMut(usize, &Mat<f64>, &Mat<f64>) -> Result<(), Error>,
+    ) -> Result<Smoothed, Error> {
         let (n, N) = (self.n, self.steps);
         if N == 0 {
             return Err(Error::Dimension {
@@ -171,26 +223,18 @@ impl RtsSmoother {
         means
             .as_mut()
             .col_mut(N - 1)
-            .copy_from(vec(&self.xf, N - 1, n).col(0));
-        covs[N - 1] = mat(&self.pf, N - 1, n).to_owned();
+            .copy_from(vec(self.xf, N - 1, n).col(0));
+        covs[N - 1] = mat(self.pf, N - 1, n).to_owned();
         for k in (0..N - 1).rev() {
-            let Pp = mat(&self.pp, k, n);
-            let Jt = solve_psd(Pp, mat(&self.ct, k, n).transpose())?;
+            let Pp = mat(self.pp, k, n);
+            let Jt = solve_psd(Pp, mat(self.ct, k, n).transpose())?;
             let J = Jt.transpose();
-            let dx = means.as_ref().col(k + 1).as_mat() - vec(&self.xp, k, n);
-            let x = vec(&self.xf, k, n) + J * dx;
+            let dx = means.as_ref().col(k + 1).as_mat() - vec(self.xp, k, n);
+            let x = vec(self.xf, k, n) + J * dx;
             means.as_mut().col_mut(k).copy_from(x.col(0));
-            let mut P = mat(&self.pf, k, n) + J * (&covs[k + 1] - Pp) * J.transpose();
+            let mut P = mat(self.pf, k, n) + J * (&covs[k + 1] - Pp) * J.transpose();
             symmetrise(&mut P);
-            let x_bad = diverged((0..n).map(|i| means[(i, k)])).map(|v| ("x_{k|N}", v));
-            let p_bad = diverged((0..n).map(|i| P[(i, i)])).map(|v| ("P_{k|N}", v));
-            if let Some((what, value)) = x_bad.or(p_bad) {
-                return Err(Error::Diverged {
-                    step: k,
-                    what,
-                    value,
-                });
-            }
+            check(k, &means, &P)?;
             covs[k] = P;
         }
         Ok(Smoothed {

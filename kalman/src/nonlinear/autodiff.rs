@@ -3,7 +3,8 @@
 
 use num_dual::{Dual64, DualNum};
 
-use super::{Jacobians, NonlinearModel};
+use super::Jacobians;
+use super::models::forward_model;
 use crate::storage::Dims;
 
 /// The scalars a [`GenericModel`] is evaluated with: `f64` for values, `num_dual::Dual64`
@@ -14,7 +15,7 @@ pub trait Scalar: DualNum<Primitive = f64> + Copy {}
 impl<T: DualNum<Primitive = f64> + Copy> Scalar for T {}
 
 /// A nonlinear model with f and h generic over the scalar, for [`AutoDiff`]. Otherwise as
-/// [`NonlinearModel`].
+/// [`NonlinearModel`](super::NonlinearModel).
 ///
 /// ```
 /// use kalman::DynDims;
@@ -108,29 +109,7 @@ impl<G: GenericModel> AutoDiff<G> {
     }
 }
 
-impl<G: GenericModel> NonlinearModel for AutoDiff<G> {
-    fn f(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]) {
-        self.model.f(x, u, k, out);
-    }
-    fn h(&mut self, x: &[f64], k: usize, out: &mut [f64]) {
-        self.model.h(x, k, out);
-    }
-    fn q(&mut self, k: usize, out: &mut [f64]) {
-        self.model.q(k, out);
-    }
-    fn r(&mut self, k: usize, out: &mut [f64]) {
-        self.model.r(k, out);
-    }
-    fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        self.model.residual(a, b, out);
-    }
-    fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-        self.model.state_add(x, dx, out);
-    }
-    fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        self.model.state_residual(a, b, out);
-    }
-}
+forward_model!(impl<G: GenericModel> for AutoDiff<G>);
 
 impl<G: GenericModel> Jacobians for AutoDiff<G> {
     fn f_jacobian(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, jac: &mut [f64]) {

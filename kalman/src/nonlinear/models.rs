@@ -306,29 +306,38 @@ impl<M: NonlinearModel> CentralDiff<M> {
     }
 }
 
-impl<M: NonlinearModel> NonlinearModel for CentralDiff<M> {
-    fn f(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]) {
-        self.model.f(x, u, k, out);
-    }
-    fn h(&mut self, x: &[f64], k: usize, out: &mut [f64]) {
-        self.model.h(x, k, out);
-    }
-    fn q(&mut self, k: usize, out: &mut [f64]) {
-        self.model.q(k, out);
-    }
-    fn r(&mut self, k: usize, out: &mut [f64]) {
-        self.model.r(k, out);
-    }
-    fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        self.model.residual(a, b, out);
-    }
-    fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-        self.model.state_add(x, dx, out);
-    }
-    fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        self.model.state_residual(a, b, out);
-    }
+/// Implements [`NonlinearModel`] for a Jacobian wrapper by forwarding every method to its
+/// `model` field: the wrappers add derivatives, never change the dynamics.
+macro_rules! forward_model {
+    (impl<$p:ident: $bound:path> for $wrapper:ty) => {
+        impl<$p: $bound> $crate::nonlinear::NonlinearModel for $wrapper {
+            fn f(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]) {
+                self.model.f(x, u, k, out);
+            }
+            fn h(&mut self, x: &[f64], k: usize, out: &mut [f64]) {
+                self.model.h(x, k, out);
+            }
+            fn q(&mut self, k: usize, out: &mut [f64]) {
+                self.model.q(k, out);
+            }
+            fn r(&mut self, k: usize, out: &mut [f64]) {
+                self.model.r(k, out);
+            }
+            fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+                self.model.residual(a, b, out);
+            }
+            fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
+                self.model.state_add(x, dx, out);
+            }
+            fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+                self.model.state_residual(a, b, out);
+            }
+        }
+    };
 }
+pub(crate) use forward_model;
+
+forward_model!(impl<M: NonlinearModel> for CentralDiff<M>);
 
 impl<M: NonlinearModel> Jacobians for CentralDiff<M> {
     fn f_jacobian(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, jac: &mut [f64]) {

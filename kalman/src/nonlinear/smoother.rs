@@ -1,11 +1,8 @@
 //! The extended and unscented Rauch–Tung–Striebel smoothers over a recorded forward pass.
 #![allow(non_snake_case)]
 
-use faer::{Mat, MatRef};
-
 use crate::Error;
-use crate::riccati::symmetrise;
-use crate::smoother::{Smoothed, solve_psd};
+use crate::smoother::{Recorded, Smoothed};
 
 /// A filter whose steps a [`NonlinearRts`] can record: after step k it holds
 /// `(x_{k|k}, P_{k|k})`, `(x_{k+1|k}, P_{k+1|k})` and the cross-covariance
@@ -118,41 +115,15 @@ impl NonlinearRts {
     /// [`Error::Dimension`] if nothing was recorded; [`Error::Factorisation`] if the eigen
     /// fallback for a singular `P_{k+1|k}` fails.
     pub fn smooth(&self) -> Result<Smoothed, Error> {
-        let (n, N) = (self.n, self.steps);
-        if N == 0 {
-            return Err(Error::Dimension {
-                name: "steps",
-                value: 0,
-                rule: "record at least one filter step",
-            });
+        Recorded {
+            n: self.n,
+            steps: self.steps,
+            xf: &self.xf,
+            pf: &self.pf,
+            xp: &self.xp,
+            pp: &self.pp,
+            ct: &self.ct,
         }
-        let mat = |v: &'_ [f64], k: usize| -> Mat<f64> {
-            MatRef::from_column_major_slice(&v[k * n * n..(k + 1) * n * n], n, n).to_owned()
-        };
-        let vec = |v: &'_ [f64], k: usize| -> Mat<f64> {
-            MatRef::from_column_major_slice(&v[k * n..(k + 1) * n], n, 1).to_owned()
-        };
-        let mut means = Mat::<f64>::zeros(n, N);
-        let mut covs = vec![Mat::<f64>::zeros(n, n); N];
-        means
-            .as_mut()
-            .col_mut(N - 1)
-            .copy_from(vec(&self.xf, N - 1).col(0));
-        covs[N - 1] = mat(&self.pf, N - 1);
-        for k in (0..N - 1).rev() {
-            let Pp = mat(&self.pp, k);
-            let Jt = solve_psd(Pp.as_ref(), mat(&self.ct, k).transpose())?;
-            let J = Jt.transpose();
-            let dx = means.as_ref().col(k + 1).as_mat() - vec(&self.xp, k);
-            let x = vec(&self.xf, k) + J * dx;
-            means.as_mut().col_mut(k).copy_from(x.col(0));
-            let mut P = mat(&self.pf, k) + J * (&covs[k + 1] - &Pp) * J.transpose();
-            symmetrise(&mut P);
-            covs[k] = P;
-        }
-        Ok(Smoothed {
-            means,
-            covariances: covs,
-        })
+        .backward(|_, _, _| Ok(()))
     }
 }
