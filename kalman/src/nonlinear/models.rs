@@ -335,6 +335,7 @@ macro_rules! forward_model {
         }
     };
 }
+#[cfg(feature = "autodiff")]
 pub(crate) use forward_model;
 
 forward_model!(impl<M: NonlinearModel> for CentralDiff<M>);
