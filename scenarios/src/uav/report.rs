@@ -78,35 +78,45 @@ pub fn write_outputs(c: &Computed, dir: &Path) -> Result<()> {
             &ss,
         )
     };
-    fig(
-        "signal_node1_W.svg",
-        "Node 1: noise generator output W (paper Fig. 4, top)",
-        "w_k components",
-        vec![
-            Series::line("W position, m", window(4)),
-            Series::line("W velocity, m/s", window(5)),
-        ],
-    )?;
-    fig(
-        "signal_node2_z.svg",
-        "Node 2: sensor output z (paper Fig. 5, top; Fig. 3 A)",
-        "m",
-        vec![
-            Series::line("z", window(6)),
-            Series::line("true position x", window(2)),
-            Series::line("reference r", window(1)),
-        ],
-    )?;
-    fig(
-        "signal_node3_filter.svg",
-        "Nodes 2 → 3: filter input z and output x̂ (paper Fig. 3 A/B)",
-        "m",
-        vec![
-            Series::line("filter input z", window(6)),
-            Series::line("filter output x̂", window(7)),
-            Series::line("reference r", window(1)),
-        ],
-    )?;
+    // The node signals that are columns of the signal record: (file, title, y label,
+    // [(series label, column)]).
+    type NodeFigure = (
+        &'static str,
+        &'static str,
+        &'static str,
+        &'static [(&'static str, usize)],
+    );
+    let nodes: [NodeFigure; 3] = [
+        (
+            "signal_node1_W.svg",
+            "Node 1: noise generator output W (paper Fig. 4, top)",
+            "w_k components",
+            &[("W position, m", 4), ("W velocity, m/s", 5)],
+        ),
+        (
+            "signal_node2_z.svg",
+            "Node 2: sensor output z (paper Fig. 5, top; Fig. 3 A)",
+            "m",
+            &[("z", 6), ("true position x", 2), ("reference r", 1)],
+        ),
+        (
+            "signal_node3_filter.svg",
+            "Nodes 2 → 3: filter input z and output x̂ (paper Fig. 3 A/B)",
+            "m",
+            &[
+                ("filter input z", 6),
+                ("filter output x̂", 7),
+                ("reference r", 1),
+            ],
+        ),
+    ];
+    for (file, title, y, columns) in nodes {
+        let series = columns
+            .iter()
+            .map(|&(label, k)| Series::line(label, window(k)))
+            .collect();
+        fig(file, title, y, series)?;
+    }
     let est_err: Vec<(f64, f64)> = rows
         .iter()
         .take_while(|r| r[0] <= 100.0)
