@@ -35,10 +35,6 @@ pub enum Error {
     /// A command-line value is invalid.
     #[error("{0}")]
     Usage(String),
-    /// A computation failed on valid input, described in words. Superseded by the typed
-    /// variants below, which name the stage and carry the library's error.
-    #[error("{0}")]
-    Compute(String),
     /// The `kalman` crate rejected a computation on the model of a user's file.
     #[error("{}: {context}: {source}", path.display())]
     KalmanOnFile {
@@ -193,7 +189,6 @@ impl Error {
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Write { .. }
-            | Error::Compute(_)
             | Error::KalmanOnFile { .. }
             | Error::Fit { .. }
             | Error::FitNotConverged { .. }

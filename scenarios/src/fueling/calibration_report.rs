@@ -386,10 +386,13 @@ fn pct(x: f64) -> String {
 /// (every set the search evaluated) into `dir`.
 ///
 /// # Errors
-/// [`Error::Write`] naming the file; [`Error::Compute`] if the parameters do not serialise.
+/// [`Error::Write`] naming the file; [`Error::SerialiseToml`] if the parameters do not
+/// serialise.
 pub fn write_files(c: &Calibration, dir: &Path) -> Result<()> {
-    let body = toml::to_string(&c.best_params)
-        .map_err(|e| Error::Compute(format!("calibration.toml: {e}")))?;
+    let body = toml::to_string(&c.best_params).map_err(|source| Error::SerialiseToml {
+        dest: dir.join("calibration.toml").display().to_string(),
+        source,
+    })?;
     let text = format!(
         "# The calibration's best set (seed {}, {} sets searched): rerun the report under it\n\
          # with `scenarios fueling --config calibration.toml`.\n{body}",
