@@ -434,10 +434,12 @@ mod tests {
         let mut f =
             Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph).expect("must succeed");
         let mut s = RtsSmoother::new();
+        assert_eq!((s.len(), s.is_empty()), (0, true));
         for z in [1.0, 3.0] {
             f.step(&[z], None).expect("must succeed");
             s.record(&f).expect("must succeed");
         }
+        assert_eq!((s.len(), s.is_empty()), (2, false));
         let out = s.smooth().expect("must succeed");
         // Batch: information matrix [[1+1+1, −1], [−1, 1+1]], rhs [1, 3]: x = [5/5, 10/5]/… solve.
         // det = 3·2 − 1 = 5; x0 = (2·1 + 1·3)/5 = 1, x1 = (1·1 + 3·3)/5 = 2.
@@ -454,5 +456,19 @@ mod tests {
         let b = faer::mat![[4.0], [0.0]];
         let x = solve_psd(a.as_ref(), b.as_ref()).expect("must succeed");
         assert!((x[(0, 0)] - 2.0).abs() < 1e-15 && x[(1, 0)].abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_factor_with_a_tiny_pivot_takes_the_fallback_too() {
+        // diag(1, 1e-18) factors (pivot² 1e-18 > 0) but its second pivot² is below
+        // RANK_TOL = 1e-12 of the diagonal's scale: the solve must treat it as singular and
+        // return the minimum-norm solution (4, 0), not the Cholesky one (4, 1e18).
+        let a = faer::mat![[1.0, 0.0], [0.0, 1e-18]];
+        let b = faer::mat![[4.0], [1.0]];
+        let x = solve_psd(a.as_ref(), b.as_ref()).expect("must succeed");
+        assert!(
+            (x[(0, 0)] - 4.0).abs() < 1e-15 && x[(1, 0)].abs() < 1e-15,
+            "{x:?}"
+        );
     }
 }
