@@ -460,14 +460,17 @@ mod tests {
 
     #[test]
     fn a_factor_with_a_tiny_pivot_takes_the_fallback_too() {
-        // diag(1, 1e-18) factors (pivot² 1e-18 > 0) but its second pivot² is below
-        // RANK_TOL = 1e-12 of the diagonal's scale: the solve must treat it as singular and
-        // return the minimum-norm solution (4, 0), not the Cholesky one (4, 1e18).
-        let a = faer::mat![[1.0, 0.0], [0.0, 1e-18]];
-        let b = faer::mat![[4.0], [1.0]];
+        // diag(100, 1e-11) factors (pivot² 1e-11 > 0), but that pivot² is below RANK_TOL =
+        // 1e-12 of the diagonal's scale 100, and so is the eigenvalue 1e-11 of the largest:
+        // the solve must treat the matrix as singular and return the minimum-norm solution
+        // (4, 0), not the Cholesky one (4, 1e11). The scale is not 1, and the small
+        // eigenvalue is far above its round-off (≈ 2e-14), so that a tolerance divided by
+        // the scale instead of multiplied would show.
+        let a = faer::mat![[100.0, 0.0], [0.0, 1e-11]];
+        let b = faer::mat![[400.0], [1.0]];
         let x = solve_psd(a.as_ref(), b.as_ref()).expect("must succeed");
         assert!(
-            (x[(0, 0)] - 4.0).abs() < 1e-15 && x[(1, 0)].abs() < 1e-15,
+            (x[(0, 0)] - 4.0).abs() < 1e-14 && x[(1, 0)].abs() < 1e-14,
             "{x:?}"
         );
     }
