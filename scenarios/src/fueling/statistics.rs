@@ -322,20 +322,14 @@ pub fn margins(sweeps: &[Sweep], records: &[SweepRecords], top: usize, seed: u64
         .first()
         .and_then(|r| r.records.get(top))
         .map_or(&[], Vec::as_slice);
+    let sweep = |id: &str| sweeps.iter().zip(records).find(|(s, _)| s.id == id);
     let of = |id: &str| {
-        sweeps
-            .iter()
-            .zip(records)
-            .find(|(s, _)| s.id == id)
+        sweep(id)
             .map(|(s, r)| point_ratios(s, r))
             .unwrap_or_default()
     };
     let ranges_of = |id: &str| {
-        let points = sweeps
-            .iter()
-            .zip(records)
-            .find(|(s, _)| s.id == id)
-            .map_or(&[][..], |(_, r)| r.records.as_slice());
+        let points = sweep(id).map_or(&[][..], |(_, r)| r.records.as_slice());
         ranges(points, seed, RESAMPLES)
     };
     Margins {
