@@ -317,10 +317,8 @@ fn nominal_rows(params: &BoomParams, points: &[TrajectoryPoint]) -> Vec<Vec<f64>
         .map(|p| {
             let d_eps = (da + p.alpha.tan() * da) / r;
             let d_alpha = da / (g * p.alpha.cos());
-            [p.t, p.alpha, p.omega, p.epsilon, d_alpha, d_eps]
-                .into_iter()
-                .enumerate()
-                .map(|(i, x)| if i == 0 { x } else { x.to_degrees() })
+            std::iter::once(p.t)
+                .chain([p.alpha, p.omega, p.epsilon, d_alpha, d_eps].map(f64::to_degrees))
                 .collect()
         })
         .collect()
