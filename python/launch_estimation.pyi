@@ -16,13 +16,15 @@ All inputs are NumPy arrays (integer arrays are converted to float64); lists, ot
 and non-finite values are refused with a one-line TypeError/ValueError naming the argument.
 """
 
-from typing import Any, Optional, Sequence, Tuple, Union
+from typing import Any, Final, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
 
 Array = npt.NDArray[np.float64]
 MatrixLike = Union[npt.NDArray[Any], float]
+_Series = Union[Sequence[Any], npt.NDArray[Any]]
+_Measurement = Union[None, float, Sequence[float], npt.NDArray[Any]]
 
 class KalmanFilter:
     """FilterPy's ``KalmanFilter`` (predict/update, correlated update, batch filter, RTS
@@ -60,12 +62,11 @@ class KalmanFilter:
     """
 
     def __init__(self, dim_x: int, dim_z: int, dim_u: int = 0) -> None: ...
-    @property
-    def dim_x(self) -> int: ...
-    @property
-    def dim_z(self) -> int: ...
-    @property
-    def dim_u(self) -> int: ...
+    # Read-only attributes are Final (assigning one raises AttributeError); the last-step
+    # quantities change with every predict/update.
+    dim_x: Final[int]
+    dim_z: Final[int]
+    dim_u: Final[int]
     x: Array
     P: Array
     F: Array
@@ -75,78 +76,42 @@ class KalmanFilter:
     B: Optional[Array]
     M: Array
     alpha: float
-    @property
-    def K(self) -> Array: ...
-    @property
-    def y(self) -> Array: ...
-    @property
-    def S(self) -> Array: ...
-    @property
-    def SI(self) -> Array: ...
-    @property
-    def z(self) -> Array: ...
-    @property
-    def x_prior(self) -> Array: ...
-    @property
-    def P_prior(self) -> Array: ...
-    @property
-    def x_post(self) -> Array: ...
-    @property
-    def P_post(self) -> Array: ...
-    @property
-    def log_likelihood(self) -> float:
-        """log N(y; 0, S) of the last update."""
-    @property
-    def likelihood(self) -> float:
-        """exp(log_likelihood), at least the smallest positive normal float."""
-    @property
-    def mahalanobis(self) -> float:
-        """sqrt(y^T S^-1 y) of the last update."""
+    K: Final[Array]
+    y: Final[Array]
+    S: Final[Array]
+    SI: Final[Array]
+    z: Final[Array]
+    x_prior: Final[Array]
+    P_prior: Final[Array]
+    x_post: Final[Array]
+    P_post: Final[Array]
+    log_likelihood: Final[float]
+    """log N(y; 0, S) of the last update."""
+    likelihood: Final[float]
+    """exp(log_likelihood), at least the smallest positive normal float."""
+    mahalanobis: Final[float]
+    """sqrt(y^T S^-1 y) of the last update."""
     def predict(
-        self,
-        u: Optional[MatrixLike] = None,
-        B: Optional[Array] = None,
-        F: Optional[MatrixLike] = None,
-        Q: Optional[MatrixLike] = None,
+        self, u: Optional[MatrixLike] = None, B: Optional[Array] = None,
+        F: Optional[MatrixLike] = None, Q: Optional[MatrixLike] = None,
     ) -> None:
         """x <- F x + B u (when B and u are given), P <- alpha^2 F P F^T + Q."""
-    def update(
-        self,
-        z: Union[None, float, Sequence[float], npt.NDArray[Any]],
-        R: Optional[MatrixLike] = None,
-        H: Optional[Array] = None,
-    ) -> None:
+    def update(self, z: _Measurement, R: Optional[MatrixLike] = None, H: Optional[Array] = None) -> None:
         """y = z - H x, S = H P H^T + R, K = P H^T S^-1, x <- x + K y,
         P <- (I - K H) P (I - K H)^T + K R K^T (Joseph form). None skips; NaN rows skip."""
     def update_correlated(
-        self,
-        z: Union[None, float, Sequence[float], npt.NDArray[Any]],
-        R: Optional[MatrixLike] = None,
-        H: Optional[Array] = None,
+        self, z: _Measurement, R: Optional[MatrixLike] = None, H: Optional[Array] = None
     ) -> None:
         """S = H P H^T + H M + M^T H^T + R, K = (P H^T + M) S^-1, x <- x + K y,
         P <- P - K (H P + M^T)."""
     def batch_filter(
-        self,
-        zs: Union[Sequence[Any], npt.NDArray[Any]],
-        Fs: None = None,
-        Qs: None = None,
-        Hs: None = None,
-        Rs: None = None,
-        Bs: None = None,
-        us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
-        update_first: bool = False,
-        saver: None = None,
+        self, zs: _Series, Fs: None = None, Qs: None = None, Hs: None = None, Rs: None = None,
+        Bs: None = None, us: Optional[_Series] = None, update_first: bool = False, saver: None = None,
     ) -> Tuple[Array, Array, Array, Array]:
         """(means, covariances, means_p, covariances_p): (N, dim_x, 1), (N, dim_x, dim_x),
         ... in one call into Rust. Missing measurements: None items or NaN entries."""
     def rts_smoother(
-        self,
-        Xs: Array,
-        Ps: Array,
-        Fs: None = None,
-        Qs: None = None,
-        inv: None = None,
+        self, Xs: Array, Ps: Array, Fs: None = None, Qs: None = None, inv: None = None
     ) -> Tuple[Array, Array, Array, Array]:
         """(x, P, K, Pp): smoothed means and covariances, smoother gains, predicted
         covariances; K[k] = P[k] F^T Pp[k]^-1 by a solve."""
@@ -154,16 +119,8 @@ class KalmanFilter:
 FilterResult = dict[str, Array]
 
 def filter(
-    F: Array,
-    H: Array,
-    Q: Array,
-    R: Array,
-    x0: Array,
-    P0: Array,
-    zs: Union[Sequence[Any], npt.NDArray[Any]],
-    us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
-    B: Optional[Array] = None,
-    S: Optional[Array] = None,
+    F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
+    us: Optional[_Series] = None, B: Optional[Array] = None, S: Optional[Array] = None,
     form: str = "joseph",
 ) -> FilterResult:
     """The engine's filter over a whole series in one call.
@@ -176,16 +133,8 @@ def filter(
     """
 
 def smooth(
-    F: Array,
-    H: Array,
-    Q: Array,
-    R: Array,
-    x0: Array,
-    P0: Array,
-    zs: Union[Sequence[Any], npt.NDArray[Any]],
-    us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
-    B: Optional[Array] = None,
-    S: Optional[Array] = None,
+    F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
+    us: Optional[_Series] = None, B: Optional[Array] = None, S: Optional[Array] = None,
 ) -> FilterResult:
     """Rauch-Tung-Striebel smoothing of the engine's filter: "x" (N, n), "P" (N, n, n)."""
 
@@ -200,15 +149,8 @@ def care(A: Array, H: Array, Q: Array, R: Array) -> FilterResult:
     """The Kalman-Bucy filter's continuous algebraic Riccati equation: "P" and "K"."""
 
 def c2d(
-    A: Array,
-    B: Array,
-    C: Array,
-    D: Array,
-    dt: float,
-    method: str = "zoh",
-    G: Optional[Array] = None,
-    W: Optional[Array] = None,
-    noise: str = "van_loan",
+    A: Array, B: Array, C: Array, D: Array, dt: float, method: str = "zoh",
+    G: Optional[Array] = None, W: Optional[Array] = None, noise: str = "van_loan",
     omega: Optional[float] = None,
 ) -> FilterResult:
     """Discretise dx = (A x + B u) dt + G dbeta (cov dbeta = W dt), y = C x + D u.
@@ -228,14 +170,9 @@ def fuel_model(
     "exact_tustin" or "zoh"."""
 
 def wls(
-    H: Array,
-    z: Array,
-    weights: Optional[Array] = None,
-    method: str = "qr",
-    scale_covariance: bool = False,
-    rank_tolerance: Optional[float] = None,
-    tikhonov: Optional[float] = None,
-    prior_mean: Optional[Array] = None,
+    H: Array, z: Array, weights: Optional[Array] = None, method: str = "qr",
+    scale_covariance: bool = False, rank_tolerance: Optional[float] = None,
+    tikhonov: Optional[float] = None, prior_mean: Optional[Array] = None,
     operator: Optional[Array] = None,
 ) -> dict[str, Any]:
     """Weighted least squares min ||V^(1/2) (H x - z)||^2 (+ lambda ||L (x - x_p)||^2) by QR
@@ -246,52 +183,25 @@ def wls(
     A rank-deficient problem without tikhonov is a ValueError."""
 
 def ekf(
-    f: Any,
-    h: Any,
-    Q: Array,
-    R: Array,
-    x0: Array,
-    P0: Array,
-    zs: Union[Sequence[Any], npt.NDArray[Any]],
-    us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
-    iterations: int = 0,
-    tolerance: float = 1e-9,
+    f: Any, h: Any, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
+    us: Optional[_Series] = None, iterations: int = 0, tolerance: float = 1e-9,
 ) -> FilterResult:
     """Extended Kalman filter over callables f(x, u, k) -> (n,) and h(x, k) -> (m,), with
     Jacobians by central differences; iterations > 0 for the iterated EKF. Returns the same
     keys as ``filter``. An exception raised by f or h propagates unchanged."""
 
 def ukf(
-    f: Any,
-    h: Any,
-    Q: Array,
-    R: Array,
-    x0: Array,
-    P0: Array,
-    zs: Union[Sequence[Any], npt.NDArray[Any]],
-    us: Union[None, Sequence[Any], npt.NDArray[Any]] = None,
-    points: str = "merwe",
-    alpha: float = 1e-3,
-    beta: float = 2.0,
-    kappa: float = 0.0,
+    f: Any, h: Any, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
+    us: Optional[_Series] = None, points: str = "merwe", alpha: float = 1e-3,
+    beta: float = 2.0, kappa: float = 0.0,
 ) -> FilterResult:
     """Unscented Kalman filter (Merwe's scaled sigma points or "cubature") over callables
     f(x, u, k) and h(x, k). Returns the same keys as ``filter``."""
 
 def fit(
-    F: Array,
-    H: Array,
-    Q: Array,
-    R: Array,
-    x0: Array,
-    P0: Array,
-    zs: Union[Sequence[Any], npt.NDArray[Any]],
-    method: str = "em",
-    q: str = "diag",
-    r: str = "diag",
-    free_x0: bool = False,
-    free_p0_diag: bool = False,
-    max_iter: Optional[int] = None,
+    F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
+    method: str = "em", q: str = "diag", r: str = "diag", free_x0: bool = False,
+    free_p0_diag: bool = False, max_iter: Optional[int] = None,
 ) -> dict[str, Any]:
     """Learn Q and R (optionally x0 and a diagonal P0) from data by "em" (Shumway-Stoffer)
     or "mle" (L-BFGS with the exact score). q, r: "fixed", "scalar", "diag" or "full".
