@@ -323,6 +323,16 @@ pub(crate) fn faer_out<'py>(
     )
 }
 
+/// Copies a faer matrix into `out`, row-major.
+pub(crate) fn copy_mat(out: &mut [f64], m: kalman::faer::MatRef<'_, f64>) {
+    let c = m.ncols();
+    for (i, row) in out.chunks_exact_mut(c).enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = m[(i, j)];
+        }
+    }
+}
+
 /// What `filter`, `ekf` and `ukf` return for a series of `steps` steps of an n-state
 /// filter, filled step by step: x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k} (row-major), the
 /// log-likelihood and the NIS (NaN with no measurement).
@@ -369,12 +379,8 @@ impl FilterRecord {
         let (n, nn) = (self.n, self.n * self.n);
         self.xs[k * n..(k + 1) * n].copy_from_slice(x);
         self.xp[k * n..(k + 1) * n].copy_from_slice(x_pred);
-        for i in 0..n {
-            for j in 0..n {
-                self.ps[k * nn + i * n + j] = p[(i, j)];
-                self.pp[k * nn + i * n + j] = p_pred[(i, j)];
-            }
-        }
+        copy_mat(&mut self.ps[k * nn..(k + 1) * nn], p);
+        copy_mat(&mut self.pp[k * nn..(k + 1) * nn], p_pred);
         self.ll[k] = log_likelihood;
         self.nis[k] = nis.unwrap_or(f64::NAN);
     }

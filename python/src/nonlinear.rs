@@ -13,7 +13,6 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{FilterRecord, float_array, mat, read_vector, shape_str, value_error};
-use crate::guard;
 
 /// Calls `func(*args)` and reads its result as a vector of length `len` into `out`; on any
 /// failure keeps the first error in `slot` and writes NaN (which the engine then refuses).
@@ -41,18 +40,13 @@ enum Kind {
     Ukf(SigmaPoints),
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The work of [`ekf`] and [`ukf`]: the arguments `(f, h, Q, R, x0, P0, zs)` and `us` as the
+/// Python signature lists them.
 fn run<'py>(
-    py: Python<'py>,
     kind: Kind,
     context: &str,
-    f: &Bound<'py, PyAny>,
-    h: &Bound<'py, PyAny>,
-    Q: &Bound<'py, PyAny>,
-    R: &Bound<'py, PyAny>,
-    x0: &Bound<'py, PyAny>,
-    P0: &Bound<'py, PyAny>,
-    zs: &Bound<'py, PyAny>,
+    py: Python<'py>,
+    [f, h, Q, R, x0, P0, zs]: [&Bound<'py, PyAny>; 7],
     us: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     for (name, c) in [("f", f), ("h", h)] {
@@ -142,68 +136,62 @@ fn run<'py>(
     rec.into_dict(py)
 }
 
-/// ekf(f, h, Q, R, x0, P0, zs, us=None, iterations=0, tolerance=1e-9) → dict as `filter`:
-/// the extended Kalman filter with Jacobians by central differences; f(x, u, k) returns
-/// the next state (u is None without us), h(x, k) the predicted measurement. iterations
-/// > 0 selects the iterated EKF (Gauss–Newton updates, at most that many).
-#[pyfunction]
-#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, iterations = 0, tolerance = 1e-9))]
-pub(crate) fn ekf<'py>(
+py_function! {
+    /// ekf(f, h, Q, R, x0, P0, zs, us=None, iterations=0, tolerance=1e-9) → dict as `filter`:
+    /// the extended Kalman filter with Jacobians by central differences; f(x, u, k) returns
+    /// the next state (u is None without us), h(x, k) the predicted measurement. iterations
+    /// > 0 selects the iterated EKF (Gauss–Newton updates, at most that many).
+    fn ekf(f, h, Q, R, x0, P0, zs; us = None; iterations: usize = 0, tolerance: f64 = 1e-9)
+        => run_ekf
+}
+
+/// [`ekf`]'s work.
+fn run_ekf<'py>(
     py: Python<'py>,
-    f: &Bound<'py, PyAny>,
-    h: &Bound<'py, PyAny>,
-    Q: &Bound<'py, PyAny>,
-    R: &Bound<'py, PyAny>,
-    x0: &Bound<'py, PyAny>,
-    P0: &Bound<'py, PyAny>,
-    zs: &Bound<'py, PyAny>,
-    us: Option<&Bound<'py, PyAny>>,
+    args: [&Bound<'py, PyAny>; 7],
+    [us]: [Option<&Bound<'py, PyAny>>; 1],
     iterations: usize,
     tolerance: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    guard(|| {
-        let update = if iterations == 0 {
-            EkfUpdate::Extended
-        } else {
-            EkfUpdate::Iterated {
-                max_iterations: iterations,
-                tolerance,
-            }
-        };
-        run(py, Kind::Ekf(update), "ekf", f, h, Q, R, x0, P0, zs, us)
-    })
+    let update = if iterations == 0 {
+        EkfUpdate::Extended
+    } else {
+        EkfUpdate::Iterated {
+            max_iterations: iterations,
+            tolerance,
+        }
+    };
+    run(Kind::Ekf(update), "ekf", py, args, us)
 }
 
-/// ukf(f, h, Q, R, x0, P0, zs, us=None, points="merwe", alpha=1e-3, beta=2.0, kappa=0.0)
-/// → dict as `filter`: the unscented Kalman filter with Merwe's scaled sigma points or
-/// the cubature rule (points="cubature").
-#[pyfunction]
-#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, points = "merwe", alpha = 1e-3, beta = 2.0, kappa = 0.0))]
-pub(crate) fn ukf<'py>(
+py_function! {
+    /// ukf(f, h, Q, R, x0, P0, zs, us=None, points="merwe", alpha=1e-3, beta=2.0, kappa=0.0)
+    /// → dict as `filter`: the unscented Kalman filter with Merwe's scaled sigma points or
+    /// the cubature rule (points="cubature").
+    fn ukf(
+        f, h, Q, R, x0, P0, zs; us = None;
+        points: &str = "merwe", alpha: f64 = 1e-3, beta: f64 = 2.0, kappa: f64 = 0.0
+    ) => run_ukf
+}
+
+/// [`ukf`]'s work.
+fn run_ukf<'py>(
     py: Python<'py>,
-    f: &Bound<'py, PyAny>,
-    h: &Bound<'py, PyAny>,
-    Q: &Bound<'py, PyAny>,
-    R: &Bound<'py, PyAny>,
-    x0: &Bound<'py, PyAny>,
-    P0: &Bound<'py, PyAny>,
-    zs: &Bound<'py, PyAny>,
-    us: Option<&Bound<'py, PyAny>>,
+    args: [&Bound<'py, PyAny>; 7],
+    [us]: [Option<&Bound<'py, PyAny>>; 1],
     points: &str,
     alpha: f64,
     beta: f64,
     kappa: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    guard(|| {
-        let points = match points {
-            "merwe" => SigmaPoints::Merwe { alpha, beta, kappa },
-            "cubature" => SigmaPoints::Cubature,
-            other => {
-                return Err(value_error(format!(
-                    "points = {other:?}; expected \"merwe\" or \"cubature\""
-                )));
-            }
-        };
-        run(py, Kind::Ukf(points), "ukf", f, h, Q, R, x0, P0, zs, us)
-    })
+    let points = match points {
+        "merwe" => SigmaPoints::Merwe { alpha, beta, kappa },
+        "cubature" => SigmaPoints::Cubature,
+        other => {
+            return Err(value_error(format!(
+                "points = {other:?}; expected \"merwe\" or \"cubature\""
+            )));
+        }
+    };
+    run(Kind::Ukf(points), "ukf", py, args, us)
 }
