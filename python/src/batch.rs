@@ -11,6 +11,7 @@ use crate::convert::{
     value_error,
 };
 use crate::kf_core::{Core, rts};
+use crate::linalg::add_mul_vec;
 
 /// Reads a whole series of vectors (`zs`, `us`): an array (N, len), (N, len, 1), or (N,)
 /// when len = 1, or a sequence whose items are vectors, scalars or None (missing).
@@ -188,8 +189,25 @@ impl Dim for Dyn {
     }
 }
 
-/// The batch loop for the dimensions of `core` (compiled per state dimension up to 8 and
-/// measurement dimension up to 3). `Err(k)`: S singular at step k.
+/// Runs `$body` with `$d` bound to `Const::<N>` for the listed N equal to `$value`, or to
+/// `Dyn($value)` for any other value: one compiled copy of the body per listed size.
+macro_rules! with_dim {
+    ($value:expr, [$($n:literal),+], |$d:ident| $body:expr) => {
+        match $value {
+            $($n => {
+                let $d = Const::<$n>;
+                $body
+            })+
+            v => {
+                let $d = Dyn(v);
+                $body
+            }
+        }
+    };
+}
+
+/// The batch loop for the dimensions of `core`, compiled per state dimension up to 8 and
+/// measurement dimension up to 3. `Err(k)`: S singular at step k.
 fn run(
     core: &mut Core,
     z: &[f64],
@@ -197,34 +215,17 @@ fn run(
     update_first: bool,
     out: Outputs<'_>,
 ) -> Result<(), usize> {
-    match core.n {
-        1 => run_n(Const::<1>, core, z, u, update_first, out),
-        2 => run_n(Const::<2>, core, z, u, update_first, out),
-        3 => run_n(Const::<3>, core, z, u, update_first, out),
-        4 => run_n(Const::<4>, core, z, u, update_first, out),
-        5 => run_n(Const::<5>, core, z, u, update_first, out),
-        6 => run_n(Const::<6>, core, z, u, update_first, out),
-        7 => run_n(Const::<7>, core, z, u, update_first, out),
-        8 => run_n(Const::<8>, core, z, u, update_first, out),
-        n => run_n(Dyn(n), core, z, u, update_first, out),
-    }
-}
-
-/// [`run`] for a state dimension, dispatching on the measurement dimension.
-fn run_n<D: Dim>(
-    d: D,
-    core: &mut Core,
-    z: &[f64],
-    u: Option<&[f64]>,
-    update_first: bool,
-    out: Outputs<'_>,
-) -> Result<(), usize> {
-    match core.m {
-        1 => run_dim(d, Const::<1>, core, z, u, update_first, out),
-        2 => run_dim(d, Const::<2>, core, z, u, update_first, out),
-        3 => run_dim(d, Const::<3>, core, z, u, update_first, out),
-        m => run_dim(d, Dyn(m), core, z, u, update_first, out),
-    }
+    with_dim!(core.n, [1, 2, 3, 4, 5, 6, 7, 8], |d| {
+        with_dim!(core.m, [1, 2, 3], |e| run_dim(
+            d,
+            e,
+            core,
+            z,
+            u,
+            update_first,
+            out
+        ))
+    })
 }
 
 /// The loop itself. Steps whose z is complete take the fast kernels below; a step with a
@@ -346,14 +347,7 @@ impl Work {
             tx[i] = s;
         }
         if let (Some(B), Some(u)) = (self.B.as_deref(), u) {
-            let p = u.len();
-            for i in 0..n {
-                tx[i] += B[i * p..(i + 1) * p]
-                    .iter()
-                    .zip(u)
-                    .map(|(b, v)| b * v)
-                    .sum::<f64>();
-            }
+            add_mul_vec(B, u, tx);
         }
         x.copy_from_slice(tx);
         // T = F P, row i = Σ_j F_ij P_j.

@@ -44,6 +44,20 @@ enum A {
 /// The inputs a user may edit in place, checked before every call.
 const INPUTS: [A; 8] = [A::X, A::P, A::F, A::Q, A::H, A::R, A::B, A::M];
 const N_ATTR: usize = 17;
+/// The attributes a prediction changes.
+const PREDICTED: [A; 4] = [A::X, A::P, A::XPrior, A::PPrior];
+/// The attributes an update changes.
+const UPDATED: [A; 9] = [
+    A::X,
+    A::P,
+    A::K,
+    A::Y,
+    A::S,
+    A::SI,
+    A::Z,
+    A::XPost,
+    A::PPost,
+];
 
 /// A linear Kalman filter with FilterPy's `KalmanFilter` interface (n = dim_x states,
 /// m = dim_z measurements, p = dim_u controls).
@@ -75,6 +89,21 @@ fn dim(obj: &Bound<'_, PyAny>, name: &str, positive: bool) -> PyResult<usize> {
         )));
     }
     Ok(v as usize)
+}
+
+/// Refuses the FilterPy arguments a whole-series method does not support: a `TypeError`
+/// "`method`: `name` is not supported; `instead`" for the first one given (not None).
+fn unsupported<const N: usize>(
+    method: &str,
+    args: [(&str, Option<&Bound<'_, PyAny>>); N],
+    instead: &str,
+) -> PyResult<()> {
+    match args.iter().find(|(_, v)| v.is_some_and(|v| !v.is_none())) {
+        Some((name, _)) => Err(type_error(format!(
+            "{method}: {name} is not supported; {instead}"
+        ))),
+        None => Ok(()),
+    }
 }
 
 impl KalmanFilter {
@@ -287,6 +316,37 @@ impl KalmanFilter {
         }
     }
 
+    /// Reads `predict`'s optional B (n×p, any p) with the number of controls p it implies
+    /// (`None` → the filter's own B and p, or p = 0 without one).
+    fn override_B(&self, B: Option<&Bound<'_, PyAny>>) -> PyResult<(Option<Vec<f64>>, usize)> {
+        let n = self.core.n;
+        match B {
+            Some(b) if !b.is_none() => {
+                let arr = float_array(b, "B")?;
+                let p = match arr.shape() {
+                    [r, c] if *r == n => *c,
+                    s => {
+                        return Err(value_error(format!(
+                            "B has shape {}, expected ({n}, p)",
+                            shape_str(s)
+                        )));
+                    }
+                };
+                let mut buf = vec![0.0; n * p];
+                read_matrix(b, "B", n, p, false, &mut buf)?;
+                Ok((Some(buf), p))
+            }
+            _ => Ok((
+                None,
+                if self.core.B.is_some() {
+                    self.core.p
+                } else {
+                    0
+                },
+            )),
+        }
+    }
+
     /// Reads a control input u of length p (`None` → no control).
     fn read_u(&self, u: Option<&Bound<'_, PyAny>>, p: usize) -> PyResult<Option<Vec<f64>>> {
         match u {
@@ -339,23 +399,107 @@ impl KalmanFilter {
                      check R and P",
                 )
             })?;
-        self.invalidate(&[
-            A::X,
-            A::P,
-            A::K,
-            A::Y,
-            A::S,
-            A::SI,
-            A::Z,
-            A::XPost,
-            A::PPost,
-        ]);
+        self.invalidate(&UPDATED);
         Ok(())
     }
 }
 
-#[pymethods]
-impl KalmanFilter {
+/// Writes `KalmanFilter`'s `#[pymethods]` block (PyO3 takes one, and does not expand macros
+/// inside it) from two tables and the other methods: a getter for each array attribute, and a
+/// setter for those that name one (the inputs), both through [`KalmanFilter::get`] and
+/// [`KalmanFilter::assign`] with the attribute's [`A`]; the two updates, `(z, R=None,
+/// H=None)` each, through [`KalmanFilter::do_update`] (`true`: correlated); then the methods
+/// that follow the tables.
+macro_rules! pymethods_with_attributes {
+    (
+        attributes {
+            $($(#[doc = $doc:literal])+ $get:ident $(/ $set:ident)? = $a:ident;)+
+        }
+        updates {
+            $($(#[doc = $udoc:literal])+ $update:ident = $correlated:literal;)+
+        }
+        $($methods:tt)*
+    ) => {
+        #[pymethods]
+        impl KalmanFilter {
+            $(
+                $(#[doc = $doc])+
+                #[getter]
+                fn $get(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+                    guard(|| Ok(self.get(py, A::$a)))
+                }
+                $(
+                    #[setter]
+                    fn $set(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+                        guard(|| self.assign(A::$a, value))
+                    }
+                )?
+            )+
+            $(
+                $(#[doc = $udoc])+
+                #[pyo3(signature = (z, R = None, H = None))]
+                fn $update(
+                    &mut self,
+                    py: Python<'_>,
+                    z: &Bound<'_, PyAny>,
+                    R: Option<&Bound<'_, PyAny>>,
+                    H: Option<&Bound<'_, PyAny>>,
+                ) -> PyResult<()> {
+                    guard(|| self.do_update(py, z, R, H, $correlated))
+                }
+            )+
+            $($methods)*
+        }
+    };
+}
+
+pymethods_with_attributes! {
+    attributes {
+        /// State estimate, (dim_x, 1) (or (dim_x,) if set so).
+        x / set_x = X;
+        /// State covariance, (dim_x, dim_x); symmetric PSD.
+        P / set_P = P;
+        /// State transition F, (dim_x, dim_x).
+        F / set_F = F;
+        /// Process noise covariance Q, (dim_x, dim_x); symmetric PSD.
+        Q / set_Q = Q;
+        /// Measurement matrix H, (dim_z, dim_x).
+        H / set_H = H;
+        /// Measurement noise covariance R, (dim_z, dim_z); symmetric PSD.
+        R / set_R = R;
+        /// Control matrix B, (dim_x, dim_u), or None.
+        B / set_B = B;
+        /// Cross-covariance of the prior state error and the measurement noise, (dim_x, dim_z);
+        /// used by `update_correlated` only.
+        M / set_M = M;
+        /// Kalman gain of the last update, (dim_x, dim_z).
+        K = K;
+        /// Innovation (residual) of the last update, (dim_z, 1).
+        y = Y;
+        /// Innovation covariance of the last update, (dim_z, dim_z).
+        S = S;
+        /// Inverse of S (computed from its factorisation when read).
+        SI = SI;
+        /// Last measurement, (dim_z, 1); NaN where missing (FilterPy stores None).
+        z = Z;
+        /// Prior (predicted) state after the last predict.
+        x_prior = XPrior;
+        /// Prior covariance after the last predict.
+        P_prior = PPrior;
+        /// Posterior state after the last update.
+        x_post = XPost;
+        /// Posterior covariance after the last update.
+        P_post = PPost;
+    }
+    updates {
+        /// update(z, R=None, H=None): FilterPy's update (Joseph form). `z = None` skips the
+        /// update; NaN entries of z skip their rows.
+        update = false;
+        /// update_correlated(z, R=None, H=None): the update with M, the cross-covariance of
+        /// the prior state error and the measurement noise.
+        update_correlated = true;
+    }
+
     /// KalmanFilter(dim_x, dim_z, dim_u=0): FilterPy's defaults (x = 0, P = F = Q = I,
     /// H = 0, R = I, B = None, M = 0).
     #[new]
@@ -395,125 +539,6 @@ impl KalmanFilter {
     #[getter]
     fn dim_u(&self) -> usize {
         self.dim_u
-    }
-
-    /// State estimate, (dim_x, 1) (or (dim_x,) if set so).
-    #[getter]
-    fn get_x(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        guard(|| Ok(self.get(py, A::X)))
-    }
-    #[setter]
-    fn set_x(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::X, value))
-    }
-    /// State covariance, (dim_x, dim_x); symmetric PSD.
-    #[getter]
-    fn get_P(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        guard(|| Ok(self.get(py, A::P)))
-    }
-    #[setter]
-    fn set_P(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::P, value))
-    }
-    /// State transition F, (dim_x, dim_x).
-    #[getter]
-    fn get_F(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        guard(|| Ok(self.get(py, A::F)))
-    }
-    #[setter]
-    fn set_F(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::F, value))
-    }
-    /// Process noise covariance Q, (dim_x, dim_x); symmetric PSD.
-    #[getter]
-    fn get_Q(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        guard(|| Ok(self.get(py, A::Q)))
-    }
-    #[setter]
-    fn set_Q(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::Q, value))
-    }
-    /// Measurement matrix H, (dim_z, dim_x).
-    #[getter]
-    fn get_H(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        guard(|| Ok(self.get(py, A::H)))
-    }
-    #[setter]
-    fn set_H(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::H, value))
-    }
-    /// Measurement noise covariance R, (dim_z, dim_z); symmetric PSD.
-    #[getter]
-    fn get_R(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        guard(|| Ok(self.get(py, A::R)))
-    }
-    #[setter]
-    fn set_R(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::R, value))
-    }
-    /// Control matrix B, (dim_x, dim_u), or None.
-    #[getter]
-    fn get_B(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        guard(|| Ok(self.get(py, A::B)))
-    }
-    #[setter]
-    fn set_B(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::B, value))
-    }
-    /// Cross-covariance of the prior state error and the measurement noise, (dim_x, dim_z);
-    /// used by `update_correlated` only.
-    #[getter]
-    fn get_M(&mut self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        guard(|| Ok(self.get(py, A::M)))
-    }
-    #[setter]
-    fn set_M(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::M, value))
-    }
-    /// Kalman gain of the last update, (dim_x, dim_z).
-    #[getter]
-    fn get_K(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::K)
-    }
-    /// Innovation (residual) of the last update, (dim_z, 1).
-    #[getter]
-    fn get_y(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::Y)
-    }
-    /// Innovation covariance of the last update, (dim_z, dim_z).
-    #[getter]
-    fn get_S(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::S)
-    }
-    /// Inverse of S (computed from its factorisation when read).
-    #[getter]
-    fn get_SI(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::SI)
-    }
-    /// Last measurement, (dim_z, 1); NaN where missing (FilterPy stores None).
-    #[getter]
-    fn get_z(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::Z)
-    }
-    /// Prior (predicted) state after the last predict.
-    #[getter]
-    fn get_x_prior(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::XPrior)
-    }
-    /// Prior covariance after the last predict.
-    #[getter]
-    fn get_P_prior(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::PPrior)
-    }
-    /// Posterior state after the last update.
-    #[getter]
-    fn get_x_post(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::XPost)
-    }
-    /// Posterior covariance after the last update.
-    #[getter]
-    fn get_P_post(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::PPost)
     }
 
     /// Fading-memory factor α ≥ 1 (P ← α² F P Fᵀ + Q).
@@ -572,63 +597,13 @@ impl KalmanFilter {
             let n = self.core.n;
             let F = self.override_matrix(F, "F", n, n, false)?;
             let Q = self.override_matrix(Q, "Q", n, n, true)?;
-            let (B, p) = match B {
-                Some(b) if !b.is_none() => {
-                    let arr = float_array(b, "B")?;
-                    let p = match arr.shape() {
-                        [r, c] if *r == n => *c,
-                        s => {
-                            return Err(value_error(format!(
-                                "B has shape {}, expected ({n}, p)",
-                                shape_str(s)
-                            )));
-                        }
-                    };
-                    let mut buf = vec![0.0; n * p];
-                    read_matrix(b, "B", n, p, false, &mut buf)?;
-                    (Some(buf), p)
-                }
-                _ => (
-                    None,
-                    if self.core.B.is_some() {
-                        self.core.p
-                    } else {
-                        0
-                    },
-                ),
-            };
+            let (B, p) = self.override_B(B)?;
             let u = self.read_u(u, p)?;
             self.core
                 .predict(u.as_deref(), F.as_deref(), Q.as_deref(), B.as_deref());
-            self.invalidate(&[A::X, A::P, A::XPrior, A::PPrior]);
+            self.invalidate(&PREDICTED);
             Ok(())
         })
-    }
-
-    /// update(z, R=None, H=None): FilterPy's update (Joseph form). `z = None` skips the
-    /// update; NaN entries of z skip their rows.
-    #[pyo3(signature = (z, R = None, H = None))]
-    fn update(
-        &mut self,
-        py: Python<'_>,
-        z: &Bound<'_, PyAny>,
-        R: Option<&Bound<'_, PyAny>>,
-        H: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<()> {
-        guard(|| self.do_update(py, z, R, H, false))
-    }
-
-    /// update_correlated(z, R=None, H=None): the update with M, the cross-covariance of the
-    /// prior state error and the measurement noise.
-    #[pyo3(signature = (z, R = None, H = None))]
-    fn update_correlated(
-        &mut self,
-        py: Python<'_>,
-        z: &Bound<'_, PyAny>,
-        R: Option<&Bound<'_, PyAny>>,
-        H: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<()> {
-        guard(|| self.do_update(py, z, R, H, true))
     }
 
     /// batch_filter(zs, us=None, update_first=False) → (means, covariances, means_p,
@@ -649,37 +624,16 @@ impl KalmanFilter {
         saver: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyTuple>> {
         guard(|| {
-            for (name, v) in [
-                ("Fs", Fs),
-                ("Qs", Qs),
-                ("Hs", Hs),
-                ("Rs", Rs),
-                ("Bs", Bs),
-                ("saver", saver),
-            ] {
-                if v.is_some_and(|v| !v.is_none()) {
-                    return Err(type_error(format!(
-                        "batch_filter: {name} is not supported; call predict/update in a \
-                         loop for per-step matrices"
-                    )));
-                }
-            }
+            unsupported(
+                "batch_filter",
+                [("Fs", Fs), ("Qs", Qs), ("Hs", Hs), ("Rs", Rs), ("Bs", Bs), ("saver", saver)],
+                "call predict/update in a loop for per-step matrices",
+            )?;
             self.sync(py)?;
             let out =
                 crate::batch::batch_filter(&mut self.core, self.x_col, py, zs, us, update_first);
-            self.invalidate(&[
-                A::X,
-                A::P,
-                A::K,
-                A::Y,
-                A::S,
-                A::SI,
-                A::Z,
-                A::XPrior,
-                A::PPrior,
-                A::XPost,
-                A::PPost,
-            ]);
+            self.invalidate(&PREDICTED);
+            self.invalidate(&UPDATED);
             out
         })
     }
@@ -697,13 +651,11 @@ impl KalmanFilter {
         inv: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyTuple>> {
         guard(|| {
-            for (name, v) in [("Fs", Fs), ("Qs", Qs), ("inv", inv)] {
-                if v.is_some_and(|v| !v.is_none()) {
-                    return Err(type_error(format!(
-                        "rts_smoother: {name} is not supported; the filter's F and Q are used"
-                    )));
-                }
-            }
+            unsupported(
+                "rts_smoother",
+                [("Fs", Fs), ("Qs", Qs), ("inv", inv)],
+                "the filter's F and Q are used",
+            )?;
             self.sync(py)?;
             crate::batch::rts_smoother(&self.core, py, Xs, Ps)
         })

@@ -3,7 +3,7 @@
 //! missing-row handling FilterPy lacks. The Python layer (`kf.rs`) only moves data in and out.
 #![allow(non_snake_case)]
 
-use crate::linalg::{Factor, mul, mul_bt, mul_vec};
+use crate::linalg::{Factor, add_mul_vec, mul, mul_bt, mul_vec};
 
 /// Why an update could not be computed.
 #[derive(Debug)]
@@ -120,14 +120,7 @@ impl Core {
         let Q = Q.unwrap_or(&self.Q);
         mul_vec(F, &self.x, n, n, &mut self.tx);
         if let (Some(B), Some(u)) = (B.or(self.B.as_deref()), u) {
-            let p = u.len();
-            for i in 0..n {
-                self.tx[i] += B[i * p..(i + 1) * p]
-                    .iter()
-                    .zip(u)
-                    .map(|(b, v)| b * v)
-                    .sum::<f64>();
-            }
+            add_mul_vec(B, u, &mut self.tx);
         }
         self.x.copy_from_slice(&self.tx);
         // F P Fᵀ is symmetric: its upper triangle, mirrored (half of the second product).

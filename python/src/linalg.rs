@@ -39,6 +39,18 @@ pub(crate) fn mul_vec(a: &[f64], x: &[f64], r: usize, k: usize, y: &mut [f64]) {
     }
 }
 
+/// `y += a · x` with `a` (len y)×(len x): each row's dot product, then added.
+pub(crate) fn add_mul_vec(a: &[f64], x: &[f64], y: &mut [f64]) {
+    let k = x.len();
+    for (i, yi) in y.iter_mut().enumerate() {
+        *yi += a[i * k..(i + 1) * k]
+            .iter()
+            .zip(x)
+            .map(|(p, q)| p * q)
+            .sum::<f64>();
+    }
+}
+
 /// Cholesky factor in place (lower triangle holds L, the strict upper triangle is zeroed);
 /// `false` if `a` is not (numerically) positive definite.
 pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
