@@ -158,11 +158,18 @@ impl GenericModel for RangeBearing {
     }
 }
 
-/// The same model with hand-written Jacobians (the reference for AD).
+/// A scalar-generic model with hand-written Jacobians (the reference for AD): the model's
+/// own f, h, Q, R, residual and state addition, and the Jacobians of its `impl Jacobians`.
 #[derive(Clone, Debug, Default)]
-pub struct RangeBearingHand(pub RangeBearing);
+pub struct Hand<M>(pub M);
 
-impl NonlinearModel for RangeBearingHand {
+/// Range and bearing with hand-written Jacobians.
+pub type RangeBearingHand = Hand<RangeBearing>;
+
+/// The pendulum with hand-written Jacobians.
+pub type PendulumHand = Hand<Pendulum>;
+
+impl<M: GenericModel> NonlinearModel for Hand<M> {
     fn f(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]) {
         self.0.f(x, u, k, out);
     }
@@ -177,6 +184,12 @@ impl NonlinearModel for RangeBearingHand {
     }
     fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
         GenericModel::residual(&self.0, a, b, out);
+    }
+    fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
+        GenericModel::state_add(&self.0, x, dx, out);
+    }
+    fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+        GenericModel::state_residual(&self.0, a, b, out);
     }
 }
 
@@ -226,25 +239,6 @@ impl GenericModel for Pendulum {
     }
     fn r(&self, _k: usize, out: &mut [f64]) {
         out[0] = 1e-4;
-    }
-}
-
-/// The pendulum with hand-written Jacobians.
-#[derive(Clone, Debug, Default)]
-pub struct PendulumHand(pub Pendulum);
-
-impl NonlinearModel for PendulumHand {
-    fn f(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]) {
-        self.0.f(x, u, k, out);
-    }
-    fn h(&mut self, x: &[f64], k: usize, out: &mut [f64]) {
-        self.0.h(x, k, out);
-    }
-    fn q(&mut self, k: usize, out: &mut [f64]) {
-        GenericModel::q(&self.0, k, out);
-    }
-    fn r(&mut self, k: usize, out: &mut [f64]) {
-        GenericModel::r(&self.0, k, out);
     }
 }
 
