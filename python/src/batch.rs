@@ -10,7 +10,7 @@ use crate::convert::{
     array3_out, copy_finite, float_array, read_vector, shape_str, type_error, type_name,
     value_error,
 };
-use crate::kf_core::{Core, rts};
+use crate::kf_core::{Core, UpdateError, rts};
 use crate::linalg::add_mul_vec;
 
 /// Reads a whole series of vectors (`zs`, `us`): an array (N, len), (N, len, 1), or (N,)
@@ -228,10 +228,12 @@ fn run(
     })
 }
 
-/// The loop itself. Steps whose z is complete take the fast kernels below; a step with a
-/// missing entry, an S that is not positive definite (the general path then tries LU), and
-/// the last step (so that K, y, S, the priors and posteriors the filter exposes afterwards
-/// are those of the last step, as in FilterPy) take `Core`'s general update and predict.
+/// The loop itself. Each step reads the previous step's output rows (the filter's own state
+/// at the first step) and writes its own rows of the four outputs. Steps whose z is complete
+/// take the fast kernels below; a step with a missing entry, a P that is not exactly
+/// symmetric or an S that is not positive definite (the general path then tries LU), and the
+/// last step (so that K, y, S, the priors and posteriors the filter exposes afterwards are
+/// those of the last step, as in FilterPy) take `Core`'s general update and predict.
 fn run_dim<D: Dim, E: Dim>(
     d: D,
     e: E,
@@ -246,10 +248,11 @@ fn run_dim<D: Dim, E: Dim>(
     let steps = z.len() / m;
     let p = u.map_or(0, |u| u.len() / steps.max(1));
     let mut w = Work::new(core, n, m);
-    // Every prediction leaves P exactly symmetric (its upper triangle mirrored); only the
-    // first update of an update-first run sees the initial P.
-    let symmetric_p0 =
-        (0..n).all(|i| (0..i).all(|j| core.P[i * n + j].to_bits() == core.P[j * n + i].to_bits()));
+    let (x0, P0) = (core.x.clone(), core.P.clone());
+    // A prediction leaves P exactly symmetric when Q is (F P Fᵀ by its upper triangle,
+    // mirrored, plus Q); only the first update of an update-first run sees the initial P.
+    let symmetric_q = is_symmetric(&w.Q, n);
+    let symmetric_p0 = is_symmetric(&P0, n);
     let Outputs {
         means,
         covs,
@@ -257,36 +260,90 @@ fn run_dim<D: Dim, E: Dim>(
         covs_p,
     } = out;
     for k in 0..steps {
-        let last = k + 1 == steps;
+        let general = k + 1 == steps;
         let zk = &z[k * m..(k + 1) * m];
         let uk = u.map(|u| &u[k * p..(k + 1) * p]);
-        let symmetric = k > 0 || !update_first || symmetric_p0;
-        let mut upd = |core: &mut Core, w: &mut Work| -> Result<(), usize> {
-            if last || zk.iter().any(|v| v.is_nan()) || !w.update(d, e, core, zk, symmetric) {
-                core.update(zk, None, None, false).map_err(|_| k)?;
-            }
-            means[k * n..(k + 1) * n].copy_from_slice(&core.x[..n]);
-            covs[k * nn..(k + 1) * nn].copy_from_slice(&core.P[..nn]);
-            Ok(())
-        };
-        let mut pred = |core: &mut Core, w: &mut Work| {
-            if last {
-                core.predict(uk, None, None, None);
-            } else {
-                w.predict(d, core, uk);
-            }
-            means_p[k * n..(k + 1) * n].copy_from_slice(&core.x[..n]);
-            covs_p[k * nn..(k + 1) * nn].copy_from_slice(&core.P[..nn]);
+        let (x_done, x_post) = means.split_at_mut(k * n);
+        let (P_done, P_post) = covs.split_at_mut(k * nn);
+        let (xp_done, x_prior) = means_p.split_at_mut(k * n);
+        let (Pp_done, P_prior) = covs_p.split_at_mut(k * nn);
+        let post = (&mut x_post[..n], &mut P_post[..nn]);
+        let prior = (&mut x_prior[..n], &mut P_prior[..nn]);
+        // The state this step starts from: the last output rows of the other kind.
+        let start = match (k, update_first) {
+            (0, _) => (&x0[..], &P0[..]),
+            (_, true) => (&xp_done[(k - 1) * n..], &Pp_done[(k - 1) * nn..]),
+            (_, false) => (&x_done[(k - 1) * n..], &P_done[(k - 1) * nn..]),
         };
         if update_first {
-            upd(core, &mut w)?;
-            pred(core, &mut w);
+            let symmetric = if k == 0 { symmetric_p0 } else { symmetric_q };
+            w.update(d, e, core, general, symmetric, zk, start, post)
+                .map_err(|_| k)?;
+            w.predict(d, core, general, uk, (&x_post[..n], &P_post[..nn]), prior);
         } else {
-            pred(core, &mut w);
-            upd(core, &mut w)?;
+            w.predict(d, core, general, uk, start, prior);
+            w.update(
+                d,
+                e,
+                core,
+                general,
+                symmetric_q,
+                zk,
+                (&x_prior[..n], &P_prior[..nn]),
+                post,
+            )
+            .map_err(|_| k)?;
         }
     }
     Ok(())
+}
+
+/// Whether the n×n `a` is exactly symmetric.
+fn is_symmetric(a: &[f64], n: usize) -> bool {
+    (0..n).all(|i| (0..i).all(|j| a[i * n + j].to_bits() == a[j * n + i].to_bits()))
+}
+
+/// Σ aᵢ bᵢ, summed in order.
+#[inline(always)]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |s, (x, y)| s + x * y)
+}
+
+/// `row += f · v`.
+#[inline(always)]
+fn axpy(row: &mut [f64], f: f64, v: &[f64]) {
+    for (r, x) in row.iter_mut().zip(v) {
+        *r += f * x;
+    }
+}
+
+/// Copies the upper triangle of the n×n `a` onto its lower one.
+#[inline(always)]
+fn mirror(a: &mut [f64], n: usize) {
+    for i in 0..n {
+        for j in 0..i {
+            a[i * n + j] = a[j * n + i];
+        }
+    }
+}
+
+/// A state (x, P) a kernel reads, and one it writes.
+type State<'a> = (&'a [f64], &'a [f64]);
+type StateMut<'a> = (&'a mut [f64], &'a mut [f64]);
+
+/// Runs `Core`'s general `step` from `from` and copies its state into `to`.
+fn via_core<T>(
+    core: &mut Core,
+    from: State<'_>,
+    to: StateMut<'_>,
+    step: impl FnOnce(&mut Core) -> T,
+) -> T {
+    core.x.copy_from_slice(from.0);
+    core.P.copy_from_slice(from.1);
+    let result = step(core);
+    to.0.copy_from_slice(&core.x);
+    to.1.copy_from_slice(&core.P);
+    result
 }
 
 /// The model (copied from the filter) and the workspaces of the fast kernels, row-major.
@@ -297,20 +354,24 @@ struct Work {
     R: Vec<f64>,
     B: Option<Vec<f64>>,
     alpha_sq: f64,
-    tx: Vec<f64>,
-    t: Vec<f64>,
-    a: Vec<f64>,
+    /// F P (n×n).
+    fp: Vec<f64>,
+    /// H P (m×n), which is (P Hᵀ)ᵀ for a symmetric P.
     hp: Vec<f64>,
-    pht: Vec<f64>,
+    /// S = H P Hᵀ + R and its Cholesky factor L (m×m), 1/L_aa (m).
     s: Vec<f64>,
-    sinv: Vec<f64>,
-    k: Vec<f64>,
-    c: Vec<f64>,
+    l: Vec<f64>,
+    dinv: Vec<f64>,
+    /// Kᵀ and (K S − P Hᵀ)ᵀ (m×n).
+    kt: Vec<f64>,
+    ct: Vec<f64>,
+    /// The innovation y (m).
     y: Vec<f64>,
 }
 
 impl Work {
     fn new(core: &Core, n: usize, m: usize) -> Self {
+        let zeros = |rows: usize, cols: usize| vec![0.0; rows * cols];
         Self {
             F: core.F.clone(),
             Q: core.Q.clone(),
@@ -318,209 +379,187 @@ impl Work {
             R: core.R.clone(),
             B: core.B.clone(),
             alpha_sq: core.alpha_sq,
-            tx: vec![0.0; n],
-            t: vec![0.0; n * n],
-            a: vec![0.0; n * n],
-            hp: vec![0.0; m * n],
-            pht: vec![0.0; n * m],
-            s: vec![0.0; m * m],
-            sinv: vec![0.0; m],
-            k: vec![0.0; n * m],
-            c: vec![0.0; n * m],
-            y: vec![0.0; m],
+            fp: zeros(n, n),
+            hp: zeros(m, n),
+            s: zeros(m, m),
+            l: zeros(m, m),
+            dinv: zeros(m, 1),
+            kt: zeros(m, n),
+            ct: zeros(m, n),
+            y: zeros(m, 1),
         }
     }
 
-    /// `Core::predict` without the prior copies: x = F x + B u, P = α² F P Fᵀ + Q (the
-    /// upper triangle of F P Fᵀ, mirrored).
+    /// `Core::predict` from `from` into `to` (`general`: by `Core` itself): x = F x + B u,
+    /// P = α² F P Fᵀ + Q with the upper triangle of F P Fᵀ mirrored, as `Core` does.
     #[inline(always)]
-    fn predict<D: Dim>(&mut self, d: D, core: &mut Core, u: Option<&[f64]>) {
+    fn predict<D: Dim>(
+        &mut self,
+        d: D,
+        core: &mut Core,
+        general: bool,
+        u: Option<&[f64]>,
+        from: State<'_>,
+        to: StateMut<'_>,
+    ) {
+        if general {
+            return via_core(core, from, to, |core| core.predict(u, None, None, None));
+        }
         let n = d.get();
         let (F, Q) = (&self.F[..n * n], &self.Q[..n * n]);
-        let (x, P) = (&mut core.x[..n], &mut core.P[..n * n]);
-        let tx = &mut self.tx[..n];
-        for i in 0..n {
-            let mut s = 0.0;
-            for j in 0..n {
-                s += F[i * n + j] * x[j];
-            }
-            tx[i] = s;
+        let (x, P) = (&from.0[..n], &from.1[..n * n]);
+        let (xo, Po) = (&mut to.0[..n], &mut to.1[..n * n]);
+        for (xi, f) in xo.iter_mut().zip(F.chunks_exact(n)) {
+            *xi = dot(f, x);
         }
         if let (Some(B), Some(u)) = (self.B.as_deref(), u) {
-            add_mul_vec(B, u, tx);
+            add_mul_vec(B, u, xo);
         }
-        x.copy_from_slice(tx);
-        // T = F P, row i = Σ_j F_ij P_j.
-        let T = &mut self.t[..n * n];
-        for i in 0..n {
-            let row = &mut T[i * n..(i + 1) * n];
+        // F P, row i = Σ_j F_ij P_j.
+        let fp = &mut self.fp[..n * n];
+        for (row, f) in fp.chunks_exact_mut(n).zip(F.chunks_exact(n)) {
             row.fill(0.0);
-            for j in 0..n {
-                let f = F[i * n + j];
-                for (r, v) in row.iter_mut().zip(&P[j * n..(j + 1) * n]) {
-                    *r += f * v;
-                }
+            for (j, &fij) in f.iter().enumerate() {
+                axpy(row, fij, &P[j * n..(j + 1) * n]);
             }
         }
+        // The upper triangle of F P Fᵀ: (F P)_i · F_j for j ≥ i; then α² · + Q.
         for i in 0..n {
+            let fpi = &fp[i * n..(i + 1) * n];
             for j in i..n {
-                let mut s = 0.0;
-                for l in 0..n {
-                    s += T[i * n + l] * F[j * n + l];
-                }
-                P[i * n + j] = self.alpha_sq * s + Q[i * n + j];
-                P[j * n + i] = self.alpha_sq * s + Q[j * n + i];
+                let s = self.alpha_sq * dot(fpi, &F[j * n..(j + 1) * n]);
+                Po[i * n + j] = s + Q[i * n + j];
+                Po[j * n + i] = s + Q[j * n + i];
             }
         }
     }
 
-    /// `Core::update` (Joseph form) for a complete z when S is positive definite (factored
-    /// by Cholesky from the same triangle `Core` reads); `false`, with nothing changed,
-    /// otherwise. `symmetric`: P is exactly symmetric, so H P is read off P Hᵀ.
+    /// `Core::update` (Joseph form) from `from` into `to` for a complete z, a symmetric P and
+    /// an S that Cholesky accepts (factored from the same triangle `Core` reads); otherwise,
+    /// or when `general`, by `Core` itself. `Err`: S singular.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn update<D: Dim, E: Dim>(
         &mut self,
         d: D,
         e: E,
         core: &mut Core,
-        z: &[f64],
+        general: bool,
         symmetric: bool,
+        z: &[f64],
+        from: State<'_>,
+        to: StateMut<'_>,
+    ) -> Result<(), UpdateError> {
+        let fast = !general && symmetric && z.iter().all(|v| !v.is_nan());
+        if fast && self.joseph(d, e, z, from, (&mut *to.0, &mut *to.1)) {
+            return Ok(());
+        }
+        via_core(core, from, to, |core| core.update(z, None, None, false))
+    }
+
+    /// The Joseph update of [`Work::update`]; `false`, with `to` not written, when S is not
+    /// positive definite. With A = (I − K H) P = P − K (H P), FilterPy's
+    /// (I − K H) P (I − K H)ᵀ + K R Kᵀ is A + (K S − P Hᵀ) Kᵀ for any K: its upper triangle,
+    /// mirrored.
+    #[inline(always)]
+    fn joseph<D: Dim, E: Dim>(
+        &mut self,
+        d: D,
+        e: E,
+        z: &[f64],
+        from: State<'_>,
+        to: StateMut<'_>,
     ) -> bool {
         let (n, m) = (d.get(), e.get());
         let (H, R) = (&self.H[..m * n], &self.R[..m * m]);
-        let (x, P) = (&mut core.x[..n], &mut core.P[..n * n]);
-        // y = z − H x; PHT = P Hᵀ (n×m); S = H PHT + R.
+        let (x, P) = (&from.0[..n], &from.1[..n * n]);
         let y = &mut self.y[..m];
-        for a in 0..m {
-            let mut s = 0.0;
-            for j in 0..n {
-                s += H[a * n + j] * x[j];
-            }
-            y[a] = z[a] - s;
+        for ((ya, za), h) in y.iter_mut().zip(z).zip(H.chunks_exact(n)) {
+            *ya = za - dot(h, x);
         }
-        let pht = &mut self.pht[..n * m];
-        for i in 0..n {
-            for a in 0..m {
-                let mut s = 0.0;
-                for j in 0..n {
-                    s += P[i * n + j] * H[a * n + j];
-                }
-                pht[i * m + a] = s;
+        let hp = &mut self.hp[..m * n];
+        for (row, h) in hp.chunks_exact_mut(n).zip(H.chunks_exact(n)) {
+            row.fill(0.0);
+            for (j, &haj) in h.iter().enumerate() {
+                axpy(row, haj, &P[j * n..(j + 1) * n]);
             }
         }
         let S = &mut self.s[..m * m];
         for a in 0..m {
             for b in 0..m {
-                let mut s = 0.0;
-                for j in 0..n {
-                    s += H[a * n + j] * pht[j * m + b];
-                }
-                S[a * m + b] = s + R[a * m + b];
+                S[a * m + b] = dot(&H[a * n..(a + 1) * n], &hp[b * n..(b + 1) * n]) + R[a * m + b];
             }
         }
         // Cholesky of Sᵀ from its lower triangle (S's upper one), as `Core` factors it:
-        // L_ab (a ≥ b) overwrites S_ba; `sinv` holds 1/L_aa.
-        let sinv = &mut self.sinv[..m];
+        // L_ab (a ≥ b) is stored at l[b, a].
+        let (L, dinv) = (&mut self.l[..m * m], &mut self.dinv[..m]);
+        L.copy_from_slice(S);
         for a in 0..m {
-            let mut dg = S[a * m + a];
+            let mut dg = L[a * m + a];
             for c in 0..a {
-                dg -= S[c * m + a] * S[c * m + a];
+                dg -= L[c * m + a] * L[c * m + a];
             }
             if dg.is_nan() || dg <= 0.0 {
                 return false;
             }
             let dg = dg.sqrt();
-            S[a * m + a] = dg;
-            sinv[a] = 1.0 / dg;
+            L[a * m + a] = dg;
+            dinv[a] = 1.0 / dg;
             for b in a + 1..m {
-                let mut s = S[a * m + b];
+                let mut s = L[a * m + b];
                 for c in 0..a {
-                    s -= S[c * m + b] * S[c * m + a];
+                    s -= L[c * m + b] * L[c * m + a];
                 }
-                S[a * m + b] = s * sinv[a];
+                L[a * m + b] = s * dinv[a];
             }
         }
-        // K = PHT S⁻¹, row by row: L Lᵀ kᵢ = phtᵢ.
-        let K = &mut self.k[..n * m];
-        K.copy_from_slice(pht);
+        // Kᵀ = S⁻ᵀ (P Hᵀ)ᵀ = S⁻ᵀ H P: L Lᵀ Kᵀ = H P, all columns at once.
+        let kt = &mut self.kt[..m * n];
+        kt.copy_from_slice(hp);
+        for a in 0..m {
+            let (done, rest) = kt.split_at_mut(a * n);
+            let row = &mut rest[..n];
+            for c in 0..a {
+                axpy(row, -L[c * m + a], &done[c * n..(c + 1) * n]);
+            }
+            row.iter_mut().for_each(|v| *v *= dinv[a]);
+        }
+        for a in (0..m).rev() {
+            let (head, tail) = kt.split_at_mut((a + 1) * n);
+            let row = &mut head[a * n..];
+            for c in a + 1..m {
+                axpy(row, -L[a * m + c], &tail[(c - a - 1) * n..(c - a) * n]);
+            }
+            row.iter_mut().for_each(|v| *v *= dinv[a]);
+        }
+        // (K S − P Hᵀ)ᵀ, row a = Σ_b S_ba Kᵀ_b − (H P)_a.
+        let ct = &mut self.ct[..m * n];
+        for (a, row) in ct.chunks_exact_mut(n).enumerate() {
+            row.fill(0.0);
+            for b in 0..m {
+                axpy(row, S[b * m + a], &kt[b * n..(b + 1) * n]);
+            }
+            axpy(row, -1.0, &hp[a * n..(a + 1) * n]);
+        }
+        let (xo, Po) = (&mut to.0[..n], &mut to.1[..n * n]);
+        xo.copy_from_slice(x);
+        for a in 0..m {
+            axpy(xo, y[a], &kt[a * n..(a + 1) * n]);
+        }
+        // The upper triangle: P_ij − Σ_a K_ia (H P)_aj + Σ_a (K S − P Hᵀ)_ia K_ja.
         for i in 0..n {
-            let r = &mut K[i * m..(i + 1) * m];
-            for a in 0..m {
-                let mut s = r[a];
-                for c in 0..a {
-                    s -= S[c * m + a] * r[c];
+            for j in i..n {
+                let mut v = P[i * n + j];
+                for a in 0..m {
+                    v -= kt[a * n + i] * hp[a * n + j];
                 }
-                r[a] = s * sinv[a];
-            }
-            for a in (0..m).rev() {
-                let mut s = r[a];
-                for c in a + 1..m {
-                    s -= S[a * m + c] * r[c];
+                for a in 0..m {
+                    v += ct[a * n + i] * kt[a * n + j];
                 }
-                r[a] = s * sinv[a];
+                Po[i * n + j] = v;
             }
         }
-        for i in 0..n {
-            for a in 0..m {
-                x[i] += K[i * m + a] * y[a];
-            }
-        }
-        // Joseph form as `Core`: A = P − K (H P), P = A + (K R − A Hᵀ) Kᵀ.
-        let hp = &mut self.hp[..m * n];
-        if symmetric {
-            // (P Hᵀ)ᵀ has the same products in the same order as H P when P = Pᵀ.
-            for a in 0..m {
-                for j in 0..n {
-                    hp[a * n + j] = pht[j * m + a];
-                }
-            }
-        } else {
-            for a in 0..m {
-                let row = &mut hp[a * n..(a + 1) * n];
-                row.fill(0.0);
-                for j in 0..n {
-                    let h = H[a * n + j];
-                    for (r, v) in row.iter_mut().zip(&P[j * n..(j + 1) * n]) {
-                        *r += h * v;
-                    }
-                }
-            }
-        }
-        let A = &mut self.a[..n * n];
-        A.copy_from_slice(P);
-        for i in 0..n {
-            let row = &mut A[i * n..(i + 1) * n];
-            for a in 0..m {
-                let kk = K[i * m + a];
-                for (r, v) in row.iter_mut().zip(&hp[a * n..(a + 1) * n]) {
-                    *r -= kk * v;
-                }
-            }
-        }
-        let C = &mut self.c[..n * m];
-        for i in 0..n {
-            for a in 0..m {
-                let mut kr = 0.0;
-                for b in 0..m {
-                    kr += K[i * m + b] * R[b * m + a];
-                }
-                let mut aht = 0.0;
-                for j in 0..n {
-                    aht += A[i * n + j] * H[a * n + j];
-                }
-                C[i * m + a] = kr - aht;
-            }
-        }
-        P.copy_from_slice(A);
-        for i in 0..n {
-            let row = &mut P[i * n..(i + 1) * n];
-            for a in 0..m {
-                let c = C[i * m + a];
-                for (j, r) in row.iter_mut().enumerate() {
-                    *r += c * K[j * m + a];
-                }
-            }
-        }
+        mirror(Po, n);
         true
     }
 }
