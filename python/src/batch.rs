@@ -2,7 +2,7 @@
 //! into Rust that loops over the steps without returning to Python.
 #![allow(non_snake_case)]
 
-use numpy::{PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -112,47 +112,37 @@ pub(crate) fn batch_filter<'py>(
     } else {
         vec![steps, n]
     };
-    let mean_array = || PyArrayDyn::<f64>::zeros(py, mean_shape.clone(), false);
-    let (means, means_p) = (mean_array(), mean_array());
-    let covs = PyArray3::<f64>::zeros(py, [steps, n, n], false);
-    let covs_p = PyArray3::<f64>::zeros(py, [steps, n, n], false);
+    let cov_shape = vec![steps, n, n];
+    let outputs = [&mean_shape, &cov_shape, &mean_shape, &cov_shape]
+        .map(|shape| PyArrayDyn::<f64>::zeros(py, shape.clone(), false));
     {
-        let mut mw = means
-            .try_readwrite()
-            .map_err(|e| value_error(e.to_string()))?;
-        let mut mpw = means_p
-            .try_readwrite()
-            .map_err(|e| value_error(e.to_string()))?;
-        let mut cw = covs
-            .try_readwrite()
-            .map_err(|e| value_error(e.to_string()))?;
-        let mut cpw = covs_p
-            .try_readwrite()
-            .map_err(|e| value_error(e.to_string()))?;
+        let err = |e: &dyn std::fmt::Display| value_error(e.to_string());
+        let [means, covs, means_p, covs_p] = outputs.each_ref().map(|a| a.try_readwrite());
+        let (mut means, mut covs) = (means.map_err(|e| err(&e))?, covs.map_err(|e| err(&e))?);
+        let (mut means_p, mut covs_p) =
+            (means_p.map_err(|e| err(&e))?, covs_p.map_err(|e| err(&e))?);
         let out = Outputs {
-            means: mw.as_slice_mut().map_err(|e| value_error(e.to_string()))?,
-            covs: cw.as_slice_mut().map_err(|e| value_error(e.to_string()))?,
-            means_p: mpw.as_slice_mut().map_err(|e| value_error(e.to_string()))?,
-            covs_p: cpw.as_slice_mut().map_err(|e| value_error(e.to_string()))?,
+            means: means.as_slice_mut().map_err(|e| err(&e))?,
+            covs: covs.as_slice_mut().map_err(|e| err(&e))?,
+            means_p: means_p.as_slice_mut().map_err(|e| err(&e))?,
+            covs_p: covs_p.as_slice_mut().map_err(|e| err(&e))?,
         };
         let u = u.as_deref();
-        py.detach(|| run(core, &z, u, update_first, out))
-            .map_err(|k| {
-                value_error(format!(
-                    "batch_filter: S (the innovation covariance H P Hᵀ + R) is singular at \
+        let batch = Batch {
+            core,
+            z: &z,
+            u,
+            update_first,
+            out,
+        };
+        py.detach(|| run(batch)).map_err(|k| {
+            value_error(format!(
+                "batch_filter: S (the innovation covariance H P Hᵀ + R) is singular at \
                      step {k}"
-                ))
-            })?;
+            ))
+        })?;
     }
-    PyTuple::new(
-        py,
-        [
-            means.into_any(),
-            covs.into_any(),
-            means_p.into_any(),
-            covs_p.into_any(),
-        ],
-    )
+    PyTuple::new(py, outputs.map(|a| a.into_any()))
 }
 
 /// Where the batch loop writes: x and P after each update and after each prediction.
@@ -206,25 +196,21 @@ macro_rules! with_dim {
     };
 }
 
-/// The batch loop for the dimensions of `core`, compiled per state dimension up to 8 and
-/// measurement dimension up to 3. `Err(k)`: S singular at step k.
-fn run(
-    core: &mut Core,
-    z: &[f64],
-    u: Option<&[f64]>,
+/// One `batch_filter` call: the filter, the series zs (N×m) and us (N×p), the step order
+/// and where the results go.
+struct Batch<'a> {
+    core: &'a mut Core,
+    z: &'a [f64],
+    u: Option<&'a [f64]>,
     update_first: bool,
-    out: Outputs<'_>,
-) -> Result<(), usize> {
-    with_dim!(core.n, [1, 2, 3, 4, 5, 6, 7, 8], |d| {
-        with_dim!(core.m, [1, 2, 3], |e| run_dim(
-            d,
-            e,
-            core,
-            z,
-            u,
-            update_first,
-            out
-        ))
+    out: Outputs<'a>,
+}
+
+/// The batch loop, compiled per state dimension up to 8 and measurement dimension up to 3.
+/// `Err(k)`: S singular at step k.
+fn run(b: Batch<'_>) -> Result<(), usize> {
+    with_dim!(b.core.n, [1, 2, 3, 4, 5, 6, 7, 8], |d| {
+        with_dim!(b.core.m, [1, 2, 3], |e| run_dim(d, e, b))
     })
 }
 
@@ -234,15 +220,14 @@ fn run(
 /// symmetric or an S that is not positive definite (the general path then tries LU), and the
 /// last step (so that K, y, S, the priors and posteriors the filter exposes afterwards are
 /// those of the last step, as in FilterPy) take `Core`'s general update and predict.
-fn run_dim<D: Dim, E: Dim>(
-    d: D,
-    e: E,
-    core: &mut Core,
-    z: &[f64],
-    u: Option<&[f64]>,
-    update_first: bool,
-    out: Outputs<'_>,
-) -> Result<(), usize> {
+fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), usize> {
+    let Batch {
+        core,
+        z,
+        u,
+        update_first,
+        out,
+    } = b;
     let (n, m) = (d.get(), e.get());
     let nn = n * n;
     let steps = z.len() / m;
