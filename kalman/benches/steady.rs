@@ -15,7 +15,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use faer::Mat;
-use kalman::riccati::dare;
+use kalman::riccati::Dare;
 use kalman::schedule::{GainSchedule, ScheduleOptions};
 use kalman::{CovarianceForm, DynDims, Filter, FixedDims};
 
@@ -97,7 +97,9 @@ fn dare_vs_iteration(c: &mut Criterion) {
     for (n, m) in [(7, 2), (50, 10), (200, 20)] {
         let p = problem(n, m);
         let (P, steps) = iterate(&p);
-        let ss = dare(p.F.as_ref(), p.H.as_ref(), p.Q.as_ref(), p.R.as_ref(), None).unwrap();
+        let ss = Dare::new(&p.F, &p.H, &p.Q, &p.R)
+            .and_then(|p| p.solve())
+            .unwrap();
         let d = (&P - &ss.prior).norm_l2() / ss.prior.norm_l2();
         eprintln!(
             "dare n={n}: iterated filter converged in {steps} steps, {} doubling steps, relative difference {d:.1e}",
@@ -111,7 +113,8 @@ fn dare_vs_iteration(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::new("dare", n), &p, |b, p| {
             b.iter(|| {
                 black_box(
-                    dare(p.F.as_ref(), p.H.as_ref(), p.Q.as_ref(), p.R.as_ref(), None)
+                    Dare::new(&p.F, &p.H, &p.Q, &p.R)
+                        .and_then(|p| p.solve())
                         .unwrap()
                         .iterations,
                 )

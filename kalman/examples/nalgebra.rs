@@ -18,7 +18,9 @@ fn main() -> Result<(), kalman::Error> {
     let s = model.smooth(&[0.0, 0.0], &p0, &zs)?.to_nalgebra();
     println!("smoothed track (column k is x_k|N-1) {}", s.means);
     println!("last smoothed covariance {}", s.covariances[zs.len() - 1]);
-    let steady = kalman::riccati::dare(&f, &h, &q, &r, None)?.to_nalgebra();
+    let steady = kalman::riccati::Dare::new(&f, &h, &q, &r)?
+        .solve()?
+        .to_nalgebra();
     println!("steady-state gain {}", steady.gain);
     Ok(())
 }

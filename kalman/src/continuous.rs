@@ -6,7 +6,7 @@
 //! Here `Q` is the n×n intensity of the process noise as it enters the state (G Q_w Gᵀ for a
 //! noise input matrix G and intensity Q_w) and `R` the m×m intensity of the measurement noise
 //! (positive definite). The steady state of the ODE is the stabilising solution of the CARE,
-//! [`crate::riccati::care`].
+//! [`crate::riccati::Care`].
 #![allow(non_snake_case)]
 
 use faer::linalg::solvers::Solve;
@@ -15,7 +15,7 @@ use faer::{Mat, MatRef};
 use crate::Error;
 use crate::MatrixInput;
 use crate::model::{check, owned};
-use crate::riccati::{Coupling, Inputs, factor_r, symmetrise, symmetrised, weighted_gram};
+use crate::riccati::{Care, factor_r, symmetrise, symmetrised, weighted_gram};
 
 /// The Kalman–Bucy filter's covariance equation for a time-invariant continuous model.
 ///
@@ -112,12 +112,7 @@ impl KalmanBucy {
         Q: impl MatrixInput,
         R: impl MatrixInput,
     ) -> Result<Self, Error> {
-        let m = Inputs::new(
-            ["A", "H", "Q", "R"],
-            Coupling::Measurement,
-            [&A, &H, &Q, &R],
-            None,
-        )?;
+        let m = Care::new(A, H, Q, R)?.inputs;
         let llt = factor_r(m.r.as_ref(), "the Kalman-Bucy gain needs R^-1")?;
         Ok(Self {
             G: weighted_gram(m.c.as_ref(), &llt),

@@ -15,7 +15,7 @@
 //!
 //! let f: DMatrix<f64> = dmatrix![1.0, 1.0; 0.0, 1.0];
 //! let h = dmatrix![1.0, 0.0];
-//! let ss = kalman::riccati::dare(&f, &h, &DMatrix::identity(2, 2), &dmatrix![1.0], None)?;
+//! let ss = kalman::riccati::Dare::new(&f, &h, &DMatrix::identity(2, 2), &dmatrix![1.0]).and_then(|p| p.solve())?;
 //! let gain: DMatrix<f64> = ss.gain.to_nalgebra();
 //! assert_eq!(gain.shape(), (2, 1));
 //! let state: DVector<f64> = [1.0, 2.0][..].to_nalgebra();
@@ -181,7 +181,9 @@ mod tests {
             DMatrix::identity(2, 2) * 0.1,
             nalgebra::dmatrix![0.4],
         );
-        let ss = crate::riccati::dare(&f, &h, &q, &r, None).expect("solvable");
+        let ss = crate::riccati::Dare::new(&f, &h, &q, &r)
+            .and_then(|p| p.solve())
+            .expect("solvable");
         let na = ss.to_nalgebra();
         assert!(
             same(&ss.prior, &na.prior)
@@ -197,7 +199,9 @@ mod tests {
             (ss.iterations, ss.relative_residual.to_bits())
         );
         let b = nalgebra::dmatrix![0.125; 0.5];
-        let lqr = crate::riccati::dlqr(&f, &b, &q, &r, None).expect("solvable");
+        let lqr = crate::riccati::Dlqr::new(&f, &b, &q, &r)
+            .and_then(|p| p.solve())
+            .expect("solvable");
         let lna = lqr.to_nalgebra();
         assert!(
             same(&lqr.gain, &lna.gain)
@@ -206,7 +210,9 @@ mod tests {
         );
         let a = nalgebra::dmatrix![-1.0];
         let one = nalgebra::dmatrix![1.0];
-        let cs = crate::riccati::care(&a, &one, &one, &one).expect("solvable");
+        let cs = crate::riccati::Care::new(&a, &one, &one, &one)
+            .and_then(|p| p.solve())
+            .expect("solvable");
         let cna = cs.to_nalgebra();
         assert!(same(&cs.covariance, &cna.covariance) && same(&cs.gain, &cna.gain));
         let smoothed = Smoothed {

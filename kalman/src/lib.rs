@@ -85,18 +85,18 @@
 //!   equations*, 2004 — [`riccati`].
 //! - Yu. V. Gridnev, A. Yu. Rusetsky, S. A. Rak, *Stochastic simulation of the automatic
 //!   control systems of an unmanned aerial vehicle with an optimal Kalman filter* (in
-//!   Russian, 2013): the UAV loop in the example of [`riccati::dlqr`].
+//!   Russian, 2013): the UAV loop in the example of [`riccati::Dlqr`].
 //!
 //! # nalgebra in, nalgebra out
 //! Every matrix argument of the public API — [`Model::new`], [`Filter::new`], the Riccati
-//! solvers ([`riccati::dare`], [`riccati::dlqr`], [`riccati::care`], …),
+//! solvers ([`riccati::Dare`], [`riccati::Dlqr`], [`riccati::Care`], …),
 //! [`continuous::expm`], the nonlinear filters — takes anything that implements
 //! [`MatrixInput`]: row-major arrays `[[f64; C]; R]`, faer matrices and, with the feature
 //! `nalgebra`, nalgebra matrices (`&DMatrix<f64>`, fixed-size `Matrix2<f64>`, views). Vectors
 //! are `&[f64]` (`dvector.as_slice()`). Results are faer matrices and slices; with the feature
 //! `nalgebra` one idiom brings any of them back: `.to_nalgebra()` from [`ToNalgebra`]
 //! (`filter.covariance().to_nalgebra()`, `filter.state().to_nalgebra()`), and on the result
-//! structs it converts every matrix at once (`dare(…)?.to_nalgebra().gain`,
+//! structs it converts every matrix at once (`Dare::new(…)?.solve()?.to_nalgebra().gain`,
 //! `model.smooth(…)?.to_nalgebra().means`). [`Model::from_matrices`] reads the dimensions off
 //! the matrices, [`Model::smooth`] filters a whole series with gaps and smooths it in one call.
 //!
@@ -127,7 +127,7 @@ let means: DMatrix<f64> = smoothed.means.to_nalgebra(); // column k is x_{k|N-1}
 assert!((means.column(3) - filter.state().to_nalgebra()).norm() < 1e-12);
 assert!((&smoothed.covariances.to_nalgebra()[3] - &p).norm() < 1e-12);
 // The steady state of the same model, nalgebra in and out.
-let steady = kalman::riccati::dare(&f, &h, &q, &r, None)?.to_nalgebra();
+let steady = kalman::riccati::Dare::new(&f, &h, &q, &r)?.solve()?.to_nalgebra();
 let k: &DMatrix<f64> = &steady.gain;
 assert_eq!(k.shape(), (2, 1));
 # Ok(())

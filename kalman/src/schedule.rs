@@ -137,7 +137,7 @@ impl<D: Dims> GainSchedule<D> {
     }
 
     /// The fixed-gain filter: the steady-state gain of `steady` (from
-    /// [`crate::riccati::dare`] on the same model) for every step.
+    /// [`crate::riccati::Dare`] on the same model) for every step.
     ///
     /// # Errors
     /// [`Error::Shape`] if `steady` does not match the model's dimensions; validation errors

@@ -227,10 +227,13 @@ fn discrete_riccati<'py>(
     let ([a, b, q, r], [na, nb, nq, nr]) = (args, names);
     let (a, b, q, r) = (mat(a, na)?, mat(b, nb)?, mat(q, nq)?, mat(r, nr)?);
     let coupling = opt_mat(coupling, coupling_name)?;
-    let coupling = coupling.as_ref().map(|s| s as &dyn kalman::MatrixInput);
     let outputs = match kind {
         Discrete::Filter => {
-            let ss = riccati::dare(&a, &b, &q, &r, coupling).map_err(engine(context))?;
+            let mut dare = riccati::Dare::new(&a, &b, &q, &r).map_err(engine(context))?;
+            if let Some(s) = &coupling {
+                dare = dare.cross_covariance(s).map_err(engine(context))?;
+            }
+            let ss = dare.solve().map_err(engine(context))?;
             vec![
                 ("P", ss.prior),
                 ("P_post", ss.posterior),
@@ -240,7 +243,11 @@ fn discrete_riccati<'py>(
             ]
         }
         Discrete::Lqr => {
-            let lqr = riccati::dlqr(&a, &b, &q, &r, coupling).map_err(engine(context))?;
+            let mut dlqr = riccati::Dlqr::new(&a, &b, &q, &r).map_err(engine(context))?;
+            if let Some(n) = &coupling {
+                dlqr = dlqr.cross_weight(n).map_err(engine(context))?;
+            }
+            let lqr = dlqr.solve().map_err(engine(context))?;
             vec![("K", lqr.gain), ("P", lqr.cost)]
         }
     };
@@ -277,7 +284,9 @@ fn run_care<'py>(
     [A, H, Q, R]: [&Bound<'py, PyAny>; 4],
 ) -> PyResult<Bound<'py, PyDict>> {
     let (A, H, Q, R) = (mat(A, "A")?, mat(H, "H")?, mat(Q, "Q")?, mat(R, "R")?);
-    let ss = riccati::care(&A, &H, &Q, &R).map_err(engine("care"))?;
+    let ss = riccati::Care::new(&A, &H, &Q, &R)
+        .and_then(|c| c.solve())
+        .map_err(engine("care"))?;
     let out = PyDict::new(py);
     out.set_item("P", faer_out(py, ss.covariance.as_ref()))?;
     out.set_item("K", faer_out(py, ss.gain.as_ref()))?;

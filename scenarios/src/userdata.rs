@@ -659,18 +659,21 @@ pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
     let model = model_file::load_discrete(path)?;
     // The engine's model checks symmetry and PSD of Q, R and the joint noise covariance.
     engine_model(path, &model)?;
-    let S = model.S.as_ref().map(|s| s as &dyn kalman::MatrixInput);
-    let ss =
-        kalman::riccati::dare(&model.F, &model.H, &model.Q, &model.R, S).map_err(|e| match e {
-            kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
-                Error::KalmanOnFile {
-                    path: path.to_path_buf(),
-                    context: "steady state",
-                    source: e,
-                }
+    let dare = kalman::riccati::Dare::new(&model.F, &model.H, &model.Q, &model.R);
+    let dare = match &model.S {
+        Some(S) => dare.and_then(|d| d.cross_covariance(S)),
+        None => dare,
+    };
+    let ss = dare.and_then(|d| d.solve()).map_err(|e| match e {
+        kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
+            Error::KalmanOnFile {
+                path: path.to_path_buf(),
+                context: "steady state",
+                source: e,
             }
-            e => model_error(path, e),
-        })?;
+        }
+        e => model_error(path, e),
+    })?;
     let m = |a: &Mat<f64>| Some(serde_json::json!(faer_rows(a.as_ref())));
     let text = json_object(&[
         ("P", m(&ss.prior)),

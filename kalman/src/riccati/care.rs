@@ -1,4 +1,4 @@
-//! The continuous equations: the filter CARE ([`care`]) and the continuous LQR ([`clqr`]),
+//! The continuous equations: the filter CARE ([`Care`]) and the continuous LQR ([`Clqr`]),
 //! by the structured doubling algorithm after a Cayley transform.
 #![allow(non_snake_case)]
 
@@ -13,12 +13,11 @@ use super::{
 };
 use crate::Error;
 use crate::MatrixInput;
-use crate::model::owned;
 
-/// Steady state of the Kalman–Bucy filter: the stabilising P of the filter CARE
-/// A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0, where `Q` is the n×n process-noise intensity as it
-/// enters the state (G Q_w Gᵀ for a noise input matrix G and intensity Q_w), and the gain
-/// K = P Hᵀ R⁻¹.
+/// The filter CARE A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0 of the Kalman–Bucy filter, where `Q`
+/// is the n×n process-noise intensity as it enters the state (G Q_w Gᵀ for a noise input
+/// matrix G and intensity Q_w); [`Care::solve`] gives the stabilising P and the gain
+/// K = P Hᵀ R⁻¹ as a [`ContinuousSteadyState`].
 ///
 /// Method: the dual control-form CARE X A_c + A_cᵀ X − X G X + Q = 0 (A_c = Aᵀ,
 /// G = Hᵀ R⁻¹ H) has Hamiltonian ℋ = [[A_c, −G], [−Q, −A_cᵀ]]. With γ > ρ(ℋ) the Cayley
@@ -27,133 +26,213 @@ use crate::model::owned;
 /// A_γ = A_c − γI, V = A_γ + G A_γ⁻ᵀ Q: A₀ = I + 2γV⁻¹, G₀ = 2γ V⁻¹ G A_γ⁻ᵀ,
 /// H₀ = 2γ V⁻ᵀ Q A_γ⁻¹; the doubling then converges to X = P.
 ///
-/// Errors as [`dare`](super::dare) with the continuous stability boundary (Re λ ≥ 0).
-///
-/// ```
-/// use faer::mat;
-/// // ẋ = −x + w, z = x + v, q = r = 1: −2P − P² + 1 = 0, P = √2 − 1.
-/// let ss = kalman::riccati::care(
-///     mat![[-1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(),
-/// ).expect("must succeed");
-/// assert!((ss.covariance[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-12);
-/// ```
-pub fn care(
-    A: impl MatrixInput,
-    H: impl MatrixInput,
-    Q: impl MatrixInput,
-    R: impl MatrixInput,
-) -> Result<ContinuousSteadyState, Error> {
-    care_with(A, H, Q, R, &RiccatiOptions::default())
-}
-
-/// [`care`] with explicit options.
+/// Errors of [`Care::solve`] as [`Dare`](super::Dare) with the continuous stability
+/// boundary (Re λ ≥ 0).
 ///
 /// # Example
 /// ```
-/// use kalman::riccati::{RiccatiOptions, care_with};
+/// use faer::mat;
+/// use kalman::riccati::Care;
 ///
-/// // ẋ = w, z = x + v, q = 4, r = 1: −P² + 4 = 0, P = 2, K = 2.
-/// let ss = care_with([[0.0]], [[1.0]], [[4.0]], [[1.0]], &RiccatiOptions::default())?;
-/// assert!((ss.covariance[(0, 0)] - 2.0).abs() < 1e-12 && (ss.gain[(0, 0)] - 2.0).abs() < 1e-12);
+/// // ẋ = −x + w, z = x + v, q = r = 1: −2P − P² + 1 = 0, P = √2 − 1.
+/// let one = mat![[1.0]];
+/// let ss = Care::new(mat![[-1.0]], &one, &one, &one)?.solve()?;
+/// assert!((ss.covariance[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
-pub fn care_with(
-    A: impl MatrixInput,
-    H: impl MatrixInput,
-    Q: impl MatrixInput,
-    R: impl MatrixInput,
-    opts: &RiccatiOptions,
-) -> Result<ContinuousSteadyState, Error> {
-    let m = Inputs::new(
-        ["A", "H", "Q", "R"],
-        Coupling::Measurement,
-        [&A, &H, &Q, &R],
-        None,
-    )?;
-    let (A, H, Q, R) = (m.a.as_ref(), m.c.as_ref(), m.q.as_ref(), m.r.as_ref());
-    let names = Names {
-        equation: "filter CARE",
-        detect: Pair::Detect("(A, H)"),
-        stab: Pair::Stab("(A, Q^{1/2})"),
-    };
-    let sol = continuous_dual(A, H, Q, R, opts, &names)?;
-    let P = sol.x;
-    let llt = factor_r(R, "the Riccati solvers need R^-1")?;
-    let gain = llt.solve(H * &P).transpose().to_owned();
-    Ok(ContinuousSteadyState {
-        covariance: P,
-        gain,
-        iterations: sol.iterations,
-        relative_residual: sol.relative_residual,
-    })
+#[derive(Debug, Clone)]
+pub struct Care {
+    pub(crate) inputs: Inputs,
+    options: RiccatiOptions,
 }
 
-/// Continuous-time LQR for ẋ = A x + B u with cost ∫ xᵀQx + uᵀRu: solves
-/// X A + Aᵀ X − X B R⁻¹ Bᵀ X + Q = 0 and returns L = R⁻¹ Bᵀ X (u = −L x).
+impl Care {
+    /// The equation of ẋ = A x + w, z = H x + v with intensities Q (n×n) and R (m×m);
+    /// default options.
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming the first bad matrix (A n×n, H m×n,
+    /// Q n×n, R m×m).
+    pub fn new(
+        A: impl MatrixInput,
+        H: impl MatrixInput,
+        Q: impl MatrixInput,
+        R: impl MatrixInput,
+    ) -> Result<Self, Error> {
+        Ok(Self {
+            inputs: Inputs::new(
+                ["A", "H", "Q", "R"],
+                Coupling::Measurement,
+                [&A, &H, &Q, &R],
+            )?,
+            options: RiccatiOptions::default(),
+        })
+    }
+
+    /// Replaces the default [`RiccatiOptions`].
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::riccati::{Care, RiccatiOptions};
+    ///
+    /// // ẋ = w, z = x + v, q = 4, r = 1: −P² + 4 = 0, P = 2, K = 2.
+    /// let opts = RiccatiOptions { residual_tolerance: 1e-12, ..RiccatiOptions::default() };
+    /// let ss = Care::new([[0.0]], [[1.0]], [[4.0]], [[1.0]])?.options(opts).solve()?;
+    /// assert!((ss.covariance[(0, 0)] - 2.0).abs() < 1e-12 && (ss.gain[(0, 0)] - 2.0).abs() < 1e-12);
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    #[must_use]
+    pub fn options(self, options: RiccatiOptions) -> Self {
+        Self { options, ..self }
+    }
+
+    /// The stabilising covariance and the Kalman–Bucy gain.
+    ///
+    /// # Errors
+    /// As listed on [`Care`].
+    pub fn solve(&self) -> Result<ContinuousSteadyState, Error> {
+        let m = &self.inputs;
+        let (A, H, Q, R) = (m.a.as_ref(), m.c.as_ref(), m.q.as_ref(), m.r.as_ref());
+        let names = Names {
+            equation: "filter CARE",
+            detect: Pair::Detect("(A, H)"),
+            stab: Pair::Stab("(A, Q^{1/2})"),
+        };
+        let sol = continuous_dual(A, H, Q, R, &self.options, &names)?;
+        let P = sol.x;
+        let llt = factor_r(R, "the Riccati solvers need R^-1")?;
+        let gain = llt.solve(H * &P).transpose().to_owned();
+        Ok(ContinuousSteadyState {
+            covariance: P,
+            gain,
+            iterations: sol.iterations,
+            relative_residual: sol.relative_residual,
+        })
+    }
+
+    /// Relative residual ‖A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q‖_F / ‖P‖_F of a candidate solution P
+    /// (+∞ when R is not positive definite).
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming P unless it is n×n and finite.
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::riccati::Care;
+    ///
+    /// // ẋ = −x + w, z = x + v, q = r = 1: P = √2 − 1 solves −2P − P² + 1 = 0.
+    /// let care = Care::new([[-1.0]], [[1.0]], [[1.0]], [[1.0]])?;
+    /// assert!(care.residual([[2f64.sqrt() - 1.0]])? < 1e-15);
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    pub fn residual(&self, P: impl MatrixInput) -> Result<f64, Error> {
+        let P = self.inputs.candidate("P", &P)?;
+        let m = &self.inputs;
+        Ok(residual(
+            m.a.as_ref(),
+            m.c.as_ref(),
+            m.q.as_ref(),
+            m.r.as_ref(),
+            P.as_ref(),
+        ))
+    }
+}
+
+/// The continuous-time LQR for ẋ = A x + B u with cost ∫ xᵀQx + uᵀRu: [`Clqr::solve`]
+/// solves X A + Aᵀ X − X B R⁻¹ Bᵀ X + Q = 0 and returns the [`Lqr`] gain L = R⁻¹ Bᵀ X
+/// (u = −L x).
 ///
-/// Errors: [`Error::NotStabilisable`] for (A, B), [`Error::NotDetectable`] for (Q^{1/2}, A)
-/// (modes with Re λ ≥ 0), shape/finiteness/PD errors naming the matrix.
+/// Errors of [`Clqr::solve`]: [`Error::NotStabilisable`] for (A, B), [`Error::NotDetectable`]
+/// for (Q^{1/2}, A) (modes with Re λ ≥ 0), PD errors naming the matrix.
 ///
 /// # Example
 /// ```
-/// use faer::mat;
+/// use kalman::riccati::Clqr;
 ///
 /// // ẋ = u, cost ∫ x² + u²: X = 1, L = 1.
-/// let (a, one) = (mat![[0.0]], mat![[1.0]]);
-/// let lqr = kalman::riccati::clqr(a.as_ref(), one.as_ref(), one.as_ref(), one.as_ref())?;
+/// let lqr = Clqr::new([[0.0]], [[1.0]], [[1.0]], [[1.0]])?.solve()?;
 /// assert!((lqr.gain[(0, 0)] - 1.0).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
-pub fn clqr(
-    A: impl MatrixInput,
-    B: impl MatrixInput,
-    Q: impl MatrixInput,
-    R: impl MatrixInput,
-) -> Result<Lqr, Error> {
-    let m = Inputs::new(
-        ["A", "B", "Q", "R"],
-        Coupling::Input,
-        [&A, &B, &Q, &R],
-        None,
-    )?;
-    let (A, B, Q, R) = (m.a.as_ref(), m.c.as_ref(), m.q.as_ref(), m.r.as_ref());
-    let names = Names {
-        equation: "LQR CARE",
-        detect: Pair::Stab("(A, B)"),
-        stab: Pair::Detect("(Q^{1/2}, A)"),
-    };
-    let opts = RiccatiOptions::default();
-    let sol = continuous_dual(A.transpose(), B.transpose(), Q, R, &opts, &names)?;
-    let llt = factor_r(R, "the Riccati solvers need R^-1")?;
-    let gain = llt.solve(B.transpose() * &sol.x);
-    Ok(Lqr {
-        gain,
-        cost: sol.x,
-        iterations: sol.iterations,
-        relative_residual: sol.relative_residual,
-    })
+#[derive(Debug, Clone)]
+pub struct Clqr {
+    inputs: Inputs,
+    options: RiccatiOptions,
 }
 
-/// Relative residual ‖A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q‖_F / ‖P‖_F of a candidate filter-CARE
-/// solution.
-///
-/// # Example
-/// ```
-/// use kalman::riccati::care_residual;
-///
-/// // ẋ = −x + w, z = x + v, q = r = 1: P = √2 − 1 solves −2P − P² + 1 = 0.
-/// let p = 2f64.sqrt() - 1.0;
-/// assert!(care_residual([[-1.0]], [[1.0]], [[1.0]], [[1.0]], [[p]]) < 1e-15);
-/// ```
-pub fn care_residual(
-    A: impl MatrixInput,
-    H: impl MatrixInput,
-    Q: impl MatrixInput,
-    R: impl MatrixInput,
-    P: impl MatrixInput,
+impl Clqr {
+    /// The problem of A (n×n), B (n×m), state weight Q (n×n) and input weight R (m×m);
+    /// default options.
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming the first bad matrix.
+    pub fn new(
+        A: impl MatrixInput,
+        B: impl MatrixInput,
+        Q: impl MatrixInput,
+        R: impl MatrixInput,
+    ) -> Result<Self, Error> {
+        Ok(Self {
+            inputs: Inputs::new(["A", "B", "Q", "R"], Coupling::Input, [&A, &B, &Q, &R])?,
+            options: RiccatiOptions::default(),
+        })
+    }
+
+    /// Replaces the default [`RiccatiOptions`].
+    #[must_use]
+    pub fn options(self, options: RiccatiOptions) -> Self {
+        Self { options, ..self }
+    }
+
+    /// The stabilising cost matrix X and the gain L.
+    ///
+    /// # Errors
+    /// As listed on [`Clqr`].
+    pub fn solve(&self) -> Result<Lqr, Error> {
+        let m = &self.inputs;
+        let (A, B, Q, R) = (m.a.as_ref(), m.c.as_ref(), m.q.as_ref(), m.r.as_ref());
+        let names = Names {
+            equation: "LQR CARE",
+            detect: Pair::Stab("(A, B)"),
+            stab: Pair::Detect("(Q^{1/2}, A)"),
+        };
+        let sol = continuous_dual(A.transpose(), B.transpose(), Q, R, &self.options, &names)?;
+        let llt = factor_r(R, "the Riccati solvers need R^-1")?;
+        let gain = llt.solve(B.transpose() * &sol.x);
+        Ok(Lqr {
+            gain,
+            cost: sol.x,
+            iterations: sol.iterations,
+            relative_residual: sol.relative_residual,
+        })
+    }
+
+    /// Relative residual ‖X A + Aᵀ X − X B R⁻¹ Bᵀ X + Q‖_F / ‖X‖_F of a candidate cost
+    /// matrix X (the filter-form residual of the dual, see [`Care::residual`]).
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming X unless it is n×n and finite.
+    pub fn residual(&self, X: impl MatrixInput) -> Result<f64, Error> {
+        let X = self.inputs.candidate("X", &X)?;
+        let m = &self.inputs;
+        Ok(residual(
+            m.a.transpose(),
+            m.c.transpose(),
+            m.q.as_ref(),
+            m.r.as_ref(),
+            X.as_ref(),
+        ))
+    }
+}
+
+/// [`Care::residual`] on faer views (the solver's own check).
+fn residual(
+    A: MatRef<'_, f64>,
+    H: MatRef<'_, f64>,
+    Q: MatRef<'_, f64>,
+    R: MatRef<'_, f64>,
+    P: MatRef<'_, f64>,
 ) -> f64 {
-    let (A, H, Q, R, P) = (owned(&A), owned(&H), owned(&Q), owned(&R), owned(&P));
-    let (A, H, Q, R, P) = (A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), P.as_ref());
     let HP = H * P;
     let corr = match R.llt(Side::Lower) {
         Ok(llt) => HP.transpose() * llt.solve(&HP),
@@ -214,7 +293,7 @@ fn continuous_dual(
         });
     }
     let (X, iterations) = sda(A0, G0, H0, opts, names.equation)?;
-    let relative_residual = care_residual(A, H, Q, R, X.as_ref());
+    let relative_residual = residual(A, H, Q, R, X.as_ref());
     let Kt = llt.solve(H * &X);
     let cl = A.to_owned() - Kt.transpose() * H;
     let abscissa = spectral(cl.as_ref(), true);

@@ -1,5 +1,5 @@
-//! The discrete equations: the filter DARE ([`dare`]), its dual the discrete LQR
-//! ([`dlqr`]), the residual, Newton's polish and the decorrelate–test–double driver.
+//! The discrete equations: the filter DARE ([`Dare`]), its dual the discrete LQR
+//! ([`Dlqr`]), the residual, Newton's polish and the decorrelate–test–double driver.
 #![allow(non_snake_case)]
 
 use faer::linalg::solvers::Solve;
@@ -12,271 +12,352 @@ use super::{
     relative, spectral, symmetrise, symmetrised, weighted_gram,
 };
 use crate::MatrixInput;
-use crate::model::owned;
 use crate::storage::Dims;
 use crate::{Error, Model};
 
-/// Steady state of the discrete filter for (F, H, Q, R) and an optional cross-covariance S
-/// (n×m, `None` = 0), with default [`RiccatiOptions`].
+/// The filter DARE of (F, H, Q, R), with an optional cross-covariance S (n×m) and
+/// [`RiccatiOptions`]; [`Dare::solve`] gives the [`SteadyState`].
 ///
-/// Errors: a shape or finiteness error naming the matrix; [`Error::NotPositiveDefinite`]
-/// for R; [`Error::NotDetectable`] for (F, H); [`Error::NotStabilisable`] for a mode of
-/// (F̃, Q̃^{1/2}) on the unit circle that the noise does not reach (F̃ = F − S R⁻¹ H,
-/// Q̃ = Q − S R⁻¹ Sᵀ; plain (F, Q^{1/2}) when S = 0);
-/// [`Error::RiccatiNoConvergence`] / [`Error::RiccatiCheck`] if the result fails.
-///
-/// ```
-/// use faer::mat;
-/// // Random walk observed in unit noise, q = 1: P = (1 + √5)/2, K = P/(P + 1).
-/// let ss = kalman::riccati::dare(
-///     mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), mat![[1.0]].as_ref(), None,
-/// ).expect("must succeed");
-/// let p = (1.0 + 5f64.sqrt()) / 2.0;
-/// assert!((ss.prior[(0, 0)] - p).abs() < 1e-12);
-/// assert!((ss.gain[(0, 0)] - p / (p + 1.0)).abs() < 1e-12);
-/// ```
-pub fn dare(
-    F: impl MatrixInput,
-    H: impl MatrixInput,
-    Q: impl MatrixInput,
-    R: impl MatrixInput,
-    S: Option<&dyn MatrixInput>,
-) -> Result<SteadyState, Error> {
-    dare_with(F, H, Q, R, S, &RiccatiOptions::default())
-}
-
-impl SteadyState {
-    /// The steady state of an engine [`Model`] (either storage path): [`dare`] on its F, H,
-    /// Q, R and S.
-    ///
-    /// # Errors
-    /// As [`dare`].
-    pub fn of<D: Dims>(model: &Model<D>) -> Result<Self, Error> {
-        let s = model.s();
-        dare(
-            model.f(),
-            model.h(),
-            model.q(),
-            model.r(),
-            s.as_ref().map(|s| s as &dyn MatrixInput),
-        )
-    }
-}
-
-/// [`dare`] with explicit options.
+/// Errors of [`Dare::solve`]: [`Error::NotPositiveDefinite`] for R; [`Error::NotDetectable`]
+/// for (F, H); [`Error::NotStabilisable`] for a mode of (F̃, Q̃^{1/2}) on the unit circle
+/// that the noise does not reach (F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ; plain (F, Q^{1/2})
+/// when S = 0); [`Error::RiccatiNoConvergence`] / [`Error::RiccatiCheck`] if the result
+/// fails. Shape and finiteness errors naming the matrix come from the builder's own calls.
 ///
 /// # Example
 /// ```
-/// use kalman::riccati::{RiccatiOptions, dare_with};
+/// use faer::mat;
+/// use kalman::riccati::Dare;
 ///
-/// // A stricter residual check still accepts the scalar random walk, P = (1 + √5)/2.
-/// let opts = RiccatiOptions { residual_tolerance: 1e-13, ..RiccatiOptions::default() };
-/// let ss = dare_with([[1.0]], [[1.0]], [[1.0]], [[1.0]], None, &opts)?;
-/// assert!((ss.prior[(0, 0)] - (1.0 + 5f64.sqrt()) / 2.0).abs() < 1e-12);
+/// // Random walk observed in unit noise, q = 1: P = (1 + √5)/2, K = P/(P + 1).
+/// let one = mat![[1.0]];
+/// let ss = Dare::new(&one, &one, &one, &one)?.solve()?;
+/// let p = (1.0 + 5f64.sqrt()) / 2.0;
+/// assert!((ss.prior[(0, 0)] - p).abs() < 1e-12);
+/// assert!((ss.gain[(0, 0)] - p / (p + 1.0)).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
-pub fn dare_with(
-    F: impl MatrixInput,
-    H: impl MatrixInput,
-    Q: impl MatrixInput,
-    R: impl MatrixInput,
-    S: Option<&dyn MatrixInput>,
-    opts: &RiccatiOptions,
-) -> Result<SteadyState, Error> {
-    let inputs = Inputs::new(
-        ["F", "H", "Q", "R"],
-        Coupling::Measurement,
-        [&F, &H, &Q, &R],
-        S.map(|S| ("S", S)),
-    )?;
-    let (F, H, Q, R) = (
-        inputs.a.as_ref(),
-        inputs.c.as_ref(),
-        inputs.q.as_ref(),
-        inputs.r.as_ref(),
-    );
-    let S = inputs.cross.as_ref().map(Mat::as_ref);
-    let m = H.nrows();
-    let names = Names {
-        equation: "filter DARE",
-        detect: Pair::Detect("(F, H)"),
-        stab: Pair::Stab(if S.is_some() {
-            "(F - S R^-1 H, (Q - S R^-1 S^T)^{1/2})"
-        } else {
-            "(F, Q^{1/2})"
-        }),
-    };
-    let sol = discrete_dual(F, H, Q, R, S, opts, &names)?;
-    let P = sol.x;
-    // Σ = H P Hᵀ + R; K = P Hᵀ Σ⁻¹; K_p = (F P Hᵀ + S) Σ⁻¹; all by Cholesky solves.
-    let HP = H * &P;
-    let mut Sigma = &HP * H.transpose() + R;
-    symmetrise(&mut Sigma);
-    let llt = Sigma
-        .llt(Side::Lower)
-        .map_err(|_| Error::NotPositiveDefinite {
-            name: "H P H^T + R",
-            n: m,
-            rule: "the steady-state innovation covariance must be invertible",
-        })?;
-    let gain = llt.solve(&HP).transpose().to_owned();
-    let mut FPHt_S = F * (&P * H.transpose());
-    if let Some(S) = S {
-        FPHt_S += S;
-    }
-    let predictor_gain = llt.solve(FPHt_S.transpose()).transpose().to_owned();
-    let mut posterior = &P - &gain * &HP;
-    symmetrise(&mut posterior);
-    Ok(SteadyState {
-        prior: P,
-        posterior,
-        gain,
-        predictor_gain,
-        innovation_cov: Sigma,
-        iterations: sol.iterations,
-        relative_residual: sol.relative_residual,
-    })
+#[derive(Debug, Clone)]
+pub struct Dare {
+    inputs: Inputs,
+    options: RiccatiOptions,
 }
 
-/// Discrete-time LQR for x_{k+1} = A x_k + B u_k with cost Σ xᵀQx + uᵀRu + 2xᵀN u
-/// (`N` = `None` for no cross weight): solves X = AᵀXA + Q − (AᵀXB + N)(R + BᵀXB)⁻¹(BᵀXA + Nᵀ)
-/// by the dual filter DARE (F = Aᵀ, H = Bᵀ, S = N) and returns L with u = −L x.
+impl Dare {
+    /// The equation of x_{k+1} = F x_k + w_k, z_k = H x_k + v_k with cov(w) = Q (n×n),
+    /// cov(v) = R (m×m) and no cross-covariance; default options.
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming the first bad matrix (F n×n, H m×n,
+    /// Q n×n, R m×m).
+    pub fn new(
+        F: impl MatrixInput,
+        H: impl MatrixInput,
+        Q: impl MatrixInput,
+        R: impl MatrixInput,
+    ) -> Result<Self, Error> {
+        Ok(Self {
+            inputs: Inputs::new(
+                ["F", "H", "Q", "R"],
+                Coupling::Measurement,
+                [&F, &H, &Q, &R],
+            )?,
+            options: RiccatiOptions::default(),
+        })
+    }
+
+    /// Adds the cross-covariance S = E[w_k v_kᵀ] (n×m).
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming S.
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::riccati::Dare;
+    ///
+    /// // F = H = Q = R = 1 and S = 1/2: P = P + 1 − (P + 1/2)²/(P + 1), so P² = 3/4.
+    /// let ss = Dare::new([[1.0]], [[1.0]], [[1.0]], [[1.0]])?.cross_covariance([[0.5]])?.solve()?;
+    /// assert!((ss.prior[(0, 0)] - 0.75f64.sqrt()).abs() < 1e-12);
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    pub fn cross_covariance(self, S: impl MatrixInput) -> Result<Self, Error> {
+        Ok(Self {
+            inputs: self.inputs.with_cross("S", &S)?,
+            ..self
+        })
+    }
+
+    /// Replaces the default [`RiccatiOptions`].
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::riccati::{Dare, RiccatiOptions};
+    ///
+    /// // A stricter residual check still accepts the scalar random walk, P = (1 + √5)/2.
+    /// let opts = RiccatiOptions { residual_tolerance: 1e-13, ..RiccatiOptions::default() };
+    /// let ss = Dare::new([[1.0]], [[1.0]], [[1.0]], [[1.0]])?.options(opts).solve()?;
+    /// assert!((ss.prior[(0, 0)] - (1.0 + 5f64.sqrt()) / 2.0).abs() < 1e-12);
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    #[must_use]
+    pub fn options(self, options: RiccatiOptions) -> Self {
+        Self { options, ..self }
+    }
+
+    /// The stabilising solution, its gains and innovation covariance.
+    ///
+    /// # Errors
+    /// As listed on [`Dare`].
+    pub fn solve(&self) -> Result<SteadyState, Error> {
+        let inputs = &self.inputs;
+        let (F, H, Q, R) = (
+            inputs.a.as_ref(),
+            inputs.c.as_ref(),
+            inputs.q.as_ref(),
+            inputs.r.as_ref(),
+        );
+        let S = inputs.cross.as_ref().map(Mat::as_ref);
+        let m = H.nrows();
+        let names = Names {
+            equation: "filter DARE",
+            detect: Pair::Detect("(F, H)"),
+            stab: Pair::Stab(if S.is_some() {
+                "(F - S R^-1 H, (Q - S R^-1 S^T)^{1/2})"
+            } else {
+                "(F, Q^{1/2})"
+            }),
+        };
+        let sol = discrete_dual(F, H, Q, R, S, &self.options, &names)?;
+        let P = sol.x;
+        // Σ = H P Hᵀ + R; K = P Hᵀ Σ⁻¹; K_p = (F P Hᵀ + S) Σ⁻¹; all by Cholesky solves.
+        let HP = H * &P;
+        let mut Sigma = &HP * H.transpose() + R;
+        symmetrise(&mut Sigma);
+        let llt = Sigma
+            .llt(Side::Lower)
+            .map_err(|_| Error::NotPositiveDefinite {
+                name: "H P H^T + R",
+                n: m,
+                rule: "the steady-state innovation covariance must be invertible",
+            })?;
+        let gain = llt.solve(&HP).transpose().to_owned();
+        let mut FPHt_S = F * (&P * H.transpose());
+        if let Some(S) = S {
+            FPHt_S += S;
+        }
+        let predictor_gain = llt.solve(FPHt_S.transpose()).transpose().to_owned();
+        let mut posterior = &P - &gain * &HP;
+        symmetrise(&mut posterior);
+        Ok(SteadyState {
+            prior: P,
+            posterior,
+            gain,
+            predictor_gain,
+            innovation_cov: Sigma,
+            iterations: sol.iterations,
+            relative_residual: sol.relative_residual,
+        })
+    }
+
+    /// Relative residual ‖F P Fᵀ + Q − (F P Hᵀ + S)(H P Hᵀ + R)⁻¹(⋯)ᵀ − P‖_F / ‖P‖_F of a
+    /// candidate solution P (0 when both the residual and P vanish; +∞ when H P Hᵀ + R is
+    /// not positive definite). The solver's own acceptance check, open for tests.
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming P unless it is n×n and finite.
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::riccati::Dare;
+    ///
+    /// // The golden ratio solves the scalar random walk's DARE p = p + 1 − p²/(p + 1); 2 does not.
+    /// let dare = Dare::new([[1.0]], [[1.0]], [[1.0]], [[1.0]])?;
+    /// assert!(dare.residual([[(1.0 + 5f64.sqrt()) / 2.0]])? < 1e-15);
+    /// // At P = 2: residual 2 + 1 − 4/3 − 2 = −1/3, relative to ‖P‖ = 2.
+    /// assert!((dare.residual([[2.0]])? - 1.0 / 6.0).abs() < 1e-15);
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    pub fn residual(&self, P: impl MatrixInput) -> Result<f64, Error> {
+        let P = self.inputs.candidate("P", &P)?;
+        let m = &self.inputs;
+        let S = m.cross.as_ref().map(Mat::as_ref);
+        Ok(residual(
+            m.a.as_ref(),
+            m.c.as_ref(),
+            m.q.as_ref(),
+            m.r.as_ref(),
+            S,
+            P.as_ref(),
+        ))
+    }
+}
+
+impl SteadyState {
+    /// The steady state of an engine [`Model`] (either storage path): [`Dare`] on its F, H,
+    /// Q, R and S.
+    ///
+    /// # Errors
+    /// As [`Dare::solve`].
+    pub fn of<D: Dims>(model: &Model<D>) -> Result<Self, Error> {
+        let mut dare = Dare::new(model.f(), model.h(), model.q(), model.r())?;
+        if let Some(s) = model.s() {
+            dare = dare.cross_covariance(s)?;
+        }
+        dare.solve()
+    }
+}
+
+/// The discrete-time LQR for x_{k+1} = A x_k + B u_k with cost Σ xᵀQx + uᵀRu + 2xᵀN u (no
+/// cross weight N unless given): [`Dlqr::solve`] solves
+/// X = AᵀXA + Q − (AᵀXB + N)(R + BᵀXB)⁻¹(BᵀXA + Nᵀ) by the dual filter DARE (F = Aᵀ,
+/// H = Bᵀ, S = N) and returns the [`Lqr`] gain L with u = −L x.
 ///
-/// Errors: [`Error::NotStabilisable`] for (A, B) (modes on or outside the unit circle),
-/// [`Error::NotDetectable`] for (Q^{1/2}, A) (modes on the unit circle: an unobserved
-/// unstable mode off the circle is stabilised by the gain), shape/finiteness/PD errors
-/// naming the matrix.
+/// Errors of [`Dlqr::solve`]: [`Error::NotStabilisable`] for (A, B) (modes on or outside the
+/// unit circle), [`Error::NotDetectable`] for (Q^{1/2}, A) (modes on the unit circle: an
+/// unobserved unstable mode off the circle is stabilised by the gain), PD errors naming the
+/// matrix. Shape and finiteness errors come from the builder's own calls.
 ///
 /// The UAV loop of Gridnev, Rusetsky and Rak (state weight diag(1, 0.1), input weight 1,
 /// Δt = 0.25):
 /// ```
 /// use faer::mat;
+/// use kalman::riccati::Dlqr;
+///
 /// let dt = 0.25;
 /// let a = mat![[1.0, dt], [0.0, 1.0]];
 /// let b = mat![[dt * dt / 2.0], [dt]];
-/// let q = mat![[1.0, 0.0], [0.0, 0.1]];
-/// let r = mat![[1.0]];
-/// let lqr = kalman::riccati::dlqr(a.as_ref(), b.as_ref(), q.as_ref(), r.as_ref(), None).expect("must succeed");
+/// let lqr = Dlqr::new(&a, &b, mat![[1.0, 0.0], [0.0, 0.1]], mat![[1.0]])?.solve()?;
 /// // The closed loop A − B L is stable.
 /// let cl = &a - &b * &lqr.gain;
 /// let rho = cl.eigenvalues().expect("must succeed").iter().map(|l| l.norm()).fold(0.0, f64::max);
 /// assert!(rho < 1.0);
-/// ```
-pub fn dlqr(
-    A: impl MatrixInput,
-    B: impl MatrixInput,
-    Q: impl MatrixInput,
-    R: impl MatrixInput,
-    N: Option<&dyn MatrixInput>,
-) -> Result<Lqr, Error> {
-    dlqr_with(A, B, Q, R, N, &RiccatiOptions::default())
-}
-
-/// [`dlqr`] with explicit options.
-///
-/// # Example
-/// ```
-/// use kalman::riccati::{RiccatiOptions, dlqr_with};
-///
-/// // x_{k+1} = 2 x_k + u_k, cost Σ x² + u²: X = 2 + √5 (from X² − 4X − 1 = 0), L = 2X/(1 + X).
-/// let lqr = dlqr_with([[2.0]], [[1.0]], [[1.0]], [[1.0]], None, &RiccatiOptions::default())?;
-/// let x = 2.0 + 5f64.sqrt();
-/// assert!((lqr.cost[(0, 0)] - x).abs() < 1e-12 && (lqr.gain[(0, 0)] - 2.0 * x / (1.0 + x)).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
-pub fn dlqr_with(
-    A: impl MatrixInput,
-    B: impl MatrixInput,
-    Q: impl MatrixInput,
-    R: impl MatrixInput,
-    N: Option<&dyn MatrixInput>,
-    opts: &RiccatiOptions,
-) -> Result<Lqr, Error> {
-    let inputs = Inputs::new(
-        ["A", "B", "Q", "R"],
-        Coupling::Input,
-        [&A, &B, &Q, &R],
-        N.map(|N| ("N", N)),
-    )?;
-    let (A, B, Q, R) = (
-        inputs.a.as_ref(),
-        inputs.c.as_ref(),
-        inputs.q.as_ref(),
-        inputs.r.as_ref(),
-    );
-    let N = inputs.cross.as_ref().map(Mat::as_ref);
-    let m = B.ncols();
-    let names = Names {
-        equation: "LQR DARE",
-        // Detectability of (Aᵀ, Bᵀ) is stabilisability of (A, B), and stabilisability of
-        // (Aᵀ, Q^{1/2}) is detectability of (Q^{1/2}, A).
-        detect: Pair::Stab("(A, B)"),
-        stab: Pair::Detect(if N.is_some() {
-            "((Q - N R^-1 N^T)^{1/2}, A - B R^-1 N^T)"
-        } else {
-            "(Q^{1/2}, A)"
-        }),
-    };
-    let sol = discrete_dual(A.transpose(), B.transpose(), Q, R, N, opts, &names)?;
-    let X = sol.x;
-    let BtX = B.transpose() * &X;
-    let mut Sigma = &BtX * B + R;
-    symmetrise(&mut Sigma);
-    let llt = Sigma
-        .llt(Side::Lower)
-        .map_err(|_| Error::NotPositiveDefinite {
-            name: "R + B^T X B",
-            n: m,
-            rule: "the LQR gain needs its inverse",
-        })?;
-    let mut rhs = &BtX * A;
-    if let Some(N) = N {
-        rhs += N.transpose();
+#[derive(Debug, Clone)]
+pub struct Dlqr {
+    inputs: Inputs,
+    options: RiccatiOptions,
+}
+
+impl Dlqr {
+    /// The problem of A (n×n), B (n×m), state weight Q (n×n) and input weight R (m×m), with
+    /// no cross weight and default options.
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming the first bad matrix.
+    pub fn new(
+        A: impl MatrixInput,
+        B: impl MatrixInput,
+        Q: impl MatrixInput,
+        R: impl MatrixInput,
+    ) -> Result<Self, Error> {
+        Ok(Self {
+            inputs: Inputs::new(["A", "B", "Q", "R"], Coupling::Input, [&A, &B, &Q, &R])?,
+            options: RiccatiOptions::default(),
+        })
     }
-    let gain = llt.solve(&rhs);
-    Ok(Lqr {
-        gain,
-        cost: X,
-        iterations: sol.iterations,
-        relative_residual: sol.relative_residual,
-    })
+
+    /// Adds the cross weight N (n×m) of the cost term 2xᵀN u.
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming N.
+    pub fn cross_weight(self, N: impl MatrixInput) -> Result<Self, Error> {
+        Ok(Self {
+            inputs: self.inputs.with_cross("N", &N)?,
+            ..self
+        })
+    }
+
+    /// Replaces the default [`RiccatiOptions`].
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::riccati::{Dlqr, RiccatiOptions};
+    ///
+    /// // x_{k+1} = 2 x_k + u_k, cost Σ x² + u²: X = 2 + √5 (from X² − 4X − 1 = 0), L = 2X/(1 + X).
+    /// let opts = RiccatiOptions { max_iterations: 50, ..RiccatiOptions::default() };
+    /// let lqr = Dlqr::new([[2.0]], [[1.0]], [[1.0]], [[1.0]])?.options(opts).solve()?;
+    /// let x = 2.0 + 5f64.sqrt();
+    /// assert!((lqr.cost[(0, 0)] - x).abs() < 1e-12 && (lqr.gain[(0, 0)] - 2.0 * x / (1.0 + x)).abs() < 1e-12);
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    #[must_use]
+    pub fn options(self, options: RiccatiOptions) -> Self {
+        Self { options, ..self }
+    }
+
+    /// The stabilising cost matrix X and the gain L.
+    ///
+    /// # Errors
+    /// As listed on [`Dlqr`].
+    pub fn solve(&self) -> Result<Lqr, Error> {
+        let inputs = &self.inputs;
+        let (A, B, Q, R) = (
+            inputs.a.as_ref(),
+            inputs.c.as_ref(),
+            inputs.q.as_ref(),
+            inputs.r.as_ref(),
+        );
+        let N = inputs.cross.as_ref().map(Mat::as_ref);
+        let m = B.ncols();
+        let names = Names {
+            equation: "LQR DARE",
+            // Detectability of (Aᵀ, Bᵀ) is stabilisability of (A, B), and stabilisability of
+            // (Aᵀ, Q^{1/2}) is detectability of (Q^{1/2}, A).
+            detect: Pair::Stab("(A, B)"),
+            stab: Pair::Detect(if N.is_some() {
+                "((Q - N R^-1 N^T)^{1/2}, A - B R^-1 N^T)"
+            } else {
+                "(Q^{1/2}, A)"
+            }),
+        };
+        let sol = discrete_dual(A.transpose(), B.transpose(), Q, R, N, &self.options, &names)?;
+        let X = sol.x;
+        let BtX = B.transpose() * &X;
+        let mut Sigma = &BtX * B + R;
+        symmetrise(&mut Sigma);
+        let llt = Sigma
+            .llt(Side::Lower)
+            .map_err(|_| Error::NotPositiveDefinite {
+                name: "R + B^T X B",
+                n: m,
+                rule: "the LQR gain needs its inverse",
+            })?;
+        let mut rhs = &BtX * A;
+        if let Some(N) = N {
+            rhs += N.transpose();
+        }
+        let gain = llt.solve(&rhs);
+        Ok(Lqr {
+            gain,
+            cost: X,
+            iterations: sol.iterations,
+            relative_residual: sol.relative_residual,
+        })
+    }
+
+    /// Relative residual ‖AᵀXA + Q − (AᵀXB + N)(R + BᵀXB)⁻¹(⋯)ᵀ − X‖_F / ‖X‖_F of a
+    /// candidate cost matrix X (the filter-form residual of the dual, see
+    /// [`Dare::residual`]).
+    ///
+    /// # Errors
+    /// [`Error::Shape`] / [`Error::NonFinite`] naming X unless it is n×n and finite.
+    pub fn residual(&self, X: impl MatrixInput) -> Result<f64, Error> {
+        let X = self.inputs.candidate("X", &X)?;
+        let m = &self.inputs;
+        let N = m.cross.as_ref().map(Mat::as_ref);
+        Ok(residual(
+            m.a.transpose(),
+            m.c.transpose(),
+            m.q.as_ref(),
+            m.r.as_ref(),
+            N,
+            X.as_ref(),
+        ))
+    }
 }
 
-/// Relative residual ‖F P Fᵀ + Q − (F P Hᵀ + S)(H P Hᵀ + R)⁻¹(⋯)ᵀ − P‖_F / ‖P‖_F of a
-/// candidate filter-DARE solution (0 when both the residual and P vanish). Used by the
-/// solvers' own check and by tests.
-///
-/// # Example
-/// ```
-/// use kalman::riccati::dare_residual;
-///
-/// // The golden ratio solves the scalar random walk's DARE p = p + 1 − p²/(p + 1); 2 does not.
-/// let p = (1.0 + 5f64.sqrt()) / 2.0;
-/// assert!(dare_residual([[1.0]], [[1.0]], [[1.0]], [[1.0]], None, [[p]]) < 1e-15);
-/// // At P = 2: residual 2 + 1 − 4/3 − 2 = −1/3, relative to ‖P‖ = 2.
-/// assert!((dare_residual([[1.0]], [[1.0]], [[1.0]], [[1.0]], None, [[2.0]]) - 1.0 / 6.0).abs() < 1e-15);
-/// ```
-pub fn dare_residual(
-    F: impl MatrixInput,
-    H: impl MatrixInput,
-    Q: impl MatrixInput,
-    R: impl MatrixInput,
-    S: Option<&dyn MatrixInput>,
-    P: impl MatrixInput,
-) -> f64 {
-    let (F, H, Q, R, P) = (owned(&F), owned(&H), owned(&Q), owned(&R), owned(&P));
-    let S = S.map(owned);
-    residual(
-        F.as_ref(),
-        H.as_ref(),
-        Q.as_ref(),
-        R.as_ref(),
-        S.as_ref().map(Mat::as_ref),
-        P.as_ref(),
-    )
-}
-
-/// [`dare_residual`] on faer views (the solvers' own check).
+/// [`Dare::residual`] on faer views (the solvers' own check).
 pub(super) fn residual(
     F: MatRef<'_, f64>,
     H: MatRef<'_, f64>,

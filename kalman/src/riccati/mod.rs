@@ -14,14 +14,14 @@
 //! W = I + G_k H_k, A_{k+1} = A_k W⁻¹ A_k, G_{k+1} = G_k + A_k W⁻¹ G_k A_kᵀ,
 //! H_{k+1} = H_k + A_kᵀ H_k W⁻¹ A_k; H_k → X quadratically. W⁻¹ is never formed: each
 //! product is an LU solve. The CARE is mapped to the same iteration by the Cayley transform
-//! (ℋ + γI)(ℋ − γI)⁻¹ of its Hamiltonian (derivation in [`care`]).
+//! (ℋ + γI)(ℋ − γI)⁻¹ of its Hamiltonian (derivation in [`Care`]).
 //!
 //! Checks. Before iterating, the PBH rank test rejects an undetectable mode on or outside
 //! the stability boundary (|λ| ≥ 1 − 10⁻⁶ discrete, Re λ ≥ −10⁻⁶·max(1, |λ|) continuous)
 //! and, for the discrete equations, an unreachable (noise) mode *on* the unit circle
 //! (||λ| − 1| ≤ 10⁻⁶): the stabilising solution exists exactly when neither occurs. An
 //! unreachable mode outside the circle is stabilised by the gain; the doubling is then
-//! restarted from Q̃ + δI and polished by Newton's method (see [`dare`]). The CARE keeps
+//! restarted from Q̃ + δI and polished by Newton's method (see [`Dare`]). The CARE keeps
 //! the stricter test (no unreachable mode with Re λ ≥ −10⁻⁶·max(1, |λ|)); a mode is "unseen" when the smallest singular value
 //! of [λI − F; C] (C scaled to ‖F‖) is below `pbh_tolerance`·max(1, ‖F‖). After iterating,
 //! the relative residual ‖Res‖_F / ‖P‖_F must be below `residual_tolerance` (10⁻¹⁰) and the
@@ -43,19 +43,18 @@ use faer::{Mat, MatRef, Side};
 use crate::model::{check, owned};
 use crate::{Error, MatrixInput};
 
-pub use care::{care, care_residual, care_with, clqr};
-pub use dare::{dare, dare_residual, dare_with, dlqr, dlqr_with};
+pub use care::{Care, Clqr};
+pub use dare::{Dare, Dlqr};
 
-/// Tuning and tolerances of the Riccati solvers. `Default` is right for almost every use.
+/// Tuning and tolerances of the Riccati solvers, given to any of them by `.options(…)`.
+/// `Default` is right for almost every use.
 ///
 /// # Example
 /// ```
-/// use faer::mat;
-/// use kalman::riccati::{RiccatiOptions, dare_with};
+/// use kalman::riccati::{Dare, RiccatiOptions};
 ///
 /// let opts = RiccatiOptions { max_iterations: 200, ..RiccatiOptions::default() };
-/// let one = mat![[1.0]];
-/// let ss = dare_with(one.as_ref(), one.as_ref(), one.as_ref(), one.as_ref(), None, &opts)?;
+/// let ss = Dare::new([[1.0]], [[1.0]], [[1.0]], [[1.0]])?.options(opts).solve()?;
 /// assert!(ss.relative_residual < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
@@ -131,7 +130,7 @@ pub struct SteadyState<M = Mat<f64>> {
 ///
 /// // x_{k+1} = x_k + u_k with cost Σ x² + u²: X = (1 + √5)/2, L = X/(1 + X).
 /// let one = mat![[1.0]];
-/// let lqr = kalman::riccati::dlqr(one.as_ref(), one.as_ref(), one.as_ref(), one.as_ref(), None)?;
+/// let lqr = kalman::riccati::Dlqr::new(&one, &one, &one, &one)?.solve()?;
 /// let x = (1.0 + 5f64.sqrt()) / 2.0;
 /// assert!((lqr.cost[(0, 0)] - x).abs() < 1e-12 && (lqr.gain[(0, 0)] - x / (1.0 + x)).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
@@ -160,7 +159,7 @@ pub struct Lqr<M = Mat<f64>> {
 ///
 /// // ẋ = −x + w, z = x + v, unit intensities: P = √2 − 1, K = P.
 /// let (a, one) = (mat![[-1.0]], mat![[1.0]]);
-/// let ss = kalman::riccati::care(a.as_ref(), one.as_ref(), one.as_ref(), one.as_ref())?;
+/// let ss = kalman::riccati::Care::new(&a, &one, &one, &one)?.solve()?;
 /// assert!((ss.gain[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
@@ -228,6 +227,7 @@ pub(crate) enum Coupling {
 /// The matrices of a Riccati problem, copied once from the caller's inputs and checked for
 /// shape and finiteness: `a` (n×n), `c` (m×n or n×m by its [`Coupling`]), `q` (n×n), `r`
 /// (m×m) and the optional cross term (n×m).
+#[derive(Debug, Clone)]
 pub(crate) struct Inputs {
     pub(crate) a: Mat<f64>,
     pub(crate) c: Mat<f64>,
@@ -238,13 +238,12 @@ pub(crate) struct Inputs {
 
 impl Inputs {
     /// Copies and checks the inputs; `names` are (a, c, q, r) as the caller's equation
-    /// writes them, and the cross term comes with its own name. The first bad matrix is
-    /// reported ([`Error::Shape`] / [`Error::NonFinite`]).
+    /// writes them. The first bad matrix is reported ([`Error::Shape`] /
+    /// [`Error::NonFinite`]).
     pub(crate) fn new(
         names: [&'static str; 4],
         coupling: Coupling,
         [a, c, q, r]: [&dyn MatrixInput; 4],
-        cross: Option<(&'static str, &dyn MatrixInput)>,
     ) -> Result<Self, Error> {
         let (a, c, q, r) = (owned(a), owned(c), owned(q), owned(r));
         let n = a.nrows();
@@ -256,15 +255,37 @@ impl Inputs {
         check(names[1], c.as_ref(), c_shape.0, c_shape.1)?;
         check(names[2], q.as_ref(), n, n)?;
         check(names[3], r.as_ref(), m, m)?;
-        let cross = match cross {
-            Some((name, s)) => {
-                let s = owned(s);
-                check(name, s.as_ref(), n, m)?;
-                Some(s)
-            }
-            None => None,
-        };
-        Ok(Self { a, c, q, r, cross })
+        Ok(Self {
+            a,
+            c,
+            q,
+            r,
+            cross: None,
+        })
+    }
+
+    /// Adds the cross term (n×m) after checking it under `name`.
+    pub(crate) fn with_cross(
+        mut self,
+        name: &'static str,
+        s: &dyn MatrixInput,
+    ) -> Result<Self, Error> {
+        let s = owned(s);
+        check(name, s.as_ref(), self.a.nrows(), self.r.nrows())?;
+        self.cross = Some(s);
+        Ok(self)
+    }
+
+    /// The n×n candidate solution `x` of this problem, copied and checked under `name`.
+    pub(crate) fn candidate(
+        &self,
+        name: &'static str,
+        x: &dyn MatrixInput,
+    ) -> Result<Mat<f64>, Error> {
+        let x = owned(x);
+        let n = self.a.nrows();
+        check(name, x.as_ref(), n, n)?;
+        Ok(x)
     }
 }
 

@@ -10,14 +10,9 @@ fn scalar_dare_closed_form() {
     let (f, q, r) = (0.9_f64, 0.5, 2.0);
     let b = r * (1.0 - f * f) - q;
     let p = (-b + (b * b + 4.0 * q * r).sqrt()) / 2.0;
-    let ss = dare(
-        mat![[f]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[q]].as_ref(),
-        mat![[r]].as_ref(),
-        None,
-    )
-    .expect("must succeed");
+    let ss = Dare::new(mat![[f]], mat![[1.0]], mat![[q]], mat![[r]])
+        .and_then(|p| p.solve())
+        .expect("must succeed");
     // Tolerance: a few ulps of p ≈ 1 after ~10 doubling steps.
     assert!(
         (ss.prior[(0, 0)] - p).abs() < 1e-13,
@@ -30,14 +25,9 @@ fn scalar_dare_closed_form() {
 
 #[test]
 fn zero_noise_stable_gives_zero() {
-    let ss = dare(
-        mat![[0.5]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[0.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        None,
-    )
-    .expect("must succeed");
+    let ss = Dare::new(mat![[0.5]], mat![[1.0]], mat![[0.0]], mat![[1.0]])
+        .and_then(|p| p.solve())
+        .expect("must succeed");
     assert!(ss.prior[(0, 0)].abs() < 1e-300);
 }
 
@@ -47,8 +37,9 @@ fn undetectable_and_unstabilisable_are_typed() {
     let H = mat![[0.0, 1.0]];
     let Q = mat![[1.0, 0.0], [0.0, 1.0]];
     let R = mat![[1.0]];
-    let e =
-        dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None).expect_err("must be an error");
+    let e = Dare::new(&F, &H, &Q, &R)
+        .and_then(|p| p.solve())
+        .expect_err("must be an error");
     assert!(
         matches!(e, Error::NotDetectable { pair: "(F, H)", .. }),
         "{e}"
@@ -58,21 +49,22 @@ fn undetectable_and_unstabilisable_are_typed() {
     let F1 = mat![[1.0, 0.0], [0.0, 0.5]];
     let H = mat![[1.0, 1.0]];
     let Q = mat![[0.0, 0.0], [0.0, 1.0]];
-    let e =
-        dare(F1.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None).expect_err("must be an error");
+    let e = Dare::new(&F1, &H, &Q, &R)
+        .and_then(|p| p.solve())
+        .expect_err("must be an error");
     assert!(
         matches!(e, Error::NotStabilisable { re, im, .. } if (re - 1.0).abs() < 1e-12 && im == 0.0),
         "{e}"
     );
     // The same on the circle at an angle: a rotation without noise.
     let (c, s) = (0.6_f64.cos(), 0.6_f64.sin());
-    let e = dare(
-        mat![[c, -s], [s, c]].as_ref(),
-        mat![[1.0, 0.0]].as_ref(),
+    let e = Dare::new(
+        mat![[c, -s], [s, c]],
+        mat![[1.0, 0.0]],
         Mat::<f64>::zeros(2, 2).as_ref(),
-        R.as_ref(),
-        None,
+        &R,
     )
+    .and_then(|p| p.solve())
     .expect_err("must be an error");
     assert!(
         matches!(e, Error::NotStabilisable { im, .. } if im > 0.5),
@@ -84,8 +76,9 @@ fn undetectable_and_unstabilisable_are_typed() {
     let F = mat![[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 0.3]];
     let H = mat![[0.0, 0.0, 1.0]];
     let Q = Mat::<f64>::identity(3, 3);
-    let e =
-        dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None).expect_err("must be an error");
+    let e = Dare::new(&F, &H, &Q, &R)
+        .and_then(|p| p.solve())
+        .expect_err("must be an error");
     assert!(
         matches!(e, Error::NotDetectable { im, .. } if im > 0.5),
         "{e}"
@@ -97,14 +90,9 @@ fn unreached_unstable_modes_off_the_circle_have_a_stabilising_solution() {
     // F = 2, Q = 0, H = R = 1: p = 4p − 4p²/(p + 1) ⇔ p² − 3p = 0. The root p = 0 leaves
     // the closed loop at 2; p = 3 gives K_p = F p/(p + 1) = 1.5, closed loop
     // 2 − 1.5 = 0.5: the stabilising solution, posterior p − p²/(p + 1) = 0.75.
-    let ss = dare(
-        mat![[2.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[0.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        None,
-    )
-    .expect("stabilising solution exists");
+    let ss = Dare::new(mat![[2.0]], mat![[1.0]], mat![[0.0]], mat![[1.0]])
+        .and_then(|p| p.solve())
+        .expect("stabilising solution exists");
     // 1e-12: a few Newton steps from a 1e-8 perturbation, quadratic convergence.
     assert!(
         (ss.prior[(0, 0)] - 3.0).abs() < 1e-12,
@@ -118,74 +106,44 @@ fn unreached_unstable_modes_off_the_circle_have_a_stabilising_solution() {
     let H = mat![[1.0, 1.0]];
     let Q = mat![[0.0, 0.0], [0.0, 1.0]];
     let R = mat![[1.0]];
-    let ss = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None)
+    let ss = Dare::new(&F, &H, &Q, &R)
+        .and_then(|p| p.solve())
         .expect("stabilising solution exists");
     let cl = &F - &ss.predictor_gain * &H;
     assert!(spectral(cl.as_ref(), false) < 1.0);
     // Independent check: the residual of the DARE itself.
-    assert!(
-        dare_residual(
-            F.as_ref(),
-            H.as_ref(),
-            Q.as_ref(),
-            R.as_ref(),
-            None,
-            ss.prior.as_ref()
-        ) < 1e-12
-    );
+    let res = Dare::new(&F, &H, &Q, &R).and_then(|d| d.residual(&ss.prior));
+    assert!(res.expect("valid shapes") < 1e-12);
 }
 
 #[test]
 fn scalar_care_and_clqr() {
-    let ss = care(
-        mat![[-1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-    )
-    .expect("must succeed");
+    let ss = Care::new(mat![[-1.0]], mat![[1.0]], mat![[1.0]], mat![[1.0]])
+        .and_then(|p| p.solve())
+        .expect("must succeed");
     assert!((ss.covariance[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-13);
     // Unstable a = 2, b = 1, q = r = 1: 4X − X² + 1 = 0, X = 2 + √5, L = X.
-    let l = clqr(
-        mat![[2.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-    )
-    .expect("must succeed");
+    let l = Clqr::new(mat![[2.0]], mat![[1.0]], mat![[1.0]], mat![[1.0]])
+        .and_then(|p| p.solve())
+        .expect("must succeed");
     assert!((l.gain[(0, 0)] - (2.0 + 5f64.sqrt())).abs() < 1e-12);
 }
 
 #[test]
 fn shape_and_pd_errors_name_the_matrix() {
-    let e = dare(
-        mat![[1.0]].as_ref(),
-        mat![[1.0, 0.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        None,
-    )
-    .expect_err("must be an error");
+    let e = Dare::new(mat![[1.0]], mat![[1.0, 0.0]], mat![[1.0]], mat![[1.0]])
+        .and_then(|p| p.solve())
+        .expect_err("must be an error");
     assert!(matches!(e, Error::Shape { name: "H", .. }), "{e}");
-    let e = dare(
-        mat![[1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[0.0]].as_ref(),
-        None,
-    )
-    .expect_err("must be an error");
+    let e = Dare::new(mat![[1.0]], mat![[1.0]], mat![[1.0]], mat![[0.0]])
+        .and_then(|p| p.solve())
+        .expect_err("must be an error");
     assert!(
         matches!(e, Error::NotPositiveDefinite { name: "R", .. }),
         "{e}"
     );
-    let e = dare(
-        mat![[f64::NAN]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        mat![[1.0]].as_ref(),
-        None,
-    )
-    .expect_err("must be an error");
+    let e = Dare::new(mat![[f64::NAN]], mat![[1.0]], mat![[1.0]], mat![[1.0]])
+        .and_then(|p| p.solve())
+        .expect_err("must be an error");
     assert!(matches!(e, Error::NonFinite { name: "F", .. }), "{e}");
 }

@@ -3,7 +3,7 @@
 
 use faer::{Mat, mat};
 use kalman::continuous::{KalmanBucy, OdeOptions, van_loan};
-use kalman::riccati::{care, care_residual, clqr, dare};
+use kalman::riccati::{Care, Clqr, Dare};
 use proptest::prelude::*;
 
 use super::common::{randn, rel, rng, spd, with_radius};
@@ -20,7 +20,9 @@ fn oscillator() -> (Mat<f64>, Mat<f64>, Mat<f64>, Mat<f64>) {
 #[test]
 fn ode_limit_is_care() {
     let (A, H, Q, R) = oscillator();
-    let ss = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()).expect("CARE");
+    let ss = Care::new(&A, &H, &Q, &R)
+        .and_then(|p| p.solve())
+        .expect("CARE");
     assert!(ss.relative_residual < 1e-12);
     let kb = KalmanBucy::new(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()).expect("KB");
     let P0 = Mat::<f64>::identity(2, 2) * 10.0;
@@ -46,7 +48,8 @@ fn ode_limit_is_care() {
 #[test]
 fn discrete_gain_over_dt_tends_to_continuous_gain_at_first_order() {
     let (A, H, Q, R) = oscillator();
-    let Kc = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref())
+    let Kc = Care::new(&A, &H, &Q, &R)
+        .and_then(|p| p.solve())
         .expect("CARE")
         .gain;
     let mut errs = Vec::new();
@@ -54,7 +57,9 @@ fn discrete_gain_over_dt_tends_to_continuous_gain_at_first_order() {
         let (F, Qd) = van_loan(A.as_ref(), Q.as_ref(), dt).expect("Van Loan");
         // Measurement noise of intensity R averaged over Δt has covariance R/Δt.
         let Rd = &R * (1.0 / dt);
-        let ss = dare(F.as_ref(), H.as_ref(), Qd.as_ref(), Rd.as_ref(), None).expect("DARE");
+        let ss = Dare::new(&F, &H, &Qd, &Rd)
+            .and_then(|p| p.solve())
+            .expect("DARE");
         let Kd = &ss.gain * (1.0 / dt);
         errs.push((&Kd - &Kc).norm_l2());
     }
@@ -84,13 +89,15 @@ proptest! {
         let H = randn(&mut g, m, n);
         let Q = spd(&mut g, n, 0.1);
         let R = spd(&mut g, m, 0.1);
-        if let Ok(ss) = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()) {
-            let res = care_residual(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), ss.covariance.as_ref());
+        let care = Care::new(&A, &H, &Q, &R).expect("valid shapes");
+        if let Ok(ss) = care.solve() {
+            let res = care.residual(&ss.covariance).expect("n×n");
             prop_assert!(res < 1e-10, "CARE residual {res:e}");
         }
         let B = H.transpose().to_owned();
-        if let Ok(l) = clqr(A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref()) {
-            let res = care_residual(A.transpose(), B.transpose(), Q.as_ref(), R.as_ref(), l.cost.as_ref());
+        let clqr = Clqr::new(&A, &B, &Q, &R).expect("valid shapes");
+        if let Ok(l) = clqr.solve() {
+            let res = clqr.residual(&l.cost).expect("n×n");
             prop_assert!(res < 1e-10, "CLQR residual {res:e}");
         }
     }
@@ -108,7 +115,9 @@ fn uav_kalman_bucy_closed_form() {
     let H = mat![[1.0, 0.0]];
     let Q = mat![[0.0, 0.0], [0.0, q]];
     let R = mat![[r]];
-    let ss = care(A.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref()).expect("UAV CARE");
+    let ss = Care::new(&A, &H, &Q, &R)
+        .and_then(|p| p.solve())
+        .expect("UAV CARE");
     let want = [
         [2f64.sqrt() * q.powf(0.25) * r.powf(0.75), (q * r).sqrt()],
         [(q * r).sqrt(), 2f64.sqrt() * q.powf(0.75) * r.powf(0.25)],

@@ -4,8 +4,8 @@
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side, mat};
-use kalman::riccati::{dare, dare_residual, dlqr};
-use kalman::{CovarianceForm, DynDims, Error, Filter, MatrixInput, Model};
+use kalman::riccati::{Dare, Dlqr};
+use kalman::{CovarianceForm, DynDims, Error, Filter, Model};
 use proptest::prelude::*;
 
 use super::common::{joint_noise, randn, rel, rho, rng, spd, with_radius};
@@ -50,15 +50,18 @@ proptest! {
         let H = randn(&mut g, m, n);
         let (Q, R, S) = joint_noise(&mut g, n, m);
         let S = cross.then_some(S);
-        let ss = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), S.as_ref().map(|s| s as &dyn MatrixInput));
-        let ss = match ss {
+        let mut dare = Dare::new(&F, &H, &Q, &R).expect("valid shapes");
+        if let Some(S) = &S {
+            dare = dare.cross_covariance(S).expect("valid shape");
+        }
+        let ss = match dare.solve() {
             Ok(ss) => ss,
             // A random H can make a mode nearly unobservable; then the typed PBH error is the
             // right answer and no NaN may appear.
             Err(Error::NotDetectable { .. }) => return Ok(()),
             Err(e) => return Err(TestCaseError::fail(format!("{e}"))),
         };
-        let res = dare_residual(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), S.as_ref().map(|s| s as &dyn MatrixInput), ss.prior.as_ref());
+        let res = dare.residual(&ss.prior).expect("n×n");
         prop_assert!(res < 1e-10, "residual {res:e}");
         prop_assert!(ss.relative_residual < 1e-10);
         let (P, _) = iterate_filter(&F, &H, &Q, &R, S.as_ref());
@@ -80,7 +83,7 @@ proptest! {
         let B = randn(&mut g, n, p);
         let Q = spd(&mut g, n, 0.1);
         let R = spd(&mut g, p, 0.1);
-        let lqr = match dlqr(A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref(), None) {
+        let lqr = match Dlqr::new(&A, &B, &Q, &R).and_then(|p| p.solve()) {
             Ok(l) => l,
             Err(Error::NotStabilisable { .. }) => return Ok(()),
             Err(e) => return Err(TestCaseError::fail(format!("{e}"))),
@@ -119,7 +122,7 @@ proptest! {
         let H = lu.solve_transpose(HD.transpose()).transpose().to_owned();
         let Q = spd(&mut g, n, 0.1);
         let R = spd(&mut g, m, 0.1);
-        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None);
+        let e = Dare::new(&F, &H, &Q, &R).and_then(|p| p.solve());
         prop_assert!(matches!(e, Err(Error::NotDetectable { pair: "(F, H)", .. })), "{:?}", e.map(|s| s.prior));
     }
 
@@ -149,13 +152,14 @@ proptest! {
         let Q = &T * &QD * T.transpose();
         let H = randn(&mut g, m, n);
         let R = spd(&mut g, m, 0.1);
-        let e = dare(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None);
+        let dare = Dare::new(&F, &H, &Q, &R).expect("valid shapes");
+        let e = dare.solve();
         if on_circle {
             // With a generic H the failing pair is the noise pair.
             prop_assert!(matches!(e, Err(Error::NotStabilisable { .. })), "{:?}", e.map(|s| s.prior));
         } else {
             let ss = e.map_err(|e| TestCaseError::fail(format!("{e}")))?;
-            let res = kalman::riccati::dare_residual(F.as_ref(), H.as_ref(), Q.as_ref(), R.as_ref(), None, ss.prior.as_ref());
+            let res = dare.residual(&ss.prior).expect("n×n");
             prop_assert!(res < 1e-10, "DARE residual {res:e}");
             let cl = &F - &ss.predictor_gain * &H;
             prop_assert!(rho(&cl) < 1.0);
@@ -171,7 +175,9 @@ fn uav_lqr() {
     let B = mat![[dt * dt / 2.0], [dt]];
     let Q = mat![[1.0, 0.0], [0.0, 0.1]];
     let R = mat![[1.0]];
-    let lqr = dlqr(A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref(), None).expect("UAV LQR");
+    let lqr = Dlqr::new(&A, &B, &Q, &R)
+        .and_then(|p| p.solve())
+        .expect("UAV LQR");
     assert!(lqr.relative_residual < 1e-12);
     let cl = &A - &B * &lqr.gain;
     assert!(rho(&cl) < 1.0);
@@ -186,27 +192,17 @@ fn uav_lqr() {
     }
     assert!(rel(&lqr.cost, &X) < 1e-10);
     // Double integrator without damping: (A, B) stabilisable, but B = 0 is not.
-    let e = dlqr(
-        A.as_ref(),
-        Mat::<f64>::zeros(2, 1).as_ref(),
-        Q.as_ref(),
-        R.as_ref(),
-        None,
-    )
-    .expect_err("must be an error");
+    let e = Dlqr::new(&A, Mat::<f64>::zeros(2, 1).as_ref(), &Q, &R)
+        .and_then(|p| p.solve())
+        .expect_err("must be an error");
     assert!(
         matches!(e, Error::NotStabilisable { pair: "(A, B)", .. }),
         "{e}"
     );
     // Q that does not see the position mode: (Q^{1/2}, A) not detectable.
-    let e = dlqr(
-        A.as_ref(),
-        B.as_ref(),
-        mat![[0.0, 0.0], [0.0, 1.0]].as_ref(),
-        R.as_ref(),
-        None,
-    )
-    .expect_err("must be an error");
+    let e = Dlqr::new(&A, &B, mat![[0.0, 0.0], [0.0, 1.0]], &R)
+        .and_then(|p| p.solve())
+        .expect_err("must be an error");
     assert!(
         matches!(
             e,
@@ -229,6 +225,8 @@ fn ill_conditioned_lqr_is_polished() {
     let B = randn(&mut g, n, p);
     let Q = spd(&mut g, n, 0.1);
     let R = spd(&mut g, p, 0.1);
-    let l = dlqr(A.as_ref(), B.as_ref(), Q.as_ref(), R.as_ref(), None).expect("polished LQR");
+    let l = Dlqr::new(&A, &B, &Q, &R)
+        .and_then(|p| p.solve())
+        .expect("polished LQR");
     assert!(l.relative_residual < 1e-10, "{:e}", l.relative_residual);
 }

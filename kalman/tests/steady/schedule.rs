@@ -3,7 +3,7 @@
 //! and zero allocations per scheduled step.
 
 use faer::Mat;
-use kalman::riccati::dare;
+use kalman::riccati::Dare;
 use kalman::schedule::{GainSchedule, ScheduleOptions};
 use kalman::{CovarianceForm, Dims, DynDims, Filter, FixedDims, Model};
 use rand::RngExt;
@@ -121,7 +121,9 @@ fn reproduces_the_full_filter() {
 fn fixed_gain_mode_matches_a_filter_started_at_steady_state() {
     let p = problem(5, 4, 2, 200, false);
     let dims = DynDims::new(4, 2, 1).expect("dims");
-    let ss = dare(p.F.as_ref(), p.H.as_ref(), p.Q.as_ref(), p.R.as_ref(), None).expect("DARE");
+    let ss = Dare::new(&p.F, &p.H, &p.Q, &p.R)
+        .and_then(|p| p.solve())
+        .expect("DARE");
     let sched = GainSchedule::fixed_gain(model(dims, &p, false), &ss).expect("fixed gain");
     assert_eq!(sched.len(), 1);
     let mut run = sched.runner(&p.x0).expect("runner");
@@ -214,7 +216,7 @@ fn bad_inputs_are_typed_errors() {
     ));
 }
 
-/// `SteadyState::of` on an engine model equals `dare` on its matrices, on both paths, and the
+/// `SteadyState::of` on an engine model equals `Dare` on its matrices, on both paths, and the
 /// schedule's steady prior equals it.
 #[test]
 fn steady_state_of_model_matches_schedule() {

@@ -71,15 +71,11 @@ pub(super) fn design(p: &UavParams) -> Result<Design> {
     let q_factor = model::psd_factor(&q).map_err(model_err("Q_d factor"))?;
     let r = p.measurement_variance;
     let [q1, q2] = p.lqr_state_weight;
-    let lqr = kalman::riccati::dlqr(
-        &f,
-        &b,
-        faer::mat![[q1, 0.0], [0.0, q2]].as_ref(),
-        faer::mat![[p.lqr_input_weight]].as_ref(),
-        None,
-    )
-    .map_err(kalman_err("discrete LQR"))?;
-    let ss = kalman::riccati::dare(&f, &h, &q, faer::mat![[r]].as_ref(), None)
+    let lqr = kalman::riccati::Dlqr::new(&f, &b, [[q1, 0.0], [0.0, q2]], [[p.lqr_input_weight]])
+        .and_then(|l| l.solve())
+        .map_err(kalman_err("discrete LQR"))?;
+    let ss = kalman::riccati::Dare::new(&f, &h, &q, [[r]])
+        .and_then(|d| d.solve())
         .map_err(kalman_err("filter DARE"))?;
     // Reference feedforward: [[F − I, B], [H, 0]]·[N_x; N_u] = [0; 0; 1].
     let m = Matrix3::new(

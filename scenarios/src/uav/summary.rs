@@ -197,7 +197,9 @@ fn kalman_bucy(p: &UavParams) -> Result<(KalmanBucyCheck, Vec<[f64; 3]>)> {
     let h = sys.c();
     let rc = p.measurement_variance * p.dt_s;
     let rcm = faer::mat![[rc]];
-    let care = kalman::riccati::care(a, h, qc, rcm.as_ref()).map_err(kalman_err("CARE"))?;
+    let care = kalman::riccati::Care::new(a, h, qc, &rcm)
+        .and_then(|c| c.solve())
+        .map_err(kalman_err("CARE"))?;
     let kc = [care.gain[(0, 0)], care.gain[(1, 0)]];
     let kb = kalman::continuous::KalmanBucy::new(a, h, qc, rcm.as_ref())
         .map_err(kalman_err("Kalman–Bucy"))?;
@@ -238,7 +240,8 @@ fn kalman_bucy(p: &UavParams) -> Result<(KalmanBucyCheck, Vec<[f64; 3]>)> {
             model::NoiseConvention::VanLoan,
         )
         .map_err(model_err("discretisation"))?;
-        let ss = kalman::riccati::dare(d.f(), d.h(), d.q(), faer::mat![[rc / dt]].as_ref(), None)
+        let ss = kalman::riccati::Dare::new(d.f(), d.h(), d.q(), [[rc / dt]])
+            .and_then(|d| d.solve())
             .map_err(kalman_err("filter DARE"))?;
         let kd = [ss.gain[(0, 0)] / dt, ss.gain[(1, 0)] / dt];
         table.push(GainRow {

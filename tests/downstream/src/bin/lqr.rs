@@ -4,7 +4,7 @@
 //! solver), counted by `tests/programs.rs` (rustfmt layout; blank and comment lines not counted).
 
 use kalman::ToNalgebra;
-use kalman::riccati::{dare, dlqr};
+use kalman::riccati::{Dare, Dlqr};
 use nalgebra::{DMatrix, dmatrix};
 
 type M = DMatrix<f64>;
@@ -23,8 +23,8 @@ fn main() -> Result<(), kalman::Error> {
     let (b, h) = (dmatrix![dt * dt / 2.0; dt], dmatrix![1.0, 0.0]);
     let q = dmatrix![dt.powi(3) / 3.0, dt * dt / 2.0; dt * dt / 2.0, dt];
     let (r, qx, ru) = (dmatrix![0.5], dmatrix![1.0, 0.0; 0.0, 0.1], dmatrix![1.0]);
-    let filter = dare(&a, &h, &q, &r, None)?.to_nalgebra();
-    let control = dlqr(&a, &b, &qx, &ru, None)?.to_nalgebra();
+    let filter = Dare::new(&a, &h, &q, &r)?.solve()?.to_nalgebra();
+    let control = Dlqr::new(&a, &b, &qx, &ru)?.solve()?.to_nalgebra();
     let (k, l) = (&filter.gain, &control.gain);
     println!("Kalman gain K = {k}LQR gain L = {l}");
     // Independent checks: P solves the filter DARE and X the control DARE (to round-off of a
