@@ -29,7 +29,7 @@ const OUTCOMES: &[&str] = &["caught", "missed", "timeout", "unviable"];
 pub(crate) fn mutants(args: &[String]) -> Result<()> {
     known(
         args,
-        &["--list"],
+        &["--list", "--skip-baseline"],
         &["--crate", "--file", "--shard", "--timeout", "--re"],
     )?;
     let file = option(args, "--file")?;
@@ -121,6 +121,11 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     // One mutant at a time (the machine is shared); only the mutated crate's unit and
     // integration tests judge a mutant, and only they are built (examples and doc tests are
     // usage, slow to build, and checked by `cargo xtask test`).
+    // The baseline (the unmutated tree built and tested first) costs one full build: a
+    // re-check of a few mutants after a run whose baseline passed may skip it.
+    if args.iter().any(|a| a == "--skip-baseline") {
+        cmd.args(["--baseline", "skip"]);
+    }
     cmd.args(["--jobs", "1", "--timeout", timeout, "--output"])
         .arg(&out)
         .args(["--cargo-arg=--lib", "--cargo-arg=--tests"])
