@@ -487,5 +487,13 @@ mod tests {
             "{} vs {exact}",
             sol.covariance[(0, 0)]
         );
+        // Each accepted step advances t, so reaching t = 1 took at least one, and a budget of
+        // fewer attempts (accepted + rejected) than the accepted steps cannot get there.
+        assert!(sol.steps >= 1);
+        let short = OdeOptions {
+            max_steps: sol.steps - 1,
+            ..OdeOptions::default()
+        };
+        assert!(kb.integrate(mat![[0.0]].as_ref(), 1.0, &short).is_err());
     }
 }

@@ -331,3 +331,84 @@ pub(crate) fn lq_rows(
     }
     c - col0
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{DynDims, FixedDims};
+
+    /// Entry (i, j) of op(A), read from the stored column-major matrix by the definition.
+    fn at(op: Op<'_>, i: usize, j: usize) -> f64 {
+        match op {
+            Op::N(a, r, _) => a[i + j * r],
+            Op::T(a, r, _) => a[j + i * r],
+        }
+    }
+
+    /// `mm` against the sum Σ_p op(A)_ip op(B)_pj written out, for the four transpose
+    /// combinations (the engine itself only passes a transposed B), both accumulations and
+    /// both parts, in the plain loops (fixed path, and small products) and in faer's GEMM
+    /// (large products on the dynamic path).
+    #[test]
+    fn products_match_the_definition_in_every_layout() {
+        let (fixed, dynamic) = (
+            FixedDims::<1, 1>::new(),
+            DynDims::new(1, 1, 0).expect("dims"),
+        );
+        for (rows, inner, cols) in [(3, 4, 2), (20, 9, 20)] {
+            // Small integers and halves: every product and partial sum is a multiple of 1/8
+            // well inside f64's exact range, so any summation order gives the same number.
+            let a: Vec<f64> = (0..rows * inner)
+                .map(|k| (k * 7 % 11) as f64 - 5.0)
+                .collect();
+            let b: Vec<f64> = (0..inner * cols)
+                .map(|k| (k * 5 % 13) as f64 * 0.5 - 3.0)
+                .collect();
+            let c0: Vec<f64> = (0..rows * cols).map(|k| k as f64 * 0.25).collect();
+            for (ta, tb) in [(false, false), (false, true), (true, false), (true, true)] {
+                let opa = if ta {
+                    Op::T(&a, inner, rows)
+                } else {
+                    Op::N(&a, rows, inner)
+                };
+                let opb = if tb {
+                    Op::T(&b, cols, inner)
+                } else {
+                    Op::N(&b, inner, cols)
+                };
+                let parts: &[Part] = if rows == cols {
+                    &[Part::Full, Part::Lower]
+                } else {
+                    &[Part::Full]
+                };
+                for (&part, add, on_fixed) in parts
+                    .iter()
+                    .flat_map(|p| [(p, false), (p, true)])
+                    .flat_map(|(p, add)| [(p, add, false), (p, add, true)])
+                {
+                    let mut c = c0.clone();
+                    let accum = if add { Accum::Add } else { Accum::Replace };
+                    if on_fixed {
+                        mm(&fixed, &mut c, part, accum, -1.5, opa, opb);
+                    } else {
+                        mm(&dynamic, &mut c, part, accum, -1.5, opa, opb);
+                    }
+                    for j in 0..cols {
+                        // `Lower` promises the lower triangle only.
+                        let i0 = if part == Part::Lower { j } else { 0 };
+                        for i in i0..rows {
+                            let dot: f64 = (0..inner).map(|p| at(opa, i, p) * at(opb, p, j)).sum();
+                            let want = if add { c0[i + j * rows] } else { 0.0 } - 1.5 * dot;
+                            assert!(
+                                (c[i + j * rows] - want).abs() <= 1e-12 * want.abs().max(1.0),
+                                "{rows}x{inner}x{cols} ta {ta} tb {tb} {part:?} add {add} \
+                                 fixed {on_fixed} ({i}, {j}): {} vs {want}",
+                                c[i + j * rows]
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

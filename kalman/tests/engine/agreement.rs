@@ -33,8 +33,24 @@ fn rel_mat(a: faer::MatRef<'_, f64>, b: &reference::M) -> f64 {
     worst / scale
 }
 
+/// [`rel_mat`] over the entries whose row and column are observed in `z` (what the
+/// innovation covariance holds in the others is a convention of each form).
+fn rel_observed(a: faer::MatRef<'_, f64>, b: &reference::M, z: &[f64]) -> f64 {
+    let keep = |i: usize, j: usize| !z[i].is_nan() && !z[j].is_nan();
+    let mut scale = 1.0_f64;
+    let mut worst = 0.0_f64;
+    for (i, row) in b.iter().enumerate() {
+        for (j, v) in row.iter().enumerate().filter(|&(j, _)| keep(i, j)) {
+            scale = scale.max(v.abs());
+            worst = worst.max((a[(i, j)] - v).abs());
+        }
+    }
+    worst / scale
+}
+
 /// Runs the engine on `p` and returns the worst relative deviation from the reference in
-/// x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k} and NIS over all steps.
+/// x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k}, NIS, the innovation, the gain and (over the
+/// observed entries) the innovation covariance over all steps.
 pub fn deviation<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> f64 {
     let model = p.model(dims).expect("valid model");
     let mut f = Filter::new(model, &p.x0, &p.P0, form).expect("valid prior");
@@ -47,6 +63,9 @@ pub fn deviation<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> f
             .max(rel_mat(f.covariance(), &r.pf))
             .max(rel_vec(f.predicted_state(), &r.xp))
             .max(rel_mat(f.predicted_covariance(), &r.pp))
+            .max(rel_vec(f.innovation(), &r.e))
+            .max(rel_mat(f.gain(), &r.gain))
+            .max(rel_observed(f.innovation_covariance(), &r.sig, z))
             .max(match (info.nis, r.nis) {
                 (Some(a), Some(b)) => (a - b).abs() / b.max(1.0),
                 (None, None) => 0.0,

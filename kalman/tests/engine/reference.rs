@@ -82,6 +82,11 @@ pub struct RefStep {
     pub pp: M,
     /// `None` on a predict-only step.
     pub nis: Option<f64>,
+    /// Innovation e_k (0 in missing entries), Σ_k = H P Hᵀ + R and K_k = P Hᵀ Σ_k⁻¹ over
+    /// the observed entries (0 in the rows and columns of missing ones).
+    pub e: Vec<f64>,
+    pub sig: M,
+    pub gain: M,
 }
 
 pub fn run(p: &kalman::strategies::FilterProblem) -> Vec<RefStep> {
@@ -113,6 +118,9 @@ pub fn run(p: &kalman::strategies::FilterProblem) -> Vec<RefStep> {
                 xp: (0..n).map(|i| Fx[i] + Bu[i]).collect(),
                 pp: add(&FPFt, &Q, 1.0),
                 nis: None,
+                e: vec![0.0; m],
+                sig: vec![vec![0.0; m]; m],
+                gain: vec![vec![0.0; m]; n],
             }
         } else {
             let Ho: M = obs.iter().map(|&i| H[i].clone()).collect();
@@ -148,11 +156,28 @@ pub fn run(p: &kalman::strategies::FilterProblem) -> Vec<RefStep> {
                 xp: (0..n).map(|i| Fx[i] + Bu[i] + Kpe[i]).collect(),
                 pp: add(&add(&FPFt, &Q, 1.0), &mul(&mul(&Kp, &Sig), &tr(&Kp)), -1.0),
                 nis: Some(nis),
+                e: scatter_vec(m, &obs, &e),
+                sig: (0..m)
+                    .map(|i| {
+                        let a = obs.iter().position(|&o| o == i);
+                        scatter_vec(m, &obs, a.map_or(&[][..], |a| &Sig[a]))
+                    })
+                    .collect(),
+                gain: K.iter().map(|row| scatter_vec(m, &obs, row)).collect(),
             }
         };
         x = step.xp.clone();
         P = step.pp.clone();
         out.push(step);
+    }
+    out
+}
+
+/// The length-`m` vector with `v[a]` at `obs[a]` and 0 elsewhere (an empty `v`: all 0).
+fn scatter_vec(m: usize, obs: &[usize], v: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; m];
+    for (&i, &x) in obs.iter().zip(v) {
+        out[i] = x;
     }
     out
 }

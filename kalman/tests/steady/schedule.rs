@@ -75,7 +75,7 @@ fn model<D: Dims>(dims: D, p: &Problem, cross: bool) -> Model<D> {
     }
 }
 
-/// Max over steps of |x_sched − x_full| / max(1, |x_full|), for x_{k|k} and x_{k+1|k}.
+/// Max over steps of |x_sched − x_full| / max(1, |x_full|), for x_{k|k}, x_{k+1|k} and e_k.
 fn compare<D: Dims>(dims: D, p: &Problem, cross: bool) -> (f64, usize) {
     let sched = GainSchedule::new(model(dims, p, cross), &p.P0, ScheduleOptions::default())
         .expect("schedule");
@@ -91,6 +91,7 @@ fn compare<D: Dims>(dims: D, p: &Problem, cross: bool) -> (f64, usize) {
             .iter()
             .zip(full.state())
             .chain(run.predicted_state().iter().zip(full.predicted_state()))
+            .chain(run.innovation().iter().zip(full.innovation()))
         {
             worst = worst.max((a - b).abs() / b.abs().max(1.0));
         }
@@ -114,6 +115,44 @@ fn reproduces_the_full_filter() {
         assert!(len > 1 && len < 300, "schedule length {len}");
         let (d, _) = compare(FixedDims::<7, 2, 1>::new(), &p, cross);
         assert!(d < 1e-12, "fixed seed {seed}: {d:e}");
+    }
+}
+
+/// Two channels measuring the same state with fully correlated noise (R = 0.5·11ᵀ) make
+/// Σ = H P Hᵀ + R singular at every step, so the cross gain S Σ⁺ comes from the
+/// eigen-decomposition: the schedule still reproduces the full filter (whose own fallback
+/// is the engine's Jacobi pseudo-inverse, an independent route to the same S Σ⁺ e).
+#[test]
+fn reproduces_the_full_filter_with_a_singular_innovation_covariance() {
+    let dims = DynDims::new(2, 2, 0).expect("dims");
+    let F = faer::mat![[0.9, 0.1], [0.0, 0.8]];
+    let H = faer::mat![[1.0, 0.0], [1.0, 0.0]];
+    let Q = faer::mat![[0.2, 0.0], [0.0, 0.1]];
+    let R = faer::mat![[0.5, 0.5], [0.5, 0.5]];
+    // Joint covariance [[R, Sᵀ], [S, Q]] PSD: minimising over u₁ + u₂ leaves
+    // 0.18 w₁² − 0.02 w₁w₂ + 0.095 w₂² > 0.
+    let S = faer::mat![[0.1, 0.1], [0.05, 0.05]];
+    let model = || {
+        Model::new(dims, &F, &H, &Q, &R)
+            .and_then(|m| m.with_cross_covariance(&S))
+            .expect("model")
+    };
+    let P0 = Mat::<f64>::identity(2, 2);
+    let sched = GainSchedule::new(model(), &P0, ScheduleOptions::default()).expect("schedule");
+    let x0 = [0.3, -0.2];
+    let mut run = sched.runner(&x0).expect("runner");
+    let mut full = Filter::new(model(), &x0, &P0, CovarianceForm::Joseph).expect("filter");
+    let mut g = rng(10);
+    for _ in 0..60 {
+        // Both channels read the same value, as the model says they must.
+        let z1: f64 = g.random_range(-3.0..3.0);
+        run.step(&[z1, z1], None).expect("scheduled step");
+        full.step(&[z1, z1], None).expect("full step");
+        // Tolerance: the two pseudo-inverses differ by rounding of O(1) numbers (Σ's
+        // nonzero eigenvalue is about 2); 1e-10 leaves room for their accumulation.
+        for (a, b) in run.predicted_state().iter().zip(full.predicted_state()) {
+            assert!((a - b).abs() < 1e-10 * b.abs().max(1.0), "{a} vs {b}");
+        }
     }
 }
 
