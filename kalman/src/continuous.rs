@@ -496,4 +496,38 @@ mod tests {
         };
         assert!(kb.integrate(mat![[0.0]].as_ref(), 1.0, &short).is_err());
     }
+
+    #[test]
+    fn step_count_grows_as_the_fifth_root_of_the_tolerance() {
+        // Unmeasured rotation (H = 0): Ṗ = A P + P Aᵀ + Q is linear and P keeps oscillating
+        // at frequency 2, so the step size stays set by the accuracy, not by a transient.
+        // The 5(4) pair's error estimate is O(h⁵), so steps h ∝ tol^{1/5}: a tolerance 10⁵
+        // times tighter takes about 10 times as many steps. A wrong tableau entry lowers
+        // the order (more steps) or breaks the estimate; [6, 16] allows for the step
+        // controller's safety factor and the last, shortened step.
+        let kb = KalmanBucy::new(
+            mat![[0.0, 1.0], [-1.0, 0.0]].as_ref(),
+            mat![[0.0, 0.0]].as_ref(),
+            mat![[0.1, 0.0], [0.0, 0.0]].as_ref(),
+            mat![[1.0]].as_ref(),
+        )
+        .expect("must succeed");
+        let steps = |rtol: f64| {
+            let opts = OdeOptions {
+                rtol,
+                atol: rtol * 1e-2,
+                max_steps: 1_000_000,
+            };
+            let P0 = mat![[1.0, 0.0], [0.0, 0.0]];
+            kb.integrate(P0.as_ref(), 20.0, &opts)
+                .expect("must succeed")
+                .steps as f64
+        };
+        let (coarse, fine) = (steps(1e-6), steps(1e-11));
+        let ratio = fine / coarse;
+        assert!(
+            (6.0..16.0).contains(&ratio),
+            "{fine} / {coarse} steps = {ratio}"
+        );
+    }
 }
