@@ -460,6 +460,18 @@ mod tests {
                 other => panic!("{method:?}, W = {w}: expected StepTooLarge, got {other:?}"),
             }
         }
+        // The growth is ‖A‖₁·Δt by definition: at Δt = 2 it is 2000.
+        match discretize(
+            &fast_scalar(0.0),
+            2.0,
+            Discretization::Zoh,
+            NoiseConvention::VanLoan,
+        ) {
+            Err(Error::StepTooLarge { growth, .. }) => {
+                assert!((growth - 2000.0).abs() < 1e-9, "{growth}");
+            }
+            other => panic!("Δt = 2: expected StepTooLarge, got {other:?}"),
+        }
         // A step 100 times smaller is fine: e^{10} for ZOH, e^{20}-scale Van Loan.
         let d = discretize(
             &fast_scalar(1.0),
@@ -472,6 +484,20 @@ mod tests {
         // Q = W (e^{2aΔt} − 1)/(2a).
         let want = (20f64.exp() - 1.0) / 2000.0;
         assert!((d.process_covariance()[(0, 0)] / want - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn van_loan_without_noise_needs_only_the_exponential_of_a() {
+        // ẋ = −1000 x: e^{A·Δt} = e^{−1000} underflows harmlessly to 0, but the Van Loan
+        // block e^{−A·Δt} = e^{1000} would overflow; with no noise (W = 0) Q_d = 0 exactly
+        // and that block is never formed.
+        let a = DMatrix::from_element(1, 1, -1000.0);
+        let g = DMatrix::from_element(1, 1, 1.0);
+        let (phi, q) = van_loan(&a, &g, &DMatrix::zeros(1, 1), 1.0).expect("no overflow");
+        assert!(phi[(0, 0)].abs() < f64::MIN_POSITIVE && q[(0, 0)].abs() < f64::MIN_POSITIVE);
+        // With noise the block is needed and overflows: a typed error naming the step.
+        let e = van_loan(&a, &g, &DMatrix::from_element(1, 1, 1.0), 1.0);
+        assert!(matches!(e, Err(Error::StepTooLarge { .. })), "{e:?}");
     }
 
     #[test]
