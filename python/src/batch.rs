@@ -302,6 +302,20 @@ fn axpy(row: &mut [f64], f: f64, v: &[f64]) {
     }
 }
 
+/// `out = Σ_l c_l · v_l` over the rows v_l (the length of `out`) of `v`, in the order of l:
+/// a row of a product, summed in the order of a dot product, written without clearing it
+/// first.
+#[inline(always)]
+fn combine(out: &mut [f64], c: &[f64], v: &[f64]) {
+    let n = out.len();
+    for (o, x) in out.iter_mut().zip(v) {
+        *o = c[0] * x;
+    }
+    for (l, &cl) in c.iter().enumerate().skip(1) {
+        axpy(out, cl, &v[l * n..(l + 1) * n]);
+    }
+}
+
 /// Copies the upper triangle of the n×n `a` onto its lower one.
 #[inline(always)]
 fn mirror(a: &mut [f64], n: usize) {
@@ -334,6 +348,8 @@ fn via_core<T>(
 /// The model (copied from the filter) and the workspaces of the fast kernels, row-major.
 struct Work {
     F: Vec<f64>,
+    /// Fᵀ: F x is a sum of its rows.
+    Ft: Vec<f64>,
     Q: Vec<f64>,
     H: Vec<f64>,
     R: Vec<f64>,
@@ -357,8 +373,15 @@ struct Work {
 impl Work {
     fn new(core: &Core, n: usize, m: usize) -> Self {
         let zeros = |rows: usize, cols: usize| vec![0.0; rows * cols];
+        let mut Ft = zeros(n, n);
+        for (i, row) in core.F.chunks_exact(n).enumerate() {
+            for (j, &f) in row.iter().enumerate() {
+                Ft[j * n + i] = f;
+            }
+        }
         Self {
             F: core.F.clone(),
+            Ft,
             Q: core.Q.clone(),
             H: core.H.clone(),
             R: core.R.clone(),
@@ -391,28 +414,23 @@ impl Work {
             return via_core(core, from, to, |core| core.predict(u, None, None, None));
         }
         let n = d.get();
-        let (F, Q) = (&self.F[..n * n], &self.Q[..n * n]);
+        let (F, Ft, Q) = (&self.F[..n * n], &self.Ft[..n * n], &self.Q[..n * n]);
         let (x, P) = (&from.0[..n], &from.1[..n * n]);
         let (xo, Po) = (&mut to.0[..n], &mut to.1[..n * n]);
-        for (xi, f) in xo.iter_mut().zip(F.chunks_exact(n)) {
-            *xi = dot(f, x);
-        }
+        combine(xo, x, Ft);
         if let (Some(B), Some(u)) = (self.B.as_deref(), u) {
             add_mul_vec(B, u, xo);
         }
-        // F P, row i = Σ_j F_ij P_j.
-        let fp = &mut self.fp[..n * n];
-        for (row, f) in fp.chunks_exact_mut(n).zip(F.chunks_exact(n)) {
-            row.fill(0.0);
-            for (j, &fij) in f.iter().enumerate() {
-                axpy(row, fij, &P[j * n..(j + 1) * n]);
-            }
+        // T = F P, row i = Σ_j F_ij P_j; the upper triangle of T Fᵀ, T_i · F_j for j ≥ i;
+        // then α² · + Q.
+        let T = &mut self.fp[..n * n];
+        for (row, f) in T.chunks_exact_mut(n).zip(F.chunks_exact(n)) {
+            combine(row, f, P);
         }
-        // The upper triangle of F P Fᵀ: (F P)_i · F_j for j ≥ i; then α² · + Q.
         for i in 0..n {
-            let fpi = &fp[i * n..(i + 1) * n];
+            let ti = &T[i * n..(i + 1) * n];
             for j in i..n {
-                let s = self.alpha_sq * dot(fpi, &F[j * n..(j + 1) * n]);
+                let s = self.alpha_sq * dot(ti, &F[j * n..(j + 1) * n]);
                 Po[i * n + j] = s + Q[i * n + j];
                 Po[j * n + i] = s + Q[j * n + i];
             }
@@ -464,10 +482,7 @@ impl Work {
         }
         let hp = &mut self.hp[..m * n];
         for (row, h) in hp.chunks_exact_mut(n).zip(H.chunks_exact(n)) {
-            row.fill(0.0);
-            for (j, &haj) in h.iter().enumerate() {
-                axpy(row, haj, &P[j * n..(j + 1) * n]);
-            }
+            combine(row, h, P);
         }
         let S = &mut self.s[..m * m];
         for a in 0..m {
