@@ -36,7 +36,10 @@ pub(crate) fn read_series(
                 )));
             }
         };
-        let out: Vec<f64> = view.iter().copied().collect();
+        let out = match view.as_slice() {
+            Some(contiguous) => contiguous.to_vec(),
+            None => view.iter().copied().collect(),
+        };
         for &v in &out {
             if v.is_infinite() || (v.is_nan() && !missing_ok) {
                 return Err(value_error(format!(
