@@ -358,39 +358,55 @@ struct Pass<'a, R: std::io::Read> {
 /// Streams the filtered estimates to `dest`; returns the diagnostics text, computed before
 /// the estimates file is renamed into place, so that a too-short record for the
 /// diagnostics writes neither file.
-fn stream<R: std::io::Read>(pass: Pass<'_, R>) -> Result<Option<String>> {
-    let Pass {
-        args,
-        dest,
-        model,
-        kf,
-        reader,
-        mut acc,
-    } = pass;
-    let n = model.n();
-    let out_name = PathBuf::from(dest.to_string());
-    let out = out_name.as_path();
+fn stream<R: std::io::Read>(mut pass: Pass<'_, R>) -> Result<Option<String>> {
+    let n = pass.model.n();
+    let (dest, full) = (pass.dest, pass.args.full_covariance);
+    write_estimates(dest, n, full, |w, out| {
+        let mut row = Row::default();
+        let mut P = vec![0.0; n * n];
+        while let Some(info) = pass.next(&mut row)? {
+            copy_col_major(pass.kf.covariance(), &mut P);
+            // No measurement, no NIS: written as NaN.
+            let nis = info.nis.unwrap_or(f64::NAN);
+            data::write_estimate(w, out, row.t, pass.kf.state(), &P, full, nis)?;
+        }
+        diagnostics_text(pass.args, pass.acc)
+    })
+}
+
+impl<R: std::io::Read> Pass<'_, R> {
+    /// Reads the next data row into `row` and runs the filter step on it (adding it to the
+    /// diagnostics); `None` at the end of the data.
+    fn next(&mut self, row: &mut Row) -> Result<Option<kalman::StepInfo>> {
+        if !self.reader.read_row(row)? {
+            return Ok(None);
+        }
+        remove_feedthrough(&self.model.D, row);
+        let info = step(self.kf, self.reader, row)?;
+        if let Some(a) = self.acc.as_deref_mut() {
+            collect(a, self.kf, &info)?;
+        }
+        Ok(Some(info))
+    }
+}
+
+/// Writes the estimates to `dest`, whole or not at all: the header of an n-state model,
+/// then the rows `rows` writes (given the writer and the file's name for its errors).
+fn write_estimates<T>(
+    dest: &crate::output::Destination,
+    n: usize,
+    full_covariance: bool,
+    rows: impl FnOnce(&mut dyn std::io::Write, &Path) -> Result<T>,
+) -> Result<T> {
+    let out = PathBuf::from(dest.to_string());
     crate::output::write_to(dest, |w| {
-        writeln!(w, "{}", data::estimates_header(n, args.full_covariance)).map_err(|source| {
+        writeln!(w, "{}", data::estimates_header(n, full_covariance)).map_err(|source| {
             Error::Write {
-                path: out.to_path_buf(),
+                path: out.clone(),
                 source,
             }
         })?;
-        let mut row = Row::default();
-        let mut P = vec![0.0; n * n];
-        while reader.read_row(&mut row)? {
-            remove_feedthrough(&model.D, &mut row);
-            let info = step(kf, reader, &row)?;
-            if let Some(a) = acc.as_deref_mut() {
-                collect(a, kf, &info)?;
-            }
-            copy_col_major(kf.covariance(), &mut P);
-            // No measurement, no NIS: written as NaN.
-            let nis = info.nis.unwrap_or(f64::NAN);
-            data::write_estimate(w, out, row.t, kf.state(), &P, args.full_covariance, nis)?;
-        }
-        diagnostics_text(args, acc)
+        rows(w, &out)
     })
 }
 
@@ -461,27 +477,14 @@ fn copy_col_major(m: faer::MatRef<'_, f64>, out: &mut [f64]) {
 /// (3n² + 2n numbers per row, plus the smoothed n×n covariance and mean per row: measured
 /// 2 kB per row at n = 7), then the backward pass, then writes. The `nis` column is the
 /// forward pass's.
-fn smooth<R: std::io::Read>(pass: Pass<'_, R>) -> Result<Option<String>> {
-    let Pass {
-        args,
-        dest,
-        model,
-        kf,
-        reader,
-        mut acc,
-    } = pass;
-    let n = model.n();
+fn smooth<R: std::io::Read>(mut pass: Pass<'_, R>) -> Result<Option<String>> {
+    let n = pass.model.n();
     let mut rts = kalman::smoother::RtsSmoother::new();
     let mut times = Vec::new();
     let mut nis = Vec::new();
     let mut row = Row::default();
-    while reader.read_row(&mut row)? {
-        remove_feedthrough(&model.D, &mut row);
-        let info = step(kf, reader, &row)?;
-        if let Some(a) = acc.as_deref_mut() {
-            collect(a, kf, &info)?;
-        }
-        rts.record(kf).map_err(smoother_error)?;
+    while let Some(info) = pass.next(&mut row)? {
+        rts.record(pass.kf).map_err(smoother_error)?;
         times.push(row.t);
         nis.push(info.nis.unwrap_or(f64::NAN));
     }
@@ -491,16 +494,9 @@ fn smooth<R: std::io::Read>(pass: Pass<'_, R>) -> Result<Option<String>> {
         Some(rts.smooth().map_err(smoother_error)?)
     };
     drop(rts);
-    let text = diagnostics_text(args, acc)?;
-    let out_name = PathBuf::from(dest.to_string());
-    let out = out_name.as_path();
-    crate::output::write_to(dest, |w| {
-        writeln!(w, "{}", data::estimates_header(n, args.full_covariance)).map_err(|source| {
-            Error::Write {
-                path: out.to_path_buf(),
-                source,
-            }
-        })?;
+    let text = diagnostics_text(pass.args, pass.acc)?;
+    let full = pass.args.full_covariance;
+    write_estimates(pass.dest, n, full, |w, out| {
         let Some(s) = &smoothed else {
             return Ok(text);
         };
@@ -511,7 +507,7 @@ fn smooth<R: std::io::Read>(pass: Pass<'_, R>) -> Result<Option<String>> {
                 *xi = s.means[(i, k)];
             }
             copy_col_major(s.covariances[k].as_ref(), &mut P);
-            data::write_estimate(w, out, t, &x, &P, args.full_covariance, nis)?;
+            data::write_estimate(w, out, t, &x, &P, full, nis)?;
         }
         Ok(text)
     })

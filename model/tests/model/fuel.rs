@@ -223,6 +223,18 @@ fn r_is_singular_without_gyro_noise_and_regular_with_it() {
     assert!(close(m.r[(0, 0)], 1.5f64.powi(2) * 1e-8, 1e-12));
     // The cross-covariance is not zero: the same u_k enters x_{k+1} and z_k.
     assert!(m.s.amax() > 0.0);
+    // The gyro noise is white: it puts R²·var back on the tilt channel at Nyquist, even in
+    // the exact-Tustin realisation whose model part has no power there.
+    let m = p
+        .build(Channels::LevelAndTilt, Realisation::ExactTustin)
+        .expect("builds");
+    let power = m.nyquist_measurement_power().expect("power");
+    // Only round-off (≈ 1e-30 m² from the model part) separates it from 2.25e-8.
+    assert!(
+        (power[0] - 1.5f64.powi(2) * 1e-8).abs() < 1e-20,
+        "{}",
+        power[0]
+    );
 }
 
 /// Impulse response of one block, discretised on its own, by its difference equation.

@@ -7,7 +7,7 @@ use std::path::Path;
 use wls::boom::{AngleRecovery, AngleUnit, AxWeightLaw, BoomConfig, RateWeight, Sign};
 
 use super::parameters::{EstimatorParams, Method};
-use super::summary::{AlternativeVerdict, BoomSummary, CaseSummary, Computed};
+use super::summary::{AlternativeVerdict, BoomSummary, CaseSummary, Computed, TurnErrors};
 use crate::error::Result;
 use crate::output;
 use crate::plot::{Figure, Scale, Series, line_plot};
@@ -234,6 +234,19 @@ fn fmt_opt(x: Option<f64>) -> String {
     x.map_or_else(|| "—".to_string(), |v| format!("{v:.2}°"))
 }
 
+/// The cells `γ | variant | max δα | max δε | over the limits from | undefined from` of a
+/// turn in the cases and alternatives tables, the over-the-limits cell given.
+fn turn_cells(t: &TurnErrors, over_from: &str) -> String {
+    format!(
+        "{}° | {} | {:.4} | {:.4} | {over_from} | {}",
+        fmt_num(t.gamma_deg),
+        t.bias.label(),
+        t.max_alpha_err_deg,
+        t.max_eps_err_deg_s2,
+        fmt_opt(t.undefined_from_alpha_deg)
+    )
+}
+
 fn unit(u: AngleUnit) -> &'static str {
     match u {
         AngleUnit::Radian => "rad",
@@ -263,9 +276,9 @@ fn options_label(o: &EstimatorParams) -> String {
 fn wls0_comment(s: &BoomSummary) -> String {
     let lim = s.limits;
     let over = |c: &&&CaseSummary| {
-        c.undefined_from_alpha_deg.is_some()
-            || c.max_alpha_err_deg > lim.alpha_deg
-            || c.max_eps_err_deg_s2 > lim.eps_deg_s2
+        c.turn.undefined_from_alpha_deg.is_some()
+            || c.turn.max_alpha_err_deg > lim.alpha_deg
+            || c.turn.max_eps_err_deg_s2 > lim.eps_deg_s2
     };
     let cases: Vec<&CaseSummary> = BOTH
         .into_iter()
@@ -273,25 +286,28 @@ fn wls0_comment(s: &BoomSummary) -> String {
         .collect();
     let departing: Vec<&&CaseSummary> = cases.iter().filter(over).collect();
     let mut t = String::new();
-    if cases.iter().all(|c| c.undefined_from_alpha_deg.is_none()) {
+    if cases
+        .iter()
+        .all(|c| c.turn.undefined_from_alpha_deg.is_none())
+    {
         t.push_str("defined over the whole turn, as the paper says; ");
     } else {
         t.push_str("NOT defined over the whole turn; ");
     }
     match departing.as_slice() {
         [] => t.push_str("no excess at all (the paper has δε⁺ slightly over)"),
-        [c] if c.bias == Sign::Plus => {
+        [c] if c.turn.bias == Sign::Plus => {
             let _ = write!(
                 t,
                 "only the \"+\" variant departs, as in the paper (δε⁺ = {:.2} °/s² vs Δε = {}: \
                  \"slightly\"); {}",
-                c.max_eps_err_deg_s2,
+                c.turn.max_eps_err_deg_s2,
                 lim.eps_deg_s2,
-                if c.max_alpha_err_deg > lim.alpha_deg {
+                if c.turn.max_alpha_err_deg > lim.alpha_deg {
                     format!(
                         "but δα⁺ = {:.2}° also exceeds Δα, which the paper does not show; no \
                          unit/weight choice avoids that (alternatives table)",
-                        c.max_alpha_err_deg
+                        c.turn.max_alpha_err_deg
                     )
                 } else {
                     "δα⁺ stays within Δα".to_string()
@@ -302,7 +318,7 @@ fn wls0_comment(s: &BoomSummary) -> String {
             let _ = write!(
                 t,
                 "the \"{}\" variant departs where the paper has \"+\" (alternatives table)",
-                c.bias.label()
+                c.turn.bias.label()
             );
         }
         _ => t.push_str("both variants depart; the paper has only δε⁺"),
@@ -385,9 +401,9 @@ fn alternatives_conclusion(s: &BoomSummary) -> String {
 }
 
 fn case(s: &BoomSummary, method: Method, gamma: f64, bias: Sign) -> Option<&CaseSummary> {
-    s.cases
-        .iter()
-        .find(|c| c.method == method && (c.gamma_deg - gamma).abs() < 1e-9 && c.bias == bias)
+    s.cases.iter().find(|c| {
+        c.method == method && (c.turn.gamma_deg - gamma).abs() < 1e-9 && c.turn.bias == bias
+    })
 }
 
 /// The text of report.md.
@@ -434,12 +450,12 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
     let pick = |m: Method, g: f64, b: Sign| case(s, m, g, b);
     let viol = |m: Method, g: f64| {
         BOTH.into_iter()
-            .filter_map(|b| pick(m, g, b).and_then(|c| c.first_violation_alpha_deg))
+            .filter_map(|b| pick(m, g, b).and_then(|c| c.turn.first_violation_alpha_deg))
             .fold(f64::INFINITY, f64::min)
     };
     let undef = |m: Method, g: f64| {
         BOTH.into_iter()
-            .filter_map(|b| pick(m, g, b).and_then(|c| c.undefined_from_alpha_deg))
+            .filter_map(|b| pick(m, g, b).and_then(|c| c.turn.undefined_from_alpha_deg))
             .fold(f64::INFINITY, f64::min)
     };
     let show = |x: f64| {
@@ -475,7 +491,10 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         BOTH.into_iter()
             .filter_map(|b| pick(m, 0.0, b))
             .fold((0.0f64, 0.0f64), |(a, e), c| {
-                (a.max(c.max_alpha_err_deg), e.max(c.max_eps_err_deg_s2))
+                (
+                    a.max(c.turn.max_alpha_err_deg),
+                    e.max(c.turn.max_eps_err_deg_s2),
+                )
             })
     };
     let (la, le) = worst(Method::Linear3);
@@ -495,13 +514,16 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
     let w0 = |b: Sign| pick(Method::Wls, 0.0, b);
     let fmt_case = |c: Option<&CaseSummary>| {
         c.map_or("—".to_string(), |c| {
+            let t = &c.turn;
+            let (over, undefined) = (
+                fmt_opt(t.first_violation_alpha_deg),
+                fmt_opt(t.undefined_from_alpha_deg),
+            );
             format!(
-                "{}: δα {:.3}°, δε {:.3} °/s², over from {}, undefined from {}",
-                c.bias.label(),
-                c.max_alpha_err_deg,
-                c.max_eps_err_deg_s2,
-                fmt_opt(c.first_violation_alpha_deg),
-                fmt_opt(c.undefined_from_alpha_deg)
+                "{}: δα {:.3}°, δε {:.3} °/s², over from {over}, undefined from {undefined}",
+                t.bias.label(),
+                t.max_alpha_err_deg,
+                t.max_eps_err_deg_s2,
             )
         })
     };
@@ -520,7 +542,8 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         fmt_case(w10(Sign::Minus)),
         if BOTH.into_iter().all(|b| {
             w10(b).is_some_and(|c| {
-                c.first_violation_alpha_deg.is_none() && c.undefined_from_alpha_deg.is_none()
+                c.turn.first_violation_alpha_deg.is_none()
+                    && c.turn.undefined_from_alpha_deg.is_none()
             })
         }) {
             "agrees"
@@ -531,7 +554,7 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
     let d10 = |b: Sign| pick(Method::Direct, 10.0, b);
     let direct10_ok = BOTH.into_iter().all(|b| {
         d10(b).is_some_and(|c| {
-            c.first_violation_alpha_deg.is_none() && c.undefined_from_alpha_deg.is_none()
+            c.turn.first_violation_alpha_deg.is_none() && c.turn.undefined_from_alpha_deg.is_none()
         })
     });
     let _ = writeln!(
@@ -570,16 +593,12 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         "| method | γ | variant | max δα, ° | max δε, °/s² | over the limits from α | undefined from α |\n|---|---|---|---|---|---|---|"
     );
     for c in &s.cases {
+        let over_from = fmt_opt(c.turn.first_violation_alpha_deg);
         let _ = writeln!(
             r,
-            "| {} | {}° | {} | {:.4} | {:.4} | {} | {} |",
+            "| {} | {} |",
             c.method.name(),
-            fmt_num(c.gamma_deg),
-            c.bias.label(),
-            c.max_alpha_err_deg,
-            c.max_eps_err_deg_s2,
-            fmt_opt(c.first_violation_alpha_deg),
-            fmt_opt(c.undefined_from_alpha_deg)
+            turn_cells(&c.turn, &over_from)
         );
     }
 
@@ -628,19 +647,15 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         "\n| options | γ | variant | max δα, ° | max δε, °/s² | over from α (t) | undefined from α |\n|---|---|---|---|---|---|---|"
     );
     for a in &s.alternatives {
+        let over_from = match (a.turn.first_violation_alpha_deg, a.first_violation_t_s) {
+            (Some(al), Some(t)) => format!("{al:.2}° ({t:.2} s)"),
+            _ => "—".to_string(),
+        };
         let _ = writeln!(
             r,
-            "| {} | {}° | {} | {:.4} | {:.4} | {} | {} |",
+            "| {} | {} |",
             options_label(&a.options),
-            fmt_num(a.gamma_deg),
-            a.bias.label(),
-            a.max_alpha_err_deg,
-            a.max_eps_err_deg_s2,
-            match (a.first_violation_alpha_deg, a.first_violation_t_s) {
-                (Some(al), Some(t)) => format!("{al:.2}° ({t:.2} s)"),
-                _ => "—".to_string(),
-            },
-            fmt_opt(a.undefined_from_alpha_deg)
+            turn_cells(&a.turn, &over_from)
         );
     }
 

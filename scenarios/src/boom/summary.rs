@@ -13,16 +13,15 @@ use wls::boom::{
 
 use super::parameters::{BoomParams, EstimatorParams, LimitParams, Method};
 use super::records::{NOISE_METHODS, NoiseRecord};
-use super::simulation::{Meter, readings, replay, stats, tracked_runs, wls_err};
+use super::simulation::{Meter, TurnStats, readings, replay, stats, tracked_runs, wls_err};
 use super::tracking::{TrackingModel, jerk_intensity};
 use crate::error::{Error, Result};
 use crate::montecarlo::{par_runs, run_rng};
 
-/// One row of the `cases` table.
+/// One turn's errors against the nominal trajectory, as the `cases` and alternatives tables
+/// show them.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CaseSummary {
-    /// The estimator.
-    pub method: Method,
+pub struct TurnErrors {
     /// γ, degrees.
     pub gamma_deg: f64,
     /// The error variant.
@@ -40,6 +39,30 @@ pub struct CaseSummary {
     /// Nominal α at the first cycle after the start-up cycle with δα > Δα or δε > Δε, an
     /// undefined cycle counting as over (the same rule for every method), degrees.
     pub first_violation_alpha_deg: Option<f64>,
+}
+
+impl TurnErrors {
+    /// The errors of `run` at offset angle `gamma_deg`, from its statistics `s`.
+    fn new(gamma_deg: f64, run: &TurnRun, s: &TurnStats) -> Self {
+        Self {
+            gamma_deg,
+            bias: run.sign,
+            max_alpha_err_deg: s.max_alpha_deg,
+            max_eps_err_deg_s2: s.max_eps_deg,
+            undefined_from_alpha_deg: s.undefined_from_deg,
+            first_violation_alpha_deg: s.violation.map(|v| v.1),
+        }
+    }
+}
+
+/// One row of the `cases` table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseSummary {
+    /// The estimator.
+    pub method: Method,
+    /// Its errors.
+    #[serde(flatten)]
+    pub turn: TurnErrors,
 }
 
 /// One row of the noise Monte Carlo: white noise σ on top of ±Δa, `runs` turns per variant.
@@ -147,18 +170,9 @@ pub struct SweepRow {
 pub struct AlternativeRow {
     /// The options.
     pub options: EstimatorParams,
-    /// γ, degrees.
-    pub gamma_deg: f64,
-    /// The error variant.
-    pub bias: Sign,
-    /// As in [`CaseSummary`].
-    pub max_alpha_err_deg: f64,
-    /// As in [`CaseSummary`].
-    pub max_eps_err_deg_s2: f64,
-    /// As in [`CaseSummary`].
-    pub undefined_from_alpha_deg: Option<f64>,
-    /// As in [`CaseSummary`].
-    pub first_violation_alpha_deg: Option<f64>,
+    /// Its errors.
+    #[serde(flatten)]
+    pub turn: TurnErrors,
     /// Time of the first violation, s.
     pub first_violation_t_s: Option<f64>,
     /// The α error stayed within Δα (defined cycles, and no undefined cycle).
@@ -368,16 +382,8 @@ pub fn summarise(
             let plus = turn(&cfg, &variants[0], quiet())?;
             let minus = turn(&cfg, &variants[1], quiet())?;
             for run in [&plus, &minus] {
-                let s = stats(run);
-                cases.push(CaseSummary {
-                    method,
-                    gamma_deg: gamma,
-                    bias: run.sign,
-                    max_alpha_err_deg: s.max_alpha_deg,
-                    max_eps_err_deg_s2: s.max_eps_deg,
-                    undefined_from_alpha_deg: s.undefined_from_deg,
-                    first_violation_alpha_deg: s.violation.map(|v| v.1),
-                });
+                let turn = TurnErrors::new(gamma, run, &stats(run));
+                cases.push(CaseSummary { method, turn });
             }
             case_runs.push((method, gamma, plus, minus));
         }
@@ -410,16 +416,8 @@ pub fn summarise(
             .map(|((a, p), m)| (a, p, m))
         {
             for run in [&p, &m] {
-                let s = stats(run);
-                cases.push(CaseSummary {
-                    method,
-                    gamma_deg: gamma,
-                    bias: run.sign,
-                    max_alpha_err_deg: s.max_alpha_deg,
-                    max_eps_err_deg_s2: s.max_eps_deg,
-                    undefined_from_alpha_deg: s.undefined_from_deg,
-                    first_violation_alpha_deg: s.violation.map(|v| v.1),
-                });
+                let turn = TurnErrors::new(gamma, run, &stats(run));
+                cases.push(CaseSummary { method, turn });
             }
             tracking_runs.push((method, gamma, p, m));
         }
@@ -519,12 +517,7 @@ pub fn summarise(
                 let defined = s.undefined_from_deg.is_none();
                 rows.push(AlternativeRow {
                     options: *o,
-                    gamma_deg: gamma,
-                    bias: run.sign,
-                    max_alpha_err_deg: s.max_alpha_deg,
-                    max_eps_err_deg_s2: s.max_eps_deg,
-                    undefined_from_alpha_deg: s.undefined_from_deg,
-                    first_violation_alpha_deg: s.violation.map(|v| v.1),
+                    turn: TurnErrors::new(gamma, &run, &s),
                     first_violation_t_s: s.violation.map(|v| v.0),
                     alpha_within: defined && s.max_alpha_deg <= params.limits.alpha_deg,
                     eps_within: defined && s.max_eps_deg <= params.limits.eps_deg_s2,
@@ -659,14 +652,17 @@ fn nearest(grid: &[f64], x: f64) -> f64 {
 }
 
 fn verdict(options: EstimatorParams, rows: &[AlternativeRow]) -> AlternativeVerdict {
-    let at = |g: f64| rows.iter().filter(move |r| (r.gamma_deg - g).abs() < 1e-9);
-    let defined_at_0 = at(0.0).all(|r| r.undefined_from_alpha_deg.is_none());
+    let at = |g: f64| {
+        rows.iter()
+            .filter(move |r| (r.turn.gamma_deg - g).abs() < 1e-9)
+    };
+    let defined_at_0 = at(0.0).all(|r| r.turn.undefined_from_alpha_deg.is_none());
     let alpha_within_at_0 = at(0.0).all(|r| r.alpha_within);
     let over: Vec<&AlternativeRow> = at(0.0).filter(|r| !r.eps_within).collect();
     let eps_pattern_at_0 = over.len() <= 1
         && over
             .iter()
-            .all(|r| r.first_violation_alpha_deg.is_some_and(|a| a > 75.0));
+            .all(|r| r.turn.first_violation_alpha_deg.is_some_and(|a| a > 75.0));
     let within_at_10 = at(10.0).all(|r| r.alpha_within && r.eps_within);
     let departures_at_0 = at(0.0)
         .filter(|r| !(r.alpha_within && r.eps_within))
@@ -676,14 +672,15 @@ fn verdict(options: EstimatorParams, rows: &[AlternativeRow]) -> AlternativeVerd
                 (false, true) => "δα",
                 _ => "δε",
             };
-            let from = match (r.first_violation_alpha_deg, r.first_violation_t_s) {
+            let from = match (r.turn.first_violation_alpha_deg, r.first_violation_t_s) {
                 (Some(a), Some(t)) => format!(" over from {a:.1}° ({t:.1} s)"),
                 _ => String::new(),
             };
             let undefined = r
+                .turn
                 .undefined_from_alpha_deg
                 .map_or(String::new(), |a| format!(", undefined from {a:.1}°"));
-            format!("{}: {what}{from}{undefined}", r.bias.label())
+            format!("{}: {what}{from}{undefined}", r.turn.bias.label())
         })
         .collect();
     AlternativeVerdict {

@@ -55,7 +55,7 @@ use kalman::nonlinear::{
     CentralDiff, Ekf, EkfUpdate, FnModel, NonlinearModel, NonlinearRts, SigmaPoints, Ukf,
 };
 use model::nalgebra::DMatrix;
-use wls::boom::{CycleError, Limits, Sign, TrajectoryPoint, TurnRun};
+use wls::boom::{Limits, Sign, TrajectoryPoint, TurnRun};
 
 use super::parameters::BoomParams;
 use crate::error::{Error, Result};
@@ -318,51 +318,17 @@ fn finite(x: &[f64]) -> bool {
 }
 
 /// A filter's per-cycle errors against the nominal turn, with the WLS's bookkeeping
-/// (`wls::boom::run_turn`): the start-up cycle is excluded from the maxima, and the first
-/// violation counts an undefined cycle as over the limits.
+/// ([`TurnRun::push`]): a cycle whose α̂ or ε̂ is not finite is undefined.
 pub(super) fn turn_run(
     points: &[TrajectoryPoint],
     track: &Track,
     sign: Sign,
     limits: Limits,
 ) -> TurnRun {
-    let mut run = TurnRun {
-        sign,
-        cycles: Vec::with_capacity(points.len()),
-        max_angle_error: 0.0,
-        max_epsilon_error: 0.0,
-        first_violation: None,
-        first_undefined: None,
-    };
-    for (k, ((p, &a), &e)) in points.iter().zip(&track.alpha).zip(&track.eps).enumerate() {
-        let defined = a.is_finite() && e.is_finite();
-        let (da, de) = if defined {
-            ((a - p.alpha).abs(), (e - p.epsilon).abs())
-        } else {
-            (f64::INFINITY, f64::INFINITY)
-        };
-        run.cycles.push(CycleError {
-            t: p.t,
-            alpha: p.alpha,
-            angle_error: da,
-            epsilon_error: de,
-            defined,
-            condition_number: f64::NAN,
-        });
-        if k == 0 {
-            continue;
-        }
-        if defined {
-            run.max_angle_error = run.max_angle_error.max(da);
-            run.max_epsilon_error = run.max_epsilon_error.max(de);
-        }
-        if run.first_violation.is_none() && (da > limits.angle || de > limits.angular_acceleration)
-        {
-            run.first_violation = Some((p.t, p.alpha));
-        }
-        if run.first_undefined.is_none() && !defined {
-            run.first_undefined = Some((p.t, p.alpha));
-        }
+    let mut run = TurnRun::new(sign, points.len());
+    for ((p, &a), &e) in points.iter().zip(&track.alpha).zip(&track.eps) {
+        let estimate = (a.is_finite() && e.is_finite()).then_some((a, e));
+        run.push(p, estimate, f64::NAN, limits);
     }
     run
 }

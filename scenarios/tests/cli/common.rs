@@ -116,6 +116,13 @@ pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     p
 }
 
+/// A fresh scratch directory (as [`scratch`]) holding the model file `m.json` with `model`.
+pub fn with_model(family: &str, name: &str, model: &str) -> PathBuf {
+    let dir = scratch(family, name);
+    write(&dir, "m.json", model);
+    dir
+}
+
 /// Runs a command that must fail with exit code 2 and exactly one line on stderr containing
 /// every string of `expect`, leaving nothing in `dir` but the inputs (`inputs` files).
 pub fn refused(dir: &Path, args: &[&str], expect: &[&str], inputs: usize) {

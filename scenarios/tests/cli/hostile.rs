@@ -50,39 +50,55 @@ enum Setup {
 /// One hostile input: extra files, the arguments, the exit code and what the one line on
 /// stderr must contain (the culprit).
 struct Row {
-    files: &'static [(&'static str, &'static [u8])],
+    files: Vec<(&'static str, &'static [u8])>,
     setup: Setup,
     args: &'static [&'static str],
     code: i32,
-    culprit: &'static [&'static str],
+    culprit: Vec<&'static str>,
 }
 
-const fn row(
-    files: &'static [(&'static str, &'static [u8])],
+fn row(
+    files: &[(&'static str, &'static [u8])],
     args: &'static [&'static str],
-    culprit: &'static [&'static str],
+    culprit: &[&'static str],
 ) -> Row {
     Row {
-        files,
+        files: files.to_vec(),
         setup: Setup::None,
         args,
         code: 2,
-        culprit,
+        culprit: culprit.to_vec(),
     }
 }
 
-const fn with(
-    setup: Setup,
-    args: &'static [&'static str],
-    culprit: &'static [&'static str],
-) -> Row {
+fn with(setup: Setup, args: &'static [&'static str], culprit: &[&'static str]) -> Row {
     Row {
-        files: &[],
         setup,
-        args,
-        code: 2,
-        culprit,
+        ..row(&[], args, culprit)
     }
+}
+
+/// A broken model file `name` (`bad.json` or `bad.toml`) with `text`, which the error names
+/// besides `culprit`.
+fn model(
+    name: &'static str,
+    text: &'static [u8],
+    args: &'static [&'static str],
+    culprit: &[&'static str],
+) -> Row {
+    let mut r = row(&[(name, text)], args, &[name]);
+    r.culprit.extend(culprit);
+    r
+}
+
+/// A broken JSON model `bad.json`, given to `args`.
+fn json(args: &'static [&'static str], text: &'static [u8], culprit: &[&'static str]) -> Row {
+    model("bad.json", text, args, culprit)
+}
+
+/// A broken TOML model `bad.toml`, given to `filter`.
+fn toml(text: &'static [u8], culprit: &[&'static str]) -> Row {
+    model("bad.toml", text, FILTER_TOML, culprit)
 }
 
 /// `filter` of model `bad.json` on the good data.
@@ -115,140 +131,36 @@ const DISC_JSON: &[&str] = &[
 fn rows() -> Vec<Row> {
     vec![
         // --- Model files: JSON.
-        row(&[("bad.json", b"{\"dt\": 1,")], FILTER_JSON, &["bad.json", "line 1"]),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[NaN]], "R": [[1]], "P0": [[1]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "key Q[0][0]", "NaN is not a JSON number"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[Infinity]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "key F[0][0]", "Infinity is not a JSON number"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[-Infinity]], "P0": [[1]]}"#)],
-            STEADY_JSON,
-            &["bad.json", "key R[0][0]", "-Infinity is not a JSON number"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]], "Z": 0}"#)],
-            FILTER_JSON,
-            &["bad.json", "unknown field `Z`"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [["1"]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "key H[0][0]", "invalid type"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]]} x"#)],
-            FILTER_JSON,
-            &["bad.json", "trailing characters"],
-        ),
-        row(&[("bad.json", b"")], FILTER_JSON, &["bad.json", "EOF while parsing"]),
-        row(&[("bad.json", b"[]")], STEADY_JSON, &["bad.json", "invalid length 0"]),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1e400]], "H": [[1]], "Q": [[1]], "R": [[1]]}"#)],
-            STEADY_JSON,
-            &["bad.json", "key F[0][0]", "number out of range"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 0, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "dt = 0"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": -1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]]}"#)],
-            STEADY_JSON,
-            &["bad.json", "dt = -1"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "P0": [[1]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "matrix R is missing"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "matrix P0 is missing"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1, 0], [0]], "H": [[1, 0]], "Q": [[1, 0], [0, 1]], "R": [[1]]}"#)],
-            STEADY_JSON,
-            &["bad.json", "matrix F: row 2 has 1 entries"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1, 0]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "matrix H is 1×2, expected 1×1"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1, 0], [0, 1]], "H": [[1, 0]], "Q": [[1, 0.5], [0, 1]], "R": [[1]]}"#)],
-            STEADY_JSON,
-            &["bad.json", "Q", "not symmetric"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[-1]], "P0": [[1]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "R", "not positive semidefinite"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[-2]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "P0", "not positive semidefinite"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [], "H": [[1]], "Q": [[1]], "R": [[1]]}"#)],
-            STEADY_JSON,
-            &["bad.json", "matrix F is empty"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "x0": [0, 1], "P0": [[1]]}"#)],
-            FILTER_JSON,
-            &["bad.json", "vector x0 has 2 entries"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "B": [[1]], "H": [[1]], "D": [[1, 2]], "Q": [[1]], "R": [[1]]}"#)],
-            STEADY_JSON,
-            &["bad.json", "matrix D is 1×2, expected 1×1"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "S": [[1, 1]]}"#)],
-            STEADY_JSON,
-            &["bad.json", "matrix S is 1×2, expected 1×1"],
-        ),
-        row(
-            &[("bad.json", br#"{"dt": 1, "F": [[2]], "H": [[0]], "Q": [[1]], "R": [[1]]}"#)],
-            STEADY_JSON,
-            &["bad.json", "not detectable"],
-        ),
+        json(FILTER_JSON, b"{\"dt\": 1,", &["line 1"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[NaN]], "R": [[1]], "P0": [[1]]}"#, &["key Q[0][0]", "NaN is not a JSON number"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[Infinity]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#, &["key F[0][0]", "Infinity is not a JSON number"]),
+        json(STEADY_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[-Infinity]], "P0": [[1]]}"#, &["key R[0][0]", "-Infinity is not a JSON number"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]], "Z": 0}"#, &["unknown field `Z`"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [["1"]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#, &["key H[0][0]", "invalid type"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]]} x"#, &["trailing characters"]),
+        json(FILTER_JSON, b"", &["EOF while parsing"]),
+        json(STEADY_JSON, b"[]", &["invalid length 0"]),
+        json(STEADY_JSON, br#"{"dt": 1, "F": [[1e400]], "H": [[1]], "Q": [[1]], "R": [[1]]}"#, &["key F[0][0]", "number out of range"]),
+        json(FILTER_JSON, br#"{"dt": 0, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#, &["dt = 0"]),
+        json(STEADY_JSON, br#"{"dt": -1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]]}"#, &["dt = -1"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "P0": [[1]]}"#, &["matrix R is missing"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]]}"#, &["matrix P0 is missing"]),
+        json(STEADY_JSON, br#"{"dt": 1, "F": [[1, 0], [0]], "H": [[1, 0]], "Q": [[1, 0], [0, 1]], "R": [[1]]}"#, &["matrix F: row 2 has 1 entries"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1, 0]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#, &["matrix H is 1×2, expected 1×1"]),
+        json(STEADY_JSON, br#"{"dt": 1, "F": [[1, 0], [0, 1]], "H": [[1, 0]], "Q": [[1, 0.5], [0, 1]], "R": [[1]]}"#, &["Q", "not symmetric"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[-1]], "P0": [[1]]}"#, &["R", "not positive semidefinite"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[-2]]}"#, &["P0", "not positive semidefinite"]),
+        json(STEADY_JSON, br#"{"dt": 1, "F": [], "H": [[1]], "Q": [[1]], "R": [[1]]}"#, &["matrix F is empty"]),
+        json(FILTER_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "x0": [0, 1], "P0": [[1]]}"#, &["vector x0 has 2 entries"]),
+        json(STEADY_JSON, br#"{"dt": 1, "F": [[1]], "B": [[1]], "H": [[1]], "D": [[1, 2]], "Q": [[1]], "R": [[1]]}"#, &["matrix D is 1×2, expected 1×1"]),
+        json(STEADY_JSON, br#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "S": [[1, 1]]}"#, &["matrix S is 1×2, expected 1×1"]),
+        json(STEADY_JSON, br#"{"dt": 1, "F": [[2]], "H": [[0]], "Q": [[1]], "R": [[1]]}"#, &["not detectable"]),
         // --- Model files: TOML, names and kinds.
-        row(
-            &[("bad.toml", b"dt = 1\nF = [[1,,]]\n")],
-            FILTER_TOML,
-            &["bad.toml", "invalid TOML model at line 2"],
-        ),
-        row(
-            &[("bad.toml", b"dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[nan]]\nR = [[1]]\nP0 = [[1]]\n")],
-            FILTER_TOML,
-            &["bad.toml", "matrix Q has NaN at row 1, column 1"],
-        ),
-        row(
-            &[("bad.toml", b"dt = 1\nF = [[inf]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\nP0 = [[1]]\n")],
-            FILTER_TOML,
-            &["bad.toml", "matrix F has inf"],
-        ),
-        row(
-            &[("bad.toml", b"dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\nP0 = [[1]]\nPO = 1\n")],
-            FILTER_TOML,
-            &["bad.toml", "unknown field `PO`", "line 7"],
-        ),
-        row(
-            &[("bad.toml", b"\xff\xfe\x00garbage")],
-            FILTER_TOML,
-            &["bad.toml", "cannot read", "UTF-8"],
-        ),
+        toml(b"dt = 1\nF = [[1,,]]\n", &["invalid TOML model at line 2"]),
+        toml(b"dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[nan]]\nR = [[1]]\nP0 = [[1]]\n", &["matrix Q has NaN at row 1, column 1"]),
+        toml(b"dt = 1\nF = [[inf]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\nP0 = [[1]]\n", &["matrix F has inf"]),
+        toml(b"dt = 1\nF = [[1]]\nH = [[1]]\nQ = [[1]]\nR = [[1]]\nP0 = [[1]]\nPO = 1\n", &["unknown field `PO`", "line 7"]),
+        toml(b"\xff\xfe\x00garbage", &["cannot read", "UTF-8"]),
         row(
             &[("bad.yaml", b"dt: 1\n")],
             &["filter", "--model", "bad.yaml", "--data", "z.csv", "--out", "est.csv"],
@@ -265,36 +177,12 @@ fn rows() -> Vec<Row> {
             &["model.json", "cannot read"],
         ),
         // --- Continuous models and discretize.
-        row(
-            &[("bad.json", br#"{"A": [[0, 1]], "C": [[1, 0]]}"#)],
-            DISC_JSON,
-            &["bad.json", "matrix A is 1×2, expected 1×1"],
-        ),
-        row(
-            &[("bad.json", br#"{"A": [[-1, 0], [0, -1]], "C": [[1, 0]], "Qc": [[1, 2], [2, 1]]}"#)],
-            DISC_JSON,
-            &["bad.json", "matrix Qc", "positive semi-definite"],
-        ),
-        row(
-            &[("bad.json", br#"{"A": [[-1]], "C": [[1]], "G": [[1], [1]]}"#)],
-            DISC_JSON,
-            &["bad.json", "matrix G is 2×1, expected 1×1"],
-        ),
-        row(
-            &[("bad.json", br#"{"A": [[4]], "C": [[1]]}"#)],
-            &["discretize", "--model", "bad.json", "--dt", "0.5", "--method", "tustin", "--out", "d.json"],
-            &["bad.json", "singular"],
-        ),
-        row(
-            &[("bad.json", br#"{"A": [[1000]], "C": [[1]]}"#)],
-            &["discretize", "--model", "bad.json", "--dt", "1", "--method", "zoh", "--out", "d.json"],
-            &["--dt 1", "too large for this A", "bad.json"],
-        ),
-        row(
-            &[("bad.json", br#"{"A": [[1000]], "C": [[1]], "Qc": [[1]]}"#)],
-            &["discretize", "--model", "bad.json", "--dt", "1", "--method", "euler", "--out", "d.json"],
-            &["--dt 1", "too large for this A", "Van Loan"],
-        ),
+        json(DISC_JSON, br#"{"A": [[0, 1]], "C": [[1, 0]]}"#, &["matrix A is 1×2, expected 1×1"]),
+        json(DISC_JSON, br#"{"A": [[-1, 0], [0, -1]], "C": [[1, 0]], "Qc": [[1, 2], [2, 1]]}"#, &["matrix Qc", "positive semi-definite"]),
+        json(DISC_JSON, br#"{"A": [[-1]], "C": [[1]], "G": [[1], [1]]}"#, &["matrix G is 2×1, expected 1×1"]),
+        json(&["discretize", "--model", "bad.json", "--dt", "0.5", "--method", "tustin", "--out", "d.json"], br#"{"A": [[4]], "C": [[1]]}"#, &["singular"]),
+        json(&["discretize", "--model", "bad.json", "--dt", "1", "--method", "zoh", "--out", "d.json"], br#"{"A": [[1000]], "C": [[1]]}"#, &["--dt 1", "too large for this A"]),
+        json(&["discretize", "--model", "bad.json", "--dt", "1", "--method", "euler", "--out", "d.json"], br#"{"A": [[1000]], "C": [[1]], "Qc": [[1]]}"#, &["--dt 1", "too large for this A", "Van Loan"]),
         // --- A filter that diverges on the data: F11 = 1e10 unmeasured overflows by row 16.
         row(
             &[
@@ -466,7 +354,7 @@ fn prepare(dir: &Path, r: &Row) {
         }
         std::fs::write(p, text).expect("base file");
     }
-    for (name, bytes) in r.files {
+    for (name, bytes) in &r.files {
         std::fs::write(dir.join(name), bytes).expect("row file");
     }
     match r.setup {
@@ -508,7 +396,7 @@ fn hostile_inputs_fail_cleanly_and_touch_nothing() {
         if err.lines().count() != 1 || !err.starts_with("scenarios: ") {
             wrong.push("stderr is not one `scenarios: …` line".into());
         }
-        for c in r.culprit {
+        for c in &r.culprit {
             if !err.contains(c) {
                 wrong.push(format!("`{c}` not named"));
             }

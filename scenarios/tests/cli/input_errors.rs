@@ -13,12 +13,7 @@ use crate::common::*;
 
 #[test]
 fn csv_errors_name_file_line_and_column() {
-    let dir = scratch("ud", "csverr");
-    write(
-        &dir,
-        "m.json",
-        r#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[1]]}"#,
-    );
+    let dir = with_model("ud", "csverr", WALK_JSON);
     let filter = argv("filter --model m.json --data z.csv --out est.csv");
     for (csv, expect) in [
         (
@@ -541,10 +536,9 @@ fn diverging_filter_is_refused_naming_the_row() {
     // overflows f64 (1.8e308) around step 16 and every estimate after it, even the measured,
     // stable x2 (F22 = 0.5), would be inf or NaN. The run must stop at a row in that range,
     // name it, and write nothing.
-    let dir = scratch("ud", "diverge");
-    write(
-        &dir,
-        "m.json",
+    let dir = with_model(
+        "ud",
+        "diverge",
         r#"{"dt": 1, "F": [[1e10, 0], [0, 0.5]], "H": [[0, 1]], "Q": [[1, 0], [0, 1]],
             "R": [[1]], "P0": [[1, 0], [0, 1]]}"#,
     );

@@ -217,10 +217,9 @@ fn filter_streams_a_long_csv() {
     // 20 000 rows through the binary: the estimates file has one row per data row and the
     // last covariance equals the scalar steady state P_post = P⁻R/(P⁻+R), P⁻ = (Q + √(Q²+4QR))/2
     // for F = H = 1 (Q = 1, R = 1: P⁻ = (1+√5)/2).
-    let dir = scratch("ud", "long");
-    write(
-        &dir,
-        "m.json",
+    let dir = with_model(
+        "ud",
+        "long",
         r#"{"dt": 1, "F": [[1]], "H": [[1]], "Q": [[1]], "R": [[1]], "P0": [[100]]}"#,
     );
     let mut csv = String::from("t,z1\n");
@@ -515,10 +514,9 @@ fn filter_memory_does_not_grow_with_the_csv() {
     // 20 000 against 100 000 rows: streaming keeps the peak at the program's own few MB; `--smooth`, which
     // must keep the pass (≥ 100 bytes a row for n = 2), shows what growth looks like — so
     // the first assertion is known to be able to fail.
-    let dir = scratch("ud", "memory");
-    write(
-        &dir,
-        "m.json",
+    let dir = with_model(
+        "ud",
+        "memory",
         r#"{"dt": 1, "F": [[1, 1], [0, 1]], "H": [[1, 0]], "Q": [[0.01, 0], [0, 0.01]], "R": [[1]], "P0": [[1, 0], [0, 1]]}"#,
     );
     let rows = |n: usize| {

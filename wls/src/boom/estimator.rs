@@ -401,6 +401,24 @@ impl BoomEstimator {
             iterations,
             startup,
         };
+        let defined = |beta: f64, s, c, eps, kappa, iterations, startup| Estimate {
+            angle: beta + gamma,
+            angular_acceleration: eps,
+            condition_number: kappa,
+            defined: true,
+            mounting_ok,
+            sin_sensor: s,
+            cos_sensor: c,
+            iterations,
+            startup,
+        };
+        let condition = |m: &Matrix3<f64>| {
+            if cfg.compute_condition {
+                cond3(m)
+            } else {
+                f64::NAN
+            }
+        };
         let prev = match (cfg.method, self.state) {
             (BoomMethod::Direct, _) | (_, None) => {
                 let startup = self.state.is_none() && cfg.method != BoomMethod::Direct;
@@ -408,48 +426,22 @@ impl BoomEstimator {
                 if !ok {
                     return Ok(undefined(s, c, f64::INFINITY, 0, startup));
                 }
-                let kappa = if cfg.compute_condition {
-                    cond3(&self.h3(s, c))
-                } else {
-                    f64::NAN
-                };
+                let kappa = condition(&self.h3(s, c));
                 let rate = self.state.map_or(0.0, |p| (eps - p.eps) / cfg.dt);
                 self.state = Some(State { s, c, eps, rate });
-                return Ok(Estimate {
-                    angle: s.asin() + gamma,
-                    angular_acceleration: eps,
-                    condition_number: kappa,
-                    defined: true,
-                    mounting_ok,
-                    sin_sensor: s,
-                    cos_sensor: c,
-                    iterations: 0,
-                    startup,
-                });
+                return Ok(defined(s.asin(), s, c, eps, kappa, 0, startup));
             }
             (_, Some(p)) => p,
         };
         let (x, kappa, iterations) = if cfg.method == BoomMethod::Linear3 {
             let H = self.h3(prev.s, prev.c);
-            let kappa = if cfg.compute_condition {
-                cond3(&H)
-            } else {
-                f64::NAN
-            };
             match H.lu().solve(&Vector3::new(a_x, a_y, 1.0)) {
-                Some(x) => (x, kappa, 0),
+                Some(x) => (x, condition(&H), 0),
                 None => return Ok(undefined(f64::NAN, f64::NAN, f64::INFINITY, 0, false)),
             }
         } else {
             match self.wls_cycle(&prev, a_x, a_y) {
-                Some((x, T, iterations)) => {
-                    let kappa = if cfg.compute_condition {
-                        cond3(&T)
-                    } else {
-                        f64::NAN
-                    };
-                    (x, kappa, iterations)
-                }
+                Some((x, T, iterations)) => (x, condition(&T), iterations),
                 None => return Ok(undefined(f64::NAN, f64::NAN, f64::INFINITY, 0, false)),
             }
         };
@@ -465,17 +457,7 @@ impl BoomEstimator {
             AngleRecovery::Arcsin => return Ok(undefined(s, c, kappa, iterations, false)),
             AngleRecovery::Atan2 => s.atan2(c),
         };
-        Ok(Estimate {
-            angle: beta + gamma,
-            angular_acceleration: eps,
-            condition_number: kappa,
-            defined: true,
-            mounting_ok,
-            sin_sensor: s,
-            cos_sensor: c,
-            iterations,
-            startup: false,
-        })
+        Ok(defined(beta, s, c, eps, kappa, iterations, false))
     }
 }
 

@@ -170,6 +170,57 @@ pub struct TurnRun {
     pub first_undefined: Option<(f64, f64)>,
 }
 
+impl TurnRun {
+    /// A turn under the variant `sign` with no cycle yet, room for `capacity` cycles.
+    pub fn new(sign: Sign, capacity: usize) -> Self {
+        Self {
+            sign,
+            cycles: Vec::with_capacity(capacity),
+            max_angle_error: 0.0,
+            max_epsilon_error: 0.0,
+            first_violation: None,
+            first_undefined: None,
+        }
+    }
+
+    /// Appends the next cycle at the nominal point `p`: `estimate` is (α̂, ε̂), `None` when
+    /// the estimator gives none that cycle (its errors count as ∞). From the second cycle on
+    /// (the first is start-up) it updates the maxima, the first violation of `limits` and
+    /// the first undefined cycle.
+    pub fn push(
+        &mut self,
+        p: &TrajectoryPoint,
+        estimate: Option<(f64, f64)>,
+        condition_number: f64,
+        limits: Limits,
+    ) {
+        let (da, de) = estimate.map_or((f64::INFINITY, f64::INFINITY), |(a, e)| {
+            ((a - p.alpha).abs(), (e - p.epsilon).abs())
+        });
+        let startup = self.cycles.is_empty();
+        self.cycles.push(CycleError {
+            t: p.t,
+            alpha: p.alpha,
+            angle_error: da,
+            epsilon_error: de,
+            defined: estimate.is_some(),
+            condition_number,
+        });
+        if startup {
+            return;
+        }
+        self.max_angle_error = self.max_angle_error.max(da);
+        self.max_epsilon_error = self.max_epsilon_error.max(de);
+        if self.first_violation.is_none() && (da > limits.angle || de > limits.angular_acceleration)
+        {
+            self.first_violation = Some((p.t, p.alpha));
+        }
+        if self.first_undefined.is_none() && estimate.is_none() {
+            self.first_undefined = Some((p.t, p.alpha));
+        }
+    }
+}
+
 /// Runs a fresh estimator over `trajectory` with readings from `measure(point, γ, variant)`
 /// (`FnMut`: a measurement model may draw noise from its own generator).
 ///
@@ -196,45 +247,12 @@ pub fn run_turn<M: FnMut(&TrajectoryPoint, f64, &ErrorVariant) -> [f64; 3]>(
     }
     let mut est = BoomEstimator::new(config.clone())?;
     let gamma = config.sensor_offset_angle;
-    let mut run = TurnRun {
-        sign: variant.sign,
-        cycles: Vec::with_capacity(trajectory.len()),
-        max_angle_error: 0.0,
-        max_epsilon_error: 0.0,
-        first_violation: None,
-        first_undefined: None,
-    };
-    for (k, p) in trajectory.iter().enumerate() {
+    let mut run = TurnRun::new(variant.sign, trajectory.len());
+    for p in trajectory {
         let [ax, ay, az] = measure(p, gamma, variant);
         let e = est.update(ax, ay, az)?;
-        let (da, de) = if e.defined {
-            (
-                (e.angle - p.alpha).abs(),
-                (e.angular_acceleration - p.epsilon).abs(),
-            )
-        } else {
-            (f64::INFINITY, f64::INFINITY)
-        };
-        run.cycles.push(CycleError {
-            t: p.t,
-            alpha: p.alpha,
-            angle_error: da,
-            epsilon_error: de,
-            defined: e.defined,
-            condition_number: e.condition_number,
-        });
-        if k == 0 {
-            continue;
-        }
-        run.max_angle_error = run.max_angle_error.max(da);
-        run.max_epsilon_error = run.max_epsilon_error.max(de);
-        if run.first_violation.is_none() && (da > limits.angle || de > limits.angular_acceleration)
-        {
-            run.first_violation = Some((p.t, p.alpha));
-        }
-        if run.first_undefined.is_none() && !e.defined {
-            run.first_undefined = Some((p.t, p.alpha));
-        }
+        let estimate = e.defined.then_some((e.angle, e.angular_acceleration));
+        run.push(p, estimate, e.condition_number, limits);
     }
     Ok(run)
 }
