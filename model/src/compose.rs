@@ -27,34 +27,22 @@ fn block_diag(ms: &[&DMatrix<f64>]) -> DMatrix<f64> {
     out
 }
 
-/// The matrices of one system, continuous or discrete (J = 0 for continuous).
-struct Parts {
-    f: DMatrix<f64>,
-    b: DMatrix<f64>,
-    h: DMatrix<f64>,
-    d: DMatrix<f64>,
-    g: DMatrix<f64>,
-    j: DMatrix<f64>,
-    q: DMatrix<f64>,
-}
+/// The matrices of one system in the order `[F, B, H, D, G, J, Q]` (a continuous system's
+/// `[A, B, C, D, G, 0, W]`: it has no noise feed-through).
+type Parts<'a> = [&'a DMatrix<f64>; 7];
 
 /// The interconnection kernel. Appended blocks: `x⁺ = Fa x + Ba v + Ga w`,
 /// `y = Ha x + Da v + Ja w`; wiring `v = K y + E u`, external outputs `z = P y + Qd u`.
 /// Solving `(I − Da K) y = Ha x + Da E u + Ja w` removes the algebraic part.
 fn connect_parts(
-    blocks: &[Parts],
+    blocks: &[Parts<'_>],
     k: &DMatrix<f64>,
     e: &DMatrix<f64>,
     p: &DMatrix<f64>,
     qd: &DMatrix<f64>,
-) -> Result<Parts> {
-    let fa = block_diag(&blocks.iter().map(|b| &b.f).collect::<Vec<_>>());
-    let ba = block_diag(&blocks.iter().map(|b| &b.b).collect::<Vec<_>>());
-    let ha = block_diag(&blocks.iter().map(|b| &b.h).collect::<Vec<_>>());
-    let da = block_diag(&blocks.iter().map(|b| &b.d).collect::<Vec<_>>());
-    let ga = block_diag(&blocks.iter().map(|b| &b.g).collect::<Vec<_>>());
-    let ja = block_diag(&blocks.iter().map(|b| &b.j).collect::<Vec<_>>());
-    let qa = block_diag(&blocks.iter().map(|b| &b.q).collect::<Vec<_>>());
+) -> Result<[DMatrix<f64>; 7]> {
+    let [fa, ba, ha, da, ga, ja, qa] =
+        std::array::from_fn(|i| block_diag(&blocks.iter().map(|b| b[i]).collect::<Vec<_>>()));
     let (nv, ny) = (ba.ncols(), ha.nrows());
     validate::shape("K", k, nv, ny, "K must be (block inputs)×(block outputs)")?;
     validate::shape("E", e, nv, e.ncols(), "E must have one row per block input")?;
@@ -97,27 +85,7 @@ fn connect_parts(
     ] {
         validate::finite(name, m)?;
     }
-    Ok(Parts {
-        f,
-        b,
-        h,
-        d,
-        g,
-        j,
-        q: qa,
-    })
-}
-
-fn parts_d(s: &DiscreteSs) -> Parts {
-    Parts {
-        f: s.f().clone(),
-        b: s.b().clone(),
-        h: s.h().clone(),
-        d: s.d().clone(),
-        g: s.g().clone(),
-        j: s.j().clone(),
-        q: s.q().clone(),
-    }
+    Ok([f, b, h, d, g, j, qa])
 }
 
 fn common_dt(blocks: &[&DiscreteSs]) -> Result<f64> {
@@ -173,9 +141,13 @@ pub fn connect(
     feedthrough: &DMatrix<f64>,
 ) -> Result<DiscreteSs> {
     let dt = common_dt(blocks)?;
-    let parts: Vec<Parts> = blocks.iter().map(|b| parts_d(b)).collect();
-    let r = connect_parts(&parts, loop_gain, input_map, output_map, feedthrough)?;
-    DiscreteSs::new(r.f, r.b, r.h, r.d, dt)?.with_noise(r.g, r.j, validate::symmetrize(&r.q))
+    let parts: Vec<Parts> = blocks
+        .iter()
+        .map(|s| [s.f(), s.b(), s.h(), s.d(), s.g(), s.j(), s.q()])
+        .collect();
+    let [f, b, h, d, g, j, q] =
+        connect_parts(&parts, loop_gain, input_map, output_map, feedthrough)?;
+    DiscreteSs::new(f, b, h, d, dt)?.with_noise(g, j, validate::symmetrize(&q))
 }
 
 /// [`connect`] for continuous blocks (same algebra; continuous models have no noise
@@ -203,20 +175,18 @@ pub fn connect_continuous(
     output_map: &DMatrix<f64>,
     feedthrough: &DMatrix<f64>,
 ) -> Result<ContinuousSs> {
+    let no_j: Vec<DMatrix<f64>> = blocks
+        .iter()
+        .map(|s| DMatrix::zeros(s.n_outputs(), s.n_noise()))
+        .collect();
     let parts: Vec<Parts> = blocks
         .iter()
-        .map(|s| Parts {
-            f: s.a().clone(),
-            b: s.b().clone(),
-            h: s.c().clone(),
-            d: s.d().clone(),
-            g: s.g().clone(),
-            j: DMatrix::zeros(s.n_outputs(), s.n_noise()),
-            q: s.w().clone(),
-        })
+        .zip(&no_j)
+        .map(|(s, j)| [s.a(), s.b(), s.c(), s.d(), s.g(), j, s.w()])
         .collect();
-    let r = connect_parts(&parts, loop_gain, input_map, output_map, feedthrough)?;
-    ContinuousSs::new(r.f, r.b, r.h, r.d)?.with_noise(r.g, validate::symmetrize(&r.q))
+    let [a, b, c, d, g, _, w] =
+        connect_parts(&parts, loop_gain, input_map, output_map, feedthrough)?;
+    ContinuousSs::new(a, b, c, d)?.with_noise(g, validate::symmetrize(&w))
 }
 
 fn sel(rows: usize, cols: usize, r0: usize, c0: usize, size: usize) -> DMatrix<f64> {

@@ -114,6 +114,10 @@ assert!((q - dmatrix![dt.powi(3) / 3.0, dt * dt / 2.0; dt * dt / 2.0, dt] * 0.1)
 #![deny(missing_docs)]
 #![deny(clippy::float_cmp)]
 
+// First: its `deserialize_via!` serves the modules below.
+#[macro_use]
+mod validate;
+
 pub mod analysis;
 pub mod bridge;
 pub mod compose;
@@ -125,7 +129,6 @@ pub mod ss;
 #[cfg(feature = "proptest")]
 pub mod strategies;
 pub mod tf;
-mod validate;
 
 pub use analysis::{
     discrete_lyapunov, eigenvalues, is_controllable, is_observable, markov_parameters, psd_factor,

@@ -142,17 +142,9 @@ pub struct ExponentialShaping {
     time_constant: f64,
 }
 
-#[derive(Deserialize)]
-struct ExponentialRaw {
-    variance: f64,
-    time_constant: f64,
-}
-
-impl TryFrom<ExponentialRaw> for ExponentialShaping {
-    type Error = Error;
-    fn try_from(r: ExponentialRaw) -> Result<Self> {
-        ExponentialShaping::new(r.variance, r.time_constant)
-    }
+deserialize_via! {
+    ExponentialShaping, ExponentialRaw { variance: f64, time_constant: f64 },
+    |r| ExponentialShaping::new(r.variance, r.time_constant)
 }
 
 impl ExponentialShaping {
@@ -216,18 +208,9 @@ pub struct IrregularRollingShaping {
     beta: f64,
 }
 
-#[derive(Deserialize)]
-struct RollingRaw {
-    variance: f64,
-    mu: f64,
-    beta: f64,
-}
-
-impl TryFrom<RollingRaw> for IrregularRollingShaping {
-    type Error = Error;
-    fn try_from(r: RollingRaw) -> Result<Self> {
-        IrregularRollingShaping::new(r.variance, r.mu, r.beta)
-    }
+deserialize_via! {
+    IrregularRollingShaping, RollingRaw { variance: f64, mu: f64, beta: f64 },
+    |r| IrregularRollingShaping::new(r.variance, r.mu, r.beta)
 }
 
 impl IrregularRollingShaping {
@@ -309,18 +292,9 @@ pub struct DampedCosineShaping {
     omega: f64,
 }
 
-#[derive(Deserialize)]
-struct DampedRaw {
-    variance: f64,
-    xi: f64,
-    omega: f64,
-}
-
-impl TryFrom<DampedRaw> for DampedCosineShaping {
-    type Error = Error;
-    fn try_from(r: DampedRaw) -> Result<Self> {
-        DampedCosineShaping::new(r.variance, r.xi, r.omega)
-    }
+deserialize_via! {
+    DampedCosineShaping, DampedRaw { variance: f64, xi: f64, omega: f64 },
+    |r| DampedCosineShaping::new(r.variance, r.xi, r.omega)
 }
 
 impl DampedCosineShaping {

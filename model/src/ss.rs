@@ -98,21 +98,13 @@ pub struct ContinuousSs {
     w: DMatrix<f64>,
 }
 
-#[derive(Deserialize)]
-struct ContinuousSsRaw {
-    a: DMatrix<f64>,
-    b: DMatrix<f64>,
-    c: DMatrix<f64>,
-    d: DMatrix<f64>,
-    g: DMatrix<f64>,
-    w: DMatrix<f64>,
-}
-
-impl TryFrom<ContinuousSsRaw> for ContinuousSs {
-    type Error = Error;
-    fn try_from(r: ContinuousSsRaw) -> Result<Self> {
-        ContinuousSs::new(r.a, r.b, r.c, r.d)?.with_noise(r.g, r.w)
-    }
+deserialize_via! {
+    ContinuousSs,
+    ContinuousSsRaw {
+        a: DMatrix<f64>, b: DMatrix<f64>, c: DMatrix<f64>, d: DMatrix<f64>,
+        g: DMatrix<f64>, w: DMatrix<f64>,
+    },
+    |r| ContinuousSs::new(r.a, r.b, r.c, r.d)?.with_noise(r.g, r.w)
 }
 
 impl ContinuousSs {
@@ -299,23 +291,13 @@ pub struct DiscreteSs {
     dt: f64,
 }
 
-#[derive(Deserialize)]
-struct DiscreteSsRaw {
-    f: DMatrix<f64>,
-    b: DMatrix<f64>,
-    h: DMatrix<f64>,
-    d: DMatrix<f64>,
-    g: DMatrix<f64>,
-    j: DMatrix<f64>,
-    q: DMatrix<f64>,
-    dt: f64,
-}
-
-impl TryFrom<DiscreteSsRaw> for DiscreteSs {
-    type Error = Error;
-    fn try_from(r: DiscreteSsRaw) -> Result<Self> {
-        DiscreteSs::new(r.f, r.b, r.h, r.d, r.dt)?.with_noise(r.g, r.j, r.q)
-    }
+deserialize_via! {
+    DiscreteSs,
+    DiscreteSsRaw {
+        f: DMatrix<f64>, b: DMatrix<f64>, h: DMatrix<f64>, d: DMatrix<f64>,
+        g: DMatrix<f64>, j: DMatrix<f64>, q: DMatrix<f64>, dt: f64,
+    },
+    |r| DiscreteSs::new(r.f, r.b, r.h, r.d, r.dt)?.with_noise(r.g, r.j, r.q)
 }
 
 impl DiscreteSs {

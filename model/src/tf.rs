@@ -35,17 +35,9 @@ pub struct ContinuousTf {
     den: Vec<f64>,
 }
 
-#[derive(Deserialize)]
-struct TfRaw {
-    num: Vec<f64>,
-    den: Vec<f64>,
-}
-
-impl TryFrom<TfRaw> for ContinuousTf {
-    type Error = Error;
-    fn try_from(r: TfRaw) -> Result<Self> {
-        ContinuousTf::new(r.num, r.den)
-    }
+deserialize_via! {
+    ContinuousTf, TfRaw { num: Vec<f64>, den: Vec<f64> },
+    |r| ContinuousTf::new(r.num, r.den)
 }
 
 fn check_poly(name: &'static str, p: &[f64]) -> Result<()> {
@@ -320,18 +312,9 @@ pub struct DiscreteTf {
     dt: f64,
 }
 
-#[derive(Deserialize)]
-struct DiscreteTfRaw {
-    num: Vec<f64>,
-    den: Vec<f64>,
-    dt: f64,
-}
-
-impl TryFrom<DiscreteTfRaw> for DiscreteTf {
-    type Error = Error;
-    fn try_from(r: DiscreteTfRaw) -> Result<Self> {
-        DiscreteTf::new(r.num, r.den, r.dt)
-    }
+deserialize_via! {
+    DiscreteTf, DiscreteTfRaw { num: Vec<f64>, den: Vec<f64>, dt: f64 },
+    |r| DiscreteTf::new(r.num, r.den, r.dt)
 }
 
 impl DiscreteTf {

@@ -1,4 +1,27 @@
 //! Shared input checks used by every constructor (shape, finiteness, symmetry, PSD, scalars).
+//! Also the one way a deserialised value reaches its type: through its checking constructor.
+
+/// Deserialisation through the type's checking constructor, so that a file can never bypass
+/// its checks: `deserialize_via! { Type, Raw { a: A, b: B }, |r| Type::new(r.a, r.b) }`
+/// declares `Raw`, the plain mirror serde fills (the same field names and types), and
+/// `TryFrom<Raw> for Type`, which builds the value by the constructor, with the `Error` and
+/// `Result` the calling module names (this crate's). `Type` carries
+/// `#[serde(try_from = "Raw")]`.
+macro_rules! deserialize_via {
+    ($ty:ty, $raw:ident { $($field:ident: $fty:ty),* $(,)? }, |$r:ident| $build:expr) => {
+        #[derive(serde::Deserialize)]
+        struct $raw {
+            $($field: $fty),*
+        }
+
+        impl TryFrom<$raw> for $ty {
+            type Error = Error;
+            fn try_from($r: $raw) -> Result<Self> {
+                $build
+            }
+        }
+    };
+}
 
 use nalgebra::DMatrix;
 
