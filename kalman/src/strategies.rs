@@ -40,24 +40,40 @@ impl Default for ProblemOptions {
 }
 
 /// A random consistent filter problem and a simulated measurement stream with its truth.
+///
+/// The matrices are named as in the crate doc and read like the accessors of [`Model`]
+/// (`f` is F, `p0` is P₀).
+///
+/// # Example
+/// ```
+/// use kalman::DynDims;
+/// use kalman::strategies::{FilterProblem, ProblemOptions};
+///
+/// let p = FilterProblem::generate(3, 2, ProblemOptions::default(), 7);
+/// assert_eq!((p.n(), p.m(), p.z.len()), (3, 2, 20));
+/// // Its model passes the engine's validation on the dynamic path.
+/// let model = p.model(DynDims::new(3, 2, 0)?)?;
+/// assert_eq!(model.f().nrows(), 3);
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Clone, Debug)]
 pub struct FilterProblem {
-    /// Transition (n×n, spectral norm ≤ 0.98).
-    pub F: Mat<f64>,
-    /// Measurement matrix (m×n).
-    pub H: Mat<f64>,
-    /// Process noise covariance.
-    pub Q: Mat<f64>,
-    /// Measurement noise covariance.
-    pub R: Mat<f64>,
-    /// Cross-covariance (present when `correlated`).
-    pub S: Option<Mat<f64>>,
-    /// Control matrix (n×p).
-    pub B: Mat<f64>,
-    /// Prior mean.
+    /// Transition F (n×n, spectral norm ≤ 0.98).
+    pub f: Mat<f64>,
+    /// Measurement matrix H (m×n).
+    pub h: Mat<f64>,
+    /// Process noise covariance Q (n×n).
+    pub q: Mat<f64>,
+    /// Measurement noise covariance R (m×m).
+    pub r: Mat<f64>,
+    /// Cross-covariance S (n×m, present when `correlated`).
+    pub s: Option<Mat<f64>>,
+    /// Control matrix B (n×p).
+    pub b: Mat<f64>,
+    /// Prior mean x₀.
     pub x0: Vec<f64>,
-    /// Prior covariance.
-    pub P0: Mat<f64>,
+    /// Prior covariance P₀.
+    pub p0: Mat<f64>,
     /// True states `x_0 … x_{T−1}` (x_0 drawn from the prior).
     pub truth: Vec<Vec<f64>>,
     /// Measurements `z_0 … z_{T−1}` (NaN = missing).
@@ -152,14 +168,14 @@ impl FilterProblem {
             x = next;
         }
         FilterProblem {
-            F,
-            H,
-            Q,
-            R,
-            S,
-            B,
+            f: F,
+            h: H,
+            q: Q,
+            r: R,
+            s: S,
+            b: B,
             x0,
-            P0,
+            p0: P0,
             truth,
             z: zs,
             u: us,
@@ -168,15 +184,15 @@ impl FilterProblem {
 
     /// Number of states.
     pub fn n(&self) -> usize {
-        self.F.nrows()
+        self.f.nrows()
     }
     /// Number of measurements.
     pub fn m(&self) -> usize {
-        self.H.nrows()
+        self.h.nrows()
     }
     /// Number of control inputs.
     pub fn p(&self) -> usize {
-        self.B.ncols()
+        self.b.ncols()
     }
 
     /// The validated model on storage path `dims` (whose n, m, p must match).
@@ -184,12 +200,12 @@ impl FilterProblem {
     /// # Errors
     /// As [`Model::new`].
     pub fn model<D: Dims>(&self, dims: D) -> Result<Model<D>, Error> {
-        let mut model = Model::new(dims, &self.F, &self.H, &self.Q, &self.R)?;
-        if let Some(S) = &self.S {
-            model = model.with_cross_covariance(S)?;
+        let mut model = Model::new(dims, &self.f, &self.h, &self.q, &self.r)?;
+        if let Some(s) = &self.s {
+            model = model.with_cross_covariance(s)?;
         }
         if self.p() > 0 {
-            model = model.with_control(&self.B)?;
+            model = model.with_control(&self.b)?;
         }
         Ok(model)
     }

@@ -53,7 +53,7 @@ fn rel_observed(a: faer::MatRef<'_, f64>, b: &reference::M, z: &[f64]) -> f64 {
 /// observed entries) the innovation covariance over all steps.
 pub fn deviation<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> f64 {
     let model = p.model(dims).expect("valid model");
-    let mut f = Filter::new(model, &p.x0, &p.P0, form).expect("valid prior");
+    let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("valid prior");
     let reference = reference::run(p);
     let mut worst = 0.0_f64;
     for ((z, u), r) in p.z.iter().zip(&p.u).zip(&reference) {

@@ -10,7 +10,7 @@ use crate::common::counting::allocations;
 /// are outside the count).
 fn count<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> usize {
     let model = p.model(dims).expect("model");
-    let mut f = Filter::new(model, &p.x0, &p.P0, form).expect("filter");
+    let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
     let _ = f.step(&p.z[0], Some(&p.u[0]));
     let before = allocations();
     for (z, u) in p.z.iter().zip(&p.u).skip(1) {

@@ -32,16 +32,16 @@ fn errors(ignore_s: bool) -> (Vec<Vec<f64>>, faer::Mat<f64>, Nees) {
         let (zs, truth) = simulate(&base, 1000 + run as u64);
         let mut model = Model::new(
             DynDims::new(n, 2, 0).expect("dims"),
-            &base.F,
-            &base.H,
-            &base.Q,
-            &base.R,
+            &base.f,
+            &base.h,
+            &base.q,
+            &base.r,
         )
         .expect("model");
-        if let Some(S) = base.S.as_ref().filter(|_| !ignore_s) {
+        if let Some(S) = base.s.as_ref().filter(|_| !ignore_s) {
             model = model.with_cross_covariance(S).expect("S");
         }
-        let mut f = Filter::new(model, &base.x0, &base.P0, CovarianceForm::Joseph).expect("filter");
+        let mut f = Filter::new(model, &base.x0, &base.p0, CovarianceForm::Joseph).expect("filter");
         for z in &zs[..STEPS - 1] {
             f.step(z, None).expect("step");
         }
@@ -61,10 +61,10 @@ fn simulate(base: &FilterProblem, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
     use rand::{RngExt, SeedableRng};
     let (n, m) = (base.n(), base.m());
     let d = n + m;
-    let S = base.S.as_ref().expect("correlated");
+    let S = base.s.as_ref().expect("correlated");
     let W = faer::Mat::from_fn(d, d, |i, j| match (i < m, j < m) {
-        (true, true) => base.R[(i, j)],
-        (false, false) => base.Q[(i - m, j - m)],
+        (true, true) => base.r[(i, j)],
+        (false, false) => base.q[(i - m, j - m)],
         (false, true) => S[(i - m, j)],
         (true, false) => S[(j - m, i)],
     });
@@ -74,7 +74,7 @@ fn simulate(base: &FilterProblem, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
         .L()
         .to_owned();
     let L0 = base
-        .P0
+        .p0
         .llt(faer::Side::Lower)
         .expect("P0 PD")
         .L()
@@ -93,11 +93,11 @@ fn simulate(base: &FilterProblem, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
             .collect();
         zs.push(
             (0..m)
-                .map(|i| (0..n).map(|j| base.H[(i, j)] * x[j]).sum::<f64>() + noise[i])
+                .map(|i| (0..n).map(|j| base.h[(i, j)] * x[j]).sum::<f64>() + noise[i])
                 .collect(),
         );
         let next = (0..n)
-            .map(|i| (0..n).map(|j| base.F[(i, j)] * x[j]).sum::<f64>() + noise[m + i])
+            .map(|i| (0..n).map(|j| base.f[(i, j)] * x[j]).sum::<f64>() + noise[m + i])
             .collect();
         xs.push(x);
         x = next;
@@ -164,12 +164,12 @@ fn current_and_delayed_forms_agree() {
     // F x_{k|k} + S Σ⁺ e_k rebuilt here from the engine's current-form outputs; and the
     // square-root form (which uses the delayed pre-array directly) agrees with both.
     let p = FilterProblem::generate(4, 2, opts(), 3);
-    let S = p.S.as_ref().expect("S");
+    let S = p.s.as_ref().expect("S");
     for form in [CovarianceForm::Joseph, CovarianceForm::SquareRoot] {
         let model = p
             .model(DynDims::new(4, 2, 0).expect("dims"))
             .expect("model");
-        let mut f = Filter::new(model, &p.x0, &p.P0, form).expect("filter");
+        let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
         for z in &p.z {
             f.step(z, None).expect("step");
             let sig = f.innovation_covariance().to_owned();
@@ -178,7 +178,7 @@ fn current_and_delayed_forms_agree() {
             for i in 0..4 {
                 let mut v = 0.0;
                 for j in 0..4 {
-                    v += p.F[(i, j)] * f.state()[j];
+                    v += p.f[(i, j)] * f.state()[j];
                 }
                 for l in 0..2 {
                     v += S[(i, l)] * w[(l, 0)];

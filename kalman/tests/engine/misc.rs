@@ -9,20 +9,20 @@ fn nalgebra_matrices_build_the_same_model() {
     let p = FilterProblem::generate(4, 2, ProblemOptions::default(), 21);
     let to_na =
         |a: &faer::Mat<f64>| nalgebra::DMatrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)]);
-    let F: nalgebra::SMatrix<f64, 4, 4> = nalgebra::SMatrix::from_fn(|i, j| p.F[(i, j)]);
+    let F: nalgebra::SMatrix<f64, 4, 4> = nalgebra::SMatrix::from_fn(|i, j| p.f[(i, j)]);
     let model = Model::new(
         FixedDims::<4, 2, 0>::new(),
         &F,
-        &to_na(&p.H),
-        &to_na(&p.Q),
-        &to_na(&p.R),
+        &to_na(&p.h),
+        &to_na(&p.q),
+        &to_na(&p.r),
     )
     .expect("model");
-    let mut a = Filter::new(model, &p.x0, &to_na(&p.P0), CovarianceForm::Joseph).expect("filter");
+    let mut a = Filter::new(model, &p.x0, &to_na(&p.p0), CovarianceForm::Joseph).expect("filter");
     let mut b = Filter::new(
         p.model(FixedDims::<4, 2, 0>::new()).expect("model"),
         &p.x0,
-        &p.P0,
+        &p.p0,
         CovarianceForm::Joseph,
     )
     .expect("filter");
@@ -43,8 +43,8 @@ fn nalgebra_matrices_build_the_same_model() {
         DynDims::new(4, 2, 0).expect("dims"),
         &F,
         &bad,
-        &to_na(&p.Q),
-        &to_na(&p.R),
+        &to_na(&p.q),
+        &to_na(&p.r),
     )
     .err();
     assert!(
@@ -65,7 +65,7 @@ fn time_varying_models_step_by_step() {
         .map(|k| if k % 2 == 0 { m0.clone() } else { m1.clone() })
         .collect();
     let mut by_source =
-        Filter::new(m0.clone(), &p.x0, &p.P0, CovarianceForm::Joseph).expect("filter");
+        Filter::new(m0.clone(), &p.x0, &p.p0, CovarianceForm::Joseph).expect("filter");
     let mut by_hand = by_source.clone();
     let mut constant = by_source.clone();
     for (k, z) in p.z.iter().enumerate() {
@@ -102,7 +102,7 @@ fn reset_restarts_from_a_new_prior() {
         p.model(DynDims::new(3, 1, 0).expect("dims"))
             .expect("model"),
         &p.x0,
-        &p.P0,
+        &p.p0,
         CovarianceForm::SquareRoot,
     )
     .expect("filter");
@@ -111,7 +111,7 @@ fn reset_restarts_from_a_new_prior() {
         f.state().to_vec()
     };
     f.step(&p.z[1], None).expect("step");
-    f.reset(&p.x0, &p.P0).expect("reset");
+    f.reset(&p.x0, &p.p0).expect("reset");
     assert_eq!(f.steps(), 0);
     f.step(&p.z[0], None).expect("step");
     assert!(

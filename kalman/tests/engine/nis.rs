@@ -22,7 +22,7 @@ fn nis_of_a_consistent_filter_is_in_the_95_percent_band() {
         let mut f = Filter::new(
             p.model(FixedDims::<4, 3, 0>::new()).expect("model"),
             &p.x0,
-            &p.P0,
+            &p.p0,
             form,
         )
         .expect("filter");
@@ -66,7 +66,7 @@ fn log_likelihood_is_the_gaussian_density_of_the_innovation() {
         p.model(DynDims::new(3, 2, 0).expect("dims"))
             .expect("model"),
         &p.x0,
-        &p.P0,
+        &p.p0,
         CovarianceForm::Joseph,
     )
     .expect("filter");

@@ -8,7 +8,7 @@ use proptest::prelude::*;
 /// Per-step (x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k}) of a run, flattened.
 fn run<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> Vec<Vec<f64>> {
     let model = p.model(dims).expect("model");
-    let mut f = Filter::new(model, &p.x0, &p.P0, form).expect("filter");
+    let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
     let mut out = Vec::new();
     for (z, u) in p.z.iter().zip(&p.u) {
         f.step(z, Some(u)).expect("step");
@@ -115,7 +115,7 @@ proptest! {
         }
         for form in [CovarianceForm::Joseph, CovarianceForm::Standard, CovarianceForm::SquareRoot] {
             let model = p.model(dims).expect("model");
-            let mut f = Filter::new(model, &p.x0, &p.P0, form).expect("filter");
+            let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
             for (z, u) in p.z.iter().zip(&p.u) {
                 let prior = f.predicted_covariance();
                 let scale: f64 = (0..p.n()).map(|i| prior[(i, i)]).sum();

@@ -91,16 +91,16 @@ pub struct RefStep {
 
 pub fn run(p: &kalman::strategies::FilterProblem) -> Vec<RefStep> {
     let (n, m) = (p.n(), p.m());
-    let F = from_faer(p.F.as_ref());
-    let H = from_faer(p.H.as_ref());
-    let Q = from_faer(p.Q.as_ref());
-    let R = from_faer(p.R.as_ref());
+    let F = from_faer(p.f.as_ref());
+    let H = from_faer(p.h.as_ref());
+    let Q = from_faer(p.q.as_ref());
+    let R = from_faer(p.r.as_ref());
     let S =
-        p.S.as_ref()
+        p.s.as_ref()
             .map_or(vec![vec![0.0; m]; n], |s| from_faer(s.as_ref()));
-    let B = from_faer(p.B.as_ref());
+    let B = from_faer(p.b.as_ref());
     let mut x = p.x0.clone();
-    let mut P = from_faer(p.P0.as_ref());
+    let mut P = from_faer(p.p0.as_ref());
     let mut out = Vec::new();
     for (z, u) in p.z.iter().zip(&p.u) {
         let obs: Vec<usize> = (0..m).filter(|&i| !z[i].is_nan()).collect();

@@ -50,10 +50,10 @@ fn linear_case<D: NlDims>(p: &FilterProblem, d: D) {
         },
     ];
     for u in updates {
-        let mut f = Ekf::new(d, Linear::new(p), &p.x0, &p.P0, u).expect("ekf");
+        let mut f = Ekf::new(d, Linear::new(p), &p.x0, &p.p0, u).expect("ekf");
         assert_eq!(count(&mut f, &p.z, &p.u), 0, "EKF {u:?} hand");
         let cd = CentralDiff::new(Linear::new(p), d);
-        let mut f = Ekf::new(d, cd, &p.x0, &p.P0, u).expect("ekf");
+        let mut f = Ekf::new(d, cd, &p.x0, &p.p0, u).expect("ekf");
         assert_eq!(
             count(&mut f, &p.z, &p.u),
             0,
@@ -61,7 +61,7 @@ fn linear_case<D: NlDims>(p: &FilterProblem, d: D) {
         );
     }
     for s in [SigmaPoints::merwe(0.5, 2.0, 0.0), SigmaPoints::Cubature] {
-        let mut f = Ukf::new(d, Linear::new(p), &p.x0, &p.P0, s).expect("ukf");
+        let mut f = Ukf::new(d, Linear::new(p), &p.x0, &p.p0, s).expect("ukf");
         assert_eq!(count(&mut f, &p.z, &p.u), 0, "UKF {s:?}");
     }
 }

@@ -70,7 +70,7 @@ enum Which {
 
 fn check<D: NlDims>(p: &FilterProblem, dims: D, which: &Which) {
     let model = p.model(dims).expect("model");
-    let mut lin = Filter::new(model, &p.x0, &p.P0, CovarianceForm::Joseph).expect("filter");
+    let mut lin = Filter::new(model, &p.x0, &p.p0, CovarianceForm::Joseph).expect("filter");
     let mut lin_s = RtsSmoother::new();
     let mut nl_s = NonlinearRts::new();
     let nl = Linear::new(p);
@@ -78,12 +78,12 @@ fn check<D: NlDims>(p: &FilterProblem, dims: D, which: &Which) {
     let mut ukf;
     match which {
         Which::Ekf(u) => {
-            ekf = Some(Ekf::new(dims, nl, &p.x0, &p.P0, *u).expect("ekf"));
+            ekf = Some(Ekf::new(dims, nl, &p.x0, &p.p0, *u).expect("ekf"));
             ukf = None;
         }
         Which::Ukf(s) => {
             ekf = None;
-            ukf = Some(Ukf::new(dims, nl, &p.x0, &p.P0, *s).expect("ukf"));
+            ukf = Some(Ukf::new(dims, nl, &p.x0, &p.p0, *s).expect("ukf"));
         }
     }
     for (k, (z, u)) in p.z.iter().zip(&p.u).enumerate() {
@@ -202,7 +202,7 @@ fn iterated_ekf_needs_two_linearisations_on_a_linear_model() {
         DynDims::new(4, 2, 1).expect("dims"),
         Linear::new(&p),
         &p.x0,
-        &p.P0,
+        &p.p0,
         EkfUpdate::Iterated {
             max_iterations: 10,
             tolerance: 1e-9,

@@ -35,11 +35,11 @@ impl Linear {
             n: p.n(),
             m: p.m(),
             p: p.p(),
-            F: col_major(&p.F),
-            H: col_major(&p.H),
-            B: col_major(&p.B),
-            Q: col_major(&p.Q),
-            R: col_major(&p.R),
+            F: col_major(&p.f),
+            H: col_major(&p.h),
+            B: col_major(&p.b),
+            Q: col_major(&p.q),
+            R: col_major(&p.r),
         }
     }
 }
