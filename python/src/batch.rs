@@ -319,16 +319,6 @@ fn combine(out: &mut [f64], c: &[f64], v: &[f64]) {
     }
 }
 
-/// Copies the upper triangle of the n×n `a` onto its lower one.
-#[inline(always)]
-fn mirror(a: &mut [f64], n: usize) {
-    for i in 0..n {
-        for j in 0..i {
-            a[i * n + j] = a[j * n + i];
-        }
-    }
-}
-
 /// A state (x, P) a kernel reads, and one it writes.
 type State<'a> = (&'a [f64], &'a [f64]);
 type StateMut<'a> = (&'a mut [f64], &'a mut [f64]);
@@ -560,9 +550,9 @@ impl Work {
                     v += ct[a * n + i] * kt[a * n + j];
                 }
                 Po[i * n + j] = v;
+                Po[j * n + i] = v;
             }
         }
-        mirror(Po, n);
         true
     }
 }
