@@ -212,8 +212,8 @@ impl Clqr {
     ///
     /// # Errors
     /// [`Error::Shape`] / [`Error::NonFinite`] naming X unless it is n×n and finite.
-    pub fn residual(&self, X: impl MatrixInput) -> Result<f64, Error> {
-        let X = self.inputs.candidate("X", &X)?;
+    pub fn residual(&self, cost: impl MatrixInput) -> Result<f64, Error> {
+        let X = self.inputs.candidate("X", &cost)?;
         let m = &self.inputs;
         Ok(residual(
             m.a.transpose(),

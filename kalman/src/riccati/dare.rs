@@ -337,13 +337,13 @@ impl Dlqr {
     }
 
     /// Relative residual ‖AᵀXA + Q − (AᵀXB + N)(R + BᵀXB)⁻¹(⋯)ᵀ − X‖_F / ‖X‖_F of a
-    /// candidate cost matrix X (the filter-form residual of the dual, see
+    /// candidate cost matrix X (`cost`; the filter-form residual of the dual, see
     /// [`Dare::residual`]).
     ///
     /// # Errors
     /// [`Error::Shape`] / [`Error::NonFinite`] naming X unless it is n×n and finite.
-    pub fn residual(&self, X: impl MatrixInput) -> Result<f64, Error> {
-        let X = self.inputs.candidate("X", &X)?;
+    pub fn residual(&self, cost: impl MatrixInput) -> Result<f64, Error> {
+        let X = self.inputs.candidate("X", &cost)?;
         let m = &self.inputs;
         let N = m.cross.as_ref().map(Mat::as_ref);
         Ok(residual(
