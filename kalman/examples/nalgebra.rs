@@ -2,8 +2,7 @@
 //! steady-state gain of the same model (`cargo run -p stochest-kalman --example nalgebra
 //! --features nalgebra`).
 
-use kalman::nalgebra::{DMatrix, dmatrix, dvector};
-use kalman::{Model, ToNalgebra};
+use kalman::prelude::*; // Model, Dare, …, ToNalgebra and nalgebra's DMatrix, dmatrix!, …
 
 fn main() -> Result<(), kalman::Error> {
     let dt = 1.0;
@@ -18,9 +17,7 @@ fn main() -> Result<(), kalman::Error> {
     let s = model.smooth(&[0.0, 0.0], &p0, &zs)?.to_nalgebra();
     println!("smoothed track (column k is x_k|N-1) {}", s.means);
     println!("last smoothed covariance {}", s.covariances[zs.len() - 1]);
-    let steady = kalman::riccati::Dare::new(&f, &h, &q, &r)?
-        .solve()?
-        .to_nalgebra();
+    let steady = Dare::new(&f, &h, &q, &r)?.solve()?.to_nalgebra();
     println!("steady-state gain {}", steady.gain);
     Ok(())
 }

@@ -41,6 +41,9 @@
 //! - [`schedule`]: the Monte Carlo mode — the data-independent gain sequence computed once
 //!   ([`schedule::GainSchedule`]) and many measurement streams run at the cost of the state
 //!   update alone; also the fixed-gain filter.
+//! - [`prelude`]: `use kalman::prelude::*;` gives a program the model, the filter, the
+//!   Riccati solvers and, with the feature `nalgebra`, `ToNalgebra` and the nalgebra types and
+//!   macros of the version this crate is built against.
 //!
 //! # Robustness
 //! Σ is factored by Cholesky with a relative pivot tolerance ([`RANK_TOL`]), falling back to
@@ -163,6 +166,7 @@ pub mod fit;
 mod kernels;
 mod model;
 pub mod nonlinear;
+pub mod prelude;
 pub mod riccati;
 pub mod schedule;
 pub mod smoother;

@@ -16,6 +16,9 @@
 //!   solves, sensitivity ∂x/∂z and worst-case bounds.
 //! - [`boom`]: the per-cycle estimator (direct, linearised 3×3, WLS), the rotation profile,
 //!   and the γ sweep.
+//! - [`prelude`]: `use wls::prelude::*;` gives a program the solver, its options and weights,
+//!   and the nalgebra types and macros (`DMatrix`, `DVector`, `dmatrix!`, `dvector!`) of the
+//!   version this crate is built against.
 //!
 //! # The boom paper's choices
 //! The WLS (9)–(10) of Zavyalov and Shatov (see [`boom`] for the equations) does not say in
@@ -69,6 +72,7 @@
 
 pub mod boom;
 mod error;
+pub mod prelude;
 pub mod solver;
 
 pub use error::{Error, Result};

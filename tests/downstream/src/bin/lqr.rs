@@ -1,11 +1,9 @@
 //! Steady-state Kalman gain (DARE) and discrete LQR for a double integrator, nalgebra in and
 //! out, checked by the two Riccati residuals computed here and by both closed loops being
-//! stable. Length: 25 code lines here, 20 in `filterpy/lqr.py` (SciPy; FilterPy has no Riccati
+//! stable. Length: 23 code lines here, 20 in `filterpy/lqr.py` (SciPy; FilterPy has no Riccati
 //! solver), counted by `tests/programs.rs` (rustfmt layout; blank and comment lines not counted).
 
-use kalman::ToNalgebra;
-use kalman::riccati::{Dare, Dlqr};
-use nalgebra::{DMatrix, dmatrix};
+use kalman::prelude::*;
 
 type M = DMatrix<f64>;
 

@@ -1,10 +1,9 @@
 //! Constant-velocity tracker with missing samples (NaN) and RTS smoothing, nalgebra in and out,
 //! checked against the batch least-squares posterior of the whole track (information form).
-//! Length: 30 code lines here, 30 in `filterpy/tracker.py` (FilterPy and NumPy), counted by
+//! Length: 29 code lines here, 30 in `filterpy/tracker.py` (FilterPy and NumPy), counted by
 //! `tests/programs.rs` (rustfmt layout; blank and comment lines not counted).
 
-use kalman::{Model, ToNalgebra};
-use nalgebra::{DMatrix, dmatrix, dvector};
+use kalman::prelude::*;
 
 fn main() -> Result<(), kalman::Error> {
     let (dt, nan) = (1.0_f64, f64::NAN);

@@ -1,10 +1,9 @@
 //! An ill-conditioned least-squares fit (a degree-7 polynomial on [0, 1]) solved plainly and
 //! with Tikhonov regularisation, nalgebra in and out, checked against the closed form
-//! x_λ = (HᵀH + λI)⁻¹Hᵀz. Length: 19 code lines here, 17 in `filterpy/wls_tikhonov.py`
+//! x_λ = (HᵀH + λI)⁻¹Hᵀz. Length: 18 code lines here, 17 in `filterpy/wls_tikhonov.py`
 //! (NumPy), counted by `tests/programs.rs` (rustfmt layout; blank and comment lines not counted).
 
-use nalgebra::{DMatrix, DVector};
-use wls::solver::{SolveOptions, Weights, solve};
+use wls::prelude::*;
 
 fn main() -> Result<(), wls::Error> {
     let h = DMatrix::from_fn(40, 8, |i, j| (i as f64 / 39.0).powi(j as i32));
