@@ -1,6 +1,6 @@
 //! One import for a program: `use kalman::prelude::*;` brings the engine's model and filter,
 //! the Riccati solvers and, with the feature `nalgebra`, the nalgebra matrix types and macros
-//! this crate is built against together with [`ToNalgebra`](crate::ToNalgebra), so nalgebra
+//! this crate is built against together with `ToNalgebra`, so nalgebra
 //! goes in and comes out without a second import.
 //!
 //! ```
