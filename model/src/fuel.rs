@@ -73,20 +73,85 @@ pub struct FuelParams {
 }
 
 impl Default for FuelParams {
+    /// [`FuelParamsStated::DEFAULT`] in SI units.
     fn default() -> Self {
-        Self {
-            dt: 0.1,
-            t_a: 20.0,
-            d_c: 1e-6,
-            v_c: 0.01,
-            delta: 0.01,
-            t_y: 2.0,
-            sensor_radius: 1.5,
-            phi: 30f64.to_radians(),
-            rolling_period: 10.0,
-            mu: 0.08,
-            max_tilt_amplitude: 1f64.to_radians(),
-            gyro_noise_var: 0.0,
+        FuelParamsStated::DEFAULT.to_si()
+    }
+}
+
+/// [`FuelParams`] in the units a person states them in (and the fueling scenario's files
+/// take): seconds, millimetres, degrees, and the fill-velocity fluctuation and the gyro noise
+/// as standard deviations. The defaults live here, once, in these units.
+///
+/// # Example
+/// ```
+/// use model::{FuelParams, FuelParamsStated};
+///
+/// // A 5 mm sensor: δ = 0.005 m, every other value the default.
+/// let si = FuelParamsStated { step_mm: 5.0, ..FuelParamsStated::DEFAULT }.to_si();
+/// assert!((si.delta - 0.005).abs() < 1e-18);
+/// assert!((si.phi - FuelParams::default().phi).abs() < 1e-15); // φ = 30° in radians
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FuelParamsStated {
+    /// Sampling interval Δt (s).
+    pub dt_s: f64,
+    /// Correlation time T_a of the fill-velocity fluctuation (s).
+    pub velocity_time_s: f64,
+    /// Standard deviation √D_c of the fill-velocity fluctuation (mm/s).
+    pub velocity_std_mm_s: f64,
+    /// Mean fill rate V_c (mm/s).
+    pub fill_rate_mm_s: f64,
+    /// Quantization step δ of the level sensor (mm).
+    pub step_mm: f64,
+    /// Time constant T_y of the hydro-damper (s).
+    pub damper_time_s: f64,
+    /// Distance R of the sensor from the tank axis (m).
+    pub sensor_radius_m: f64,
+    /// Angle φ between the direction to the stern and to the sensor (degrees).
+    pub sensor_angle_deg: f64,
+    /// Dominant rolling period 2π/β (s).
+    pub rolling_period_s: f64,
+    /// Irregularity μ of rolling (1/s).
+    pub irregularity_per_s: f64,
+    /// Maximum tilt amplitude A_max (degrees).
+    pub max_amplitude_deg: f64,
+    /// Standard deviation of the gyro's tilt reading (degrees).
+    pub gyro_noise_deg: f64,
+}
+
+impl FuelParamsStated {
+    /// The defaults, every value assumed (see [`FuelParams`]).
+    pub const DEFAULT: Self = Self {
+        dt_s: 0.1,
+        velocity_time_s: 20.0,
+        velocity_std_mm_s: 1.0,
+        fill_rate_mm_s: 10.0,
+        step_mm: 10.0,
+        damper_time_s: 2.0,
+        sensor_radius_m: 1.5,
+        sensor_angle_deg: 30.0,
+        rolling_period_s: 10.0,
+        irregularity_per_s: 0.08,
+        max_amplitude_deg: 1.0,
+        gyro_noise_deg: 0.0,
+    };
+
+    /// The same parameters in SI units (m, rad, variances).
+    pub fn to_si(&self) -> FuelParams {
+        FuelParams {
+            dt: self.dt_s,
+            t_a: self.velocity_time_s,
+            d_c: (self.velocity_std_mm_s * 1e-3).powi(2),
+            v_c: self.fill_rate_mm_s * 1e-3,
+            delta: self.step_mm * 1e-3,
+            t_y: self.damper_time_s,
+            sensor_radius: self.sensor_radius_m,
+            phi: self.sensor_angle_deg.to_radians(),
+            rolling_period: self.rolling_period_s,
+            mu: self.irregularity_per_s,
+            max_tilt_amplitude: self.max_amplitude_deg.to_radians(),
+            gyro_noise_var: self.gyro_noise_deg.to_radians().powi(2),
         }
     }
 }

@@ -143,7 +143,9 @@ pub use compose::{
 };
 pub use discretize::{Discretization, NoiseConvention, discretize, expm, van_loan, zoh};
 pub use error::{Error, Result};
-pub use fuel::{Channels, FuelModel, FuelParams, OUTPUT_NAMES, PaperCoefficients, Realisation};
+pub use fuel::{
+    Channels, FuelModel, FuelParams, FuelParamsStated, OUTPUT_NAMES, PaperCoefficients, Realisation,
+};
 pub use shaping::{
     DampedCosineShaping, ExponentialShaping, IrregularRollingShaping, ShapingFilter, noise_driven,
 };

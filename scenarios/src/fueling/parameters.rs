@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use model::{FuelParams, Realisation};
+use model::{FuelParams, FuelParamsStated, Realisation};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -103,22 +103,24 @@ pub struct FuelingParams {
 }
 
 impl Default for FuelingParams {
+    /// The physical values are the fuel model's ([`FuelParamsStated::DEFAULT`]).
     fn default() -> Self {
+        let fuel = FuelParamsStated::DEFAULT;
         Self {
             runs_per_point: 1000,
             sweep_runs_per_point: 1000,
-            dt_s: 0.1,
-            velocity_time_s: 20.0,
-            velocity_std_mm_s: 1.0,
-            fill_rate_mm_s: 10.0,
-            step_mm: 10.0,
-            damper_time_s: 2.0,
-            sensor_radius_m: 1.5,
-            sensor_angle_deg: 30.0,
-            rolling_period_s: 10.0,
-            irregularity_per_s: 0.08,
-            max_amplitude_deg: 1.0,
-            gyro_noise_deg: 0.0,
+            dt_s: fuel.dt_s,
+            velocity_time_s: fuel.velocity_time_s,
+            velocity_std_mm_s: fuel.velocity_std_mm_s,
+            fill_rate_mm_s: fuel.fill_rate_mm_s,
+            step_mm: fuel.step_mm,
+            damper_time_s: fuel.damper_time_s,
+            sensor_radius_m: fuel.sensor_radius_m,
+            sensor_angle_deg: fuel.sensor_angle_deg,
+            rolling_period_s: fuel.rolling_period_s,
+            irregularity_per_s: fuel.irregularity_per_s,
+            max_amplitude_deg: fuel.max_amplitude_deg,
+            gyro_noise_deg: fuel.gyro_noise_deg,
             valve_delay_s: 0.0,
             target_level_m: 10.0,
             random_target_phase: true,
@@ -271,20 +273,21 @@ impl FuelingParams {
             Swept::RandomTargetPhase(on) => on,
             _ => self.random_target_phase,
         };
-        let fuel = FuelParams {
-            dt: self.dt_s,
-            t_a: self.velocity_time_s,
-            d_c: (self.velocity_std_mm_s * 1e-3).powi(2),
-            v_c: fill_rate_mm_s.unwrap_or(self.fill_rate_mm_s) * 1e-3,
-            delta: step_mm.unwrap_or(self.step_mm) * 1e-3,
-            t_y: damper_time_s.unwrap_or(self.damper_time_s),
-            sensor_radius: self.sensor_radius_m,
-            phi: self.sensor_angle_deg.to_radians(),
-            rolling_period: period_s.unwrap_or(self.rolling_period_s),
-            mu: self.irregularity_per_s,
-            max_tilt_amplitude: amplitude_deg.to_radians(),
-            gyro_noise_var: self.gyro_noise_deg.to_radians().powi(2),
-        };
+        let fuel = FuelParamsStated {
+            dt_s: self.dt_s,
+            velocity_time_s: self.velocity_time_s,
+            velocity_std_mm_s: self.velocity_std_mm_s,
+            fill_rate_mm_s: fill_rate_mm_s.unwrap_or(self.fill_rate_mm_s),
+            step_mm: step_mm.unwrap_or(self.step_mm),
+            damper_time_s: damper_time_s.unwrap_or(self.damper_time_s),
+            sensor_radius_m: self.sensor_radius_m,
+            sensor_angle_deg: self.sensor_angle_deg,
+            rolling_period_s: period_s.unwrap_or(self.rolling_period_s),
+            irregularity_per_s: self.irregularity_per_s,
+            max_amplitude_deg: amplitude_deg,
+            gyro_noise_deg: self.gyro_noise_deg,
+        }
+        .to_si();
         World {
             fuel,
             target: self.target_level_m,
@@ -538,9 +541,11 @@ mod tests {
 
     #[test]
     fn default_world_is_the_fuel_models_default() {
-        // The scenario states SPEC F's values in the units of its TOML file (mm, degrees);
-        // converted to SI they must be `model::FuelParams::default()` exactly, so the two
-        // statements of the defaults cannot drift apart.
+        // The scenario's physical defaults are the fuel model's, stated in the units of its
+        // TOML file (mm, degrees) and copied field by field; the base world converts them
+        // by the model's own conversion, so it must be `model::FuelParams::default()`
+        // exactly (a field copied from the wrong one, or a sweep's value leaking into the
+        // base world, fails).
         let p = FuelingParams::default();
         let world = p.world(p.max_amplitude_deg, Swept::Nothing);
         assert_eq!(world.fuel, FuelParams::default());
