@@ -63,7 +63,7 @@ pub const PARALLEL_THRESHOLD: usize = 400 * 400 * 400;
 
 /// Below this size faer's triangular-output product is slower than its full GEMM (the
 /// upper triangle is then computed too and overwritten when the caller mirrors the lower
-/// one); measured with `benches/step.rs`.
+/// one); measured with the criterion benchmark of the filter step.
 const TRIANGULAR_MIN: usize = 128;
 
 /// `C = alpha·op(A)·op(B)`, replacing `C` or added to it (`accum`); `C` is contiguous

@@ -41,6 +41,15 @@
 //!
 //! let rolling = IrregularRollingProcess::new(&IrregularRollingConfig::default(), dt)?;
 //! assert!((rolling.variance() - 1.0).abs() < 1e-12);
+//!
+//! // nalgebra out and in: the boom accelerometer's reading is a `Vector3<f64>`, and the
+//! // mounting check takes one (a_z must stay near 0).
+//! use sensors::nalgebra::Vector3;
+//! use sensors::{Accelerometer, AccelerometerConfig, BoomMotion};
+//! let accel = Accelerometer::new(&AccelerometerConfig::default())?;
+//! let reading: Vector3<f64> = accel.measure(BoomMotion::default(), &mut rng);
+//! accel.check_mounting(&reading)?;
+//! assert!(accel.check_mounting(&Vector3::new(0.0, 9.8, 5.0)).is_err());
 //! # Ok::<(), sensors::Error>(())
 //! ```
 //!
