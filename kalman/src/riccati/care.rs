@@ -91,8 +91,7 @@ impl Care {
     /// # Errors
     /// As listed on [`Care`].
     pub fn solve(&self) -> Result<ContinuousSteadyState, Error> {
-        let m = &self.inputs;
-        let (A, H, Q, R) = (m.a.as_ref(), m.c.as_ref(), m.q.as_ref(), m.r.as_ref());
+        let ([A, H, Q, R], _) = self.inputs.views();
         let names = Names {
             equation: "filter CARE",
             detect: Pair::Detect("(A, H)"),
@@ -127,14 +126,8 @@ impl Care {
     /// ```
     pub fn residual(&self, P: impl MatrixInput) -> Result<f64, Error> {
         let P = self.inputs.candidate("P", &P)?;
-        let m = &self.inputs;
-        Ok(residual(
-            m.a.as_ref(),
-            m.c.as_ref(),
-            m.q.as_ref(),
-            m.r.as_ref(),
-            P.as_ref(),
-        ))
+        let ([A, H, Q, R], _) = self.inputs.views();
+        Ok(residual(A, H, Q, R, P.as_ref()))
     }
 }
 
@@ -189,8 +182,7 @@ impl Clqr {
     /// # Errors
     /// As listed on [`Clqr`].
     pub fn solve(&self) -> Result<Lqr, Error> {
-        let m = &self.inputs;
-        let (A, B, Q, R) = (m.a.as_ref(), m.c.as_ref(), m.q.as_ref(), m.r.as_ref());
+        let ([A, B, Q, R], _) = self.inputs.views();
         let names = Names {
             equation: "LQR CARE",
             detect: Pair::Stab("(A, B)"),
@@ -214,14 +206,8 @@ impl Clqr {
     /// [`Error::Shape`] / [`Error::NonFinite`] naming X unless it is n×n and finite.
     pub fn residual(&self, cost: impl MatrixInput) -> Result<f64, Error> {
         let X = self.inputs.candidate("X", &cost)?;
-        let m = &self.inputs;
-        Ok(residual(
-            m.a.transpose(),
-            m.c.transpose(),
-            m.q.as_ref(),
-            m.r.as_ref(),
-            X.as_ref(),
-        ))
+        let ([A, B, Q, R], _) = self.inputs.views();
+        Ok(residual(A.transpose(), B.transpose(), Q, R, X.as_ref()))
     }
 }
 

@@ -109,14 +109,7 @@ impl Dare {
     /// # Errors
     /// As listed on [`Dare`].
     pub fn solve(&self) -> Result<SteadyState, Error> {
-        let inputs = &self.inputs;
-        let (F, H, Q, R) = (
-            inputs.a.as_ref(),
-            inputs.c.as_ref(),
-            inputs.q.as_ref(),
-            inputs.r.as_ref(),
-        );
-        let S = inputs.cross.as_ref().map(Mat::as_ref);
+        let ([F, H, Q, R], S) = self.inputs.views();
         let m = H.nrows();
         let names = Names {
             equation: "filter DARE",
@@ -179,16 +172,8 @@ impl Dare {
     /// ```
     pub fn residual(&self, P: impl MatrixInput) -> Result<f64, Error> {
         let P = self.inputs.candidate("P", &P)?;
-        let m = &self.inputs;
-        let S = m.cross.as_ref().map(Mat::as_ref);
-        Ok(residual(
-            m.a.as_ref(),
-            m.c.as_ref(),
-            m.q.as_ref(),
-            m.r.as_ref(),
-            S,
-            P.as_ref(),
-        ))
+        let ([F, H, Q, R], S) = self.inputs.views();
+        Ok(residual(F, H, Q, R, S, P.as_ref()))
     }
 }
 
@@ -291,14 +276,7 @@ impl Dlqr {
     /// # Errors
     /// As listed on [`Dlqr`].
     pub fn solve(&self) -> Result<Lqr, Error> {
-        let inputs = &self.inputs;
-        let (A, B, Q, R) = (
-            inputs.a.as_ref(),
-            inputs.c.as_ref(),
-            inputs.q.as_ref(),
-            inputs.r.as_ref(),
-        );
-        let N = inputs.cross.as_ref().map(Mat::as_ref);
+        let ([A, B, Q, R], N) = self.inputs.views();
         let m = B.ncols();
         let names = Names {
             equation: "LQR DARE",
@@ -344,16 +322,8 @@ impl Dlqr {
     /// [`Error::Shape`] / [`Error::NonFinite`] naming X unless it is n×n and finite.
     pub fn residual(&self, cost: impl MatrixInput) -> Result<f64, Error> {
         let X = self.inputs.candidate("X", &cost)?;
-        let m = &self.inputs;
-        let N = m.cross.as_ref().map(Mat::as_ref);
-        Ok(residual(
-            m.a.transpose(),
-            m.c.transpose(),
-            m.q.as_ref(),
-            m.r.as_ref(),
-            N,
-            X.as_ref(),
-        ))
+        let ([A, B, Q, R], N) = self.inputs.views();
+        Ok(residual(A.transpose(), B.transpose(), Q, R, N, X.as_ref()))
     }
 }
 

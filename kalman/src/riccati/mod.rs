@@ -276,6 +276,12 @@ impl Inputs {
         Ok(self)
     }
 
+    /// Views of (a, c, q, r) and of the cross term.
+    pub(crate) fn views(&self) -> ([MatRef<'_, f64>; 4], Option<MatRef<'_, f64>>) {
+        let [a, c, q, r] = [&self.a, &self.c, &self.q, &self.r].map(Mat::as_ref);
+        ([a, c, q, r], self.cross.as_ref().map(Mat::as_ref))
+    }
+
     /// The n×n candidate solution `x` of this problem, copied and checked under `name`.
     pub(crate) fn candidate(
         &self,
