@@ -81,77 +81,78 @@ impl Default for FuelParams {
 
 /// [`FuelParams`] in the units a person states them in (and the fueling scenario's files
 /// take): seconds, millimetres, degrees, and the fill-velocity fluctuation and the gyro noise
-/// as standard deviations. The defaults live here, once, in these units.
+/// as standard deviations; each field is named by its symbol in [`FuelParams`] and its unit.
+/// The defaults live here, once, in these units.
 ///
 /// # Example
 /// ```
 /// use model::{FuelParams, FuelParamsStated};
 ///
 /// // A 5 mm sensor: δ = 0.005 m, every other value the default.
-/// let si = FuelParamsStated { step_mm: 5.0, ..FuelParamsStated::DEFAULT }.to_si();
+/// let si = FuelParamsStated { delta_mm: 5.0, ..FuelParamsStated::DEFAULT }.to_si();
 /// assert!((si.delta - 0.005).abs() < 1e-18);
 /// assert!((si.phi - FuelParams::default().phi).abs() < 1e-15); // φ = 30° in radians
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FuelParamsStated {
-    /// Sampling interval Δt (s).
+    /// Δt, s.
     pub dt_s: f64,
-    /// Correlation time T_a of the fill-velocity fluctuation (s).
-    pub velocity_time_s: f64,
-    /// Standard deviation √D_c of the fill-velocity fluctuation (mm/s).
-    pub velocity_std_mm_s: f64,
-    /// Mean fill rate V_c (mm/s).
-    pub fill_rate_mm_s: f64,
-    /// Quantization step δ of the level sensor (mm).
-    pub step_mm: f64,
-    /// Time constant T_y of the hydro-damper (s).
-    pub damper_time_s: f64,
-    /// Distance R of the sensor from the tank axis (m).
-    pub sensor_radius_m: f64,
-    /// Angle φ between the direction to the stern and to the sensor (degrees).
-    pub sensor_angle_deg: f64,
-    /// Dominant rolling period 2π/β (s).
+    /// T_a, s.
+    pub t_a_s: f64,
+    /// √D_c, mm/s.
+    pub sigma_c_mm_s: f64,
+    /// V_c, mm/s.
+    pub v_c_mm_s: f64,
+    /// δ, mm.
+    pub delta_mm: f64,
+    /// T_y, s.
+    pub t_y_s: f64,
+    /// R, m.
+    pub r_m: f64,
+    /// φ, degrees.
+    pub phi_deg: f64,
+    /// 2π/β, s.
     pub rolling_period_s: f64,
-    /// Irregularity μ of rolling (1/s).
-    pub irregularity_per_s: f64,
-    /// Maximum tilt amplitude A_max (degrees).
-    pub max_amplitude_deg: f64,
-    /// Standard deviation of the gyro's tilt reading (degrees).
-    pub gyro_noise_deg: f64,
+    /// μ, 1/s.
+    pub mu_per_s: f64,
+    /// A_max, degrees.
+    pub a_max_deg: f64,
+    /// The gyro noise's standard deviation √`gyro_noise_var`, degrees.
+    pub gyro_sigma_deg: f64,
 }
 
 impl FuelParamsStated {
     /// The defaults, every value assumed (see [`FuelParams`]).
     pub const DEFAULT: Self = Self {
         dt_s: 0.1,
-        velocity_time_s: 20.0,
-        velocity_std_mm_s: 1.0,
-        fill_rate_mm_s: 10.0,
-        step_mm: 10.0,
-        damper_time_s: 2.0,
-        sensor_radius_m: 1.5,
-        sensor_angle_deg: 30.0,
+        t_a_s: 20.0,
+        sigma_c_mm_s: 1.0,
+        v_c_mm_s: 10.0,
+        delta_mm: 10.0,
+        t_y_s: 2.0,
+        r_m: 1.5,
+        phi_deg: 30.0,
         rolling_period_s: 10.0,
-        irregularity_per_s: 0.08,
-        max_amplitude_deg: 1.0,
-        gyro_noise_deg: 0.0,
+        mu_per_s: 0.08,
+        a_max_deg: 1.0,
+        gyro_sigma_deg: 0.0,
     };
 
     /// The same parameters in SI units (m, rad, variances).
     pub fn to_si(&self) -> FuelParams {
         FuelParams {
             dt: self.dt_s,
-            t_a: self.velocity_time_s,
-            d_c: (self.velocity_std_mm_s * 1e-3).powi(2),
-            v_c: self.fill_rate_mm_s * 1e-3,
-            delta: self.step_mm * 1e-3,
-            t_y: self.damper_time_s,
-            sensor_radius: self.sensor_radius_m,
-            phi: self.sensor_angle_deg.to_radians(),
+            t_a: self.t_a_s,
+            d_c: (self.sigma_c_mm_s * 1e-3).powi(2),
+            v_c: self.v_c_mm_s * 1e-3,
+            delta: self.delta_mm * 1e-3,
+            t_y: self.t_y_s,
+            sensor_radius: self.r_m,
+            phi: self.phi_deg.to_radians(),
             rolling_period: self.rolling_period_s,
-            mu: self.irregularity_per_s,
-            max_tilt_amplitude: self.max_amplitude_deg.to_radians(),
-            gyro_noise_var: self.gyro_noise_deg.to_radians().powi(2),
+            mu: self.mu_per_s,
+            max_tilt_amplitude: self.a_max_deg.to_radians(),
+            gyro_noise_var: self.gyro_sigma_deg.to_radians().powi(2),
         }
     }
 }
