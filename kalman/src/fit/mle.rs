@@ -32,50 +32,65 @@ impl Default for MleOptions {
     }
 }
 
-/// `−ln L / n_obs` and its gradient (scaled so that the optimiser's tolerances do not depend
-/// on the series length). One score recursion gives both, and argmin asks for them
-/// separately — the line search for the cost and then the gradient at each trial point,
-/// L-BFGS for the gradient at the accepted point again — so the last few evaluations are
-/// kept and a repeated θ costs nothing.
-struct Problem<'a, M: ParamMap + ?Sized> {
+/// The last few evaluations of `(ln L, ∇ ln L)`, so that a repeated θ costs nothing. One
+/// score recursion gives both, and argmin asks for them separately — the line search for
+/// the cost and then the gradient at each trial point, L-BFGS for the gradient at the
+/// accepted point again — and [`mle`] asks again at the start, before the Newton polish and
+/// for its verdict.
+struct Memo<'a, M: ParamMap + ?Sized> {
     map: &'a M,
     data: &'a Series<'a>,
-    scale: f64,
-    memo: RefCell<Vec<Evaluation>>,
+    kept: RefCell<Vec<Evaluation>>,
 }
 
 /// θ with `ln L` and `∇ ln L` there.
 type Evaluation = (Vec<f64>, f64, Vec<f64>);
 
-/// Evaluations kept by [`Problem`] (the line search's last trials and L-BFGS's point).
+/// Evaluations kept by [`Memo`] (the line search's last trials and L-BFGS's point).
 const MEMO: usize = 4;
 
-impl<'a, M: ParamMap + ?Sized> Problem<'a, M> {
-    fn new(map: &'a M, data: &'a Series<'a>, scale: f64) -> Self {
+impl<'a, M: ParamMap + ?Sized> Memo<'a, M> {
+    fn new(map: &'a M, data: &'a Series<'a>) -> Self {
         Self {
             map,
             data,
-            scale,
-            memo: RefCell::new(Vec::with_capacity(MEMO)),
+            kept: RefCell::new(Vec::with_capacity(MEMO)),
         }
     }
 
     /// `(ln L, ∇ ln L)` at `p`, from the memo when `p` was evaluated lately.
     fn eval(&self, p: &[f64]) -> Result<(f64, Vec<f64>), FitError> {
-        if let Some((_, ll, g)) = self.memo.borrow().iter().find(|(t, _, _)| t == p) {
+        if let Some((_, ll, g)) = self.kept.borrow().iter().find(|(t, _, _)| t == p) {
             return Ok((*ll, g.clone()));
         }
         let (ll, g) = log_likelihood_gradient(self.map, p, self.data)?;
-        let mut memo = self.memo.borrow_mut();
-        if memo.len() == MEMO {
-            memo.remove(0);
+        let mut kept = self.kept.borrow_mut();
+        if kept.len() == MEMO {
+            kept.remove(0);
         }
-        memo.push((p.to_vec(), ll, g.clone()));
+        kept.push((p.to_vec(), ll, g.clone()));
         Ok((ll, g))
     }
 }
 
-impl<M: ParamMap + ?Sized> CostFunction for Problem<'_, M> {
+/// `−ln L / n_obs` and its gradient (scaled so that the optimiser's tolerances do not depend
+/// on the series length), evaluated through the fit's [`Memo`].
+struct Problem<'a, 'm, M: ParamMap + ?Sized> {
+    memo: &'m Memo<'a, M>,
+    scale: f64,
+}
+
+impl<'a, 'm, M: ParamMap + ?Sized> Problem<'a, 'm, M> {
+    fn new(memo: &'m Memo<'a, M>, scale: f64) -> Self {
+        Self { memo, scale }
+    }
+
+    fn eval(&self, p: &[f64]) -> Result<(f64, Vec<f64>), FitError> {
+        self.memo.eval(p)
+    }
+}
+
+impl<M: ParamMap + ?Sized> CostFunction for Problem<'_, '_, M> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, argmin::core::Error> {
@@ -87,7 +102,7 @@ impl<M: ParamMap + ?Sized> CostFunction for Problem<'_, M> {
     }
 }
 
-impl<M: ParamMap + ?Sized> Gradient for Problem<'_, M> {
+impl<M: ParamMap + ?Sized> Gradient for Problem<'_, '_, M> {
     type Param = Vec<f64>;
     type Gradient = Vec<f64>;
     fn gradient(&self, p: &Vec<f64>) -> Result<Vec<f64>, argmin::core::Error> {
@@ -99,9 +114,9 @@ impl<M: ParamMap + ?Sized> Gradient for Problem<'_, M> {
 }
 
 /// Nelder–Mead's cost: failures become +∞ (the simplex steps away from them).
-struct Robust<'a, M: ParamMap + ?Sized>(Problem<'a, M>);
+struct Robust<'a, 'm, M: ParamMap + ?Sized>(Problem<'a, 'm, M>);
 
-impl<M: ParamMap + ?Sized> CostFunction for Robust<'_, M> {
+impl<M: ParamMap + ?Sized> CostFunction for Robust<'_, '_, M> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, argmin::core::Error> {
@@ -115,7 +130,7 @@ impl<M: ParamMap + ?Sized> CostFunction for Robust<'_, M> {
 /// by less than 1e-14 between iterations — the round-off of `−ln L/n_obs`, where the line
 /// search can no longer tell a better point from a worse one (see [`newton_polish`]).
 fn lbfgs<M: ParamMap + ?Sized>(
-    problem: Problem<'_, M>,
+    problem: Problem<'_, '_, M>,
     theta0: Vec<f64>,
     max_iter: u64,
     grad_tol: f64,
@@ -160,13 +175,13 @@ fn max_abs(v: &[f64]) -> f64 {
 /// is not positive definite (no Newton direction) or no halving helps. Returns θ and the
 /// number of steps taken.
 fn newton_polish<M: ParamMap + ?Sized>(
-    map: &M,
+    memo: &Memo<'_, M>,
     mut theta: Vec<f64>,
-    data: &Series<'_>,
     grad_tol: f64,
 ) -> Result<(Vec<f64>, usize), FitError> {
+    let (map, data) = (memo.map, memo.data);
     let k = theta.len();
-    let (_, mut g) = log_likelihood_gradient(map, &theta, data)?;
+    let (_, mut g) = memo.eval(&theta)?;
     let mut steps = 0;
     while steps < NEWTON_STEPS && max_abs(&g) > grad_tol {
         let mut l = super::flat(&observed_information(map, &theta, data)?);
@@ -183,7 +198,7 @@ fn newton_polish<M: ParamMap + ?Sized>(
         let mut t = 1.0;
         for _ in 0..5 {
             let trial: Vec<f64> = theta.iter().zip(&delta).map(|(a, d)| a + t * d).collect();
-            if let Ok((ll, gt)) = log_likelihood_gradient(map, &trial, data)
+            if let Ok((ll, gt)) = memo.eval(&trial)
                 && ll.is_finite()
                 && decrement(&gt).0 < d0
             {
@@ -247,9 +262,10 @@ pub fn mle<M: ParamMap + ?Sized>(
     }
     data.check(&map.system(&theta0)?)?;
     // The likelihood must be defined at the start.
-    log_likelihood_gradient(map, &theta0, data)?;
+    let memo = Memo::new(map, data);
+    memo.eval(&theta0)?;
     let scale = 1.0 / data.observed() as f64;
-    let mk = || Problem::new(map, data, scale);
+    let mk = || Problem::new(&memo, scale);
     let mut notes = Vec::new();
     let mut iterations = 0;
     let theta = match lbfgs(mk(), theta0.clone(), opts.max_iter, opts.grad_tol) {
@@ -288,14 +304,14 @@ pub fn mle<M: ParamMap + ?Sized>(
             }
         }
     };
-    let (theta, steps) = newton_polish(map, theta, data, opts.grad_tol)?;
+    let (theta, steps) = newton_polish(&memo, theta, opts.grad_tol)?;
     if steps > 0 {
         iterations += steps;
         notes.push(format!(
             "{steps} Newton step(s) on the observed information after L-BFGS (its cost had reached round-off)"
         ));
     }
-    let (_, g) = log_likelihood_gradient(map, &theta, data)?;
+    let (_, g) = memo.eval(&theta)?;
     let gmax = max_abs(&g);
     let converged = gmax <= opts.grad_tol;
     let mut message = if converged {
@@ -360,7 +376,7 @@ mod tests {
         assert!(fit.converged, "{}", fit.message);
         let start: Vec<f64> = fit.theta.iter().map(|t| t + 0.3).collect();
         let (ll0, _) = log_likelihood_gradient(&map, &start, &data).expect("start");
-        let (theta, steps) = newton_polish(&map, start, &data, 1e-7).expect("polish");
+        let (theta, steps) = newton_polish(&Memo::new(&map, &data), start, 1e-7).expect("polish");
         let (ll, g) = log_likelihood_gradient(&map, &theta, &data).expect("end");
         assert!(max_abs(&g) <= 1e-7, "{g:?} after {steps} steps");
         assert!((1..=6).contains(&steps), "{steps} steps");
