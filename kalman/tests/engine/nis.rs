@@ -129,3 +129,49 @@ fn singular_innovation_covariance_takes_the_rank_revealing_path() {
         );
     }
 }
+
+/// A channel that is an exact multiple of another (z₂ = 2 z₁, noise included: R = r·[[1, 2],
+/// [2, 4]]) carries no information of its own, so the filter must give the estimates, NIS
+/// and rank of the one-channel filter. Σ is singular with unequal diagonal entries, so the
+/// dense forms' eigen-decomposition has to rotate by a non-trivial angle.
+#[test]
+fn an_exactly_dependent_channel_adds_nothing() {
+    use kalman::Model;
+    let F = [[0.95, 0.1], [-0.1, 0.9]];
+    let Q = [[0.02, 0.0], [0.0, 0.05]];
+    let r = 0.3;
+    let dims2 = DynDims::new(2, 2, 0).expect("dims");
+    let dims1 = DynDims::new(2, 1, 0).expect("dims");
+    let H2 = [[1.0, 0.5], [2.0, 1.0]];
+    let R2 = [[r, 2.0 * r], [2.0 * r, 4.0 * r]];
+    let P0 = [[2.0, 0.3], [0.3, 1.0]];
+    for form in [
+        CovarianceForm::Joseph,
+        CovarianceForm::Standard,
+        CovarianceForm::SquareRoot,
+    ] {
+        let two = Model::new(dims2, &F, &H2, &Q, &R2).expect("model");
+        let one = Model::new(dims1, &F, &[[1.0, 0.5]], &Q, &[[r]]).expect("model");
+        let mut f2 = Filter::new(two, &[0.5, -0.5], &P0, form).expect("filter");
+        let mut f1 = Filter::new(one, &[0.5, -0.5], &P0, form).expect("filter");
+        for k in 0..30 {
+            let z = (0.4 * k as f64).sin();
+            let i2 = f2.step(&[z, 2.0 * z], None).expect("step");
+            let i1 = f1.step(&[z], None).expect("step");
+            assert_eq!(i2.rank, 1, "{form:?} step {k}");
+            // Tolerance: both are O(1) computations of the same numbers; the two-channel
+            // one adds a rank cut (the dropped eigenvalue is round-off, ~1e-16 of the kept
+            // one) and the rotation that finds it.
+            let close = |a: f64, b: f64| (a - b).abs() < 1e-10 * b.abs().max(1.0);
+            let (nis2, nis1) = (i2.nis.expect("nis"), i1.nis.expect("nis"));
+            assert!(close(nis2, nis1), "{form:?} step {k}: NIS {nis2} vs {nis1}");
+            let (P2, P1) = (f2.covariance(), f1.covariance());
+            for i in 0..2 {
+                assert!(close(f2.state()[i], f1.state()[i]), "{form:?} step {k}: x");
+                for j in 0..2 {
+                    assert!(close(P2[(i, j)], P1[(i, j)]), "{form:?} step {k}: P");
+                }
+            }
+        }
+    }
+}
