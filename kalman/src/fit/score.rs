@@ -69,6 +69,15 @@ impl FlatDeriv {
     }
 }
 
+/// The prediction's part of the state derivative, `dxn = F ∂x + ∂F x`.
+fn predict_dx(dxn: &mut [f64], s: &Flat, di: &FlatDeriv, dx: &[f64], x: &[f64]) {
+    let n = s.n;
+    gemm(dxn, n, 1, n, 1.0, &s.F, n, false, dx, n, false, 0.0);
+    if let Some(df) = &di.F {
+        gemm(dxn, n, 1, n, 1.0, df, n, false, x, n, false, 1.0);
+    }
+}
+
 /// The prediction's part of the covariance derivative, written to `dPn`:
 /// F ∂P Fᵀ + ∂F P Fᵀ + F P ∂Fᵀ + ∂Q, with `FP` = F P (a filtered P) and `tn` an n×n scratch.
 fn predict_dP(
@@ -277,38 +286,7 @@ impl Work {
     fn covariance_stage(&mut self, s: &Flat, d: &[FlatDeriv], k: usize) -> Result<(), FitError> {
         let (n, m) = (s.n, s.m);
         let mo = self.obs.len();
-        // FP = F P, Pn = F P Fᵀ + Q
-        gemm(
-            &mut self.FP,
-            n,
-            n,
-            n,
-            1.0,
-            &s.F,
-            n,
-            false,
-            &self.P,
-            n,
-            false,
-            0.0,
-        );
-        gemm(
-            &mut self.Pn,
-            n,
-            n,
-            n,
-            1.0,
-            &self.FP,
-            n,
-            false,
-            &s.F,
-            n,
-            true,
-            0.0,
-        );
-        for (a, q) in self.Pn.iter_mut().zip(&s.Q) {
-            *a += q;
-        }
+        self.predict_P(s);
         for (r, &i) in self.obs.iter().enumerate() {
             for c in 0..n {
                 self.Ho[r + c * mo] = s.H[i + c * m];
@@ -466,23 +444,7 @@ impl Work {
             grad[i] -= 0.5 * (self.tr[i] - a_ds_a + 2.0 * a_de);
             // dx' = dF x + F dx + dM α − G dΣ α + G de
             let dxn = &mut self.dxn[i];
-            gemm(
-                dxn,
-                n,
-                1,
-                n,
-                1.0,
-                &s.F,
-                n,
-                false,
-                &self.dx[i],
-                n,
-                false,
-                0.0,
-            );
-            if let Some(df) = &di.F {
-                gemm(dxn, n, 1, n, 1.0, df, n, false, &self.x, n, false, 1.0);
-            }
+            predict_dx(dxn, s, di, &self.dx[i], &self.x);
             gemm(dxn, n, 1, mo, 1.0, dM, n, false, alpha, mo, false, 1.0);
             for r in 0..mo {
                 dsa[r] = de[r] - dsa[r];
@@ -495,8 +457,8 @@ impl Work {
         term
     }
 
-    /// A step with every row missing: prediction only.
-    fn predict_only(&mut self, s: &Flat, d: &[FlatDeriv], u: &[f64]) {
+    /// `FP = F P` and the predicted `Pn = F P Fᵀ + Q`.
+    fn predict_P(&mut self, s: &Flat) {
         let n = s.n;
         gemm(
             &mut self.FP,
@@ -512,7 +474,6 @@ impl Work {
             false,
             0.0,
         );
-        s.predict_mean(&mut self.xn, &self.x, u);
         gemm(
             &mut self.Pn,
             n,
@@ -530,25 +491,16 @@ impl Work {
         for (a, q) in self.Pn.iter_mut().zip(&s.Q) {
             *a += q;
         }
+    }
+
+    /// A step with every row missing: prediction only.
+    fn predict_only(&mut self, s: &Flat, d: &[FlatDeriv], u: &[f64]) {
+        let n = s.n;
+        self.predict_P(s);
+        s.predict_mean(&mut self.xn, &self.x, u);
         for (i, di) in d.iter().enumerate() {
             let dxn = &mut self.dxn[i];
-            gemm(
-                dxn,
-                n,
-                1,
-                n,
-                1.0,
-                &s.F,
-                n,
-                false,
-                &self.dx[i],
-                n,
-                false,
-                0.0,
-            );
-            if let Some(df) = &di.F {
-                gemm(dxn, n, 1, n, 1.0, df, n, false, &self.x, n, false, 1.0);
-            }
+            predict_dx(dxn, s, di, &self.dx[i], &self.x);
             predict_dP(
                 &mut self.dPn[i],
                 &mut self.tn,

@@ -7,7 +7,8 @@ use super::linalg::{
     joseph, mirror_lower, mul, mul_nt, nis_logdet, pd_cholesky, right_solve, symmetrise,
 };
 use super::{
-    Core, Jacobians, LN_2PI, NlDims, StepInfo, compact_rows, compact_square, compact_vec, finite,
+    Core, Jacobians, LN_2PI, NlDims, Stages, StepInfo, UpdateWork, compact_rows, compact_square,
+    compact_vec, finite,
 };
 use crate::storage::Buf;
 use crate::{Error, MatrixInput, RANK_TOL};
@@ -65,23 +66,25 @@ pub struct Ekf<D: NlDims, M> {
     c: Core<D>,
     /// ∂f/∂x at x_{k|k} of the last prediction.
     fj: D::Nn,
-    gain: D::Nm,
     hj: D::Mn,
     hc: D::Mn,
-    rc: D::Mm,
-    sig: D::Mm,
-    /// Reciprocals of the diagonal of the factor of Σ (in `sig`).
-    sinv: D::Mv,
     zh: D::Mv,
     ef: D::Mv,
-    e: D::Mv,
-    tmpm: D::Mv,
     xi: D::Nv,
     xn: D::Nv,
-    dx: D::Nv,
-    a: D::Nn,
-    t: D::Nn,
-    kr: D::Nm,
+    w: UpdateWork<D>,
+}
+
+impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
+    fn core(&mut self) -> &mut Core<D> {
+        &mut self.c
+    }
+    fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
+        self.update_with(z)
+    }
+    fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
+        self.predict(u)
+    }
 }
 
 impl<D: NlDims, M: Jacobians> Ekf<D, M> {
@@ -122,26 +125,17 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
         let c = Core::new(dims, x0, P0)?;
         let (n, m) = (dims.n(), dims.m());
         Ok(Self {
+            w: UpdateWork::new(n, m),
             model,
             update,
             c,
             fj: D::Nn::zeros(n * n),
-            gain: D::Nm::zeros(n * m),
             hj: D::Mn::zeros(m * n),
             hc: D::Mn::zeros(m * n),
-            rc: D::Mm::zeros(m * m),
-            sig: D::Mm::zeros(m * m),
-            sinv: D::Mv::zeros(m),
             zh: D::Mv::zeros(m),
             ef: D::Mv::zeros(m),
-            e: D::Mv::zeros(m),
-            tmpm: D::Mv::zeros(m),
             xi: D::Nv::zeros(n),
             xn: D::Nv::zeros(n),
-            dx: D::Nv::zeros(n),
-            a: D::Nn::zeros(n * n),
-            t: D::Nn::zeros(n * n),
-            kr: D::Nm::zeros(n * m),
         })
     }
 
@@ -153,12 +147,7 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
     /// step; [`Error::SingularInnovation`]. After an error the step counter has not
     /// advanced and the filtered estimate may be partly written: [`Ekf::reset`] the filter.
     pub fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
-        self.c.check_z(z)?;
-        let info = self.update_with(z)?;
-        self.predict(u)?;
-        self.c.info = info;
-        self.c.k += 1;
-        Ok(info)
+        self.run_step(z, u)
     }
 
     fn update_with(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
@@ -183,7 +172,7 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
                 tolerance,
             } => (max_iterations, tolerance, "iterated EKF"),
         };
-        compact_square(self.c.r.as_slice(), m, z, mo, self.rc.as_mut_slice());
+        compact_square(self.c.r.as_slice(), m, z, mo, self.w.rc.as_mut_slice());
         self.xi.as_mut_slice()[..n].copy_from_slice(xp);
         let mut nis = (0.0, 0.0);
         for it in 1..=max_it {
@@ -199,26 +188,26 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
                 &self.zh.as_slice()[..m],
                 &mut self.ef.as_mut_slice()[..m],
             );
-            let e = &mut self.e.as_mut_slice()[..mo];
+            let e = &mut self.w.e.as_mut_slice()[..mo];
             compact_vec(&self.ef.as_slice()[..m], z, e);
             let hc = &mut self.hc.as_mut_slice()[..mo * n];
             compact_rows(&self.hj.as_slice()[..m * n], m, n, z, mo, hc);
             if it > 1 {
                 // Gauss–Newton: e + H_i (x_i ⊖ x⁻).
-                let dx = &mut self.dx.as_mut_slice()[..n];
+                let dx = &mut self.w.dx.as_mut_slice()[..n];
                 self.model.state_residual(xi, xp, dx);
                 mul(e, hc, dx, mo, n, 1, true);
             }
             // PHᵀ (n×mo) into the gain buffer, Σ = H PHᵀ + R.
-            let K = &mut self.gain.as_mut_slice()[..n * mo];
+            let K = &mut self.w.gain.as_mut_slice()[..n * mo];
             mul_nt(K, pp, hc, n, n, mo, false);
-            let sig = &mut self.sig.as_mut_slice()[..mo * mo];
+            let sig = &mut self.w.sig.as_mut_slice()[..mo * mo];
             mul(sig, hc, K, mo, n, mo, false);
-            for (s, r) in sig.iter_mut().zip(&self.rc.as_slice()[..mo * mo]) {
+            for (s, r) in sig.iter_mut().zip(&self.w.rc.as_slice()[..mo * mo]) {
                 *s += r;
             }
             symmetrise(sig, mo);
-            let sinv = &mut self.sinv.as_mut_slice()[..mo];
+            let sinv = &mut self.w.sinv.as_mut_slice()[..mo];
             if let Err(pivot) = pd_cholesky(sig, mo, sinv, RANK_TOL) {
                 return Err(Error::SingularInnovation {
                     filter: name,
@@ -229,20 +218,20 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
                 });
             }
             right_solve(sig, sinv, mo, K, n);
-            let dx = &mut self.dx.as_mut_slice()[..n];
+            let dx = &mut self.w.dx.as_mut_slice()[..n];
             mul(dx, K, e, n, mo, 1, false);
             self.model.state_add(
                 xp,
-                &self.dx.as_slice()[..n],
+                &self.w.dx.as_slice()[..n],
                 &mut self.xn.as_mut_slice()[..n],
             );
-            nis = nis_logdet(sig, sinv, mo, e, &mut self.tmpm.as_mut_slice()[..mo]);
+            nis = nis_logdet(sig, sinv, mo, e, &mut self.w.tmpm.as_mut_slice()[..mo]);
             info.iterations = it;
             if it == max_it {
                 break;
             }
             let (xi, xn) = (&self.xi.as_slice()[..n], &self.xn.as_slice()[..n]);
-            let dx = &mut self.dx.as_mut_slice()[..n];
+            let dx = &mut self.w.dx.as_mut_slice()[..n];
             self.model.state_residual(xn, xi, dx);
             let step = dx.iter().map(|v| v * v).sum::<f64>().sqrt();
             let size = xi.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -254,15 +243,15 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
         self.c.xf.as_mut_slice()[..n].copy_from_slice(&self.xn.as_slice()[..n]);
         joseph(
             pp,
-            &self.gain.as_slice()[..n * mo],
+            &self.w.gain.as_slice()[..n * mo],
             &self.hc.as_slice()[..mo * n],
-            &self.rc.as_slice()[..mo * mo],
+            &self.w.rc.as_slice()[..mo * mo],
             n,
             mo,
             &mut self.c.pf.as_mut_slice()[..n * n],
-            &mut self.a.as_mut_slice()[..n * n],
-            &mut self.t.as_mut_slice()[..n * n],
-            &mut self.kr.as_mut_slice()[..n * mo],
+            &mut self.w.a.as_mut_slice()[..n * n],
+            &mut self.w.t.as_mut_slice()[..n * n],
+            &mut self.w.kr.as_mut_slice()[..n * mo],
         );
         info.nis = Some(nis.0);
         info.log_likelihood = -0.5 * (nis.0 + nis.1 + mo as f64 * LN_2PI);
@@ -279,7 +268,7 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
         let F = &mut self.fj.as_mut_slice()[..n * n];
         self.model.f_jacobian(xf, u, k, F);
         finite("f_jacobian", k, F)?;
-        let t = &mut self.t.as_mut_slice()[..n * n];
+        let t = &mut self.w.t.as_mut_slice()[..n * n];
         mul(t, F, &self.c.pf.as_slice()[..n * n], n, n, n, false);
         let pp = &mut self.c.pp.as_mut_slice()[..n * n];
         pp.copy_from_slice(&self.c.q.as_slice()[..n * n]);

@@ -171,6 +171,59 @@ struct Core<D: NlDims> {
     info: StepInfo,
 }
 
+/// A nonlinear filter's step is its update with `z_k`, then its prediction with `u_k`; the
+/// step counter advances only when both succeed. Written once here for the EKF and the UKF.
+trait Stages<D: NlDims> {
+    fn core(&mut self) -> &mut Core<D>;
+    fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, crate::Error>;
+    fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), crate::Error>;
+
+    fn run_step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, crate::Error> {
+        self.core().check_z(z)?;
+        let info = self.update_stage(z)?;
+        self.predict_stage(u)?;
+        let c = self.core();
+        c.info = info;
+        c.k += 1;
+        Ok(info)
+    }
+}
+
+/// The update's workspaces that the EKF and the UKF share: the gain (or the UKF's
+/// cross-covariance before it becomes the gain), R and Σ with the reciprocals of its factor's
+/// diagonal, the innovation, and the Joseph form's scratch.
+#[derive(Clone, Debug)]
+struct UpdateWork<D: NlDims> {
+    gain: D::Nm,
+    rc: D::Mm,
+    sig: D::Mm,
+    /// Reciprocals of the diagonal of the factor of Σ (in `sig`).
+    sinv: D::Mv,
+    e: D::Mv,
+    tmpm: D::Mv,
+    dx: D::Nv,
+    a: D::Nn,
+    t: D::Nn,
+    kr: D::Nm,
+}
+
+impl<D: NlDims> UpdateWork<D> {
+    fn new(n: usize, m: usize) -> Self {
+        Self {
+            gain: D::Nm::zeros(n * m),
+            rc: D::Mm::zeros(m * m),
+            sig: D::Mm::zeros(m * m),
+            sinv: D::Mv::zeros(m),
+            e: D::Mv::zeros(m),
+            tmpm: D::Mv::zeros(m),
+            dx: D::Nv::zeros(n),
+            a: D::Nn::zeros(n * n),
+            t: D::Nn::zeros(n * n),
+            kr: D::Nm::zeros(n * m),
+        }
+    }
+}
+
 impl<D: NlDims> Core<D> {
     fn new(dims: D, x0: &[f64], P0: &impl crate::MatrixInput) -> Result<Self, crate::Error> {
         let (n, m) = (dims.n(), dims.m());

@@ -7,7 +7,10 @@ use super::linalg::{
     joseph, left_solve, mirror_lower, mul, mul_tn, nis_logdet, pd_cholesky, psd_cholesky, rank1,
     rank1_lower, right_solve,
 };
-use super::{Core, LN_2PI, NlDims, NonlinearModel, StepInfo, compact_square, compact_vec, finite};
+use super::{
+    Core, LN_2PI, NlDims, NonlinearModel, Stages, StepInfo, UpdateWork, compact_square,
+    compact_vec, finite,
+};
 use crate::storage::Buf;
 use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
 
@@ -190,20 +193,23 @@ pub struct Ukf<D: NlDims, M> {
     l: D::Nn,
     /// Reciprocals of the diagonals of the factors of P (`l`) and of Σ (in `sig`).
     linv: D::Nv,
-    sinv: D::Mv,
-    gain: D::Nm,
     ht: D::Nm,
-    rc: D::Mm,
     rt: D::Mm,
-    sig: D::Mm,
     zbar: D::Mv,
-    e: D::Mv,
-    tmpm: D::Mv,
     col: D::Mv,
-    dx: D::Nv,
-    a: D::Nn,
-    t: D::Nn,
-    kr: D::Nm,
+    w: UpdateWork<D>,
+}
+
+impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
+    fn core(&mut self) -> &mut Core<D> {
+        &mut self.c
+    }
+    fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
+        self.update_with(z)
+    }
+    fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
+        self.predict(u)
+    }
 }
 
 impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
@@ -227,6 +233,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         let mut wc = D::W::zeros(s);
         let spread = points.weights(n, wm.as_mut_slice(), wc.as_mut_slice())?;
         Ok(Self {
+            w: UpdateWork::new(n, m),
             model,
             points,
             spread,
@@ -241,20 +248,10 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             dz: D::ZSig::zeros(m * s),
             l: D::Nn::zeros(n * n),
             linv: D::Nv::zeros(n),
-            sinv: D::Mv::zeros(m),
-            gain: D::Nm::zeros(n * m),
             ht: D::Nm::zeros(n * m),
-            rc: D::Mm::zeros(m * m),
             rt: D::Mm::zeros(m * m),
-            sig: D::Mm::zeros(m * m),
             zbar: D::Mv::zeros(m),
-            e: D::Mv::zeros(m),
-            tmpm: D::Mv::zeros(m),
             col: D::Mv::zeros(m),
-            dx: D::Nv::zeros(n),
-            a: D::Nn::zeros(n * n),
-            t: D::Nn::zeros(n * n),
-            kr: D::Nm::zeros(n * m),
         })
     }
 
@@ -267,12 +264,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
     /// step counter has not advanced and the estimates may be partly written:
     /// [`Ukf::reset`] the filter.
     pub fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
-        self.c.check_z(z)?;
-        let info = self.update_with(z)?;
-        self.predict(u)?;
-        self.c.info = info;
-        self.c.k += 1;
-        Ok(info)
+        self.run_step(z, u)
     }
 
     /// Sigma points of `(x, P)` into `chi` (and the factor of P into `l`).
@@ -295,7 +287,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         })?;
         let chi = self.chi.as_mut_slice();
         chi[..n].copy_from_slice(x);
-        let dx = &mut self.dx.as_mut_slice()[..n];
+        let dx = &mut self.w.dx.as_mut_slice()[..n];
         for j in 0..n {
             for (sign, col) in [(1.0, 1 + j), (-1.0, 1 + n + j)] {
                 let f = sign * self.spread;
@@ -357,10 +349,10 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             self.model
                 .state_residual(&chi[i * n..(i + 1) * n], xp, &mut dchi[i * n..(i + 1) * n]);
         }
-        compact_square(self.c.r.as_slice(), m, z, mo, self.rc.as_mut_slice());
-        let sig = &mut self.sig.as_mut_slice()[..mo * mo];
-        sig.copy_from_slice(&self.rc.as_slice()[..mo * mo]);
-        let C = &mut self.gain.as_mut_slice()[..n * mo];
+        compact_square(self.c.r.as_slice(), m, z, mo, self.w.rc.as_mut_slice());
+        let sig = &mut self.w.sig.as_mut_slice()[..mo * mo];
+        sig.copy_from_slice(&self.w.rc.as_slice()[..mo * mo]);
+        let C = &mut self.w.gain.as_mut_slice()[..n * mo];
         C.fill(0.0);
         for i in 0..s {
             let d = &dz[i * mo..(i + 1) * mo];
@@ -378,14 +370,14 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         let rt = &mut self.rt.as_mut_slice()[..mo * mo];
         rt.copy_from_slice(sig);
         // R_c is no longer needed (copied into Σ): it holds Cᵀ H̃ᵀ.
-        let ctht = &mut self.rc.as_mut_slice()[..mo * mo];
+        let ctht = &mut self.w.rc.as_mut_slice()[..mo * mo];
         mul_tn(ctht, C, ht, mo, n, mo, false);
         for (r, v) in rt.iter_mut().zip(ctht.iter()) {
             *r -= v;
         }
         // Σ and Cᵀ H̃ᵀ = Cᵀ P⁻¹ C are symmetric: R̃ too, up to rounding; make it exact.
         mirror_lower(rt, mo);
-        let sinv = &mut self.sinv.as_mut_slice()[..mo];
+        let sinv = &mut self.w.sinv.as_mut_slice()[..mo];
         if let Err(pivot) = pd_cholesky(sig, mo, sinv, RANK_TOL) {
             return Err(Error::SingularInnovation {
                 filter: "UKF",
@@ -398,14 +390,14 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         let K = C;
         right_solve(sig, sinv, mo, K, n);
         self.model.residual(z, zbar, col);
-        let e = &mut self.e.as_mut_slice()[..mo];
+        let e = &mut self.w.e.as_mut_slice()[..mo];
         compact_vec(col, z, e);
-        let dx = &mut self.dx.as_mut_slice()[..n];
+        let dx = &mut self.w.dx.as_mut_slice()[..n];
         mul(dx, K, e, n, mo, 1, false);
         self.model
             .state_add(xp, dx, &mut self.c.xf.as_mut_slice()[..n]);
         // H̃ = (H̃ᵀ)ᵀ as an mo×n matrix for the Joseph form.
-        let hrows = &mut self.kr.as_mut_slice()[..n * mo];
+        let hrows = &mut self.w.kr.as_mut_slice()[..n * mo];
         for j in 0..n {
             for i in 0..mo {
                 hrows[i + j * mo] = ht[j + i * n];
@@ -420,11 +412,11 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             n,
             mo,
             &mut self.c.pf.as_mut_slice()[..n * n],
-            &mut self.a.as_mut_slice()[..n * n],
-            &mut self.t.as_mut_slice()[..n * n],
+            &mut self.w.a.as_mut_slice()[..n * n],
+            &mut self.w.t.as_mut_slice()[..n * n],
             ht,
         );
-        let nl = nis_logdet(sig, sinv, mo, e, &mut self.tmpm.as_mut_slice()[..mo]);
+        let nl = nis_logdet(sig, sinv, mo, e, &mut self.w.tmpm.as_mut_slice()[..mo]);
         info.nis = Some(nl.0);
         info.log_likelihood = -0.5 * (nl.0 + nl.1 + mo as f64 * LN_2PI);
         info.iterations = 1;
@@ -447,7 +439,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         }
         // x⁺ = y_0 ⊕ Σ_{i≥1} Wm_i (y_i ⊖ y_0) (as ẑ in the update).
         let dy = &mut self.dy.as_mut_slice()[..n * s];
-        let dx = &mut self.dx.as_mut_slice()[..n];
+        let dx = &mut self.w.dx.as_mut_slice()[..n];
         for i in 1..s {
             self.model
                 .state_residual(&y[i * n..(i + 1) * n], &y[..n], &mut dy[i * n..(i + 1) * n]);
