@@ -178,6 +178,18 @@ fn par_for(_work: usize) -> Par {
     Par::Seq
 }
 
+/// Replaces the square `n`×`n` `a` by `(a + aᵀ)/2`.
+#[inline(always)]
+pub(crate) fn symmetrise(a: &mut [f64], n: usize) {
+    for j in 0..n {
+        for i in j + 1..n {
+            let s = 0.5 * (a[i + j * n] + a[j + i * n]);
+            a[i + j * n] = s;
+            a[j + i * n] = s;
+        }
+    }
+}
+
 /// Copies the lower triangle of the square `n`×`n` matrix to the upper one.
 #[inline(always)]
 pub(crate) fn mirror_lower(a: &mut [f64], n: usize) {

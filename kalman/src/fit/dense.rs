@@ -70,16 +70,7 @@ pub(crate) fn chol_solve(l: &[f64], n: usize, b: &mut [f64], c: usize) {
     }
 }
 
-/// `a = (a + aᵀ)/2` for an `n×n` matrix.
-pub(crate) fn symmetrise(a: &mut [f64], n: usize) {
-    for j in 0..n {
-        for i in j + 1..n {
-            let s = 0.5 * (a[i + j * n] + a[j + i * n]);
-            a[i + j * n] = s;
-            a[j + i * n] = s;
-        }
-    }
-}
+pub(crate) use crate::kernels::symmetrise;
 
 #[cfg(test)]
 mod tests {

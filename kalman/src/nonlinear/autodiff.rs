@@ -4,7 +4,7 @@
 use num_dual::{Dual64, DualNum};
 
 use super::Jacobians;
-use super::models::forward_model;
+use super::models::{difference, forward_model, sum};
 use crate::storage::Dims;
 
 /// The scalars a [`GenericModel`] is evaluated with: `f64` for values, `num_dual::Dual64`
@@ -53,21 +53,15 @@ pub trait GenericModel {
     fn r(&self, k: usize, out: &mut [f64]);
     /// The measurement residual `a − b` (override to wrap angles).
     fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        for ((o, x), y) in out.iter_mut().zip(a).zip(b) {
-            *o = x - y;
-        }
+        difference(a, b, out);
     }
     /// The state addition `x ⊕ δ` (override to wrap angles).
     fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-        for ((o, a), b) in out.iter_mut().zip(x).zip(dx) {
-            *o = a + b;
-        }
+        sum(x, dx, out);
     }
     /// The state difference `a ⊖ b` (override to wrap angles).
     fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        for ((o, x), y) in out.iter_mut().zip(a).zip(b) {
-            *o = x - y;
-        }
+        difference(a, b, out);
     }
 }
 

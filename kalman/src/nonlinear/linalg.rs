@@ -68,17 +68,7 @@ pub(crate) fn rank1(C: &mut [f64], w: f64, a: &[f64], b: &[f64], r: usize, c: us
     }
 }
 
-/// Replaces the square `n`×`n` `a` by `(a + aᵀ)/2`.
-#[inline(always)]
-pub(crate) fn symmetrise(a: &mut [f64], n: usize) {
-    for j in 0..n {
-        for i in j + 1..n {
-            let s = 0.5 * (a[i + j * n] + a[j + i * n]);
-            a[i + j * n] = s;
-            a[j + i * n] = s;
-        }
-    }
-}
+pub(crate) use crate::kernels::symmetrise;
 
 /// Largest absolute diagonal entry of the `n`×`n` `a`.
 #[inline(always)]

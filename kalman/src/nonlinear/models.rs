@@ -6,6 +6,20 @@ use crate::Error;
 use crate::model::{MatrixInput, load, psd_factor, symmetrise};
 use crate::storage::Dims;
 
+/// `out = a − b` entry by entry: the default residual and state difference.
+pub(crate) fn difference(a: &[f64], b: &[f64], out: &mut [f64]) {
+    for ((o, x), y) in out.iter_mut().zip(a).zip(b) {
+        *o = x - y;
+    }
+}
+
+/// `out = x + δ` entry by entry: the default state addition.
+pub(crate) fn sum(x: &[f64], dx: &[f64], out: &mut [f64]) {
+    for ((o, a), b) in out.iter_mut().zip(x).zip(dx) {
+        *o = a + b;
+    }
+}
+
 /// A nonlinear state-space model `x_{k+1} = f(x_k, u_k, k) + w_k`, `z_k = h(x_k, k) + v_k`
 /// with `cov(w_k) = Q_k`, `cov(v_k) = R_k`.
 ///
@@ -40,21 +54,15 @@ pub trait NonlinearModel {
     fn r(&mut self, k: usize, out: &mut [f64]);
     /// The measurement residual `a − b` (override to wrap angles); `out` has length m.
     fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        for ((o, x), y) in out.iter_mut().zip(a).zip(b) {
-            *o = x - y;
-        }
+        difference(a, b, out);
     }
     /// The state addition `x ⊕ δ` (override to wrap angles); `out` has length n.
     fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-        for ((o, a), b) in out.iter_mut().zip(x).zip(dx) {
-            *o = a + b;
-        }
+        sum(x, dx, out);
     }
     /// The state difference `a ⊖ b` (override to wrap angles); `out` has length n.
     fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        for ((o, x), y) in out.iter_mut().zip(a).zip(b) {
-            *o = x - y;
-        }
+        difference(a, b, out);
     }
 }
 

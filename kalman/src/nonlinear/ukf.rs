@@ -480,40 +480,7 @@ impl<D: NlDims, M> Ukf<D, M> {
     pub fn sigma_points(&self) -> SigmaPoints {
         self.points
     }
-    /// The model.
-    pub fn model(&self) -> &M {
-        &self.model
-    }
-    /// The model, mutable.
-    pub fn model_mut(&mut self) -> &mut M {
-        &mut self.model
-    }
-    /// Steps taken.
-    pub fn steps(&self) -> usize {
-        self.c.k
-    }
-    /// What the last step produced.
-    pub fn last_step(&self) -> StepInfo {
-        self.c.info
-    }
-    /// `x_{k|k}` after step k (before the first step: `x0`).
-    pub fn state(&self) -> &[f64] {
-        &self.c.xf.as_slice()[..self.c.dims.n()]
-    }
-    /// `P_{k|k}`.
-    pub fn covariance(&self) -> MatRef<'_, f64> {
-        let n = self.c.dims.n();
-        MatRef::from_column_major_slice(&self.c.pf.as_slice()[..n * n], n, n)
-    }
-    /// `x_{k+1|k}`.
-    pub fn predicted_state(&self) -> &[f64] {
-        &self.c.xp.as_slice()[..self.c.dims.n()]
-    }
-    /// `P_{k+1|k}`.
-    pub fn predicted_covariance(&self) -> MatRef<'_, f64> {
-        let n = self.c.dims.n();
-        MatRef::from_column_major_slice(&self.c.pp.as_slice()[..n * n], n, n)
-    }
+    filter_accessors!();
 }
 
 impl<D: NlDims, M> super::ForwardPass for Ukf<D, M> {
