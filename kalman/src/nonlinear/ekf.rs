@@ -75,18 +75,6 @@ pub struct Ekf<D: NlDims, M> {
     w: UpdateWork<D>,
 }
 
-impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
-    fn core(&mut self) -> &mut Core<D> {
-        &mut self.c
-    }
-    fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
-        self.update_with(z)
-    }
-    fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
-        self.predict(u)
-    }
-}
-
 impl<D: NlDims, M: Jacobians> Ekf<D, M> {
     /// A filter for `model` with prior mean `x0` (length n) and covariance `P0` (n×n,
     /// symmetric PSD). All workspaces are allocated here.
@@ -149,8 +137,14 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
     pub fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
         self.run_step(z, u)
     }
+}
 
-    fn update_with(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
+impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
+    fn core(&mut self) -> &mut Core<D> {
+        &mut self.c
+    }
+
+    fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
         let mo = self.c.load_r(&mut self.model, z)?;
         let mut info = StepInfo {
@@ -258,7 +252,7 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
         Ok(info)
     }
 
-    fn predict(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
+    fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
         let (n, k) = (self.c.dims.n(), self.c.k);
         self.c.load_q(&mut self.model)?;
         let xf = &self.c.xf.as_slice()[..n];

@@ -200,18 +200,6 @@ pub struct Ukf<D: NlDims, M> {
     w: UpdateWork<D>,
 }
 
-impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
-    fn core(&mut self) -> &mut Core<D> {
-        &mut self.c
-    }
-    fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
-        self.update_with(z)
-    }
-    fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
-        self.predict(u)
-    }
-}
-
 impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
     /// A filter for `model` with prior mean `x0` (length n), covariance `P0` (n×n,
     /// symmetric PSD) and the sigma-point set `points`. All workspaces are allocated here.
@@ -300,8 +288,14 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         }
         Ok(())
     }
+}
 
-    fn update_with(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
+impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
+    fn core(&mut self) -> &mut Core<D> {
+        &mut self.c
+    }
+
+    fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
         let s = 2 * n + 1;
         let mo = self.c.load_r(&mut self.model, z)?;
@@ -423,7 +417,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         Ok(info)
     }
 
-    fn predict(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
+    fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
         let (n, k) = (self.c.dims.n(), self.c.k);
         let s = 2 * n + 1;
         self.c.load_q(&mut self.model)?;
