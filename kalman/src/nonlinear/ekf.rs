@@ -298,14 +298,7 @@ impl<D: NlDims, M> Ekf<D, M> {
 }
 
 impl<D: NlDims, M: super::NonlinearModel> super::ForwardPass for Ekf<D, M> {
-    fn filtered(&self) -> (&[f64], &[f64]) {
-        let n = self.c.dims.n();
-        (&self.c.xf.as_slice()[..n], &self.c.pf.as_slice()[..n * n])
-    }
-    fn predicted(&self) -> (&[f64], &[f64]) {
-        let n = self.c.dims.n();
-        (&self.c.xp.as_slice()[..n], &self.c.pp.as_slice()[..n * n])
-    }
+    forward_pass_moments!();
     /// `C_k = P_{k|k} F_kᵀ`.
     fn cross_covariance(&self, out: &mut [f64]) {
         let n = self.c.dims.n();

@@ -119,6 +119,21 @@ macro_rules! filter_accessors {
     };
 }
 
+/// [`ForwardPass::filtered`] and [`ForwardPass::predicted`] for the EKF and the UKF, over
+/// their `c` ([`Core`]) field.
+macro_rules! forward_pass_moments {
+    () => {
+        fn filtered(&self) -> (&[f64], &[f64]) {
+            let n = self.c.dims.n();
+            (&self.c.xf.as_slice()[..n], &self.c.pf.as_slice()[..n * n])
+        }
+        fn predicted(&self) -> (&[f64], &[f64]) {
+            let n = self.c.dims.n();
+            (&self.c.xp.as_slice()[..n], &self.c.pp.as_slice()[..n * n])
+        }
+    };
+}
+
 mod autodiff;
 mod ekf;
 mod linalg;

@@ -478,14 +478,7 @@ impl<D: NlDims, M> Ukf<D, M> {
 }
 
 impl<D: NlDims, M> super::ForwardPass for Ukf<D, M> {
-    fn filtered(&self) -> (&[f64], &[f64]) {
-        let n = self.c.dims.n();
-        (&self.c.xf.as_slice()[..n], &self.c.pf.as_slice()[..n * n])
-    }
-    fn predicted(&self) -> (&[f64], &[f64]) {
-        let n = self.c.dims.n();
-        (&self.c.xp.as_slice()[..n], &self.c.pp.as_slice()[..n * n])
-    }
+    forward_pass_moments!();
     /// `C_k = Σ Wc_i (χ_i ⊖ x_{k|k})(f(χ_i) ⊖ x_{k+1|k})ᵀ` of the last prediction.
     fn cross_covariance(&self, out: &mut [f64]) {
         let n = self.c.dims.n();
