@@ -78,7 +78,6 @@
 //! ```
 #![allow(non_snake_case)]
 
-#[cfg(feature = "autodiff")]
 /// The accessors the EKF and the UKF share, over their `model` and `c` ([`Core`]) fields.
 macro_rules! filter_accessors {
     () => {
@@ -134,6 +133,7 @@ macro_rules! forward_pass_moments {
     };
 }
 
+#[cfg(feature = "autodiff")]
 mod autodiff;
 mod ekf;
 mod linalg;
