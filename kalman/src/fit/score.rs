@@ -195,10 +195,8 @@ struct Work {
     xn: Vec<f64>,
     P: Vec<f64>,
     Pn: Vec<f64>,
-    dx: Vec<Vec<f64>>,
-    dxn: Vec<Vec<f64>>,
-    dP: Vec<Vec<f64>>,
-    dPn: Vec<Vec<f64>>,
+    /// One entry per parameter.
+    par: Vec<ParamWork>,
     obs: Vec<usize>,
     // the covariance stage's results (for the observed rows `obs`)
     Ho: Vec<f64>,
@@ -208,9 +206,6 @@ struct Work {
     M: Vec<f64>,
     G: Vec<f64>,
     FP: Vec<f64>,
-    dsig: Vec<Vec<f64>>,
-    dM: Vec<Vec<f64>>,
-    tr: Vec<f64>,
     // scratch
     sig: Vec<f64>,
     X: Vec<f64>,
@@ -223,28 +218,45 @@ struct Work {
     dsa: Vec<f64>,
 }
 
+/// The derivatives with respect to one parameter: ∂x and ∂P now and next, and the
+/// covariance stage's ∂Σ, ∂M and tr(Σ⁻¹∂Σ).
+struct ParamWork {
+    dx: Vec<f64>,
+    dxn: Vec<f64>,
+    dP: Vec<f64>,
+    dPn: Vec<f64>,
+    dsig: Vec<f64>,
+    dM: Vec<f64>,
+    tr: f64,
+}
+
 impl Work {
     fn new(s: &Flat, d: &[FlatDeriv]) -> Self {
         let (n, m) = (s.n, s.m);
         let mut P = s.P0.clone();
         symmetrise(&mut P, n);
-        let dx: Vec<Vec<f64>> = d
+        let par = d
             .iter()
-            .map(|di| di.x0.clone().unwrap_or_else(|| vec![0.0; n]))
-            .collect();
-        let dP: Vec<Vec<f64>> = d
-            .iter()
-            .map(|di| di.P0.clone().unwrap_or_else(|| vec![0.0; n * n]))
+            .map(|di| {
+                let dx = di.x0.clone().unwrap_or_else(|| vec![0.0; n]);
+                let dP = di.P0.clone().unwrap_or_else(|| vec![0.0; n * n]);
+                ParamWork {
+                    dxn: dx.clone(),
+                    dx,
+                    dPn: dP.clone(),
+                    dP,
+                    dsig: vec![0.0; m * m],
+                    dM: vec![0.0; n * m],
+                    tr: 0.0,
+                }
+            })
             .collect();
         Self {
             x: s.x0.clone(),
             xn: vec![0.0; n],
             Pn: vec![0.0; n * n],
             P,
-            dxn: dx.clone(),
-            dx,
-            dPn: dP.clone(),
-            dP,
+            par,
             obs: Vec::with_capacity(m),
             Ho: vec![0.0; m * n],
             L: vec![0.0; m * m],
@@ -253,9 +265,6 @@ impl Work {
             M: vec![0.0; n * m],
             G: vec![0.0; n * m],
             FP: vec![0.0; n * n],
-            dsig: vec![vec![0.0; m * m]; d.len()],
-            dM: vec![vec![0.0; n * m]; d.len()],
-            tr: vec![0.0; d.len()],
             sig: vec![0.0; m * m],
             X: vec![0.0; m * m],
             tn: vec![0.0; n * n],
@@ -346,9 +355,17 @@ impl Work {
                 &mut self.tm[..n * mo],
                 &mut self.X[..mo * mo],
             );
-            let (dsig, dM) = (&mut self.dsig[i][..mo * mo], &mut self.dM[i][..n * mo]);
+            let ParamWork {
+                dP,
+                dPn,
+                dsig,
+                dM,
+                tr,
+                ..
+            } = &mut self.par[i];
+            let (dsig, dM) = (&mut dsig[..mo * mo], &mut dM[..n * mo]);
             // dΣ = Ho dP Hoᵀ + dHo PHt + (dHo PHt)ᵀ + dR_oo
-            gemm(tm, n, mo, n, 1.0, &self.dP[i], n, false, Ho, mo, true, 0.0);
+            gemm(tm, n, mo, n, 1.0, dP, n, false, Ho, mo, true, 0.0);
             gemm(dsig, mo, mo, n, 1.0, Ho, mo, false, tm, n, false, 0.0);
             if has_dh {
                 gemm(X, mo, mo, n, 1.0, dHo, mo, false, PHt, n, false, 0.0);
@@ -368,7 +385,7 @@ impl Work {
             // tr(Σ⁻¹ dΣ)
             X.copy_from_slice(dsig);
             chol_solve(L, mo, X, mo);
-            self.tr[i] = (0..mo).map(|r| X[r + r * mo]).sum();
+            *tr = (0..mo).map(|r| X[r + r * mo]).sum();
             // dM = dF P Hoᵀ + F dP Hoᵀ + F P dHoᵀ   (tm holds dP Hoᵀ)
             gemm(dM, n, mo, n, 1.0, &s.F, n, false, tm, n, false, 0.0);
             if let Some(df) = &di.F {
@@ -378,8 +395,7 @@ impl Work {
                 gemm(dM, n, mo, n, 1.0, &self.FP, n, false, dHo, mo, true, 1.0);
             }
             // dP' = dF P Fᵀ + F P dFᵀ + F dP Fᵀ + dQ − dM Gᵀ − G dMᵀ + G dΣ Gᵀ
-            let dPn = &mut self.dPn[i];
-            predict_dP(dPn, &mut self.tn, &s.F, &self.dP[i], di, &self.FP, n);
+            predict_dP(dPn, &mut self.tn, &s.F, dP, di, &self.FP, n);
             gemm(&mut self.tn, n, n, mo, 1.0, dM, n, false, G, n, true, 0.0);
             for r in 0..n {
                 for c in 0..n {
@@ -426,10 +442,18 @@ impl Work {
             let (Ho, dHo, G) = (&self.Ho[..mo * n], &self.dHo[..mo * n], &self.G[..n * mo]);
             let alpha = &self.alpha[..mo];
             let (de, dsa) = (&mut self.de[..mo], &mut self.dsa[..mo]);
-            let (dsig, dM) = (&self.dsig[i][..mo * mo], &self.dM[i][..n * mo]);
+            let ParamWork {
+                dx,
+                dxn,
+                dsig,
+                dM,
+                tr,
+                ..
+            } = &mut self.par[i];
+            let (dsig, dM) = (&dsig[..mo * mo], &dM[..n * mo]);
             // de = −dHo x − Ho dx
             for r in 0..mo {
-                let mut v = -(0..n).map(|c| Ho[r + c * mo] * self.dx[i][c]).sum::<f64>();
+                let mut v = -(0..n).map(|c| Ho[r + c * mo] * dx[c]).sum::<f64>();
                 if has_dh {
                     v -= (0..n).map(|c| dHo[r + c * mo] * self.x[c]).sum::<f64>();
                 }
@@ -441,10 +465,9 @@ impl Work {
             }
             let a_ds_a: f64 = (0..mo).map(|r| alpha[r] * dsa[r]).sum();
             let a_de: f64 = (0..mo).map(|r| alpha[r] * de[r]).sum();
-            grad[i] -= 0.5 * (self.tr[i] - a_ds_a + 2.0 * a_de);
+            grad[i] -= 0.5 * (*tr - a_ds_a + 2.0 * a_de);
             // dx' = dF x + F dx + dM α − G dΣ α + G de
-            let dxn = &mut self.dxn[i];
-            predict_dx(dxn, s, di, &self.dx[i], &self.x);
+            predict_dx(dxn, s, di, dx, &self.x);
             gemm(dxn, n, 1, mo, 1.0, dM, n, false, alpha, mo, false, 1.0);
             for r in 0..mo {
                 dsa[r] = de[r] - dsa[r];
@@ -498,18 +521,9 @@ impl Work {
         let n = s.n;
         self.predict_P(s);
         s.predict_mean(&mut self.xn, &self.x, u);
-        for (i, di) in d.iter().enumerate() {
-            let dxn = &mut self.dxn[i];
-            predict_dx(dxn, s, di, &self.dx[i], &self.x);
-            predict_dP(
-                &mut self.dPn[i],
-                &mut self.tn,
-                &s.F,
-                &self.dP[i],
-                di,
-                &self.FP,
-                n,
-            );
+        for (w, di) in self.par.iter_mut().zip(d) {
+            predict_dx(&mut w.dxn, s, di, &w.dx, &self.x);
+            predict_dP(&mut w.dPn, &mut self.tn, &s.F, &w.dP, di, &self.FP, n);
         }
         symmetrise(&mut self.Pn, n);
     }
@@ -524,7 +538,7 @@ impl Work {
                 .zip(new)
                 .all(|(u, v)| (u - v).abs() <= FIXED_POINT_TOL * scale)
         };
-        still(&self.P, &self.Pn) && self.dP.iter().zip(&self.dPn).all(|(a, b)| still(a, b))
+        still(&self.P, &self.Pn) && self.par.iter().all(|w| still(&w.dP, &w.dPn))
     }
 }
 
@@ -581,10 +595,14 @@ fn score(
             ll += w.data_stage(s, d, z, data.u(k), grad);
         }
         std::mem::swap(&mut w.x, &mut w.xn);
-        std::mem::swap(&mut w.dx, &mut w.dxn);
+        for p in &mut w.par {
+            std::mem::swap(&mut p.dx, &mut p.dxn);
+        }
         if fresh {
             std::mem::swap(&mut w.P, &mut w.Pn);
-            std::mem::swap(&mut w.dP, &mut w.dPn);
+            for p in &mut w.par {
+                std::mem::swap(&mut p.dP, &mut p.dPn);
+            }
         }
     }
     Ok((ll, reused))
