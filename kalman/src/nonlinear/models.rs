@@ -7,6 +7,7 @@ use crate::model::{MatrixInput, load, psd_factor, symmetrise};
 use crate::storage::Dims;
 
 /// `out = a − b` entry by entry: the default residual and state difference.
+#[inline]
 pub(crate) fn difference(a: &[f64], b: &[f64], out: &mut [f64]) {
     for ((o, x), y) in out.iter_mut().zip(a).zip(b) {
         *o = x - y;
@@ -14,6 +15,7 @@ pub(crate) fn difference(a: &[f64], b: &[f64], out: &mut [f64]) {
 }
 
 /// `out = x + δ` entry by entry: the default state addition.
+#[inline]
 pub(crate) fn sum(x: &[f64], dx: &[f64], out: &mut [f64]) {
     for ((o, a), b) in out.iter_mut().zip(x).zip(dx) {
         *o = a + b;
