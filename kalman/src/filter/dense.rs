@@ -63,6 +63,12 @@ fn update<D: Dims>(model: &Model<D>, st: &mut State<D>, z: &[f64], observed: usi
     );
     let maxdiag = innovation_covariance(model, st);
     let (rank, logdet) = gain(model, st, observed, maxdiag);
+    // The unit diagonal of the missing entries served the factorisation only: Σ as
+    // reported (`Filter::innovation_covariance`) is zero in their rows and columns.
+    let (sig, mask) = (st.sig.as_mut_slice(), st.mask.as_slice());
+    for i in (0..m).filter(|&i| !mask[i]) {
+        sig[i + i * m] = 0.0;
+    }
     let y = &st.y.as_slice()[..m];
     let nis: f64 = y.iter().map(|v| v * v).sum();
     // x⁺ = x⁻ + K e.

@@ -140,3 +140,36 @@ fn fixed_filters_are_sized_by_their_dimensions() {
         "FixedFilter<16, 16> is {large} bytes"
     );
 }
+
+#[test]
+fn innovation_covariance_is_zero_in_the_rows_of_missing_entries() {
+    // Every form reports Σ over the observed entries, with the rows and columns of a missing
+    // entry zero (the dense forms factor a unit placeholder there, which must not leak), and
+    // all forms agree on the observed block, to round-off of a well-conditioned 3×3 problem.
+    let p = FilterProblem::generate(4, 3, ProblemOptions::default(), 31);
+    let mut sigmas = Vec::new();
+    for form in [
+        CovarianceForm::Standard,
+        CovarianceForm::Joseph,
+        CovarianceForm::SquareRoot,
+    ] {
+        let model = p
+            .model(DynDims::new(4, 3, 0).expect("dims"))
+            .expect("model");
+        let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
+        f.step(&p.z[0], None).expect("step");
+        let z = [p.z[1][0], f64::NAN, p.z[1][2]];
+        f.step(&z, None).expect("step with a gap");
+        let sig = f.innovation_covariance();
+        for j in 0..3 {
+            assert_eq!(sig[(1, j)], 0.0, "{form:?} row 1");
+            assert_eq!(sig[(j, 1)], 0.0, "{form:?} column 1");
+        }
+        sigmas.push([sig[(0, 0)], sig[(0, 2)], sig[(2, 2)]]);
+    }
+    for s in &sigmas[1..] {
+        for (a, b) in s.iter().zip(&sigmas[0]) {
+            assert!((a - b).abs() <= 1e-10 * b.abs().max(1.0), "{a} vs {b}");
+        }
+    }
+}
