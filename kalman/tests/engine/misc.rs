@@ -162,8 +162,8 @@ fn innovation_covariance_is_zero_in_the_rows_of_missing_entries() {
         f.step(&z, None).expect("step with a gap");
         let sig = f.innovation_covariance();
         for j in 0..3 {
-            assert_eq!(sig[(1, j)], 0.0, "{form:?} row 1");
-            assert_eq!(sig[(j, 1)], 0.0, "{form:?} column 1");
+            assert!(sig[(1, j)].abs() <= 0.0, "{form:?} row 1");
+            assert!(sig[(j, 1)].abs() <= 0.0, "{form:?} column 1");
         }
         sigmas.push([sig[(0, 0)], sig[(0, 2)], sig[(2, 2)]]);
     }
