@@ -147,3 +147,26 @@ fn shape_and_pd_errors_name_the_matrix() {
         .expect_err("must be an error");
     assert!(matches!(e, Error::NonFinite { name: "F", .. }), "{e}");
 }
+
+#[test]
+fn lqr_residual_measures_a_candidate() {
+    // A = B = Q = R = 1: the control DARE is X = 1 + X − X²/(1 + X), so X² = X + 1 and
+    // X = (1 + √5)/2; the candidate X = 1 leaves |1 + 1 − 1/2 − 1| / 1 = 1/2 exactly.
+    let lqr = Dlqr::new([[1.0]], [[1.0]], [[1.0]], [[1.0]]).expect("inputs");
+    let golden = (1.0 + 5f64.sqrt()) / 2.0;
+    assert!(lqr.residual([[golden]]).expect("residual") < 1e-15);
+    let off = lqr.residual([[1.0]]).expect("residual");
+    assert!((off - 0.5).abs() < 1e-15, "{off}");
+}
+
+#[test]
+fn lqr_cross_weight_enters_the_equation() {
+    // A = B = Q = R = 1 and N = 1/2: X = X + 1 − (X + 1/2)²/(1 + X), so X² = 3/4 (against
+    // the golden ratio without N).
+    let x = Dlqr::new([[1.0]], [[1.0]], [[1.0]], [[1.0]])
+        .and_then(|d| d.cross_weight([[0.5]]))
+        .and_then(|d| d.solve())
+        .expect("solve")
+        .cost[(0, 0)];
+    assert!((x - 0.75f64.sqrt()).abs() < 1e-12, "{x}");
+}
