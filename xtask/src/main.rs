@@ -217,6 +217,11 @@ fn ci(args: &[String]) -> Result<()> {
     let mut cmd = cargo();
     cmd.args(["fmt", "--all", "--check"]);
     run(cmd)?;
+    // The user project outside the workspace, whose code-line counts its tests compare.
+    let mut cmd = cargo();
+    cmd.args(["fmt", "--check", "--manifest-path"])
+        .arg(root().join("tests/downstream/Cargo.toml"));
+    run(cmd)?;
     let mut cmd = cargo();
     cmd.args([
         "clippy",
