@@ -495,6 +495,8 @@ fn discrete_dual(
         if !(r.is_finite() && closed_loop_radius(Ft.as_ref(), H, R, &next) < 1.0) {
             break;
         }
+        // `<=` would be equivalent: a tie to the last bit means Newton has reached its
+        // fixed point (next = current = X), so X is the same either way.
         if r < relative_residual {
             X = next.clone();
             relative_residual = r;

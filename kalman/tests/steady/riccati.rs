@@ -230,3 +230,73 @@ fn ill_conditioned_lqr_is_polished() {
         .expect("polished LQR");
     assert!(l.relative_residual < 1e-10, "{:e}", l.relative_residual);
 }
+
+/// Every Riccati builder passes its options on to the solver: one doubling step is too few
+/// for the scalar random walk (the doubling needs about five to reach 1e-14), so each solve
+/// must stop with `RiccatiNoConvergence` naming its equation, where the default options
+/// solve the same problem.
+#[test]
+fn every_builder_applies_its_options() {
+    use kalman::riccati::{Care, Clqr, RiccatiOptions};
+    let one = [[1.0]];
+    let opts = RiccatiOptions {
+        max_iterations: 1,
+        ..RiccatiOptions::default()
+    };
+    let verdicts = [
+        (
+            Dare::new(one, one, one, one)
+                .expect("inputs")
+                .solve()
+                .map(|_| ()),
+            Dare::new(one, one, one, one)
+                .expect("inputs")
+                .options(opts)
+                .solve()
+                .map(|_| ()),
+        ),
+        (
+            Dlqr::new(one, one, one, one)
+                .expect("inputs")
+                .solve()
+                .map(|_| ()),
+            Dlqr::new(one, one, one, one)
+                .expect("inputs")
+                .options(opts)
+                .solve()
+                .map(|_| ()),
+        ),
+        (
+            Care::new([[-1.0]], one, one, one)
+                .expect("inputs")
+                .solve()
+                .map(|_| ()),
+            Care::new([[-1.0]], one, one, one)
+                .expect("inputs")
+                .options(opts)
+                .solve()
+                .map(|_| ()),
+        ),
+        (
+            Clqr::new([[-1.0]], one, one, one)
+                .expect("inputs")
+                .solve()
+                .map(|_| ()),
+            Clqr::new([[-1.0]], one, one, one)
+                .expect("inputs")
+                .options(opts)
+                .solve()
+                .map(|_| ()),
+        ),
+    ];
+    for (k, (default, capped)) in verdicts.into_iter().enumerate() {
+        assert!(default.is_ok(), "builder {k}: {default:?}");
+        assert!(
+            matches!(
+                capped,
+                Err(Error::RiccatiNoConvergence { iterations: 1, .. })
+            ),
+            "builder {k}: {capped:?}"
+        );
+    }
+}
