@@ -495,8 +495,9 @@ fn discrete_dual(
         if !(r.is_finite() && closed_loop_radius(Ft.as_ref(), H, R, &next) < 1.0) {
             break;
         }
-        // `<=` would be equivalent: a tie to the last bit means Newton has reached its
-        // fixed point (next = current = X), so X is the same either way.
+        // `<=` would be equivalent: it keeps the later of two iterates whose residuals agree
+        // to the last bit, which happens only once Newton has stalled at round-off, where the
+        // two differ by round-off and pass the acceptance below alike.
         if r < relative_residual {
             X = next.clone();
             relative_residual = r;
