@@ -82,6 +82,9 @@ pub(crate) fn max_diag(a: &[f64], n: usize) -> f64 {
 /// `zero_tol·max_diag` of zero (or below it but above `−neg_tol·max_diag`) is a zero pivot:
 /// its column of `L` is zero and its `inv` entry 0 (the semidefinite case). A pivot below
 /// `−neg_tol·max_diag` is returned as `Err(pivot)`.
+///
+/// Computed as `a = U D Uᵀ` first (see [`ldl_pass`]): the chain from one pivot to the next
+/// holds one division and no square root; the square roots come after, all independent.
 #[inline(always)]
 pub(crate) fn psd_cholesky(
     a: &[f64],
@@ -94,66 +97,100 @@ pub(crate) fn psd_cholesky(
     let (a, L, inv) = (&a[..n * n], &mut L[..n * n], &mut inv[..n]);
     let scale = max_diag(a, n);
     for j in 0..n {
-        let mut d = a[j + j * n];
-        for k in 0..j {
-            d -= L[j + k * n] * L[j + k * n];
-        }
+        L[j + j * n] = a[j + j * n];
         for i in 0..j {
             L[i + j * n] = 0.0;
         }
-        if d.is_nan() || d < -neg_tol * scale {
-            return Err(d);
-        }
-        if d <= zero_tol * scale {
-            for i in j..n {
-                L[i + j * n] = 0.0;
-            }
-            inv[j] = 0.0;
-            continue;
-        }
-        let d = d.sqrt();
-        let r = 1.0 / d;
-        L[j + j * n] = d;
-        inv[j] = r;
         for i in j + 1..n {
-            let mut s = a[i + j * n];
-            for k in 0..j {
-                s -= L[i + k * n] * L[j + k * n];
-            }
-            L[i + j * n] = s * r;
+            L[i + j * n] = a[i + j * n];
         }
     }
+    ldl_pass(L, n, inv, |d| {
+        if d.is_nan() || d < -neg_tol * scale {
+            Err(d)
+        } else {
+            Ok(d > zero_tol * scale)
+        }
+    })?;
+    scale_columns(L, n, inv);
     Ok(())
 }
 
 /// Lower Cholesky factor of a positive definite `n`×`n` `a` in place (lower triangle), with
 /// the reciprocals of its diagonal in `inv`. Returns `Err(pivot)` for the first pivot at or
-/// below `tol·max_diag`.
+/// below `tol·max_diag`. Computed as [`psd_cholesky`].
 #[inline(always)]
 pub(crate) fn pd_cholesky(a: &mut [f64], n: usize, inv: &mut [f64], tol: f64) -> Result<(), f64> {
     let (a, inv) = (&mut a[..n * n], &mut inv[..n]);
     let scale = max_diag(a, n);
+    ldl_pass(a, n, inv, |d| {
+        if d.is_nan() || d <= tol * scale {
+            Err(d)
+        } else {
+            Ok(true)
+        }
+    })?;
+    scale_columns(a, n, inv);
+    Ok(())
+}
+
+/// The first pass of the Cholesky factorisations, in place on the lower triangle of `a`:
+/// `a = U D Uᵀ` (U unit lower) held as `s_ij = U_ij d_j` below the diagonal (the pivot
+/// column before its division), `d_j` on it and `1/d_j` in `inv`. With `w_k = s_jk / d_k`,
+/// `d_j = a_jj − Σ_{k<j} s_jk w_k` and `s_ij = a_ij − Σ_{k<j} s_ik w_k` (i > j). `pivot`
+/// judges each `d_j`: `Err` stops, `Ok(false)` makes it a zero pivot (its column and its
+/// `inv` entry zero, so later columns ignore it).
+#[inline(always)]
+fn ldl_pass(
+    a: &mut [f64],
+    n: usize,
+    inv: &mut [f64],
+    pivot: impl Fn(f64) -> Result<bool, f64>,
+) -> Result<(), f64> {
     for j in 0..n {
         let mut d = a[j + j * n];
         for k in 0..j {
-            d -= a[j + k * n] * a[j + k * n];
+            let s = a[j + k * n];
+            d -= s * (s * inv[k]);
         }
-        if d.is_nan() || d <= tol * scale {
-            return Err(d);
+        if !pivot(d)? {
+            for i in j..n {
+                a[i + j * n] = 0.0;
+            }
+            inv[j] = 0.0;
+            continue;
         }
-        let d = d.sqrt();
-        let r = 1.0 / d;
         a[j + j * n] = d;
-        inv[j] = r;
+        inv[j] = 1.0 / d;
         for i in j + 1..n {
             let mut s = a[i + j * n];
             for k in 0..j {
-                s -= a[i + k * n] * a[j + k * n];
+                s -= a[i + k * n] * (a[j + k * n] * inv[k]);
             }
-            a[i + j * n] = s * r;
+            a[i + j * n] = s;
         }
     }
     Ok(())
+}
+
+/// The second pass: `L_jj = √d_j`, `L_ij = s_ij / √d_j` and `inv_j = 1/√d_j` from
+/// [`ldl_pass`]'s output (a zero pivot stays a zero column with `inv_j` 0). The columns are
+/// independent: their square roots and divisions overlap.
+#[inline(always)]
+fn scale_columns(a: &mut [f64], n: usize, inv: &mut [f64]) {
+    for j in 0..n {
+        // A zero pivot has `inv_j` exactly 0; any other a positive one.
+        if inv[j] <= 0.0 {
+            continue;
+        }
+        let root = a[j + j * n].sqrt();
+        let r = 1.0 / root;
+        a[j + j * n] = root;
+        inv[j] = r;
+        for i in j + 1..n {
+            a[i + j * n] *= r;
+        }
+    }
 }
 
 /// Solves `L y = b` in place (`L` lower `n`×`n`, leading dimension `n`, `inv` the

@@ -288,27 +288,17 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         }
         Ok(())
     }
-}
 
-impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
-    fn core(&mut self) -> &mut Core<D> {
-        &mut self.c
-    }
-
-    fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
+    /// The update with `mo` ≥ 1 observed rows (see [`Stages::update_stage`]).
+    #[inline(always)]
+    fn update_observed(
+        &mut self,
+        z: &[f64],
+        mo: usize,
+        mut info: StepInfo,
+    ) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
         let s = 2 * n + 1;
-        let mo = self.c.load_r(&mut self.model, z)?;
-        let mut info = StepInfo {
-            step: k,
-            observed: mo,
-            ..StepInfo::default()
-        };
-        if mo == 0 {
-            self.c.xf.as_mut_slice()[..n].copy_from_slice(&self.c.xp.as_slice()[..n]);
-            self.c.pf.as_mut_slice()[..n * n].copy_from_slice(&self.c.pp.as_slice()[..n * n]);
-            return Ok(info);
-        }
         self.draw(true)?;
         let wm = &self.wm.as_slice()[..s];
         let wc = &self.wc.as_slice()[..s];
@@ -415,6 +405,34 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
         info.log_likelihood = -0.5 * (nl.0 + nl.1 + mo as f64 * LN_2PI);
         info.iterations = 1;
         Ok(info)
+    }
+}
+
+impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
+    fn core(&mut self) -> &mut Core<D> {
+        &mut self.c
+    }
+
+    fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
+        let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
+        let mo = self.c.load_r(&mut self.model, z)?;
+        let info = StepInfo {
+            step: k,
+            observed: mo,
+            ..StepInfo::default()
+        };
+        if mo == 0 {
+            self.c.xf.as_mut_slice()[..n].copy_from_slice(&self.c.xp.as_slice()[..n]);
+            self.c.pf.as_mut_slice()[..n * n].copy_from_slice(&self.c.pp.as_slice()[..n * n]);
+            return Ok(info);
+        }
+        // The usual case, every row observed, gets its own copy in which mo is the constant
+        // m on the fixed-size path: its loops and copies unroll.
+        if mo == m {
+            self.update_observed(z, m, info)
+        } else {
+            self.update_observed(z, mo, info)
+        }
     }
 
     fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {

@@ -208,3 +208,39 @@ fn pendulum_runs_equal_filterpy() {
         compare(&mut ukf, file, 2, 1, &format!("pendulum UKF {set:?}"));
     }
 }
+
+#[test]
+fn bearing_wrap_is_filterpy_formula_bit_for_bit() {
+    use std::f64::consts::{PI, TAU};
+    // The test models' `wrap` skips `fmod` when a + π is already in [0, 2π); it must return
+    // exactly what FilterPy's `(a + π) % 2π − π` gives (as `rem_euclid`), at the edges of
+    // that range, outside it and for signed zeros and non-finite input.
+    let formula = |a: f64| (a + PI).rem_euclid(TAU) - PI;
+    let mut inputs = vec![
+        0.0,
+        -0.0,
+        PI,
+        -PI,
+        PI - 1e-16,
+        -PI + 1e-16,
+        f64::from_bits(PI.to_bits() - 1),
+        f64::from_bits(PI.to_bits() + 1),
+        TAU,
+        -TAU,
+        3.0 * PI,
+        -7.5,
+        1e6,
+        -1e-300,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+    ];
+    inputs.extend((0..2000).map(|i| -10.0 + 0.01 * i as f64 + 1e-7 * (i % 7) as f64));
+    for a in inputs {
+        let (got, want) = (super::models::wrap(a), formula(a));
+        assert!(
+            got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+            "wrap({a:e}) = {got:e}, formula {want:e}"
+        );
+    }
+}

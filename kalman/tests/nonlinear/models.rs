@@ -77,9 +77,17 @@ impl Jacobians for Linear {
     }
 }
 
-/// Wraps an angle to [−π, π).
+/// Wraps an angle to [−π, π): `(a + π) mod 2π − π`, FilterPy's formula. When `a + π`
+/// already lies in [0, 2π) the remainder is `a + π` itself (exactly), so that case skips the
+/// `fmod` call; the result is the same bit for bit.
 pub fn wrap(a: f64) -> f64 {
-    (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI
+    use std::f64::consts::{PI, TAU};
+    let t = a + PI;
+    if (0.0..TAU).contains(&t) {
+        t - PI
+    } else {
+        t.rem_euclid(TAU) - PI
+    }
 }
 
 /// Constant velocity in the plane, x = (px, vx, py, vy); range and bearing from the origin
