@@ -42,8 +42,9 @@ pub(super) enum Modes {
 }
 
 /// Eigenvalues of F on (or outside) the stability boundary, within `margin`: |λ| ≥ 1 − margin
-/// (|1 − |λ|| ≤ margin for [`Modes::On`]) discrete, Re λ ≥ −margin·max(1, |λ|)
-/// (|Re λ| ≤ margin·max(1, |λ|)) continuous; one of each conjugate pair.
+/// (|1 − |λ|| ≤ margin for [`Modes::On`]) discrete, Re λ ≥ −margin·max(1, |λ|) continuous;
+/// one of each conjugate pair. The continuous equations always test on-or-right of the axis
+/// (the CARE keeps the stricter test), so `which` matters for the discrete ones only.
 pub(super) fn marginal_modes(
     F: MatRef<'_, f64>,
     continuous: bool,
@@ -65,8 +66,7 @@ pub(super) fn marginal_modes(
         .filter(|l| {
             let modulus = l.norm();
             match (continuous, which) {
-                (true, Modes::OnOrOutside) => l.re >= -margin * modulus.max(1.0),
-                (true, Modes::On) => l.re.abs() <= margin * modulus.max(1.0),
+                (true, _) => l.re >= -margin * modulus.max(1.0),
                 (false, Modes::OnOrOutside) => modulus >= 1.0 - margin,
                 (false, Modes::On) => (modulus - 1.0).abs() <= margin,
             }

@@ -145,3 +145,28 @@ fn uav_kalman_bucy_closed_form() {
         .expect("settles");
     assert!(rel(&sol.covariance, &ss.covariance) < 1e-7);
 }
+
+/// The continuous boundary band is relative to the mode's size: λ = −ε ± 10i with
+/// ε = 5·10⁻⁶ lies within margin·|λ| = 10⁻⁶·10 of the imaginary axis, so the CARE treats it
+/// as a mode on the axis; with no process noise it is unreached, and the solve refuses it
+/// as not stabilisable. Moved out of the band (ε = 2·10⁻⁵) the mode is plainly stable, needs
+/// no noise, and the solution is P = 0 (A stable, Q = 0).
+#[test]
+fn continuous_marginal_band_scales_with_the_mode() {
+    let solve = |eps: f64| {
+        let A = mat![[-eps, 10.0], [-10.0, -eps]];
+        let I = Mat::<f64>::identity(2, 2);
+        Care::new(&A, &I, Mat::<f64>::zeros(2, 2), &I).and_then(|c| c.solve())
+    };
+    let inside = solve(5e-6);
+    assert!(
+        matches!(inside, Err(kalman::Error::NotStabilisable { re, .. }) if (re + 5e-6).abs() < 1e-9),
+        "{inside:?}"
+    );
+    let outside = solve(2e-5).expect("a stable mode needs no noise");
+    assert!(
+        outside.covariance.norm_l2() <= 0.0,
+        "{:?}",
+        outside.covariance
+    );
+}
