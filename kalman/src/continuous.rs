@@ -15,7 +15,7 @@ use faer::{Mat, MatRef};
 use crate::Error;
 use crate::MatrixInput;
 use crate::model::{check, owned};
-use crate::riccati::{Care, factor_r, symmetrise, symmetrised, weighted_gram};
+use crate::riccati::{Care, factor_pd, symmetrise, symmetrised, weighted_gram};
 
 /// The Kalman–Bucy filter's covariance equation for a time-invariant continuous model.
 ///
@@ -113,7 +113,7 @@ impl KalmanBucy {
         R: impl MatrixInput,
     ) -> Result<Self, Error> {
         let m = Care::new(A, H, Q, R)?.inputs;
-        let llt = factor_r(m.r.as_ref(), "the Kalman-Bucy gain needs R^-1")?;
+        let llt = factor_pd("R", m.r.as_ref(), "the Kalman-Bucy gain needs R^-1")?;
         Ok(Self {
             G: weighted_gram(m.c.as_ref(), &llt),
             Q: symmetrised(m.q.as_ref()),
@@ -138,7 +138,7 @@ impl KalmanBucy {
     pub fn gain(&self, P: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
         let n = self.A.nrows();
         check("P", P, n, n)?;
-        let llt = factor_r(self.R.as_ref(), "the Kalman-Bucy gain needs R^-1")?;
+        let llt = factor_pd("R", self.R.as_ref(), "the Kalman-Bucy gain needs R^-1")?;
         Ok(llt.solve(&self.H * P).transpose().to_owned())
     }
 

@@ -1,6 +1,10 @@
 //! Steady-state Riccati equations: the filter DARE and the discrete LQR (its dual) by the
 //! structured doubling algorithm (SDA), the CARE and continuous LQR by SDA after a Cayley
 //! transform, each with a PBH detectability / stabilisability check and a residual check.
+//! All four are one builder, [`Riccati`], for a kind of [`Equation`]: [`Dare`], [`Dlqr`],
+//! [`Care`] and [`Clqr`] are its aliases, called alike (`new`, optionally the cross term and
+//! `options`, then `solve` or `residual`); an LQR is solved as the filter equation of its
+//! dual.
 //!
 //! Notation as in the crate doc: the discrete model x_{k+1} = F x_k + w_k, z_k = H x_k + v_k,
 //! cov(w) = Q, cov(v) = R, E[w_k v_kᵀ] = S. The steady-state *prior* covariance P solves the
@@ -30,9 +34,11 @@
 //! [`Error::NotPositiveDefinite`].
 #![allow(non_snake_case)]
 
+mod builder;
 mod care;
 mod checks;
 mod dare;
+mod problem;
 mod sda;
 #[cfg(test)]
 mod tests;
@@ -40,11 +46,11 @@ mod tests;
 use faer::linalg::solvers::{Llt, Solve};
 use faer::{Mat, MatRef, Side};
 
-use crate::model::{check, owned};
-use crate::{Error, MatrixInput};
+use crate::Error;
 
-pub use care::{Care, Clqr};
-pub use dare::{Dare, Dlqr};
+pub use builder::{
+    Care, Clqr, Dare, Dlqr, Equation, FilterCare, FilterDare, LqrCare, LqrDare, Riccati,
+};
 
 /// Tuning and tolerances of the Riccati solvers, given to any of them by `.options(…)`.
 /// `Default` is right for almost every use.
@@ -178,6 +184,7 @@ pub struct ContinuousSteadyState<M = Mat<f64>> {
     pub relative_residual: f64,
 }
 
+#[derive(Debug, Clone, Copy)]
 enum Pair {
     Detect(&'static str),
     Stab(&'static str),
@@ -192,20 +199,6 @@ impl Pair {
     }
 }
 
-/// Error labels: `detect` is reported when the (F, H)-like pair of the filter form fails,
-/// `stab` when the (F, Q^{1/2})-like pair fails.
-struct Names {
-    equation: &'static str,
-    detect: Pair,
-    stab: Pair,
-}
-
-struct Solved {
-    x: Mat<f64>,
-    iterations: usize,
-    relative_residual: f64,
-}
-
 fn relative(num: f64, den: f64) -> f64 {
     if num == 0.0 {
         0.0
@@ -213,85 +206,6 @@ fn relative(num: f64, den: f64) -> f64 {
         num / den
     } else {
         f64::INFINITY
-    }
-}
-
-/// How the second matrix of a Riccati problem meets the state: a measurement matrix (m×n,
-/// the filter form's H) or an input matrix (n×m, the control form's B).
-#[derive(Clone, Copy)]
-pub(crate) enum Coupling {
-    Measurement,
-    Input,
-}
-
-/// The matrices of a Riccati problem, copied once from the caller's inputs and checked for
-/// shape and finiteness: `a` (n×n), `c` (m×n or n×m by its [`Coupling`]), `q` (n×n), `r`
-/// (m×m) and the optional cross term (n×m).
-#[derive(Debug, Clone)]
-pub(crate) struct Inputs {
-    pub(crate) a: Mat<f64>,
-    pub(crate) c: Mat<f64>,
-    pub(crate) q: Mat<f64>,
-    pub(crate) r: Mat<f64>,
-    pub(crate) cross: Option<Mat<f64>>,
-}
-
-impl Inputs {
-    /// Copies and checks the inputs; `names` are (a, c, q, r) as the caller's equation
-    /// writes them. The first bad matrix is reported ([`Error::Shape`] /
-    /// [`Error::NonFinite`]).
-    pub(crate) fn new(
-        names: [&'static str; 4],
-        coupling: Coupling,
-        [a, c, q, r]: [&dyn MatrixInput; 4],
-    ) -> Result<Self, Error> {
-        let (a, c, q, r) = (owned(a), owned(c), owned(q), owned(r));
-        let n = a.nrows();
-        let (m, c_shape) = match coupling {
-            Coupling::Measurement => (c.nrows(), (c.nrows(), n)),
-            Coupling::Input => (c.ncols(), (n, c.ncols())),
-        };
-        check(names[0], a.as_ref(), n, n)?;
-        check(names[1], c.as_ref(), c_shape.0, c_shape.1)?;
-        check(names[2], q.as_ref(), n, n)?;
-        check(names[3], r.as_ref(), m, m)?;
-        Ok(Self {
-            a,
-            c,
-            q,
-            r,
-            cross: None,
-        })
-    }
-
-    /// Adds the cross term (n×m) after checking it under `name`.
-    pub(crate) fn with_cross(
-        mut self,
-        name: &'static str,
-        s: &dyn MatrixInput,
-    ) -> Result<Self, Error> {
-        let s = owned(s);
-        check(name, s.as_ref(), self.a.nrows(), self.r.nrows())?;
-        self.cross = Some(s);
-        Ok(self)
-    }
-
-    /// Views of (a, c, q, r) and of the cross term.
-    pub(crate) fn views(&self) -> ([MatRef<'_, f64>; 4], Option<MatRef<'_, f64>>) {
-        let [a, c, q, r] = [&self.a, &self.c, &self.q, &self.r].map(Mat::as_ref);
-        ([a, c, q, r], self.cross.as_ref().map(Mat::as_ref))
-    }
-
-    /// The n×n candidate solution `x` of this problem, copied and checked under `name`.
-    pub(crate) fn candidate(
-        &self,
-        name: &'static str,
-        x: &dyn MatrixInput,
-    ) -> Result<Mat<f64>, Error> {
-        let x = owned(x);
-        let n = self.a.nrows();
-        check(name, x.as_ref(), n, n)?;
-        Ok(x)
     }
 }
 
@@ -309,12 +223,16 @@ pub(crate) fn symmetrised(M: MatRef<'_, f64>) -> Mat<f64> {
     S
 }
 
-/// The Cholesky factor of the positive definite `R`, or [`Error::NotPositiveDefinite`]
-/// naming R with `rule` (what needs R⁻¹).
-pub(crate) fn factor_r(R: MatRef<'_, f64>, rule: &'static str) -> Result<Llt<f64>, Error> {
-    R.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
-        name: "R",
-        n: R.nrows(),
+/// The Cholesky factor of the positive definite `M` (its lower triangle), or
+/// [`Error::NotPositiveDefinite`] naming it `name` with `rule` (what needs M⁻¹).
+pub(crate) fn factor_pd(
+    name: &'static str,
+    M: MatRef<'_, f64>,
+    rule: &'static str,
+) -> Result<Llt<f64>, Error> {
+    M.llt(Side::Lower).map_err(|_| Error::NotPositiveDefinite {
+        name,
+        n: M.nrows(),
         rule,
     })
 }
