@@ -208,19 +208,6 @@ pub(crate) fn forward(L: &[f64], inv: &[f64], n: usize, b: &mut [f64]) {
     }
 }
 
-/// Solves `Lᵀ x = b` in place (`L` lower `n`×`n`); zero pivots as in [`forward`].
-#[inline(always)]
-pub(crate) fn backward(L: &[f64], inv: &[f64], n: usize, b: &mut [f64]) {
-    let (L, inv, b) = (&L[..n * n], &inv[..n], &mut b[..n]);
-    for j in (0..n).rev() {
-        let mut s = b[j];
-        for i in j + 1..n {
-            s -= L[i + j * n] * b[i];
-        }
-        b[j] = s * inv[j];
-    }
-}
-
 /// `B ← B (L Lᵀ)⁻¹` for the `rows`×`n` `B`, a column at a time (`Y Lᵀ = B`, then
 /// `X L = Y`): each column operation runs down all rows at once; zero pivots as in
 /// [`forward`].
@@ -254,16 +241,6 @@ pub(crate) fn right_solve(L: &[f64], inv: &[f64], n: usize, B: &mut [f64], rows:
         for b in bj.iter_mut() {
             *b *= inv[j];
         }
-    }
-}
-
-/// `B ← (L Lᵀ)⁻¹ B` for the `n`×`cols` `B`, column by column.
-#[inline(always)]
-pub(crate) fn left_solve(L: &[f64], inv: &[f64], n: usize, B: &mut [f64], cols: usize) {
-    for j in 0..cols {
-        let b = &mut B[j * n..(j + 1) * n];
-        forward(L, inv, n, b);
-        backward(L, inv, n, b);
     }
 }
 
@@ -326,6 +303,51 @@ pub(crate) fn joseph(
             let mut s = 0.0;
             for k in 0..n {
                 s += T[i + k * n] * A[j + k * n];
+            }
+            for a in 0..mo {
+                s += KR[i + a * n] * K[j + a * n];
+            }
+            out[i + j * n] = s;
+        }
+    }
+    mirror_lower(out, n);
+}
+
+/// The Joseph form of [`joseph`] given the factor `L` of `P` (`P = L Lᵀ`, `L` lower `n`×`n`)
+/// and `G` (`n`×`mo`) with `H L = Gᵀ`: `(I − K H) L = M = L − K Gᵀ`, so
+/// `P⁺ = M Mᵀ + K R Kᵀ` — a Gram matrix plus `K R Kᵀ`, symmetric PSD by its form as the
+/// Joseph form is, without forming H or `(I − K H) P`. Only the lower triangle is computed,
+/// then mirrored. `M` (`n`×`n`) and `KR` (`n`×`mo`) are workspaces.
+#[inline(always)]
+pub(crate) fn factored_joseph(
+    L: &[f64],
+    K: &[f64],
+    G: &[f64],
+    R: &[f64],
+    n: usize,
+    mo: usize,
+    out: &mut [f64],
+    M: &mut [f64],
+    KR: &mut [f64],
+) {
+    let (L, K, G, R) = (&L[..n * n], &K[..n * mo], &G[..n * mo], &R[..mo * mo]);
+    let (M, KR, out) = (&mut M[..n * n], &mut KR[..n * mo], &mut out[..n * n]);
+    M.copy_from_slice(L);
+    for a in 0..mo {
+        let k = &K[a * n..(a + 1) * n];
+        for j in 0..n {
+            let g = G[j + a * n];
+            for (m, ki) in M[j * n..(j + 1) * n].iter_mut().zip(k) {
+                *m -= ki * g;
+            }
+        }
+    }
+    mul(KR, K, R, n, mo, mo, false);
+    for j in 0..n {
+        for i in j..n {
+            let mut s = 0.0;
+            for k in 0..n {
+                s += M[i + k * n] * M[j + k * n];
             }
             for a in 0..mo {
                 s += KR[i + a * n] * K[j + a * n];
@@ -402,9 +424,10 @@ mod tests {
     }
 
     #[test]
-    fn right_and_left_solves_reconstruct() {
-        // a = M Mᵀ + I (3×3, PD); X = B a⁻¹ must satisfy X a = B, Y = a⁻¹ Bᵀ must satisfy
-        // a Y = Bᵀ, to rounding (entries O(1), condition number < 30: 1e-13 is ample).
+    fn right_and_forward_solves_reconstruct() {
+        // a = M Mᵀ + I (3×3, PD) = L Lᵀ; X = B a⁻¹ must satisfy X a = B, Y = L⁻¹ Bᵀ must
+        // satisfy L Y = Bᵀ, to rounding (entries O(1), condition number < 30: 1e-13 is
+        // ample).
         let m = [1.0, 0.5, -0.3, 0.2, 2.0, 0.7, -1.0, 0.1, 1.5];
         let mut a = [0.0; 9];
         mul_nt(&mut a, &m, &m, 3, 3, 3, false);
@@ -413,6 +436,11 @@ mod tests {
         }
         let (mut L, mut inv) = (a, [0.0; 3]);
         pd_cholesky(&mut L, 3, &mut inv, 1e-12).expect("PD");
+        for j in 0..3 {
+            for i in 0..j {
+                L[i + 3 * j] = 0.0; // the factor is the lower triangle
+            }
+        }
         let b = [1.0, -2.0, 0.5, 3.0, -1.0, 0.25]; // 2×3
         let mut x = b;
         right_solve(&L, &inv, 3, &mut x, 2);
@@ -425,11 +453,48 @@ mod tests {
             }
         }
         let mut y = bt;
-        left_solve(&L, &inv, 3, &mut y, 2);
-        let mut ay = [0.0; 6];
-        mul(&mut ay, &a, &y, 3, 3, 2, false);
-        for (p, q) in xa.iter().zip(&b).chain(ay.iter().zip(&bt)) {
+        for c in 0..2 {
+            forward(&L, &inv, 3, &mut y[3 * c..3 * c + 3]);
+        }
+        let mut ly = [0.0; 6];
+        mul(&mut ly, &L, &y, 3, 3, 2, false);
+        for (p, q) in xa.iter().zip(&b).chain(ly.iter().zip(&bt)) {
             assert!((p - q).abs() < 1e-13, "{p} vs {q}");
+        }
+    }
+
+    #[test]
+    fn factored_joseph_equals_the_joseph_form() {
+        // P = L Lᵀ (4×4), K (4×2), H (2×4), R (2×2 PD); G = (H L)ᵀ. Both forms are O(10)
+        // sums of O(1–10) products: agreement to 1e-12 is rounding.
+        let n = 4;
+        let L = [
+            2.0, 0.5, -0.3, 0.1, 0.0, 1.5, 0.2, -0.4, 0.0, 0.0, 1.0, 0.3, 0.0, 0.0, 0.0, 0.7,
+        ];
+        let mut P = [0.0; 16];
+        mul_nt(&mut P, &L, &L, n, n, n, false);
+        let K = [0.3, -0.1, 0.2, 0.05, 0.1, 0.4, -0.2, 0.3];
+        let H = [1.0, 0.2, 0.0, -0.5, 0.3, 1.0, 0.1, 0.0];
+        let R = [0.5, 0.1, 0.1, 0.2];
+        let mut HL = [0.0; 8];
+        mul(&mut HL, &H, &L, 2, n, n, false);
+        let mut G = [0.0; 8];
+        for i in 0..2 {
+            for j in 0..n {
+                G[j + i * n] = HL[i + j * 2];
+            }
+        }
+        let (mut want, mut got) = ([0.0; 16], [0.0; 16]);
+        let (mut A, mut T, mut KR) = ([0.0; 16], [0.0; 16], [0.0; 8]);
+        joseph(&P, &K, &H, &R, n, 2, &mut want, &mut A, &mut T, &mut KR);
+        factored_joseph(&L, &K, &G, &R, n, 2, &mut got, &mut A, &mut KR);
+        for (p, q) in got.iter().zip(&want) {
+            assert!((p - q).abs() < 1e-12, "{p} vs {q}");
+        }
+        for j in 0..n {
+            for i in 0..n {
+                assert!(got[i + j * n].to_bits() == got[j + i * n].to_bits());
+            }
         }
     }
 }

@@ -36,7 +36,9 @@
 //!   linear model gives the linear filter exactly). The covariance update is Joseph-style
 //!   with the statistically linearised measurement matrix H̃ = Cᵀ P⁻¹ and effective noise
 //!   R̃ = Σ − Cᵀ P⁻¹ C: `P⁺ = (I − K H̃) P (I − K H̃)ᵀ + K R̃ Kᵀ`, equal to `P − K Σ Kᵀ` in
-//!   exact arithmetic but kept symmetric PSD by its form.
+//!   exact arithmetic but kept symmetric PSD by its form. It is evaluated through the
+//!   sigma points' factor P = L Lᵀ: with G = L⁻¹ C, `(I − K H̃) L = L − K Gᵀ` and
+//!   R̃ = Σ − Gᵀ G, so `P⁺ = (L − K Gᵀ)(L − K Gᵀ)ᵀ + K R̃ Kᵀ` (no P⁻¹, no n³ product).
 //!
 //! All filters skip NaN rows of z (an all-NaN z is a predict-only step), report the
 //! normalised innovation squared and the Gaussian log-likelihood ([`StepInfo`]), run on the

@@ -4,8 +4,8 @@
 use faer::{Mat, MatRef};
 
 use super::linalg::{
-    joseph, left_solve, mirror_lower, mul, mul_tn, nis_logdet, pd_cholesky, psd_cholesky, rank1,
-    rank1_lower, right_solve,
+    factored_joseph, forward, mirror_lower, mul, mul_tn, nis_logdet, pd_cholesky, psd_cholesky,
+    rank1, rank1_lower, right_solve,
 };
 use super::{
     Core, LN_2PI, NlDims, NonlinearModel, Stages, StepInfo, UpdateWork, compact_square,
@@ -344,22 +344,25 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             rank1(C, wc[i], &dchi[i * n..(i + 1) * n], d, n, mo);
         }
         mirror_lower(sig, mo);
-        // H̃ᵀ = P⁻¹ C by the factor of P (zero pivots give the minimum-norm choice), and
-        // R̃ = Σ − Cᵀ H̃ᵀ, before Σ is factored in place.
+        // With P = L Lᵀ and G = L⁻¹ C (a forward solve; zero pivots give zero rows, the
+        // minimum-norm choice): H̃ L = Cᵀ L⁻ᵀ = Gᵀ and R̃ = Σ − Cᵀ P⁻¹ C = Σ − Gᵀ G,
+        // formed before Σ is factored in place.
         let L = &self.l.as_slice()[..n * n];
-        let ht = &mut self.ht.as_mut_slice()[..n * mo];
-        ht.copy_from_slice(C);
+        let G = &mut self.ht.as_mut_slice()[..n * mo];
+        G.copy_from_slice(C);
         let linv = &self.linv.as_slice()[..n];
-        left_solve(L, linv, n, ht, mo);
+        for j in 0..mo {
+            forward(L, linv, n, &mut G[j * n..(j + 1) * n]);
+        }
         let rt = &mut self.rt.as_mut_slice()[..mo * mo];
         rt.copy_from_slice(sig);
-        // R_c is no longer needed (copied into Σ): it holds Cᵀ H̃ᵀ.
-        let ctht = &mut self.w.rc.as_mut_slice()[..mo * mo];
-        mul_tn(ctht, C, ht, mo, n, mo, false);
-        for (r, v) in rt.iter_mut().zip(ctht.iter()) {
+        // R_c is no longer needed (copied into Σ): it holds Gᵀ G.
+        let gtg = &mut self.w.rc.as_mut_slice()[..mo * mo];
+        mul_tn(gtg, G, G, mo, n, mo, false);
+        for (r, v) in rt.iter_mut().zip(gtg.iter()) {
             *r -= v;
         }
-        // Σ and Cᵀ H̃ᵀ = Cᵀ P⁻¹ C are symmetric: R̃ too, up to rounding; make it exact.
+        // Σ and Gᵀ G are symmetric: R̃ too, up to rounding; make it exact.
         mirror_lower(rt, mo);
         let sinv = &mut self.w.sinv.as_mut_slice()[..mo];
         if let Err(pivot) = pd_cholesky(sig, mo, sinv, RANK_TOL) {
@@ -380,25 +383,18 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         mul(dx, K, e, n, mo, 1, false);
         self.model
             .state_add(xp, dx, &mut self.c.xf.as_mut_slice()[..n]);
-        // H̃ = (H̃ᵀ)ᵀ as an mo×n matrix for the Joseph form.
-        let hrows = &mut self.w.kr.as_mut_slice()[..n * mo];
-        for j in 0..n {
-            for i in 0..mo {
-                hrows[i + j * mo] = ht[j + i * n];
-            }
-        }
-        // The Joseph form needs its own K·R̃ workspace: reuse `ht` (its content is copied).
-        joseph(
-            &self.c.pp.as_slice()[..n * n],
+        // The Joseph form (I − K H̃) P (I − K H̃)ᵀ + K R̃ Kᵀ through the factor of P:
+        // (I − K H̃) L = L − K Gᵀ.
+        factored_joseph(
+            L,
             K,
-            hrows,
+            G,
             rt,
             n,
             mo,
             &mut self.c.pf.as_mut_slice()[..n * n],
             &mut self.w.a.as_mut_slice()[..n * n],
-            &mut self.w.t.as_mut_slice()[..n * n],
-            ht,
+            &mut self.w.kr.as_mut_slice()[..n * mo],
         );
         let nl = nis_logdet(sig, sinv, mo, e, &mut self.w.tmpm.as_mut_slice()[..mo]);
         info.nis = Some(nl.0);
