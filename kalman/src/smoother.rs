@@ -13,7 +13,14 @@
 //! inverse. A singular P_{k+1|k} (e.g. a noise-free state component) takes the documented
 //! fallback: the minimum-norm solution through the symmetric eigen-decomposition, with
 //! eigenvalues below [`crate::RANK_TOL`]·λ_max treated as zero.
+//!
+//! The record and the backward pass are one type, [`Rts`], for both smoothers: the linear
+//! [`RtsSmoother`] (`Rts<Linear>`) and the nonlinear
+//! [`NonlinearRts`](crate::nonlinear::NonlinearRts) (`Rts<Nonlinear>`, C_k formed by the
+//! EKF or UKF) differ only in how a step is read from the filter.
 #![allow(non_snake_case)]
+
+use std::marker::PhantomData;
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
@@ -23,9 +30,62 @@ use crate::riccati::symmetrise;
 use crate::storage::Dims;
 use crate::{CovarianceForm, Error, Filter, MatrixInput, Model, RANK_TOL};
 
-/// Recorder and backward pass of the RTS smoother (offline: it stores every step). The
-/// common path is one call, [`Filter::run_smoothed`]; record by hand (below) to pass control
-/// inputs or per-step models ([`RtsSmoother::record_with`]) or to interleave other work.
+/// Recorder and backward pass of a Rauch–Tung–Striebel smoother (offline: it stores every
+/// step), for the filter family `K`: [`RtsSmoother`] (`Rts<Linear>`) records a [`Filter`],
+/// [`NonlinearRts`](crate::nonlinear::NonlinearRts) an EKF or UKF. The record — step after
+/// step, column-major: filtered means x_{k|k} (n each) and covariances P_{k|k} (n×n), the
+/// predicted x_{k+1|k} and P_{k+1|k}, and the cross-covariances C_k = cov(x_k, x_{k+1} |
+/// z_0..z_k) (n×n) — and the backward pass are shared; the families differ only in how a
+/// step is read from the filter.
+///
+/// # Example
+/// ```
+/// use kalman::smoother::{Linear, Rts};
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
+///
+/// // A random walk, q = r = 1, prior N(0, 1), measured as 1 and 3: the batch solution is
+/// // x = (1, 2) (see [`Filter::run_smoothed`]).
+/// let model = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]])?;
+/// let mut filter = Filter::new(model, &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
+/// let mut rts = Rts::<Linear>::new();
+/// for z in [1.0, 3.0] {
+///     filter.step(&[z], None)?;
+///     rts.record(&filter)?;
+/// }
+/// assert_eq!(rts.len(), 2);
+/// assert!((rts.smooth()?.means[(0, 1)] - 2.0).abs() < 1e-12);
+/// # Ok::<(), kalman::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Rts<K> {
+    /// States per step, fixed by the first recorded step.
+    n: usize,
+    steps: usize,
+    xf: Vec<f64>,
+    pf: Vec<f64>,
+    xp: Vec<f64>,
+    pp: Vec<f64>,
+    ct: Vec<f64>,
+    family: PhantomData<K>,
+}
+
+/// The family of [`RtsSmoother`]: the linear [`Filter`], with C_k = P_{k|k} Fᵀ − K_k Sᵀ
+/// from the step's model.
+///
+/// # Example
+/// ```
+/// use kalman::smoother::{Linear, Rts, RtsSmoother};
+///
+/// // The alias and the generic name are one type.
+/// let rts: Rts<Linear> = RtsSmoother::new();
+/// assert!(rts.is_empty() && rts.len() == 0);
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub enum Linear {}
+
+/// The RTS smoother of the linear [`Filter`] on either storage path. The common path is one
+/// call, [`Filter::run_smoothed`]; record by hand (below) to pass control inputs or per-step
+/// models ([`RtsSmoother::record_with`]) or to interleave other work.
 ///
 /// # Example
 /// ```
@@ -45,16 +105,23 @@ use crate::{CovarianceForm, Error, Filter, MatrixInput, Model, RANK_TOL};
 /// assert!((s.covariances[3][(0, 0)] - filter.covariance()[(0, 0)]).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
-#[derive(Debug, Clone, Default)]
-pub struct RtsSmoother {
-    n: usize,
-    xf: Vec<f64>,
-    pf: Vec<f64>,
-    xp: Vec<f64>,
-    pp: Vec<f64>,
-    ct: Vec<f64>,
-    steps: usize,
-}
+pub type RtsSmoother = Rts<Linear>;
+
+/// The family of [`NonlinearRts`](crate::nonlinear::NonlinearRts): any
+/// [`ForwardPass`](crate::nonlinear::ForwardPass) (the EKF and the UKF), which forms C_k
+/// itself.
+///
+/// # Example
+/// ```
+/// use kalman::nonlinear::NonlinearRts;
+/// use kalman::smoother::{Nonlinear, Rts};
+///
+/// // Nothing recorded: the backward pass is a typed error, not a panic.
+/// let rts: Rts<Nonlinear> = NonlinearRts::new();
+/// assert!(matches!(rts.smooth(), Err(kalman::Error::Dimension { name: "steps", .. })));
+/// ```
+#[derive(Debug, Clone, Copy)]
+pub enum Nonlinear {}
 
 /// Output of [`RtsSmoother::smooth`] and [`Filter::run_smoothed`].
 ///
@@ -84,7 +151,22 @@ pub struct Smoothed<M = Mat<f64>> {
     pub covariances: Vec<M>,
 }
 
-impl RtsSmoother {
+impl<K> Default for Rts<K> {
+    fn default() -> Self {
+        Self {
+            n: 0,
+            steps: 0,
+            xf: Vec::new(),
+            pf: Vec::new(),
+            xp: Vec::new(),
+            pp: Vec::new(),
+            ct: Vec::new(),
+            family: PhantomData,
+        }
+    }
+}
+
+impl<K> Rts<K> {
     /// An empty recorder; the number of states is fixed by the first recorded step.
     pub fn new() -> Self {
         Self::default()
@@ -100,98 +182,33 @@ impl RtsSmoother {
         self.steps == 0
     }
 
-    /// Records the step the filter has just taken with its own (time-invariant) model.
+    /// Admits a step of a filter with `n` states: the first step fixes n, a later one must
+    /// match it.
     ///
     /// # Errors
-    /// [`Error::Dimension`] if the filter's n differs from that of the steps recorded before.
-    pub fn record<D: Dims>(&mut self, filter: &Filter<D>) -> Result<(), Error> {
-        self.record_with(filter, filter.model())
-    }
-
-    /// Records the step the filter has just taken with `model` (time-varying systems: the
-    /// model passed to [`Filter::step_with`] for that step).
-    ///
-    /// # Errors
-    /// [`Error::Dimension`] if n differs from that of the steps recorded before, or the
-    /// model's n from the filter's.
-    pub fn record_with<D: Dims>(
-        &mut self,
-        filter: &Filter<D>,
-        model: &Model<D>,
-    ) -> Result<(), Error> {
+    /// [`Error::Dimension`] naming n if it differs from that of the steps recorded before.
+    pub(crate) fn admit(&mut self, n: usize) -> Result<(), Error> {
         if self.steps == 0 {
-            self.n = filter.state().len();
+            self.n = n;
         }
-        let n = self.n;
-        if model.dims().n() != n || filter.state().len() != n {
-            return Err(Error::Dimension {
-                name: "n",
-                value: filter.state().len(),
-                rule: "the smoother's n must match the filter's",
-            });
+        if n == self.n {
+            Ok(())
+        } else {
+            Err(mismatch(n))
         }
-        let Pf = filter.covariance();
-        // C_k = P_{k|k} Fᵀ − K_k Sᵀ.
-        let mut C = Pf * model.f().transpose();
-        if let Some(S) = model.s() {
-            C -= filter.gain() * S.transpose();
-        }
-        self.xf.extend_from_slice(filter.state());
-        self.xp.extend_from_slice(filter.predicted_state());
-        push(&mut self.pf, Pf);
-        push(&mut self.pp, filter.predicted_covariance());
-        push(&mut self.ct, C.as_ref());
+    }
+
+    /// Appends an admitted step: x_{k|k}, x_{k+1|k} (n each) and P_{k|k}, P_{k+1|k}, C_k
+    /// (n×n).
+    pub(crate) fn push(&mut self, xf: &[f64], xp: &[f64], [pf, pp, ct]: [MatRef<'_, f64>; 3]) {
+        self.xf.extend_from_slice(xf);
+        self.xp.extend_from_slice(xp);
+        push(&mut self.pf, pf);
+        push(&mut self.pp, pp);
+        push(&mut self.ct, ct);
         self.steps += 1;
-        Ok(())
     }
 
-    /// The backward pass over all recorded steps.
-    ///
-    /// # Errors
-    /// [`Error::Dimension`] if nothing was recorded; [`Error::Factorisation`] if the eigen
-    /// fallback for a singular P_{k+1|k} fails; [`Error::Diverged`] naming the step if a
-    /// smoothed mean or variance is not finite.
-    pub fn smooth(&self) -> Result<Smoothed, Error> {
-        let n = self.n;
-        let recorded = Recorded {
-            n,
-            steps: self.steps,
-            xf: &self.xf,
-            pf: &self.pf,
-            xp: &self.xp,
-            pp: &self.pp,
-            ct: &self.ct,
-        };
-        recorded.backward(|k, means, P| {
-            let x_bad = diverged((0..n).map(|i| means[(i, k)])).map(|v| ("x_{k|N}", v));
-            let p_bad = diverged((0..n).map(|i| P[(i, i)])).map(|v| ("P_{k|N}", v));
-            match x_bad.or(p_bad) {
-                Some((what, value)) => Err(Error::Diverged {
-                    step: k,
-                    what,
-                    value,
-                }),
-                None => Ok(()),
-            }
-        })
-    }
-}
-
-/// A recorded forward pass, step after step column-major: filtered means `xf` (n each) and
-/// covariances `pf` (n×n), predicted `xp`, `pp`, and the cross-covariances `ct` (C_k =
-/// cov(x_k, x_{k+1}) given z_0..z_k, n×n). The linear and the unscented RTS smoothers share
-/// its backward pass.
-pub(crate) struct Recorded<'a> {
-    pub(crate) n: usize,
-    pub(crate) steps: usize,
-    pub(crate) xf: &'a [f64],
-    pub(crate) pf: &'a [f64],
-    pub(crate) xp: &'a [f64],
-    pub(crate) pp: &'a [f64],
-    pub(crate) ct: &'a [f64],
-}
-
-impl Recorded<'_> {
     /// The RTS backward pass: J_k = C_k P_{k+1|k}⁺ (a PSD solve), x_{k|N} = x_{k|k} +
     /// J_k (x_{k+1|N} − x_{k+1|k}), P_{k|N} = P_{k|k} + J_k (P_{k+1|N} − P_{k+1|k}) J_kᵀ
     /// (symmetrised). `check(k, means, P_{k|N})` runs at each step before P_{k|N} is stored
@@ -223,16 +240,16 @@ impl Recorded<'_> {
         means
             .as_mut()
             .col_mut(N - 1)
-            .copy_from(vec(self.xf, N - 1, n).col(0));
-        covs[N - 1] = mat(self.pf, N - 1, n).to_owned();
+            .copy_from(vec(&self.xf, N - 1, n).col(0));
+        covs[N - 1] = mat(&self.pf, N - 1, n).to_owned();
         for k in (0..N - 1).rev() {
-            let Pp = mat(self.pp, k, n);
-            let Jt = solve_psd(Pp, mat(self.ct, k, n).transpose())?;
+            let Pp = mat(&self.pp, k, n);
+            let Jt = solve_psd(Pp, mat(&self.ct, k, n).transpose())?;
             let J = Jt.transpose();
-            let dx = means.as_ref().col(k + 1).as_mat() - vec(self.xp, k, n);
-            let x = vec(self.xf, k, n) + J * dx;
+            let dx = means.as_ref().col(k + 1).as_mat() - vec(&self.xp, k, n);
+            let x = vec(&self.xf, k, n) + J * dx;
             means.as_mut().col_mut(k).copy_from(x.col(0));
-            let mut P = mat(self.pf, k, n) + J * (&covs[k + 1] - Pp) * J.transpose();
+            let mut P = mat(&self.pf, k, n) + J * (&covs[k + 1] - Pp) * J.transpose();
             symmetrise(&mut P);
             check(k, &means, &P)?;
             covs[k] = P;
@@ -240,6 +257,68 @@ impl Recorded<'_> {
         Ok(Smoothed {
             means,
             covariances: covs,
+        })
+    }
+}
+
+impl Rts<Linear> {
+    /// Records the step the filter has just taken with its own (time-invariant) model.
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] if the filter's n differs from that of the steps recorded before.
+    pub fn record<D: Dims>(&mut self, filter: &Filter<D>) -> Result<(), Error> {
+        self.record_with(filter, filter.model())
+    }
+
+    /// Records the step the filter has just taken with `model` (time-varying systems: the
+    /// model passed to [`Filter::step_with`] for that step).
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] if n differs from that of the steps recorded before, or the
+    /// model's n from the filter's.
+    pub fn record_with<D: Dims>(
+        &mut self,
+        filter: &Filter<D>,
+        model: &Model<D>,
+    ) -> Result<(), Error> {
+        let n = filter.state().len();
+        self.admit(n)?;
+        if model.dims().n() != n {
+            return Err(mismatch(n));
+        }
+        let Pf = filter.covariance();
+        // C_k = P_{k|k} Fᵀ − K_k Sᵀ.
+        let mut C = Pf * model.f().transpose();
+        if let Some(S) = model.s() {
+            C -= filter.gain() * S.transpose();
+        }
+        self.push(
+            filter.state(),
+            filter.predicted_state(),
+            [Pf, filter.predicted_covariance(), C.as_ref()],
+        );
+        Ok(())
+    }
+
+    /// The backward pass over all recorded steps.
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] if nothing was recorded; [`Error::Factorisation`] if the eigen
+    /// fallback for a singular P_{k+1|k} fails; [`Error::Diverged`] naming the step if a
+    /// smoothed mean or variance is not finite.
+    pub fn smooth(&self) -> Result<Smoothed, Error> {
+        let n = self.n;
+        self.backward(|k, means, P| {
+            let x_bad = diverged((0..n).map(|i| means[(i, k)])).map(|v| ("x_{k|N}", v));
+            let p_bad = diverged((0..n).map(|i| P[(i, i)])).map(|v| ("P_{k|N}", v));
+            match x_bad.or(p_bad) {
+                Some((what, value)) => Err(Error::Diverged {
+                    step: k,
+                    what,
+                    value,
+                }),
+                None => Ok(()),
+            }
         })
     }
 }
@@ -328,6 +407,15 @@ impl<D: Dims> Model<D> {
         }
         let rows = (0..z.nrows()).map(|k| (0..m).map(|j| z.at(k, j)).collect::<Vec<_>>());
         Filter::new(self.clone(), x0, P0, CovarianceForm::Joseph)?.run_smoothed(rows)
+    }
+}
+
+/// The error for a step whose n (`value`) does not match the record's.
+fn mismatch(value: usize) -> Error {
+    Error::Dimension {
+        name: "n",
+        value,
+        rule: "the smoother's n must match the filter's",
     }
 }
 

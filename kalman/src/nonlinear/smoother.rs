@@ -1,8 +1,10 @@
 //! The extended and unscented Rauch–Tung–Striebel smoothers over a recorded forward pass.
 #![allow(non_snake_case)]
 
+use faer::MatRef;
+
 use crate::Error;
-use crate::smoother::{Recorded, Smoothed};
+use crate::smoother::{Nonlinear, Rts, Smoothed};
 
 /// A filter whose steps a [`NonlinearRts`] can record: after step k it holds
 /// `(x_{k|k}, P_{k|k})`, `(x_{k+1|k}, P_{k+1|k})` and the cross-covariance
@@ -17,9 +19,10 @@ pub trait ForwardPass {
     fn cross_covariance(&self, out: &mut [f64]);
 }
 
-/// The nonlinear Rauch–Tung–Striebel smoother: recorded from an [`super::Ekf`] it is the
-/// extended RTS smoother, from a [`super::Ukf`] the unscented RTS smoother (Särkkä,
-/// "Unscented Rauch–Tung–Striebel smoother"): both run the backward pass
+/// The nonlinear Rauch–Tung–Striebel smoother ([`Rts`] of the [`Nonlinear`] family): recorded
+/// from an [`super::Ekf`] it is the extended RTS smoother, from a [`super::Ukf`] the
+/// unscented RTS smoother (Särkkä, "Unscented Rauch–Tung–Striebel smoother"): both run the
+/// backward pass
 ///
 /// `J_k = C_k P_{k+1|k}⁻¹`,  `x_{k|N} = x_{k|k} + J_k (x_{k+1|N} − x_{k+1|k})`,
 /// `P_{k|N} = P_{k|k} + J_k (P_{k+1|N} − P_{k+1|k}) J_kᵀ`
@@ -52,60 +55,36 @@ pub trait ForwardPass {
 /// # Ok(())
 /// # }
 /// ```
-#[derive(Clone, Debug, Default)]
-pub struct NonlinearRts {
-    n: usize,
-    xf: Vec<f64>,
-    pf: Vec<f64>,
-    xp: Vec<f64>,
-    pp: Vec<f64>,
-    ct: Vec<f64>,
-    c: Vec<f64>,
-    steps: usize,
-}
+pub type NonlinearRts = Rts<Nonlinear>;
 
-impl NonlinearRts {
-    /// An empty recorder; the number of states is fixed by the first recorded step.
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    /// Number of recorded steps.
-    pub fn len(&self) -> usize {
-        self.steps
-    }
-
-    /// Whether nothing is recorded.
-    pub fn is_empty(&self) -> bool {
-        self.steps == 0
-    }
-
+impl Rts<Nonlinear> {
     /// Records the step the filter has just taken.
     ///
     /// # Errors
-    /// [`Error::Dimension`] if the filter's n differs from that of the steps recorded before.
+    /// [`Error::Dimension`] if the filter's n differs from that of the steps recorded before,
+    /// or a vector or matrix it hands over is not of size n or n×n.
     pub fn record(&mut self, filter: &impl ForwardPass) -> Result<(), Error> {
         let (xf, pf) = filter.filtered();
-        if self.steps == 0 {
-            self.n = xf.len();
-            self.c = vec![0.0; self.n * self.n];
-        }
-        let n = self.n;
+        let n = xf.len();
+        self.admit(n)?;
         let (xp, pp) = filter.predicted();
-        if xf.len() != n {
-            return Err(Error::Dimension {
-                name: "n",
-                value: xf.len(),
-                rule: "the smoother's n must match the filter's",
-            });
+        for (name, value, len) in [
+            ("P_{k|k}", pf.len(), n * n),
+            ("x_{k+1|k}", xp.len(), n),
+            ("P_{k+1|k}", pp.len(), n * n),
+        ] {
+            if value != len {
+                return Err(Error::Dimension {
+                    name,
+                    value,
+                    rule: "a recorded step must hold n-vectors and n-by-n matrices",
+                });
+            }
         }
-        filter.cross_covariance(&mut self.c);
-        self.xf.extend_from_slice(xf);
-        self.pf.extend_from_slice(pf);
-        self.xp.extend_from_slice(xp);
-        self.pp.extend_from_slice(pp);
-        self.ct.extend_from_slice(&self.c);
-        self.steps += 1;
+        let mut c = vec![0.0; n * n];
+        filter.cross_covariance(&mut c);
+        let square = |v| MatRef::from_column_major_slice(v, n, n);
+        self.push(xf, xp, [square(pf), square(pp), square(&c)]);
         Ok(())
     }
 
@@ -115,15 +94,46 @@ impl NonlinearRts {
     /// [`Error::Dimension`] if nothing was recorded; [`Error::Factorisation`] if the eigen
     /// fallback for a singular `P_{k+1|k}` fails.
     pub fn smooth(&self) -> Result<Smoothed, Error> {
-        Recorded {
-            n: self.n,
-            steps: self.steps,
-            xf: &self.xf,
-            pf: &self.pf,
-            xp: &self.xp,
-            pp: &self.pp,
-            ct: &self.ct,
+        self.backward(|_, _, _| Ok(()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A forward pass of two states whose P_{k+1|k} has three entries instead of four.
+    struct Short;
+
+    impl ForwardPass for Short {
+        fn filtered(&self) -> (&[f64], &[f64]) {
+            (&[0.0, 0.0], &[1.0, 0.0, 0.0, 1.0])
         }
-        .backward(|_, _, _| Ok(()))
+        fn predicted(&self) -> (&[f64], &[f64]) {
+            (&[0.0, 0.0], &[1.0, 0.0, 0.0])
+        }
+        fn cross_covariance(&self, out: &mut [f64]) {
+            out.fill(0.0);
+        }
+    }
+
+    #[test]
+    fn a_step_of_the_wrong_size_is_a_typed_error_and_is_not_recorded() {
+        let mut rts = NonlinearRts::new();
+        let e = rts
+            .record(&Short)
+            .expect_err("P_{k+1|k} has 3 entries, not 4");
+        assert!(
+            matches!(
+                e,
+                Error::Dimension {
+                    name: "P_{k+1|k}",
+                    value: 3,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        assert!(rts.is_empty());
     }
 }
