@@ -57,6 +57,11 @@ pub(super) fn continuous_residual(form: &FilterForm<'_>, P: MatRef<'_, f64>) -> 
     relative(res.norm_l2(), P.norm_l2())
 }
 
+/// ‖ℋ‖_F of the Hamiltonian ℋ = [[A_c, −G], [−Q, −A_cᵀ]], from its blocks (ℋ is never formed).
+pub(super) fn hamiltonian_norm(Ac: &Mat<f64>, G: &Mat<f64>, Q: &Mat<f64>) -> f64 {
+    (2.0 * Ac.squared_norm_l2() + G.squared_norm_l2() + Q.squared_norm_l2()).sqrt()
+}
+
 /// PBH tests and SDA-after-Cayley for the filter-form CARE A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0.
 pub(super) fn continuous_dual(
     form: &FilterForm<'_>,
@@ -82,9 +87,7 @@ pub(super) fn continuous_dual(
     let Hc = symmetrised(Q);
     let Ac = A.transpose().to_owned();
     // γ ≥ ‖ℋ‖_F > ρ(ℋ): ℋ − γI is non-singular, so the Cayley transform exists.
-    let gamma = 1.01
-        * (2.0 * Ac.squared_norm_l2() + G.squared_norm_l2() + Hc.squared_norm_l2()).sqrt()
-        + f64::MIN_POSITIVE.sqrt();
+    let gamma = 1.01 * hamiltonian_norm(&Ac, &G, &Hc) + f64::MIN_POSITIVE.sqrt();
     let I = Mat::<f64>::identity(n, n);
     let Ag = &Ac - gamma * &I;
     let Ag_lu = Ag.partial_piv_lu();

@@ -170,3 +170,38 @@ fn lqr_cross_weight_enters_the_equation() {
         .cost[(0, 0)];
     assert!((x - 0.75f64.sqrt()).abs() < 1e-12, "{x}");
 }
+
+#[test]
+fn hamiltonian_norm_is_the_norm_of_the_assembled_matrix() {
+    // γ must exceed ρ(ℋ) for the Cayley transform to send the stable eigenvalues inside the
+    // unit circle; the solver takes γ from ‖ℋ‖_F computed blockwise, so the blockwise sum
+    // must equal the norm of ℋ = [[A_c, −G], [−Q, −A_cᵀ]] built out in full.
+    let Ac = mat![[0.3, -1.2], [2.5, -0.7]];
+    let G = mat![[2.0, 0.4], [0.4, 0.9]];
+    let Q = mat![[0.5, -0.1], [-0.1, 3.0]];
+    let Hm = Mat::<f64>::from_fn(4, 4, |i, j| match (i < 2, j < 2) {
+        (true, true) => Ac[(i, j)],
+        (true, false) => -G[(i, j - 2)],
+        (false, true) => -Q[(i - 2, j)],
+        (false, false) => -Ac[(j - 2, i - 2)],
+    });
+    let blockwise = care::hamiltonian_norm(&Ac, &G, &Q);
+    assert!(
+        (blockwise - Hm.norm_l2()).abs() < 1e-14 * Hm.norm_l2(),
+        "{blockwise}"
+    );
+}
+
+#[test]
+fn care_and_clqr_residuals_measure_a_candidate() {
+    // ẋ = −x + w, z = x + v, q = r = 1: the residual of P is |−2P − P² + 1| / P; zero at
+    // P = √2 − 1, exactly 2 at P = 1 (|−2 − 1 + 1| / 1).
+    let care = Care::new([[-1.0]], [[1.0]], [[1.0]], [[1.0]]).expect("inputs");
+    assert!(care.residual([[2f64.sqrt() - 1.0]]).expect("residual") < 1e-15);
+    let off = care.residual([[1.0]]).expect("residual");
+    assert!((off - 2.0).abs() < 1e-15, "{off}");
+    // Its dual, the LQR with A = −1, B = Q = R = 1, has the same equation in X.
+    let clqr = Clqr::new([[-1.0]], [[1.0]], [[1.0]], [[1.0]]).expect("inputs");
+    let off = clqr.residual([[1.0]]).expect("residual");
+    assert!((off - 2.0).abs() < 1e-15, "{off}");
+}
