@@ -327,15 +327,27 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         // Deviations: dz (mo × s, observed rows), dchi (n × s).
         let dz = &mut self.dz.as_mut_slice()[..mo * s];
         let dchi = &mut self.dchi.as_mut_slice()[..n * s];
+        // With every row observed (mo = m: no NaN in z) the compactions are copies: the
+        // residuals go straight to their places.
+        let all = mo == m;
         for i in 0..s {
-            self.model.residual(&zs[i * m..(i + 1) * m], zbar, col);
-            compact_vec(col, z, &mut dz[i * mo..(i + 1) * mo]);
+            let zi = &zs[i * m..(i + 1) * m];
+            let di = &mut dz[i * mo..(i + 1) * mo];
+            if all {
+                self.model.residual(zi, zbar, di);
+            } else {
+                self.model.residual(zi, zbar, col);
+                compact_vec(col, z, di);
+            }
             self.model
                 .state_residual(&chi[i * n..(i + 1) * n], xp, &mut dchi[i * n..(i + 1) * n]);
         }
-        compact_square(self.c.r.as_slice(), m, z, mo, self.w.rc.as_mut_slice());
         let sig = &mut self.w.sig.as_mut_slice()[..mo * mo];
-        sig.copy_from_slice(&self.w.rc.as_slice()[..mo * mo]);
+        if all {
+            sig.copy_from_slice(&self.c.r.as_slice()[..m * m]);
+        } else {
+            compact_square(self.c.r.as_slice(), m, z, mo, sig);
+        }
         let C = &mut self.w.gain.as_mut_slice()[..n * mo];
         C.fill(0.0);
         for i in 0..s {
@@ -356,7 +368,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         }
         let rt = &mut self.rt.as_mut_slice()[..mo * mo];
         rt.copy_from_slice(sig);
-        // R_c is no longer needed (copied into Σ): it holds Gᵀ G.
+        // The R_c workspace (R is copied straight into Σ) holds Gᵀ G.
         let gtg = &mut self.w.rc.as_mut_slice()[..mo * mo];
         mul_tn(gtg, G, G, mo, n, mo, false);
         for (r, v) in rt.iter_mut().zip(gtg.iter()) {
@@ -376,9 +388,13 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         }
         let K = C;
         right_solve(sig, sinv, mo, K, n);
-        self.model.residual(z, zbar, col);
         let e = &mut self.w.e.as_mut_slice()[..mo];
-        compact_vec(col, z, e);
+        if all {
+            self.model.residual(z, zbar, e);
+        } else {
+            self.model.residual(z, zbar, col);
+            compact_vec(col, z, e);
+        }
         let dx = &mut self.w.dx.as_mut_slice()[..n];
         mul(dx, K, e, n, mo, 1, false);
         self.model
