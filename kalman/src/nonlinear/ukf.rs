@@ -311,15 +311,19 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         }
         // ẑ = Z_0 + Σ_{i≥1} Wm_i (Z_i ⊖ Z_0): no cancellation between a large negative
         // Wm_0 and the other weights, and wrapped components averaged around Z_0.
+        // The Z_i ⊖ Z_0 go to the deviations' workspace first (all of them before the sum
+        // reads them back), which the deviations from ẑ overwrite below.
         let zbar = &mut self.zbar.as_mut_slice()[..m];
         let col = &mut self.col.as_mut_slice()[..m];
-        zbar.fill(0.0);
+        let d0 = &mut self.dz.as_mut_slice()[..m * s];
         for i in 1..s {
-            self.model.residual(&zs[i * m..(i + 1) * m], &zs[..m], col);
-            for (a, b) in zbar.iter_mut().zip(col.iter()) {
-                *a += wm[i] * b;
-            }
+            self.model.residual(
+                &zs[i * m..(i + 1) * m],
+                &zs[..m],
+                &mut d0[i * m..(i + 1) * m],
+            );
         }
+        mul(zbar, &d0[m..], &wm[1..], m, s - 1, 1, false);
         for (a, b) in zbar.iter_mut().zip(&zs[..m]) {
             *a += b;
         }
