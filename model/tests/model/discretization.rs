@@ -48,6 +48,26 @@ fn van_loan_white_acceleration() {
 }
 
 #[test]
+fn van_loan_transition_with_and_without_noise() {
+    // The transition is e^{A·Δt} whether or not noise enters (a zero G W Gᵀ takes the short
+    // path without the 2n×2n exponential): for the double integrator, [[1, Δt], [0, 1]],
+    // exact up to rounding (nilpotent A).
+    let dt = 0.3;
+    let a = m(2, 2, &[0.0, 1.0, 0.0, 0.0]);
+    let g = m(2, 1, &[0.0, 1.0]);
+    let exact = m(2, 2, &[1.0, dt, 0.0, 1.0]);
+    for q in [0.0, 0.7] {
+        let (phi, qd) = van_loan(&a, &g, &m(1, 1, &[q]), dt).expect("ok");
+        assert_close("e^{A dt}", &phi, &exact, 1e-14);
+        assert_eq!(
+            qd.iter().any(|v| v.abs() > 0.0),
+            q > 0.0,
+            "Q_d zero exactly when q = 0"
+        );
+    }
+}
+
+#[test]
 fn zoh_first_order_lag() {
     for (t, dt) in [(2.0, 0.1), (0.5, 1.0), (20.0, 0.05)] {
         let a = m(1, 1, &[-1.0 / t]);
