@@ -179,8 +179,9 @@ fn ldl_pass(
 #[inline(always)]
 fn scale_columns(a: &mut [f64], n: usize, inv: &mut [f64]) {
     for j in 0..n {
-        // A zero pivot has `inv_j` exactly 0; any other a positive one.
-        if inv[j] <= 0.0 {
+        // A zero pivot was stored as exactly 0; any other is positive (+∞ included, which
+        // gives `inv_j` 0 as the direct factorisation did).
+        if a[j + j * n] <= 0.0 {
             continue;
         }
         let root = a[j + j * n].sqrt();
