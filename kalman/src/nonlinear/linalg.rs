@@ -299,19 +299,7 @@ pub(crate) fn joseph(
     }
     mul(T, A, P, n, n, n, false);
     mul(KR, K, R, n, mo, mo, false);
-    for j in 0..n {
-        for i in j..n {
-            let mut s = 0.0;
-            for k in 0..n {
-                s += T[i + k * n] * A[j + k * n];
-            }
-            for a in 0..mo {
-                s += KR[i + a * n] * K[j + a * n];
-            }
-            out[i + j * n] = s;
-        }
-    }
-    mirror_lower(out, n);
+    symmetric_sum(out, T, A, KR, K, n, mo);
 }
 
 /// The Joseph form of [`joseph`] given the factor `L` of `P` (`P = L Lᵀ`, `L` lower `n`×`n`)
@@ -344,11 +332,26 @@ pub(crate) fn factored_joseph(
         }
     }
     mul(KR, K, R, n, mo, mo, false);
+    symmetric_sum(out, M, M, KR, K, n, mo);
+}
+
+/// `out = X Yᵀ + KR Kᵀ` (`X`, `Y` `n`×`n`; `KR`, `K` `n`×`mo`) for a sum its caller knows
+/// to be symmetric (the two Joseph forms): the lower triangle computed, then mirrored.
+#[inline(always)]
+fn symmetric_sum(
+    out: &mut [f64],
+    X: &[f64],
+    Y: &[f64],
+    KR: &[f64],
+    K: &[f64],
+    n: usize,
+    mo: usize,
+) {
     for j in 0..n {
         for i in j..n {
             let mut s = 0.0;
             for k in 0..n {
-                s += M[i + k * n] * M[j + k * n];
+                s += X[i + k * n] * Y[j + k * n];
             }
             for a in 0..mo {
                 s += KR[i + a * n] * K[j + a * n];
