@@ -400,6 +400,8 @@ fn cross_gain(S: MatRef<'_, f64>, Sigma: MatRef<'_, f64>) -> Result<Mat<f64>, Er
         let dmin = (0..m)
             .map(|i| L[(i, i)] * L[(i, i)])
             .fold(f64::INFINITY, f64::min);
+        // `==`, `>=` or `RANK_TOL + smax` here would be equivalent: they send a regular Σ
+        // down the eigen-decomposition, whose S Σ⁺ equals S Σ⁻¹ to round-off (only slower).
         if dmin > crate::RANK_TOL * smax {
             return Ok(llt.solve(S.transpose()).transpose().to_owned());
         }

@@ -86,6 +86,11 @@ fn compare<D: Dims>(dims: D, p: &Problem, cross: bool) -> (f64, usize) {
     for (z, u) in p.zs.iter().zip(&p.us) {
         run.step(z, Some(u)).expect("scheduled step");
         full.step(z, Some(u)).expect("full step");
+        assert_eq!(
+            run.innovation().len(),
+            full.innovation().len(),
+            "innovation length"
+        );
         for (a, b) in run
             .state()
             .iter()
@@ -121,37 +126,49 @@ fn reproduces_the_full_filter() {
 /// Two channels measuring the same state with fully correlated noise (R = 0.5·11ᵀ) make
 /// Σ = H P Hᵀ + R singular at every step, so the cross gain S Σ⁺ comes from the
 /// eigen-decomposition: the schedule still reproduces the full filter (whose own fallback
-/// is the engine's Jacobi pseudo-inverse, an independent route to the same S Σ⁺ e).
+/// is the engine's Jacobi pseudo-inverse, an independent route to the same S Σ⁺ e). With
+/// δ of independent noise added to the second channel, Σ's Cholesky succeeds but its last
+/// pivot (≈ δ) lies below `RANK_TOL`·max Σ_ii: both must still treat the channels as
+/// dependent — an inverse through that pivot would multiply the channels' √δ-sized
+/// disagreement by 1/δ and leave the full filter's estimates far behind. The case with R
+/// scaled by c = 200 puts the pivot δ = 10⁻¹² between `RANK_TOL`/max Σ_ii and
+/// `RANK_TOL`·max Σ_ii, so the threshold must scale with Σ, not against it.
 #[test]
 fn reproduces_the_full_filter_with_a_singular_innovation_covariance() {
-    let dims = DynDims::new(2, 2, 0).expect("dims");
-    let F = faer::mat![[0.9, 0.1], [0.0, 0.8]];
-    let H = faer::mat![[1.0, 0.0], [1.0, 0.0]];
-    let Q = faer::mat![[0.2, 0.0], [0.0, 0.1]];
-    let R = faer::mat![[0.5, 0.5], [0.5, 0.5]];
-    // Joint covariance [[R, Sᵀ], [S, Q]] PSD: minimising over u₁ + u₂ leaves
-    // 0.18 w₁² − 0.02 w₁w₂ + 0.095 w₂² > 0.
-    let S = faer::mat![[0.1, 0.1], [0.05, 0.05]];
-    let model = || {
-        Model::new(dims, &F, &H, &Q, &R)
-            .and_then(|m| m.with_cross_covariance(&S))
-            .expect("model")
-    };
-    let P0 = Mat::<f64>::identity(2, 2);
-    let sched = GainSchedule::new(model(), &P0, ScheduleOptions::default()).expect("schedule");
-    let x0 = [0.3, -0.2];
-    let mut run = sched.runner(&x0).expect("runner");
-    let mut full = Filter::new(model(), &x0, &P0, CovarianceForm::Joseph).expect("filter");
-    let mut g = rng(10);
-    for _ in 0..60 {
-        // Both channels read the same value, as the model says they must.
-        let z1: f64 = g.random_range(-3.0..3.0);
-        run.step(&[z1, z1], None).expect("scheduled step");
-        full.step(&[z1, z1], None).expect("full step");
-        // Tolerance: the two pseudo-inverses differ by rounding of O(1) numbers (Σ's
-        // nonzero eigenvalue is about 2); 1e-10 leaves room for their accumulation.
-        for (a, b) in run.predicted_state().iter().zip(full.predicted_state()) {
-            assert!((a - b).abs() < 1e-10 * b.abs().max(1.0), "{a} vs {b}");
+    for (c, delta) in [(1.0, 0.0), (1.0, 1e-13), (200.0, 1e-12)] {
+        let dims = DynDims::new(2, 2, 0).expect("dims");
+        let F = faer::mat![[0.9, 0.1], [0.0, 0.8]];
+        let H = faer::mat![[1.0, 0.0], [1.0, 0.0]];
+        let Q = faer::mat![[0.2, 0.0], [0.0, 0.1]];
+        let R = faer::mat![[0.5 * c, 0.5 * c], [0.5 * c, 0.5 * c + delta]];
+        // Joint covariance [[R, Sᵀ], [S, Q]] PSD: minimising over u₁ + u₂ leaves
+        // 0.18 w₁² − 0.02 w₁w₂ + 0.095 w₂² > 0 (c ≥ 1 and δ ≥ 0 only add to R).
+        let S = faer::mat![[0.1, 0.1], [0.05, 0.05]];
+        let model = || {
+            Model::new(dims, &F, &H, &Q, &R)
+                .and_then(|m| m.with_cross_covariance(&S))
+                .expect("model")
+        };
+        let P0 = Mat::<f64>::identity(2, 2);
+        let sched = GainSchedule::new(model(), &P0, ScheduleOptions::default()).expect("schedule");
+        let x0 = [0.3, -0.2];
+        let mut run = sched.runner(&x0).expect("runner");
+        let mut full = Filter::new(model(), &x0, &P0, CovarianceForm::Joseph).expect("filter");
+        let mut g = rng(10);
+        for _ in 0..60 {
+            // The channels read the same value up to the second one's √δ of own noise.
+            let z1: f64 = g.random_range(-3.0..3.0);
+            let z2 = z1 + delta.sqrt() * g.random_range(-1.0..1.0);
+            run.step(&[z1, z2], None).expect("scheduled step");
+            full.step(&[z1, z2], None).expect("full step");
+            // Tolerance: the two pseudo-inverses differ by rounding of O(1) numbers (Σ's
+            // nonzero eigenvalue is about 2); 1e-10 leaves room for their accumulation.
+            for (a, b) in run.predicted_state().iter().zip(full.predicted_state()) {
+                assert!(
+                    (a - b).abs() < 1e-10 * b.abs().max(1.0),
+                    "δ = {delta}: {a} vs {b}"
+                );
+            }
         }
     }
 }
