@@ -53,7 +53,7 @@ const TASKS: &[(&str, &str)] = &[
     (
         "mutants",
         "sampled mutation testing of the library crates (cargo-mutants; not in CI) \
-         [--crate C] [--file F] [--shard K/N] [--re REGEX] [--timeout S] [--list]",
+         [--crate C] [--file F] [--shard K/N] [--re REGEX] [--timeout S] [--target-dir D] [--skip-baseline] [--list]",
     ),
 ];
 

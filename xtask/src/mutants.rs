@@ -4,7 +4,8 @@
 //! tree and the mutated crate's unit and integration tests run against it; a mutant the tests
 //! do not fail on is *missed* and names a place the tests are blind to. The run is sequential
 //! (`-j 1`) with a per-mutant timeout, its build artifacts go to `target/mutants/build` (kept
-//! warm between runs) and its report to `target/mutants/<label>/mutants.out`.
+//! warm between runs; `--target-dir` names another, so two runs can go side by side) and its
+//! report to `target/mutants/<label>/mutants.out`.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -30,7 +31,14 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     known(
         args,
         &["--list", "--skip-baseline"],
-        &["--crate", "--file", "--shard", "--timeout", "--re"],
+        &[
+            "--crate",
+            "--file",
+            "--shard",
+            "--timeout",
+            "--re",
+            "--target-dir",
+        ],
     )?;
     let file = option(args, "--file")?;
     let krate = match (option(args, "--crate")?, file) {
@@ -54,6 +62,11 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
             bail!("--shard takes K/N with 0 ≤ K < N, not `{s}`");
         }
     }
+    // Two runs at once need two build directories: cargo locks one for the whole build.
+    let target_dir = option(args, "--target-dir")?.map_or_else(
+        || root().join("target").join("mutants").join("build"),
+        std::path::PathBuf::from,
+    );
     let timeout = option(args, "--timeout")?.unwrap_or(DEFAULT_TIMEOUT);
     timeout
         .parse::<u32>()
@@ -129,10 +142,7 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     cmd.args(["--jobs", "1", "--timeout", timeout, "--output"])
         .arg(&out)
         .args(["--cargo-arg=--lib", "--cargo-arg=--tests"])
-        .env(
-            "CARGO_TARGET_DIR",
-            root().join("target").join("mutants").join("build"),
-        );
+        .env("CARGO_TARGET_DIR", target_dir);
     let shown = format!("{cmd:?}");
     eprintln!("$ {shown}");
     let started = Instant::now();
