@@ -173,3 +173,50 @@ fn irls_stops_where_the_relative_step_rule_says() {
     assert_eq!(out.iterations, expected as usize);
     assert!((out.solution.x[0] - a).abs() <= 2.0 * tol);
 }
+
+/// The rank tolerance. By default it is max(m, n)·ε·σ_max, relative to the largest singular
+/// value, so the rank of diag(s, s·1e-17) is 1 whatever the unit s is (1e-17 is far below
+/// 2ε ≈ 4.4e-16 and far above the rounding of the SVD of a diagonal matrix, which is exact).
+/// A given tolerance is used as it is (0 counts every non-zero σ; 1 cuts σ = 0.5 here), and
+/// a negative or non-finite one is refused by name. Ridge rows (λ = 4, so every augmented σ
+/// is ≥ 2) keep the rank-deficient cases solvable, so the rank is reported, not refused.
+#[test]
+fn the_rank_tolerance_is_relative_by_default_and_absolute_when_given() {
+    let ridge = |rank_tolerance| SolveOptions {
+        rank_tolerance,
+        ..SolveOptions::ridge(4.0)
+    };
+    let z = DVector::from_vec(vec![1.0, 1.0]);
+    for s in [1e-10, 1.0, 1e10] {
+        let h = DMatrix::from_diagonal(&DVector::from_vec(vec![s, s * 1e-17]));
+        let sol = solve(&h, &z, &Weights::Identity, &ridge(None)).expect("ridge makes it solvable");
+        assert_eq!(sol.rank, 1, "unit {s}");
+        let expected = 2.0 * f64::EPSILON * s;
+        assert!(
+            (sol.rank_tolerance - expected).abs() <= 1e-12 * expected,
+            "unit {s}"
+        );
+        let all =
+            solve(&h, &z, &Weights::Identity, &ridge(Some(0.0))).expect("tolerance 0 is valid");
+        assert_eq!(all.rank, 2, "unit {s}");
+        assert!(all.rank_tolerance.abs() <= 0.0);
+    }
+    let h = DMatrix::from_diagonal(&DVector::from_vec(vec![3.0, 0.5]));
+    let cut = solve(&h, &z, &Weights::Identity, &ridge(Some(1.0))).expect("tolerance 1 is valid");
+    assert_eq!(cut.rank, 1);
+    assert!((cut.rank_tolerance - 1.0).abs() <= 0.0);
+    for bad in [-1.0, -f64::MIN_POSITIVE, f64::NAN, f64::INFINITY] {
+        let err =
+            solve(&h, &z, &Weights::Identity, &ridge(Some(bad))).expect_err("invalid tolerance");
+        assert!(
+            matches!(
+                err,
+                Error::InvalidParameter {
+                    name: "rank_tolerance",
+                    ..
+                }
+            ),
+            "{bad}: {err:?}"
+        );
+    }
+}
