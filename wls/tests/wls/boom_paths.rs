@@ -120,3 +120,20 @@ fn first_violation_is_decided_by_either_error_alone() {
         assert_eq!(run.first_violation, expected);
     }
 }
+
+/// The label reports use is the name the variant is stored under (its serde name), so a
+/// report and a stored record name a variant alike.
+#[test]
+fn a_variant_is_labelled_by_its_stored_name() {
+    use wls::boom::Sign;
+    for (sign, variant) in [
+        (Sign::Plus, ErrorVariant::plus(0.1)),
+        (Sign::Minus, ErrorVariant::minus(0.1)),
+        (Sign::Nominal, ErrorVariant::nominal()),
+    ] {
+        let stored = serde_json::to_string(&sign).expect("a unit variant serialises");
+        assert_eq!(stored, format!("\"{}\"", sign.label()));
+        assert_eq!(variant.sign, sign);
+        assert_eq!(variant.label(), sign.label());
+    }
+}

@@ -7,7 +7,8 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use wls::Error;
 use wls::solver::{
-    IrlsOptions, SolveOptions, Tikhonov, Weights, sensitivity, solve, solve_irls, worst_case_bounds,
+    IrlsOptions, PriorRows, SolveOptions, Tikhonov, Weights, sensitivity, solve, solve_irls,
+    worst_case_bounds,
 };
 
 fn uniform(rng: &mut ChaCha8Rng, m: usize, n: usize) -> DMatrix<f64> {
@@ -219,4 +220,85 @@ fn the_rank_tolerance_is_relative_by_default_and_absolute_when_given() {
             "{bad}: {err:?}"
         );
     }
+}
+
+/// The regularised system's default rank tolerance is relative too: a ridge that penalises
+/// only the first unknown leaves H = diag(s, s·1e-17) rank-deficient in the second whatever
+/// the unit s, and that is refused by name (3 rows: tolerance 3·ε·σ_max ≫ 1e-17·σ_max).
+#[test]
+fn a_regularisation_that_misses_an_unknown_is_rank_deficient_in_any_unit() {
+    let z = DVector::from_vec(vec![1.0, 1.0]);
+    let options = SolveOptions {
+        tikhonov: Some(Tikhonov {
+            lambda: 1.0,
+            prior_mean: None,
+            operator: Some(DMatrix::from_row_slice(1, 2, &[1.0, 0.0])),
+        }),
+        ..SolveOptions::default()
+    };
+    for s in [1e-10, 1.0, 1e10] {
+        let h = DMatrix::from_diagonal(&DVector::from_vec(vec![s, s * 1e-17]));
+        let err = solve(&h, &z, &Weights::Identity, &options).expect_err("deficient");
+        assert!(
+            matches!(
+                err,
+                Error::RankDeficient {
+                    name: "regularised system",
+                    rank: 1,
+                    cols: 2,
+                    ..
+                }
+            ),
+            "unit {s}: {err:?}"
+        );
+    }
+}
+
+/// Prior rows must have one column per unknown and at least one row; either mistake is a
+/// shape error naming them.
+#[test]
+fn prior_rows_of_the_wrong_shape_are_named() {
+    let h = DMatrix::identity(3, 2);
+    let z = DVector::from_vec(vec![1.0, 2.0, 3.0]);
+    for (k, cols) in [(1, 3), (2, 1), (0, 2)] {
+        let options = SolveOptions {
+            prior: Some(PriorRows {
+                rows: DMatrix::from_element(k, cols, 1.0),
+                values: DVector::zeros(k),
+                weights: Weights::Identity,
+            }),
+            ..SolveOptions::default()
+        };
+        let err = solve(&h, &z, &Weights::Identity, &options).expect_err("bad prior shape");
+        assert!(
+            matches!(err, Error::Shape { name: "prior.rows", rows, cols: c, .. } if rows == k && c == cols),
+            "{k}×{cols}: {err:?}"
+        );
+    }
+}
+
+/// A zero error bound is a valid bound (an exact measurement): it contributes nothing, so
+/// the bounds equal those of the remaining measurements alone.
+#[test]
+fn a_zero_error_bound_is_valid_and_contributes_nothing() {
+    let h = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 1.0, 1.0, 0.0, 2.0]);
+    let options = SolveOptions::default();
+    let with_zero = worst_case_bounds(
+        &h,
+        &Weights::Identity,
+        &DVector::from_vec(vec![0.0, 0.1, 0.2]),
+        &options,
+    )
+    .expect("zero is a valid bound");
+    let s = sensitivity(&h, &Weights::Identity, &options).expect("full rank");
+    for i in 0..2 {
+        let expected = 0.1 * s[(i, 1)].abs() + 0.2 * s[(i, 2)].abs();
+        // A sum of two products: rounding of a few ε.
+        assert!(
+            (with_zero[i] - expected).abs() <= 1e-15,
+            "{i}: {} vs {expected}",
+            with_zero[i]
+        );
+    }
+    assert!(with_zero.iter().all(|b| *b > 0.0));
 }
