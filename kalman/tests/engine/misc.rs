@@ -111,8 +111,11 @@ fn reset_restarts_from_a_new_prior() {
         f.state().to_vec()
     };
     f.step(&p.z[1], None).expect("step");
+    assert_eq!(f.steps(), 2);
     f.reset(&p.x0, &p.p0).expect("reset");
     assert_eq!(f.steps(), 0);
+    // A reset keeps the covariance form the filter was built with.
+    assert_eq!(f.form(), CovarianceForm::SquareRoot);
     f.step(&p.z[0], None).expect("step");
     assert!(
         f.state()
