@@ -110,8 +110,11 @@ fn reset_restarts_from_a_new_prior() {
         f.step(&p.z[0], None).expect("step");
         f.state().to_vec()
     };
-    f.step(&p.z[1], None).expect("step");
+    let info = f.step(&p.z[1], None).expect("step");
     assert_eq!(f.steps(), 2);
+    // The last step's record is the one the step returned (step 1, one measured channel).
+    assert_eq!(f.last_step(), info);
+    assert_eq!((info.step, info.observed), (1, 1));
     f.reset(&p.x0, &p.p0).expect("reset");
     assert_eq!(f.steps(), 0);
     // A reset keeps the covariance form the filter was built with.

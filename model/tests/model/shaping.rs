@@ -213,3 +213,21 @@ mod props {
         }
     }
 }
+
+/// The parameters read back are the ones given, for values on both sides of 1 (so no constant
+/// can stand in for them), and the rolling filter's coefficients are the paper's closed form
+/// in them: a = 2μ/(μ² + β²), b = 1/(μ² + β²).
+#[test]
+fn parameters_read_back_as_given() {
+    for (x, y) in [(0.08, 0.63), (2.5, 0.2), (1.0, 3.0)] {
+        let e = ExponentialShaping::new(1.0, x).expect("valid");
+        assert!((e.time_constant() - x).abs() <= 0.0);
+        assert!((e.shortest_time_constant() - x).abs() <= 0.0);
+        let r = IrregularRollingShaping::new(1.0, x, y).expect("valid");
+        assert!((r.mu() - x).abs() <= 0.0 && (r.beta() - y).abs() <= 0.0);
+        let (a, b) = r.coefficients();
+        let s = x * x + y * y;
+        // Two roundings each: 1e-15 relative.
+        assert!((a - 2.0 * x / s).abs() <= 1e-15 * a && (b - 1.0 / s).abs() <= 1e-15 * b);
+    }
+}

@@ -137,3 +137,50 @@ fn a_variant_is_labelled_by_its_stored_name() {
         assert_eq!(variant.label(), sign.label());
     }
 }
+
+/// A violation is an error that *exceeds* its limit: a limit equal to the largest error after
+/// start-up is met, one a step of round-off below it is violated, first at the cycle that
+/// reaches that largest error (or earlier, if an earlier cycle is above the lowered limit).
+/// Each error alone, the other limit out of reach.
+#[test]
+fn an_error_equal_to_its_limit_is_not_a_violation() {
+    let profile = RotationProfile::default().trajectory().expect("valid");
+    let points = &profile.points[..300];
+    let config = BoomConfig::default();
+    let measure = ideal_accelerometer(config.g, config.sensor_radius);
+    let variant = ErrorVariant::plus(0.02);
+    let loose = Limits {
+        angle: 1.0,
+        angular_acceleration: 1.0,
+    };
+    let reference = run_turn(points, &config, &measure, &variant, loose).expect("valid");
+    assert_eq!(reference.first_violation, None);
+    let errors: [fn(&CycleError) -> f64; 2] = [|c| c.angle_error, |c| c.epsilon_error];
+    for (which, error_of) in errors.into_iter().enumerate() {
+        let largest = reference.cycles[1..]
+            .iter()
+            .map(error_of)
+            .fold(0.0, f64::max);
+        assert!(largest > 0.0 && largest < 1.0, "{which}: {largest}");
+        let limits_at = |limit: f64| {
+            let mut l = loose;
+            if which == 0 {
+                l.angle = limit;
+            } else {
+                l.angular_acceleration = limit;
+            }
+            l
+        };
+        let met = run_turn(points, &config, &measure, &variant, limits_at(largest)).expect("valid");
+        assert_eq!(met.first_violation, None, "{which}: limit = largest error");
+        let below = largest - largest * f64::EPSILON;
+        let broken =
+            run_turn(points, &config, &measure, &variant, limits_at(below)).expect("valid");
+        let expected = reference.cycles[1..]
+            .iter()
+            .find(|c| error_of(c) > below)
+            .map(|c| (c.t, c.alpha));
+        assert!(expected.is_some());
+        assert_eq!(broken.first_violation, expected, "{which}");
+    }
+}
