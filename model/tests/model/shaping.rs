@@ -216,7 +216,7 @@ mod props {
 
 /// The parameters read back are the ones given, for values on both sides of 1 (so no constant
 /// can stand in for them), and the rolling filter's coefficients are the paper's closed form
-/// in them: a = 2μ/(μ² + β²), b = 1/(μ² + β²).
+/// in them: a = 2μ/(μ² + β²), b = 1/(μ² + β²) (the damped cosine's c, d likewise in ξ, ω).
 #[test]
 fn parameters_read_back_as_given() {
     for (x, y) in [(0.08, 0.63), (2.5, 0.2), (1.0, 3.0)] {
@@ -229,5 +229,9 @@ fn parameters_read_back_as_given() {
         let s = x * x + y * y;
         // Two roundings each: 1e-15 relative.
         assert!((a - 2.0 * x / s).abs() <= 1e-15 * a && (b - 1.0 / s).abs() <= 1e-15 * b);
+        let d = DampedCosineShaping::new(1.0, x, y).expect("valid");
+        assert!((d.xi() - x).abs() <= 0.0 && (d.omega() - y).abs() <= 0.0);
+        let (c, dd) = d.coefficients();
+        assert!((c - 2.0 * x / s).abs() <= 1e-15 * c && (dd - 1.0 / s).abs() <= 1e-15 * dd);
     }
 }
