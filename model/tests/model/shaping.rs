@@ -3,9 +3,9 @@
 
 use model::{
     DampedCosineShaping, DiscreteSs, Discretization, ExponentialShaping, IrregularRollingShaping,
-    NoiseConvention, ShapingFilter, psd_factor,
+    NoiseConvention, ShapingFilter, noise_driven, psd_factor,
 };
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -173,6 +173,28 @@ fn paper_discretisations_of_the_filters() {
     let q = DampedCosineShaping::new(1e-4 / 12.0, 0.05, 6.0).expect("valid");
     let d = q.discretize_paper(0.1).expect("ok");
     assert!(d.j()[(0, 0)] > 0.0);
+    // Its rule (1 + z⁻¹) → 2 removes exact Tustin's zero at z = −1 (the Nyquist frequency)
+    // and keeps the gain at z = 1 (both factors are 2 there), which is N(0)/D(0) = 1.
+    let gain = |s: &DiscreteSs, z: f64| {
+        let n = s.f().nrows();
+        let x = (DMatrix::identity(n, n) * z - s.f())
+            .lu()
+            .solve(s.g())
+            .expect("z is not a pole");
+        (s.h() * x + s.j())[(0, 0)]
+    };
+    let tustin =
+        noise_driven(&q.transfer_function().tustin(0.1, None).expect("ok"), 1.0).expect("ok");
+    // Round-off of a 2-state solve with entries ≤ 1e3: 1e-12.
+    assert!(
+        gain(&tustin, -1.0).abs() <= 1e-12,
+        "{}",
+        gain(&tustin, -1.0)
+    );
+    assert!(gain(&d, -1.0).abs() > 1e-3, "{}", gain(&d, -1.0));
+    for s in [&d, &tustin] {
+        assert!((gain(s, 1.0) - 1.0).abs() <= 1e-12, "{}", gain(s, 1.0));
+    }
     // At Δt ≤ (shortest time constant)/20 the paper's discretisation of each filter stays
     // within 5 % of D (Tustin with N/Δt under-states the variance by about Δt/(2T)).
     for (name, f) in filters() {

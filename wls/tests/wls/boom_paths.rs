@@ -4,7 +4,7 @@
 
 use wls::Error;
 use wls::boom::{
-    BoomConfig, CycleError, Deceleration, ErrorVariant, Limits, RotationProfile,
+    BoomConfig, Breakpoint, CycleError, Deceleration, ErrorVariant, Level, Limits, RotationProfile,
     ideal_accelerometer, run_turn,
 };
 
@@ -183,4 +183,88 @@ fn an_error_equal_to_its_limit_is_not_a_violation() {
         assert!(expected.is_some());
         assert_eq!(broken.first_violation, expected, "{which}");
     }
+}
+
+/// Over the paper profile's first segment (0–9°) the acceleration is a constant ε₀ =
+/// 0.4584 °/s², so from rest α = ε₀t²/2 and ω = ε₀t exactly; RK4 is exact on a quadratic,
+/// so every sample there must match to round-off (≈ 630 steps of a few ε each: 1e-12
+/// relative is a margin of > 10).
+#[test]
+fn the_constant_acceleration_segment_follows_its_closed_form() {
+    let profile = RotationProfile::default().trajectory().expect("valid");
+    let eps0 = 0.4584_f64;
+    let mut checked = 0;
+    for p in profile
+        .points
+        .iter()
+        .take_while(|p| p.alpha.to_degrees() < 8.9)
+    {
+        let alpha = eps0 * p.t * p.t / 2.0;
+        let omega = eps0 * p.t;
+        assert!(
+            (p.alpha.to_degrees() - alpha).abs() <= 1e-12 * alpha.max(1e-3),
+            "t = {}: α = {}° against {alpha}°",
+            p.t,
+            p.alpha.to_degrees()
+        );
+        assert!(
+            (p.omega.to_degrees() - omega).abs() <= 1e-12 * omega.max(1e-3),
+            "t = {}",
+            p.t
+        );
+        assert!(
+            (p.epsilon.to_degrees() - eps0).abs() <= 1e-14,
+            "t = {}",
+            p.t
+        );
+        checked += 1;
+    }
+    // t = √(2·8.9/ε₀) ≈ 6.2 s at 0.01 s steps.
+    assert!(checked > 600, "{checked}");
+}
+
+/// A linear ramp ε = ε₀(1 − α/10°) from rest at 0° is a harmonic oscillation about 10°:
+/// α = 10°·(1 − cos kt), ω = 10°·k·sin kt with k = √(ε₀/10°). RK4 at kh ≈ 0.002 has a
+/// local error of order (kh)⁵ ≈ 1e-14 of the amplitude, so ≈ 980 steps to 15° stay within
+/// 1e-10 of it (a margin of > 10); a step that evaluates ε at the wrong angle is off by far
+/// more, which the constant segment of the paper profile cannot show.
+#[test]
+fn a_linear_ramp_from_rest_follows_the_harmonic_closed_form() {
+    let eps0 = 0.4584_f64;
+    let profile = RotationProfile {
+        breakpoints: vec![
+            Breakpoint {
+                alpha_deg: 0.0,
+                epsilon: Level::Value(eps0),
+            },
+            Breakpoint {
+                alpha_deg: 20.0,
+                epsilon: Level::Value(-eps0),
+            },
+        ],
+        final_angle_deg: 15.0,
+        dt: 0.01,
+        deceleration: Deceleration::Fixed(1.0),
+    };
+    let tr = profile.trajectory().expect("valid");
+    let k = (eps0 / 10.0).sqrt();
+    for p in &tr.points {
+        let (alpha, omega) = (10.0 * (1.0 - (k * p.t).cos()), 10.0 * k * (k * p.t).sin());
+        assert!(
+            (p.alpha.to_degrees() - alpha).abs() <= 1e-10 * 10.0,
+            "t = {}",
+            p.t
+        );
+        assert!(
+            (p.omega.to_degrees() - omega).abs() <= 1e-10 * 10.0 * k,
+            "t = {}",
+            p.t
+        );
+    }
+    let last = tr.points.last().expect("non-empty");
+    assert!(
+        last.alpha.to_degrees() > 14.9,
+        "{}",
+        last.alpha.to_degrees()
+    );
 }
