@@ -273,26 +273,19 @@ impl RotationProfile {
     }
 
     /// Integrates from rest at α = first breakpoint; calls `visit(t, α, ω)` (degrees) for each
-    /// sample, and returns the outcome: `Ok(ω)` if α reached the final angle with ω ≥ 0 at
-    /// that moment, `Err(α_stop)` if ω returned to 0 first.
-    fn integrate(
-        &self,
-        decel: f64,
-        mut visit: impl FnMut(f64, f64, f64),
-    ) -> Result<core::result::Result<f64, f64>> {
+    /// sample, and returns whether α reached the final angle (`true`) or ω returned to 0 first
+    /// (`false`).
+    fn integrate(&self, decel: f64, mut visit: impl FnMut(f64, f64, f64)) -> Result<bool> {
         let mut alpha = self.breakpoints.first().map_or(0.0, |b| b.alpha_deg);
         let mut omega = 0.0;
         visit(0.0, alpha, omega);
         for k in 1..=MAX_STEPS {
             let (a, w) = self.step(alpha, omega, decel);
             if w <= 0.0 {
-                return Ok(Err(alpha));
+                return Ok(false);
             }
             if a >= self.final_angle_deg {
-                // Interpolate ω at the crossing so the bisection target is continuous in ε_d.
-                // Only the sign is used: any positive mix of ω ≥ 0 and w > 0 gives the same ε_d.
-                let f = (self.final_angle_deg - alpha) / (a - alpha);
-                return Ok(Ok(omega + f * (w - omega)));
+                return Ok(true);
             }
             alpha = a;
             omega = w;
@@ -311,17 +304,12 @@ impl RotationProfile {
     /// An invalid table, or a table whose final angle cannot be reached (the bracket fails).
     pub fn solve_deceleration(&self) -> Result<f64> {
         self.validate()?;
-        // g(d) > 0: the boom passes the final angle still moving (d too small);
-        // g(d) < 0: it stops short (d too large). Continuous and increasing in −d.
-        let g = |d: f64| -> Result<f64> {
-            Ok(match self.integrate(d, |_, _, _| {})? {
-                Ok(w) => w,
-                Err(a) => a - self.final_angle_deg,
-            })
-        };
+        // Whether the boom reaches the final angle still moving: true for d too small, false
+        // for d too large, switching once as d grows.
+        let reaches = |d: f64| self.integrate(d, |_, _, _| {});
         let (mut lo, mut hi) = (0.0, 1.0);
         let mut grow = 0;
-        while g(hi)? > 0.0 {
+        while reaches(hi)? {
             lo = hi;
             hi *= 2.0;
             grow += 1;
@@ -333,7 +321,7 @@ impl RotationProfile {
                 });
             }
         }
-        if g(lo.max(1e-12))? <= 0.0 {
+        if !reaches(lo.max(1e-12))? {
             return Err(Error::InvalidParameter {
                 name: "profile",
                 value: lo,
@@ -343,7 +331,7 @@ impl RotationProfile {
         // Bisection to the last representable digits (≈ 60 halvings of [0, 1]).
         for _ in 0..80 {
             let mid = 0.5 * (lo + hi);
-            if g(mid)? > 0.0 {
+            if reaches(mid)? {
                 lo = mid;
             } else {
                 hi = mid;
@@ -368,7 +356,7 @@ impl RotationProfile {
         let mut points = Vec::new();
         let rad = core::f64::consts::PI / 180.0;
         // A fixed ε_d may stop the boom short of the final angle; the trajectory ends there.
-        let _outcome = self.integrate(decel, |t, a, w| {
+        let _reached = self.integrate(decel, |t, a, w| {
             points.push(TrajectoryPoint {
                 t,
                 alpha: a * rad,

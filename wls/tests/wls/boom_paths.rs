@@ -268,3 +268,29 @@ fn a_linear_ramp_from_rest_follows_the_harmonic_closed_form() {
         last.alpha.to_degrees()
     );
 }
+
+/// Scaling every acceleration of the table by s and the step by 1/√s leaves the discrete
+/// path in α unchanged (each RK4 stage scales exactly: ω by √s, ε by s), so the solved ε_d
+/// scales by s. With s a power of 4, √s is a power of 2 and the scaling is exact in binary;
+/// only the bisection's own stopping (1e-15 relative) separates the two answers. s = 4 and
+/// 1024 need ε_d ≈ 1.7 and 430 °/s², beyond the search's initial bracket [0, 1].
+#[test]
+fn the_solved_deceleration_scales_with_the_table() {
+    let base = RotationProfile::default();
+    let d1 = base.solve_deceleration().expect("valid");
+    for s in [4.0_f64, 1024.0] {
+        let mut scaled = base.clone();
+        for b in &mut scaled.breakpoints {
+            if let Level::Value(e) = &mut b.epsilon {
+                *e *= s;
+            }
+        }
+        scaled.dt = base.dt / s.sqrt();
+        let ds = scaled.solve_deceleration().expect("valid");
+        assert!(
+            (ds / s - d1).abs() <= 1e-14 * d1,
+            "s = {s}: {ds} against {}",
+            s * d1
+        );
+    }
+}
