@@ -2,7 +2,7 @@
 //! Lyapunov residuals, PSD factors, and the SPD strategy's condition number.
 
 use model::{discrete_lyapunov, is_controllable, is_observable, rank, spectral_radius};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 #[test]
 fn controllability_and_observability_of_double_integrator() {
@@ -101,5 +101,49 @@ mod props {
                 rank(&o, None).expect("ok") == sys.n_states()
             );
         }
+    }
+}
+
+/// The default rank tolerance is max(rows, cols)·ε·σ_max, relative to the largest singular
+/// value: diag(s, s·1e-17) has rank 1 whatever the unit s (1e-17 is far below 2ε), and a
+/// given tolerance counts only the singular values strictly above it.
+#[test]
+fn rank_tolerance_is_relative_and_strict() {
+    for s in [1e-10, 1.0, 1e10] {
+        let m = DMatrix::from_diagonal(&DVector::from_vec(vec![s, s * 1e-17]));
+        assert_eq!(rank(&m, None).expect("finite"), 1, "unit {s}");
+        let tol = model::analysis::default_rank_tolerance(&m);
+        // The SVD of a diagonal matrix returns its entries to round-off.
+        assert!(
+            (tol - 2.0 * f64::EPSILON * s).abs() <= 1e-12 * tol,
+            "unit {s}: {tol}"
+        );
+    }
+    let m = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 3.0]);
+    let sv = m.clone().svd(false, false).singular_values;
+    let (big, small) = (sv.max(), sv.min());
+    assert_eq!(
+        rank(&m, Some(small)).expect("finite"),
+        1,
+        "σ = tol is not above it"
+    );
+    assert_eq!(rank(&m, Some(small * (1.0 - 1e-12))).expect("finite"), 2);
+    assert_eq!(rank(&m, Some(big)).expect("finite"), 0);
+}
+
+/// The spectral abscissa is the largest real part of the eigenvalues: the largest diagonal
+/// entry of a triangular matrix, and a for the rotation-scaling block [[a, b], [−b, a]]
+/// (eigenvalues a ± ib), positive or negative.
+#[test]
+fn spectral_abscissa_is_the_largest_real_part() {
+    let tri = DMatrix::from_row_slice(3, 3, &[-1.0, 5.0, 2.0, 0.0, 0.25, 7.0, 0.0, 0.0, -3.0]);
+    assert!((model::spectral_abscissa(&tri).expect("finite") - 0.25).abs() <= 1e-14);
+    for a in [0.7, -1.5] {
+        let rot = DMatrix::from_row_slice(2, 2, &[a, 2.0, -2.0, a]);
+        // A 2×2 real Schur block: a few ε of the entries.
+        assert!(
+            (model::spectral_abscissa(&rot).expect("finite") - a).abs() <= 1e-14,
+            "{a}"
+        );
     }
 }
