@@ -233,3 +233,44 @@ fn correlated_noise_matches_the_decorrelated_model() {
         }
     }
 }
+
+/// A deterministic model (Q = 0) from an exact prior (P0 = 0) has every covariance zero, so
+/// the smoother's gain must be zero (the minimum-norm solve against the zero P_{k+1|k}), not
+/// a division by it: the smoothed path is the filtered one, x_k = Fᵏ x0, with zero covariance.
+#[test]
+fn an_exact_prior_of_a_deterministic_model_is_smoothed_to_itself() {
+    let F = mat![[1.0, 0.1], [0.0, 1.0]];
+    let model = Model::new(
+        DynDims::new(2, 1, 0).expect("dims"),
+        &F,
+        &mat![[1.0, 0.0]],
+        &Mat::<f64>::zeros(2, 2),
+        &mat![[1.0]],
+    )
+    .expect("model");
+    let mut f = Filter::new(
+        model,
+        &[1.0, 0.5],
+        &Mat::<f64>::zeros(2, 2),
+        CovarianceForm::Joseph,
+    )
+    .expect("filter");
+    let mut s = RtsSmoother::new();
+    for k in 0..6 {
+        f.step(&[(k as f64).sin()], None).expect("step");
+        s.record(&f).expect("record");
+    }
+    let out = s
+        .smooth()
+        .expect("a zero covariance is smoothed, not divided by");
+    for k in 0..6 {
+        // x_k = (1 + 0.05 k, 0.5): sums of k terms of 0.05, exact to a few ε.
+        let x = [1.0 + 0.05 * k as f64, 0.5];
+        for i in 0..2 {
+            assert!((out.means[(i, k)] - x[i]).abs() <= 1e-14, "x[{i}] at {k}");
+            for j in 0..2 {
+                assert!(out.covariances[k][(i, j)].abs() <= 0.0, "P[{i},{j}] at {k}");
+            }
+        }
+    }
+}

@@ -147,3 +147,48 @@ fn spectral_abscissa_is_the_largest_real_part() {
         );
     }
 }
+
+/// A continuous model's own checks: stable exactly when every eigenvalue of A has a negative
+/// real part (an integrator, eigenvalue 0, is not), and the double integrator is controllable
+/// from the acceleration input and observable from the position, not the other way round.
+#[test]
+fn continuous_model_stability_controllability_and_observability() {
+    let ss = |a: &[f64], b: &[f64], c: &[f64]| {
+        model::ContinuousSs::new(
+            DMatrix::from_row_slice(2, 2, a),
+            DMatrix::from_row_slice(2, 1, b),
+            DMatrix::from_row_slice(1, 2, c),
+            DMatrix::zeros(1, 1),
+        )
+        .expect("valid")
+    };
+    let stable = ss(&[-1.0, 2.0, 0.0, -0.5], &[0.0, 1.0], &[1.0, 0.0]);
+    let integrator = ss(&[0.0, 0.0, 0.0, -1.0], &[0.0, 1.0], &[1.0, 0.0]);
+    let unstable = ss(&[0.3, 0.0, 0.0, -1.0], &[0.0, 1.0], &[1.0, 0.0]);
+    assert!(stable.is_stable().expect("ok"));
+    assert!(!integrator.is_stable().expect("ok"));
+    assert!(!unstable.is_stable().expect("ok"));
+
+    let double = [0.0, 1.0, 0.0, 0.0];
+    let from_acceleration = ss(&double, &[0.0, 1.0], &[1.0, 0.0]);
+    let from_position = ss(&double, &[1.0, 0.0], &[0.0, 1.0]);
+    assert!(from_acceleration.is_controllable(None).expect("ok"));
+    assert!(from_acceleration.is_observable(None).expect("ok"));
+    assert!(!from_position.is_controllable(None).expect("ok"));
+    assert!(!from_position.is_observable(None).expect("ok"));
+}
+
+/// The Lyapunov doubling stops on a criterion relative to P, so a scaled Q gives the scaled
+/// P to round-off whatever the unit (an absolute stopping rule would stop early for small Q
+/// and truncate the series).
+#[test]
+fn discrete_lyapunov_is_scale_free() {
+    let f = DMatrix::from_row_slice(2, 2, &[0.9, 0.2, -0.1, 0.7]);
+    let q = DMatrix::from_row_slice(2, 2, &[1.0, 0.3, 0.3, 2.0]);
+    let p1 = discrete_lyapunov(&f, &q).expect("stable");
+    for s in [1e-12, 1e12] {
+        let ps = discrete_lyapunov(&f, &(&q * s)).expect("stable");
+        // Doublings of a contraction with ρ ≈ 0.8: a few dozen roundings, 1e-13 relative.
+        assert!((&ps / s - &p1).amax() <= 1e-13 * p1.amax(), "unit {s}");
+    }
+}
