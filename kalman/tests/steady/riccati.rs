@@ -269,3 +269,20 @@ fn every_builder_applies_its_options() {
         );
     }
 }
+
+/// A doubling iterate that overflows is an error at that iteration, even when only one of
+/// the three iterates does: for the scalar LQR with a = 0.9, b = 1, q = 0 and r = 1e-308, the
+/// first doubling step multiplies G₀ = b²/r = 1e308 by 1 + a² = 1.81, past f64::MAX, while
+/// A₁ = a² and H₁ = q = 0 stay finite (a solver that looked only at those would return the
+/// zero solution without noticing).
+#[test]
+fn one_overflowing_doubling_iterate_is_an_error_at_once() {
+    let result = Dlqr::new([[0.9]], [[1.0]], [[0.0]], [[1e-308]]).and_then(|p| p.solve());
+    assert!(
+        matches!(
+            result,
+            Err(Error::RiccatiNoConvergence { iterations: 1, reason, .. }) if reason.contains("non-finite")
+        ),
+        "{result:?}"
+    );
+}

@@ -192,3 +192,38 @@ fn discrete_lyapunov_is_scale_free() {
         assert!((&ps / s - &p1).amax() <= 1e-13 * p1.amax(), "unit {s}");
     }
 }
+
+/// The discrete twin: stable exactly when every eigenvalue of F lies inside the unit circle
+/// (a unit eigenvalue is not), the spectral radius is the largest modulus (0.9 for a
+/// triangular F with diagonal 0.5, −0.9), and the discrete double integrator is controllable
+/// from the acceleration input and observable from the position, not the other way round.
+#[test]
+fn discrete_model_stability_controllability_and_observability() {
+    let ss = |f: &[f64], b: &[f64], h: &[f64]| {
+        model::DiscreteSs::new(
+            DMatrix::from_row_slice(2, 2, f),
+            DMatrix::from_row_slice(2, 1, b),
+            DMatrix::from_row_slice(1, 2, h),
+            DMatrix::zeros(1, 1),
+            0.1,
+        )
+        .expect("valid")
+    };
+    let stable = ss(&[0.5, 1.0, 0.0, -0.9], &[0.0, 1.0], &[1.0, 0.0]);
+    let marginal = ss(&[1.0, 0.0, 0.0, 0.5], &[0.0, 1.0], &[1.0, 0.0]);
+    let unstable = ss(&[1.2, 0.0, 0.0, 0.1], &[0.0, 1.0], &[1.0, 0.0]);
+    assert!(stable.is_stable().expect("ok"));
+    assert!(!marginal.is_stable().expect("ok"));
+    assert!(!unstable.is_stable().expect("ok"));
+    // Eigenvalues of a triangular matrix: its diagonal, to a few ε.
+    assert!((stable.spectral_radius().expect("ok") - 0.9).abs() <= 1e-14);
+    assert!((unstable.spectral_radius().expect("ok") - 1.2).abs() <= 1e-14);
+
+    let double = [1.0, 1.0, 0.0, 1.0];
+    let from_acceleration = ss(&double, &[0.5, 1.0], &[1.0, 0.0]);
+    let from_position = ss(&double, &[1.0, 0.0], &[0.0, 1.0]);
+    assert!(from_acceleration.is_controllable(None).expect("ok"));
+    assert!(from_acceleration.is_observable(None).expect("ok"));
+    assert!(!from_position.is_controllable(None).expect("ok"));
+    assert!(!from_position.is_observable(None).expect("ok"));
+}
