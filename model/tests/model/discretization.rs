@@ -185,8 +185,13 @@ fn discrete_tf_impulse_response_matches_realisation() {
     let tf = DiscreteTf::new(vec![0.5, 0.2, -0.1], vec![1.0, -0.6, 0.08], 0.1).expect("valid");
     let h = tf.impulse_response(30);
     let ss = tf.realize();
-    for (k, mk) in ss.impulse_response(30).iter().enumerate() {
-        assert!((mk[(0, 0)] - h[k]).abs() < 1e-14, "k = {k}");
+    // The same response from the noise input of the noise-driven model (G = B, J = D).
+    let noise = model::noise_driven(&tf, 1.0).expect("valid");
+    for markov in [ss.impulse_response(30), noise.noise_impulse_response(30)] {
+        assert_eq!(markov.len(), 30);
+        for (k, mk) in markov.iter().enumerate() {
+            assert!((mk[(0, 0)] - h[k]).abs() < 1e-14, "k = {k}");
+        }
     }
 }
 
