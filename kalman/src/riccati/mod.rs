@@ -199,14 +199,10 @@ impl Pair {
     }
 }
 
+/// `num/den` for two norms (`den ≥ 0`): 0 for a zero residual (also over a zero solution),
+/// +∞ for a non-zero residual over a zero solution.
 fn relative(num: f64, den: f64) -> f64 {
-    if num == 0.0 {
-        0.0
-    } else if den > 0.0 {
-        num / den
-    } else {
-        f64::INFINITY
-    }
+    if num == 0.0 { 0.0 } else { num / den }
 }
 
 /// Hᵀ R⁻¹ H from the Cholesky factor of R, symmetrised.

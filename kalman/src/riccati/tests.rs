@@ -205,3 +205,18 @@ fn care_and_clqr_residuals_measure_a_candidate() {
     let off = clqr.residual([[1.0]]).expect("residual");
     assert!((off - 2.0).abs() < 1e-15, "{off}");
 }
+
+#[test]
+fn symmetrise_averages_the_off_diagonal_pairs_and_leaves_the_diagonal() {
+    // Diagonal entries near f64::MAX must stay as they are (adding one to itself would
+    // overflow); each off-diagonal pair becomes its mean, exactly for these binary fractions.
+    let mut M = mat![[1e308, 1.0, 0.25], [3.0, -1e308, 0.5], [0.75, 1.5, 2.0]];
+    symmetrise(&mut M);
+    let expected = mat![[1e308, 2.0, 0.5], [2.0, -1e308, 1.0], [0.5, 1.0, 2.0]];
+    assert_eq!(M, expected);
+    // The relative residual of a zero residual is 0 even over a zero solution, and a
+    // non-zero residual over a zero solution is infinitely large.
+    assert!(relative(0.0, 0.0).abs() <= 0.0);
+    assert!(relative(1e-3, 0.0).is_infinite() && relative(1e-3, 0.0) > 0.0);
+    assert!((relative(1.0, 4.0) - 0.25).abs() <= 0.0);
+}
