@@ -71,6 +71,8 @@ fn lambda_max_spd3(G: &Matrix3<f64>) -> f64 {
         let step = p / dp;
         if step.is_nan() || step <= 4.0 * f64::EPSILON * x {
             // Converged, or rounding made p ≤ 0 at the root: stop without overshooting.
+            // (Stopping only on NaN is equivalent to round-off: the iterates then stay within
+            // a few ulps of the root until the iteration cap.)
             if step > 0.0 {
                 x -= step;
             }
@@ -480,6 +482,13 @@ mod tests {
             let reference = SymmetricEigen::new(G).eigenvalues.max();
             // Linear convergence near a double root stops within ~1e-8 relative of it.
             assert!((lambda_max_spd3(&G) / reference - 1.0).abs() < 1e-8, "{G}");
+        }
+        // The stopping rule is relative to λ: a simple largest eigenvalue comes out to a few
+        // ulps in any unit (1e-13 leaves the reference's own ε·‖G‖ and a margin).
+        for s in [1e-12, 1.0, 1e12] {
+            let G = cases[0] * s;
+            let reference = SymmetricEigen::new(G).eigenvalues.max();
+            assert!((lambda_max_spd3(&G) / reference - 1.0).abs() < 1e-13, "unit {s}");
         }
     }
 
