@@ -220,3 +220,21 @@ fn symmetrise_averages_the_off_diagonal_pairs_and_leaves_the_diagonal() {
     assert!(relative(1e-3, 0.0).is_infinite() && relative(1e-3, 0.0) > 0.0);
     assert!((relative(1.0, 4.0) - 0.25).abs() <= 0.0);
 }
+
+#[test]
+fn a_care_scaled_towards_underflow_keeps_its_solution() {
+    // Scaling A, HᵀR⁻¹H and Q by s scales the whole equation, not its solution: the scalar
+    // case a = −s, g = s, q = s keeps p = √2 − 1 down to s = 1e-155, where ‖ℋ‖_F ≈ 2s is
+    // below the Cayley shift's floor √(f64::MIN_POSITIVE) ≈ 1.5e-154, so that floor decides
+    // the shift's sign. (Products of order s² are subnormal there: 1e-10 relative.)
+    for s in [1.0, 1e-100, 1e-155] {
+        let ss = Care::new(mat![[-s]], mat![[1.0]], mat![[s]], mat![[1.0 / s]])
+            .and_then(|p| p.solve())
+            .expect("must succeed");
+        assert!(
+            (ss.covariance[(0, 0)] - (2f64.sqrt() - 1.0)).abs() < 1e-10,
+            "s = {s}: {:?}",
+            ss.covariance
+        );
+    }
+}

@@ -72,7 +72,8 @@ fn lambda_max_spd3(G: &Matrix3<f64>) -> f64 {
         if step.is_nan() || step <= 4.0 * f64::EPSILON * x {
             // Converged, or rounding made p ≤ 0 at the root: stop without overshooting.
             // (Stopping only on NaN is equivalent to round-off: the iterates then stay within
-            // a few ulps of the root until the iteration cap.)
+            // a few ulps of the root until the iteration cap. So is skipping this last step,
+            // or taking it the other way: it is at most 4ε·x.)
             if step > 0.0 {
                 x -= step;
             }
@@ -488,7 +489,10 @@ mod tests {
         for s in [1e-12, 1.0, 1e12] {
             let G = cases[0] * s;
             let reference = SymmetricEigen::new(G).eigenvalues.max();
-            assert!((lambda_max_spd3(&G) / reference - 1.0).abs() < 1e-13, "unit {s}");
+            assert!(
+                (lambda_max_spd3(&G) / reference - 1.0).abs() < 1e-13,
+                "unit {s}"
+            );
         }
     }
 
