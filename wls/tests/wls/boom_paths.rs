@@ -278,19 +278,28 @@ fn a_linear_ramp_from_rest_follows_the_harmonic_closed_form() {
 fn the_solved_deceleration_scales_with_the_table() {
     let base = RotationProfile::default();
     let d1 = base.solve_deceleration().expect("valid");
-    for s in [4.0_f64, 1024.0] {
-        let mut scaled = base.clone();
-        for b in &mut scaled.breakpoints {
+    let scaled = |s: f64| {
+        let mut p = base.clone();
+        for b in &mut p.breakpoints {
             if let Level::Value(e) = &mut b.epsilon {
                 *e *= s;
             }
         }
-        scaled.dt = base.dt / s.sqrt();
-        let ds = scaled.solve_deceleration().expect("valid");
+        p.dt = base.dt / s.sqrt();
+        p.solve_deceleration()
+    };
+    for s in [4.0_f64, 1024.0] {
+        let ds = scaled(s).expect("valid");
         assert!(
             (ds / s - d1).abs() <= 1e-14 * d1,
             "s = {s}: {ds} against {}",
             s * d1
         );
     }
+    // The search doubles its bracket up to 60 times, so ε_d up to 2^60 °/s² is found: here
+    // ≈ 8.4e17 > 2^59. (s is not a power of 4, so the scaled path differs by rounding: 1e-9.)
+    let s = 2e18;
+    let ds = scaled(s).expect("within the search's range");
+    assert!(ds > 2f64.powi(59));
+    assert!((ds / s - d1).abs() <= 1e-9 * d1, "{ds} against {}", s * d1);
 }
