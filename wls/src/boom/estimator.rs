@@ -121,6 +121,8 @@ impl Reduced {
         let t = T[(2, 2)];
         // T₃₃ and √v₆ are O(1)–O(10³) here: no overflow guard (hypot) needed.
         let rho = (t * t + v6).sqrt();
+        // (At ρ = 0, `≥` would write 0/0 into q₃, but the solve below refuses the zero pivot
+        // T₃₃ either way: equivalent.)
         if rho > 0.0 {
             q[2] = (t * q[2] + v6 * e0) / rho;
             T[(2, 2)] = rho;
