@@ -140,6 +140,8 @@ fn householder<const M: usize>(a: &mut [[f64; 4]; M]) {
         if norm <= 0.0 {
             continue;
         }
+        // α against the sign of x₀, so v₀ = x₀ − α never cancels (`≥` differs only at x₀ = 0,
+        // where neither sign cancels: equivalent).
         let alpha = if a[j][j] > 0.0 { -norm } else { norm };
         // v = x − α·e₁, stored in a scratch column; β = 2/(vᵀv) = 1/(norm·(norm + |x₀|)).
         let mut v = [0.0; M];
@@ -500,15 +502,32 @@ mod tests {
 
     /// The hand-written Householder reduction gives the R of nalgebra's QR (up to row signs)
     /// and the same least-squares solution.
+    /// The second case has columns almost along e₁ and e₂ (off-axis parts 1e-9): with the
+    /// reflector's sign chosen against cancellation, v₀ = x₀ + ‖x‖ keeps every digit; the
+    /// other sign would cancel x₀ − ‖x‖ to nothing and leave the column unreduced by 1e-9.
     #[test]
     fn householder_matches_nalgebra_qr() {
-        let mut a = [
-            [9.8, 0.0, 0.0, 1.0],
-            [0.0, 9.8, 0.43, 2.0],
-            [5.0, 7.0, 0.0, 10.0],
-            [1.0, 0.0, 0.0, 0.3],
-            [0.0, 1.0, 0.0, 0.9],
-        ];
+        for a in [
+            [
+                [9.8, 0.0, 0.0, 1.0],
+                [0.0, 9.8, 0.43, 2.0],
+                [5.0, 7.0, 0.0, 10.0],
+                [1.0, 0.0, 0.0, 0.3],
+                [0.0, 1.0, 0.0, 0.9],
+            ],
+            [
+                [2.0, 0.5, 0.0, 1.0],
+                [1e-9, 3.0, 0.25, 2.0],
+                [1e-9, 1e-9, 1.0, 0.5],
+                [0.0, 1e-9, 0.5, 0.3],
+                [0.0, 0.0, 0.25, 0.9],
+            ],
+        ] {
+            householder_case(a);
+        }
+    }
+
+    fn householder_case(mut a: [[f64; 4]; 5]) {
         let A = SMatrix::<f64, 5, 3>::from_fn(|i, j| a[i][j]);
         let b = SMatrix::<f64, 5, 1>::from_fn(|i, _| a[i][3]);
         householder(&mut a);

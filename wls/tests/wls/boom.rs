@@ -535,3 +535,34 @@ fn gamma_sweep_finds_the_smallest_feasible_offset() {
     let rep = sweep_gamma(&tr.points, &base, &meas, &variants, &gammas, strict).expect("valid");
     assert!((rep.smallest_feasible.expect("feasible").to_degrees() - 11.0).abs() < 1e-9);
 }
+
+/// A state seeded with a mounting offset γ = 10°: the Linear3 row s₀·s + c₀·c = 1 holds at
+/// the truth only if the seed is the sensor angle β = α − γ, so one cycle on exact readings
+/// from the seeded true state returns α (1e-10: the rounding bound of the test above). The
+/// estimator keeps its configuration, and a reset makes the next cycle a start-up again.
+#[test]
+fn a_seeded_state_is_the_sensor_angle_and_a_reset_forgets_it() {
+    let gamma = 10f64.to_radians();
+    let cfg = BoomConfig {
+        sensor_offset_angle: gamma,
+        ..config(BoomMethod::Linear3)
+    };
+    let mut est = BoomEstimator::new(cfg.clone()).expect("valid");
+    assert_eq!(est.config(), &cfg);
+    for a in [5.0, 40.0, 75.0_f64] {
+        let alpha = a.to_radians();
+        let (ax, ay) = exact(&cfg, alpha, 0.004);
+        est.set_state(alpha, 0.004).expect("finite");
+        let e = est.update(ax, ay, 0.0).expect("finite");
+        assert!(!e.startup && e.defined, "{a}°");
+        assert!(
+            (e.angle - alpha).abs() < 1e-10,
+            "{a}°: {}",
+            e.angle.to_degrees()
+        );
+        assert!((e.angular_acceleration - 0.004).abs() < 1e-10, "{a}°");
+    }
+    est.reset();
+    let (ax, ay) = exact(&cfg, 0.3, 0.0);
+    assert!(est.update(ax, ay, 0.0).expect("finite").startup);
+}
