@@ -238,3 +238,40 @@ fn a_care_scaled_towards_underflow_keeps_its_solution() {
         );
     }
 }
+
+#[test]
+fn pbh_embeds_a_complex_mode_and_scales_its_tolerance_with_f() {
+    let opts = RiccatiOptions::default();
+    // A rotation by θ has the unit-circle pair cos θ ± i sin θ: unobservable from C = 0,
+    // observable from either coordinate. The complex mode's real embedding must put Im M in
+    // its own block for both columns (n = 2).
+    let (c, s) = (0.6_f64, 0.8_f64);
+    let F = mat![[c, -s], [s, c]];
+    let unseen = checks::pbh(F.as_ref(), mat![[0.0, 0.0]].as_ref(), &[(c, s)], &opts).expect("svd");
+    assert_eq!(unseen, Some((c, s)));
+    for C in [mat![[1.0, 0.0]], mat![[0.0, 1.0]]] {
+        let seen = checks::pbh(F.as_ref(), C.as_ref(), &[(c, s)], &opts).expect("svd");
+        assert_eq!(seen, None, "{C:?}");
+    }
+    // With a third, stable state the embedding has more than one column per block to place
+    // Im M in: the pair is unobservable from that state alone and seen from either of its own.
+    let F3 = mat![[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 0.5]];
+    for (C, flagged) in [
+        (mat![[0.0, 0.0, 1.0]], true),
+        (mat![[1.0, 0.0, 0.0]], false),
+        (mat![[0.0, 1.0, 1.0]], false),
+    ] {
+        let verdict = checks::pbh(F3.as_ref(), C.as_ref(), &[(c, s)], &opts).expect("svd");
+        assert_eq!(verdict.is_some(), flagged, "{C:?}");
+    }
+    // The tolerance is relative to max(1, ‖F‖): with ‖F‖_F ≈ 100 the mode λ = 1 of
+    // [[1, 100], [0, 0.5]] (eigenvector e₁) seen from C at an angle φ to its null direction
+    // has σ_min ≈ 0.7·100·φ (C is scaled to ‖F‖), so φ = 1e-9 is below 1e-7·‖F‖ (flagged)
+    // but would not be below 1e-7/‖F‖, and φ = 1e-4 is clearly seen.
+    let F = mat![[1.0, 100.0], [0.0, 0.5]];
+    for (phi, flagged) in [(1e-9_f64, true), (1e-4, false)] {
+        let C = mat![[phi.sin(), phi.cos()]];
+        let verdict = checks::pbh(F.as_ref(), C.as_ref(), &[(1.0, 0.0)], &opts).expect("svd");
+        assert_eq!(verdict.is_some(), flagged, "φ = {phi}");
+    }
+}
