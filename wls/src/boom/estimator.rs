@@ -326,6 +326,7 @@ impl BoomEstimator {
         // so the root is found by the Illinois variant of regula falsi on [0, 1]. The full
         // solution is back-substituted once with the converged v₆.
         let t = reduced.T[(2, 2)];
+        // (`≤` differs only at |T₃₃| = f64::MIN_POSITIVE exactly: equivalent.)
         let (rate, iterations) = if t.abs() < f64::MIN_POSITIVE {
             // The five rows say nothing about ε: e = e₀ whatever v₆ > 0.
             (0.0, 0)

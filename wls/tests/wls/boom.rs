@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, DVector};
 use wls::Error;
 use wls::boom::{
     AngleUnit, BoomConfig, BoomEstimator, BoomMethod, BoomSolver, ErrorVariant, Limits, RateWeight,
-    RotationProfile, TrajectoryPoint, ideal_accelerometer, run_turn, sweep_gamma,
+    RotationProfile, TrajectoryPoint, WlsWeights, ideal_accelerometer, run_turn, sweep_gamma,
 };
 use wls::solver::{SolveOptions, Weights, solve};
 
@@ -568,4 +568,28 @@ fn a_seeded_state_is_the_sensor_angle_and_a_reset_forgets_it() {
     est.reset();
     let (ax, ay) = exact(&cfg, 0.3, 0.0);
     assert!(est.update(ax, ay, 0.0).expect("finite").startup);
+}
+
+/// With a zero weight on a_y (allowed: weights are ≥ 0) no row but the prior mentions ε, so
+/// the self-consistent WLS cycle must return the previous cycle's ε unchanged, whatever the
+/// new reading says, and still the angle from the other rows (1e-10: the exactness bound of
+/// the first test; the a_x row and the priors agree at the truth).
+#[test]
+fn a_zero_weight_on_a_y_keeps_the_previous_acceleration() {
+    let cfg = BoomConfig {
+        weights: WlsWeights {
+            ay: 0.0,
+            ..WlsWeights::default()
+        },
+        ..config(BoomMethod::Wls)
+    };
+    assert!(matches!(cfg.rate_weight, RateWeight::FixedPoint { .. }));
+    let mut est = BoomEstimator::new(cfg.clone()).expect("valid");
+    let alpha = 30f64.to_radians();
+    est.set_state(alpha, 0.004).expect("finite");
+    let (ax, ay) = exact(&cfg, alpha, 0.009);
+    let e = est.update(ax, ay, 0.0).expect("finite");
+    assert!(e.defined, "{e:?}");
+    assert!((e.angular_acceleration - 0.004).abs() < 1e-12, "{e:?}");
+    assert!((e.angle - alpha).abs() < 1e-10, "{e:?}");
 }
