@@ -344,6 +344,7 @@ impl BoomEstimator {
                 let r = r0 + theta * r1;
                 let u = 1.0 + w.eps_rate_gain * r.abs();
                 let v6 = w.eps_prior / (u * u);
+                // (Dividing by r.signum() = ±1 instead of multiplying is exact: equivalent.)
                 let dv6 = -2.0 * w.eps_prior * w.eps_rate_gain * r.signum() * r1 / (u * u * u);
                 let den = t2 + v6;
                 (theta - v6 / den, 1.0 - t2 * dv6 / (den * den))
