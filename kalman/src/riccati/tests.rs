@@ -264,6 +264,17 @@ fn pbh_embeds_a_complex_mode_and_scales_its_tolerance_with_f() {
         let verdict = checks::pbh(F3.as_ref(), C.as_ref(), &[(c, s)], &opts).expect("svd");
         assert_eq!(verdict.is_some(), flagged, "{C:?}");
     }
+    // The pair in the last two states: no complex multiple of its eigenvector (0, 1, ∓i) has
+    // a real part confined to the first state, so every column of the embedding's Im M block
+    // takes part in the null vector.
+    let F3 = mat![[0.5, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]];
+    for (C, flagged) in [
+        (mat![[1.0, 0.0, 0.0]], true),
+        (mat![[0.0, 0.0, 1.0]], false),
+    ] {
+        let verdict = checks::pbh(F3.as_ref(), C.as_ref(), &[(c, s)], &opts).expect("svd");
+        assert_eq!(verdict.is_some(), flagged, "{C:?}");
+    }
     // The tolerance is relative to max(1, ‖F‖): with ‖F‖_F ≈ 100 the mode λ = 1 of
     // [[1, 100], [0, 0.5]] (eigenvector e₁) seen from C at an angle φ to its null direction
     // has σ_min ≈ 0.7·100·φ (C is scaled to ‖F‖), so φ = 1e-9 is below 1e-7·‖F‖ (flagged)
