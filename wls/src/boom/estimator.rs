@@ -436,8 +436,13 @@ impl BoomEstimator {
                     return Ok(undefined(s, c, f64::INFINITY, 0, startup));
                 }
                 let kappa = condition(&self.h3(s, c));
-                let rate = self.state.map_or(0.0, |p| (eps - p.eps) / cfg.dt);
-                self.state = Some(State { s, c, eps, rate });
+                // No ε̇: a start-up cycle has no previous ε, and Direct never reads it.
+                self.state = Some(State {
+                    s,
+                    c,
+                    eps,
+                    rate: 0.0,
+                });
                 return Ok(defined(s.asin(), s, c, eps, kappa, 0, startup));
             }
             (_, Some(p)) => p,

@@ -602,3 +602,21 @@ fn a_zero_weight_on_a_y_keeps_the_previous_acceleration() {
     assert!((e.angular_acceleration - 0.004).abs() < 1e-12, "{e:?}");
     assert!((e.angle - alpha).abs() < 1e-10, "{e:?}");
 }
+
+/// At α = 90° the solved s is 1 up to a few ulps, which the arcsin recovery must accept
+/// (its slack is 4ε) rather than call the estimate undefined: Linear3 and WLS seeded at the
+/// vertical on exact readings. asin is flat at 1, so an s error of a few ε moves α by up to
+/// √(2·4ε) ≈ 3e-8 rad: 1e-7.
+#[test]
+fn the_vertical_boom_is_recovered_by_the_arcsin() {
+    for method in [BoomMethod::Linear3, BoomMethod::Wls] {
+        let cfg = config(method);
+        let mut est = BoomEstimator::new(cfg.clone()).expect("valid");
+        let alpha = 90f64.to_radians();
+        est.set_state(alpha, 0.0).expect("finite");
+        let (ax, ay) = exact(&cfg, alpha, 0.0);
+        let e = est.update(ax, ay, 0.0).expect("finite");
+        assert!(e.defined, "{method:?}: {e:?}");
+        assert!((e.angle - alpha).abs() < 1e-7, "{method:?}: {e:?}");
+    }
+}
