@@ -181,7 +181,9 @@ fn fixed_gain_mode_matches_a_filter_started_at_steady_state() {
         .and_then(|p| p.solve())
         .expect("DARE");
     let sched = GainSchedule::fixed_gain(model(dims, &p, false), &ss).expect("fixed gain");
+    // The one steady gain: a schedule is never empty.
     assert_eq!(sched.len(), 1);
+    assert!(!sched.is_empty());
     let mut run = sched.runner(&p.x0).expect("runner");
     let mut full = Filter::new(
         model(dims, &p, false),
