@@ -213,6 +213,7 @@ impl<D: Dims> GainSchedule<D> {
         let mut r = ScheduledFilter {
             s: self,
             k: 0,
+            taken: 0,
             xp: D::Nv::zeros(n),
             xf: D::Nv::zeros(n),
             e: D::Mv::zeros(m),
@@ -228,7 +229,10 @@ impl<D: Dims> GainSchedule<D> {
 #[derive(Debug, Clone)]
 pub struct ScheduledFilter<'a, D: Dims> {
     s: &'a GainSchedule<D>,
+    /// The position in the schedule (it jumps to the steady gain when a fallback ends).
     k: usize,
+    /// Steps taken since the last reset.
+    taken: usize,
     xp: D::Nv,
     xf: D::Nv,
     e: D::Mv,
@@ -246,6 +250,7 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         load_vec("x0", x0, n, self.xp.as_mut_slice())?;
         self.xf.as_mut_slice()[..n].copy_from_slice(x0);
         self.k = 0;
+        self.taken = 0;
         self.in_full = false;
         Ok(())
     }
@@ -290,8 +295,9 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         if !s.cross.is_empty() {
             add_mat_vec(n, &s.cross[idx].as_slice()[..n * m], e, xp);
         }
-        let step = self.k;
+        let step = self.taken;
         self.k += 1;
+        self.taken += 1;
         for (what, x) in [("x_{k|k}", &*xf), ("x_{k+1|k}", &*xp)] {
             if let Some(value) = diverged(x.iter().copied()) {
                 return Err(Error::Diverged { step, what, value });
@@ -314,7 +320,7 @@ impl<D: Dims> ScheduledFilter<'_, D> {
             self.in_full = true;
         }
         // The internal filter counts from its restart: name the stream's step instead.
-        let step = self.k;
+        let step = self.taken;
         self.full.step(z, u).map_err(|e| match e {
             Error::Diverged { what, value, .. } => Error::Diverged { step, what, value },
             e => e,
@@ -335,9 +341,12 @@ impl<D: Dims> ScheduledFilter<'_, D> {
         }
         if diff <= s.opts.reentry_tolerance * big {
             self.in_full = false;
+            // (Any position at or past the last gain does the same: the gain index and the
+            // prior of a later fallback both saturate there.)
             self.k = self.k.max(s.gains.len() - 1);
         }
         self.k += 1;
+        self.taken += 1;
         Ok(())
     }
 
@@ -358,7 +367,7 @@ impl<D: Dims> ScheduledFilter<'_, D> {
 
     /// Steps taken since the last reset.
     pub fn steps(&self) -> usize {
-        self.k
+        self.taken
     }
 
     /// Whether the next step runs on the schedule (false while in the full-update fallback).

@@ -341,3 +341,67 @@ fn fallback_counts<D: Dims>(dims: D, p: &Problem) -> (usize, usize, bool) {
     let a3 = allocations();
     (a1 - a0, a3 - a2, run.on_schedule())
 }
+
+/// One measurement missing anywhere — inside the transient, at the last scheduled gain, just
+/// after it — makes that step the full filter's (restarted from the scheduled prior of that
+/// step, or the steady one past the schedule), so the stream equals the full filter at every
+/// step; the runner counts the steps it took, also after jumping back onto the schedule,
+/// and it is back on the schedule within the same number of steps in any unit (Q, R, P0
+/// scaled by 1e6, the data by 1e3). Tolerance as `reproduces_the_full_filter`.
+#[test]
+fn a_missing_measurement_anywhere_is_the_full_filters_step() {
+    let base = problem(3, 4, 2, 160, false);
+    let len = GainSchedule::new(
+        model(DynDims::new(4, 2, 1).expect("dims"), &base, false),
+        &base.P0,
+        ScheduleOptions::default(),
+    )
+    .expect("schedule")
+    .len();
+    assert!(len > 4 && len + 60 < 160, "{len}");
+    for miss_at in [2, len - 1, len, len + 1] {
+        let mut back_after = Vec::new();
+        for scale in [1.0, 1e6] {
+            let mut p = problem(3, 4, 2, 160, false);
+            p.zs[miss_at][1] = f64::NAN;
+            for M in [&mut p.Q, &mut p.R, &mut p.P0] {
+                *M *= faer::Scale(scale);
+            }
+            let s = scale.sqrt();
+            p.zs.iter_mut().flatten().for_each(|z| *z *= s);
+            p.us.iter_mut().flatten().for_each(|u| *u *= s);
+            p.x0.iter_mut().for_each(|x| *x *= s);
+            let dims = DynDims::new(4, 2, 1).expect("dims");
+            let sched =
+                GainSchedule::new(model(dims, &p, false), &p.P0, ScheduleOptions::default())
+                    .expect("schedule");
+            let mut run = sched.runner(&p.x0).expect("runner");
+            let mut full =
+                Filter::new(model(dims, &p, false), &p.x0, &p.P0, CovarianceForm::Joseph)
+                    .expect("filter");
+            let mut back = None;
+            for (k, (z, u)) in p.zs.iter().zip(&p.us).enumerate() {
+                run.step(z, Some(u)).expect("scheduled step");
+                full.step(z, Some(u)).expect("full step");
+                assert_eq!(run.steps(), k + 1, "missing at {miss_at}");
+                assert_eq!((run.state().len(), run.predicted_state().len()), (4, 4));
+                let states = run.state().iter().zip(full.state());
+                for (a, b) in states.chain(run.predicted_state().iter().zip(full.predicted_state()))
+                {
+                    assert!(
+                        (a - b).abs() <= 1e-9 * b.abs().max(s),
+                        "missing at {miss_at}, step {k}"
+                    );
+                }
+                if k >= miss_at && back.is_none() && run.on_schedule() {
+                    back = Some(k - miss_at);
+                }
+            }
+            back_after.push(back.expect("back on the schedule"));
+        }
+        assert_eq!(
+            back_after[0], back_after[1],
+            "missing at {miss_at}: re-entry depends on the unit"
+        );
+    }
+}
