@@ -405,3 +405,38 @@ fn a_missing_measurement_anywhere_is_the_full_filters_step() {
         );
     }
 }
+
+/// A deterministic model (Q = R = S = 0) from an exact prior (P0 = 0) has Σ = 0 at every
+/// step: the cross gain S Σ⁺ must be the zero matrix (Σ⁺ = 0), not 0·∞, so the schedule is
+/// built and the stream is the noise-free path x_{k+1} = F x_k + B u_k.
+#[test]
+fn a_zero_innovation_covariance_gives_zero_gains() {
+    let dims = DynDims::new(2, 1, 1).expect("dims");
+    let F = faer::mat![[1.0, 0.1], [0.0, 1.0]];
+    let zero2 = Mat::<f64>::zeros(2, 2);
+    let model = Model::new(
+        dims,
+        &F,
+        &faer::mat![[1.0, 0.0]],
+        &zero2,
+        &Mat::<f64>::zeros(1, 1),
+    )
+    .and_then(|m| m.with_control(&faer::mat![[0.0], [1.0]]))
+    .and_then(|m| m.with_cross_covariance(&Mat::<f64>::zeros(2, 1)))
+    .expect("model");
+    let sched = GainSchedule::new(model, &zero2, ScheduleOptions::default())
+        .expect("a zero Σ is a valid (deterministic) case");
+    let mut run = sched.runner(&[1.0, 0.5]).expect("runner");
+    let mut x = [1.0, 0.5];
+    for k in 0..5 {
+        run.step(&[(k as f64).cos()], Some(&[0.2])).expect("step");
+        x = [x[0] + 0.1 * x[1], x[1] + 0.2];
+        for i in 0..2 {
+            // A few additions of numbers ≤ 2: 1e-15.
+            assert!(
+                (run.predicted_state()[i] - x[i]).abs() <= 1e-15,
+                "step {k}, x[{i}]"
+            );
+        }
+    }
+}
