@@ -351,6 +351,8 @@ impl BoomEstimator {
             };
             let to_eps = d.abs() / k;
             let mut iterations = 0;
+            // (Running the search in these two cases too, or at f = 0 moving `a` instead of
+            // `b` below, lands on the same root within `tol`: equivalent.)
             let root = if w.eps_prior <= 0.0 || to_eps <= tol {
                 // v₆ ≡ 0, or e₀ = e₅ and v₆ cannot move the answer.
                 0.0

@@ -620,3 +620,36 @@ fn the_vertical_boom_is_recovered_by_the_arcsin() {
         assert!((e.angle - alpha).abs() < 1e-7, "{method:?}: {e:?}");
     }
 }
+
+/// The self-consistent search reports the v₆ evaluations it made: at least one on a cycle
+/// where it runs (noisy readings make ε̇ and so v₆ move), never more than its cap, also when
+/// the cap is 1 and the tolerance is out of reach.
+#[test]
+fn the_v6_search_counts_its_evaluations_up_to_its_cap() {
+    use rand::{RngExt, SeedableRng};
+    for (max_iterations, tolerance) in [(1, 1e-300), (50, 1e-10)] {
+        let cfg = BoomConfig {
+            rate_weight: RateWeight::FixedPoint {
+                max_iterations,
+                tolerance,
+            },
+            ..BoomConfig::default()
+        };
+        let tr = RotationProfile::default().trajectory().expect("valid");
+        let meas = ideal_accelerometer(cfg.g, cfg.sensor_radius);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut est = BoomEstimator::new(cfg.clone()).expect("valid");
+        let mut most = 0;
+        for p in tr.points.iter().step_by(7).take(200) {
+            let [ax, ay, az] = meas(p, 0.0, &ErrorVariant::nominal());
+            let ay = ay + rng.random_range(-0.02..0.02);
+            let e = est.update(ax, ay, az).expect("finite");
+            assert!(e.iterations <= max_iterations, "{e:?}");
+            if !e.startup {
+                assert!(e.iterations >= 1, "{e:?}");
+            }
+            most = most.max(e.iterations);
+        }
+        assert!(most >= 1);
+    }
+}
