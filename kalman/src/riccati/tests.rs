@@ -286,3 +286,32 @@ fn pbh_embeds_a_complex_mode_and_scales_its_tolerance_with_f() {
         assert_eq!(verdict.is_some(), flagged, "φ = {phi}");
     }
 }
+
+#[test]
+fn the_last_check_wants_a_closed_loop_strictly_inside() {
+    // Stable means ρ < 1 (discrete) and max Re λ < 0 (continuous): a closed loop on the
+    // boundary is refused, one just inside accepted, a NaN refused.
+    let opts = RiccatiOptions::default();
+    let solved = || problem::Solved {
+        x: Mat::<f64>::identity(1, 1),
+        iterations: 1,
+        relative_residual: 0.0,
+    };
+    for (time, boundary, inside) in [
+        (problem::Time::Discrete, 1.0, 1.0 - 1e-12),
+        (problem::Time::Continuous, 0.0, -1e-12),
+    ] {
+        assert!(
+            solved().checked(boundary, time, &opts, "test").is_err(),
+            "{time:?}"
+        );
+        assert!(
+            solved().checked(f64::NAN, time, &opts, "test").is_err(),
+            "{time:?}"
+        );
+        assert!(
+            solved().checked(inside, time, &opts, "test").is_ok(),
+            "{time:?}"
+        );
+    }
+}
