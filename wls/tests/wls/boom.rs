@@ -653,3 +653,29 @@ fn the_v6_search_counts_its_evaluations_up_to_its_cap() {
         assert!(most >= 1);
     }
 }
+
+/// The mounting tolerance may be zero (demand a_z = 0 exactly) but not negative or
+/// non-finite; a bad one is refused by name.
+#[test]
+fn the_mounting_tolerance_is_checked_by_name() {
+    for (value, valid) in [
+        (0.0, true),
+        (0.5, true),
+        (-1e-9, false),
+        (f64::NAN, false),
+        (f64::INFINITY, false),
+    ] {
+        let cfg = BoomConfig {
+            mounting_tolerance: value,
+            ..BoomConfig::default()
+        };
+        match BoomEstimator::new(cfg) {
+            Ok(_) => assert!(valid, "{value} accepted"),
+            Err(Error::InvalidParameter { name, .. }) => {
+                assert!(!valid, "{value} refused");
+                assert_eq!(name, "mounting_tolerance");
+            }
+            Err(e) => panic!("{value}: {e:?}"),
+        }
+    }
+}
