@@ -183,7 +183,8 @@ impl<D: Dims> GainSchedule<D> {
         self.gains.len()
     }
 
-    /// Always false: a schedule holds at least the steady gain.
+    /// Always false: a schedule holds at least the steady gain (so a body of `false` would
+    /// be equivalent).
     pub fn is_empty(&self) -> bool {
         self.gains.is_empty()
     }

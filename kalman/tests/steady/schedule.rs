@@ -440,3 +440,34 @@ fn a_zero_innovation_covariance_gives_zero_gains() {
         }
     }
 }
+
+/// A steady state solved for another model is refused by the fixed-gain schedule, naming the
+/// gain, when either of its dimensions differs (here only the measurement count).
+#[test]
+fn a_fixed_gain_of_the_wrong_shape_is_named() {
+    let p = problem(5, 4, 2, 10, false);
+    let ss = Dare::new(&p.F, &p.H, &p.Q, &p.R)
+        .and_then(|p| p.solve())
+        .expect("DARE");
+    let one_channel = Model::new(
+        DynDims::new(4, 1, 0).expect("dims"),
+        &p.F,
+        &p.H.subrows(0, 1),
+        &p.Q,
+        &p.R.submatrix(0, 0, 1, 1),
+    )
+    .expect("model");
+    let e = GainSchedule::fixed_gain(one_channel, &ss).expect_err("a 4×2 gain for one channel");
+    assert!(
+        matches!(
+            e,
+            kalman::Error::Shape {
+                name: "K",
+                expected_rows: 4,
+                expected_cols: 1,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+}
