@@ -21,8 +21,8 @@ use crate::{cargo, known, option, root};
 const LIBRARY_CRATES: &[&str] = &["model", "kalman", "wls", "sensors"];
 
 /// Seconds a mutant's tests may run before it counts as a timeout (the unit and integration
-/// suite of one crate, unoptimised and without [`LONG_RUNS`], takes under 10 s here when
-/// unmutated).
+/// suite of one crate, unoptimised and without [`LONG_RUNS`], takes about 10 s on this
+/// machine when unmutated and quiet, 10–25 s beside a second run).
 const DEFAULT_TIMEOUT: &str = "60";
 
 /// Tests left out of a mutant's run: long runs that take most of a crate's test time when the
@@ -30,8 +30,9 @@ const DEFAULT_TIMEOUT: &str = "60";
 /// only turn a caught mutant into a missed one, never the reverse, so the counts stay
 /// honest; `cargo xtask test` runs them as always.
 const LONG_RUNS: &[&str] = &[
-    // One million steps of the fuel filter (27 s unoptimised, the whole rest of the kalman
-    // suite about 8 s); its short-run properties are checked by the other engine tests.
+    // One million steps of the fuel filter (27 s unoptimised, all the other kalman tests
+    // together about 15 s run one at a time); its short-run properties are checked by the
+    // other engine tests.
     "engine::fuel::fuel_model_runs_a_million_steps",
 ];
 
