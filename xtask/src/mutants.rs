@@ -74,7 +74,9 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
             bail!("--shard takes K/N with 0 ≤ K < N, not `{s}`");
         }
     }
-    // Two runs at once need two build directories: cargo locks one for the whole build.
+    // Two runs at once must not share a build directory: cargo builds every copy of the tree
+    // into the same files (a path package's hash is relative to its workspace), so one run
+    // could test the other's mutant.
     let target_dir = option(args, "--target-dir")?.map_or_else(
         || root().join("target").join("mutants").join("build"),
         std::path::PathBuf::from,
