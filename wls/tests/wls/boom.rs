@@ -5,8 +5,9 @@
 use nalgebra::{DMatrix, DVector};
 use wls::Error;
 use wls::boom::{
-    AngleUnit, BoomConfig, BoomEstimator, BoomMethod, BoomSolver, ErrorVariant, Limits, RateWeight,
-    RotationProfile, TrajectoryPoint, WlsWeights, ideal_accelerometer, run_turn, sweep_gamma,
+    AngleUnit, BoomConfig, BoomEstimator, BoomMethod, BoomSolver, ErrorVariant, Estimate, Limits,
+    RateWeight, RotationProfile, TrajectoryPoint, WlsWeights, ideal_accelerometer, run_turn,
+    sweep_gamma,
 };
 use wls::solver::{SolveOptions, Weights, solve};
 
@@ -23,6 +24,14 @@ fn exact(cfg: &BoomConfig, alpha: f64, eps: f64) -> (f64, f64) {
         cfg.g * beta.sin(),
         cfg.g * beta.cos() + eps * cfg.sensor_radius,
     )
+}
+
+/// One cycle of a fresh estimator seeded at (α, ε₀) on exact readings at (α, ε).
+fn seeded_cycle(cfg: &BoomConfig, alpha: f64, eps0: f64, eps: f64) -> Estimate {
+    let mut est = BoomEstimator::new(cfg.clone()).expect("valid");
+    est.set_state(alpha, eps0).expect("finite");
+    let (ax, ay) = exact(cfg, alpha, eps);
+    est.update(ax, ay, 0.0).expect("finite")
 }
 
 /// γ = 0 (and γ = 10°), exact static readings over 0–89°: every method returns α and ε.
@@ -119,11 +128,7 @@ fn linear3_condition_number_grows_like_inverse_cosine() {
     let mut last = 0.0;
     for a in angles {
         let alpha = a.to_radians();
-        let cfg = config(BoomMethod::Linear3);
-        let (ax, ay) = exact(&cfg, alpha, 0.0);
-        let mut est = BoomEstimator::new(cfg).expect("valid");
-        est.set_state(alpha, 0.0).expect("finite");
-        let e = est.update(ax, ay, 0.0).expect("finite");
+        let e = seeded_cycle(&config(BoomMethod::Linear3), alpha, 0.0, 0.0);
         assert!(
             e.condition_number > last,
             "κ must grow: {a}° {}",
@@ -593,11 +598,8 @@ fn a_zero_weight_on_a_y_keeps_the_previous_acceleration() {
         ..config(BoomMethod::Wls)
     };
     assert!(matches!(cfg.rate_weight, RateWeight::FixedPoint { .. }));
-    let mut est = BoomEstimator::new(cfg.clone()).expect("valid");
     let alpha = 30f64.to_radians();
-    est.set_state(alpha, 0.004).expect("finite");
-    let (ax, ay) = exact(&cfg, alpha, 0.009);
-    let e = est.update(ax, ay, 0.0).expect("finite");
+    let e = seeded_cycle(&cfg, alpha, 0.004, 0.009);
     assert!(e.defined, "{e:?}");
     assert!((e.angular_acceleration - 0.004).abs() < 1e-12, "{e:?}");
     assert!((e.angle - alpha).abs() < 1e-10, "{e:?}");
@@ -610,12 +612,8 @@ fn a_zero_weight_on_a_y_keeps_the_previous_acceleration() {
 #[test]
 fn the_vertical_boom_is_recovered_by_the_arcsin() {
     for method in [BoomMethod::Linear3, BoomMethod::Wls] {
-        let cfg = config(method);
-        let mut est = BoomEstimator::new(cfg.clone()).expect("valid");
         let alpha = 90f64.to_radians();
-        est.set_state(alpha, 0.0).expect("finite");
-        let (ax, ay) = exact(&cfg, alpha, 0.0);
-        let e = est.update(ax, ay, 0.0).expect("finite");
+        let e = seeded_cycle(&config(method), alpha, 0.0, 0.0);
         assert!(e.defined, "{method:?}: {e:?}");
         assert!((e.angle - alpha).abs() < 1e-7, "{method:?}: {e:?}");
     }

@@ -5,7 +5,7 @@
 use wls::Error;
 use wls::boom::{
     BoomConfig, Breakpoint, CycleError, Deceleration, ErrorVariant, Level, Limits, RotationProfile,
-    ideal_accelerometer, run_turn,
+    TurnRun, ideal_accelerometer, run_turn,
 };
 
 /// The field an `InvalidParameter` error names, or a panic showing what came instead.
@@ -76,16 +76,27 @@ fn a_final_angle_passed_in_the_first_step_cannot_be_stopped_at() {
     }
 }
 
+/// The first 300 samples (3 s) of the paper's turn with the "+" variant of 0.02 m/s², run
+/// under `limits`.
+fn short_turn(limits: Limits) -> TurnRun {
+    let profile = RotationProfile::default().trajectory().expect("valid");
+    let config = BoomConfig::default();
+    let measure = ideal_accelerometer(config.g, config.sensor_radius);
+    run_turn(
+        &profile.points[..300],
+        &config,
+        &measure,
+        &ErrorVariant::plus(0.02),
+        limits,
+    )
+    .expect("valid")
+}
+
 /// A turn's first violation is the first cycle after start-up where *either* error exceeds
 /// its own limit: rebuilt here from the per-cycle records, with one limit out of reach
 /// (1 rad, 1 rad/s²) so that the other error alone decides.
 #[test]
 fn first_violation_is_decided_by_either_error_alone() {
-    let profile = RotationProfile::default().trajectory().expect("valid");
-    let points = &profile.points[..300];
-    let config = BoomConfig::default();
-    let measure = ideal_accelerometer(config.g, config.sensor_radius);
-    let variant = ErrorVariant::plus(0.02);
     let tight = 1e-4;
     for (limits, error_of) in [
         (
@@ -103,7 +114,7 @@ fn first_violation_is_decided_by_either_error_alone() {
             |c: &CycleError| c.angle_error,
         ),
     ] {
-        let run = run_turn(points, &config, &measure, &variant, limits).expect("valid");
+        let run = short_turn(limits);
         let expected = run.cycles[1..]
             .iter()
             .find(|c| error_of(c) > tight)
@@ -144,16 +155,11 @@ fn a_variant_is_labelled_by_its_stored_name() {
 /// Each error alone, the other limit out of reach.
 #[test]
 fn an_error_equal_to_its_limit_is_not_a_violation() {
-    let profile = RotationProfile::default().trajectory().expect("valid");
-    let points = &profile.points[..300];
-    let config = BoomConfig::default();
-    let measure = ideal_accelerometer(config.g, config.sensor_radius);
-    let variant = ErrorVariant::plus(0.02);
     let loose = Limits {
         angle: 1.0,
         angular_acceleration: 1.0,
     };
-    let reference = run_turn(points, &config, &measure, &variant, loose).expect("valid");
+    let reference = short_turn(loose);
     assert_eq!(reference.first_violation, None);
     let errors: [fn(&CycleError) -> f64; 2] = [|c| c.angle_error, |c| c.epsilon_error];
     for (which, error_of) in errors.into_iter().enumerate() {
@@ -171,11 +177,10 @@ fn an_error_equal_to_its_limit_is_not_a_violation() {
             }
             l
         };
-        let met = run_turn(points, &config, &measure, &variant, limits_at(largest)).expect("valid");
+        let met = short_turn(limits_at(largest));
         assert_eq!(met.first_violation, None, "{which}: limit = largest error");
         let below = largest - largest * f64::EPSILON;
-        let broken =
-            run_turn(points, &config, &measure, &variant, limits_at(below)).expect("valid");
+        let broken = short_turn(limits_at(below));
         let expected = reference.cycles[1..]
             .iter()
             .find(|c| error_of(c) > below)
