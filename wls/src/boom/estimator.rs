@@ -166,6 +166,51 @@ fn householder<const M: usize>(a: &mut [[f64; 4]; M]) {
 /// |s| may exceed 1 only by rounding for the angle to be defined.
 const SIN_SLACK: f64 = 4.0 * f64::EPSILON;
 
+/// The root of an increasing-through-zero h on the bracket [0, 1] (h(0) < 0 < h(1), given by
+/// the caller), by Newton's method safeguarded by bisection: (root, evaluations of h).
+///
+/// `h` returns (h(x), h′(x)). A Newton step is taken only when it lands strictly inside the
+/// current bracket; otherwise the bracket is halved. So every evaluation is strictly
+/// inside (0, 1), where h means something, and never at a bracket end, whose sign is known.
+/// The search stops once a step moves x by at most `tol / scale` or after `max_it` evaluations.
+/// (A stop on the bracket's width would add nothing: x is an end of the updated bracket and the
+/// next point lies inside it, so the step is never wider than the bracket.)
+fn newton_in_unit_bracket(
+    mut h: impl FnMut(f64) -> (f64, f64),
+    x0: f64,
+    scale: f64,
+    tol: f64,
+    max_it: u32,
+) -> (f64, u32) {
+    let (mut a, mut b) = (0.0, 1.0);
+    let mut x = x0;
+    let mut evaluations = 0;
+    while evaluations < max_it {
+        evaluations += 1;
+        let (f, df) = h(x);
+        // (At f = 0 moving `a` instead lands on the same root within `tol`: equivalent.)
+        if f < 0.0 {
+            a = x;
+        } else {
+            b = x;
+        }
+        // x is now an end of the bracket, so a tangent with h′ ≤ 0 points out of it (or to ±∞,
+        // or NaN at h′ = 0): the bounds alone reject every step but a Newton step of h′ > 0.
+        let newton = x - f / df;
+        let next = if newton > a && newton < b {
+            newton
+        } else {
+            0.5 * (a + b)
+        };
+        let step = (next - x).abs();
+        x = next;
+        if step * scale <= tol {
+            break;
+        }
+    }
+    (x, evaluations)
+}
+
 impl BoomEstimator {
     /// A new estimator; the first `update` is the start-up cycle.
     ///
@@ -350,40 +395,16 @@ impl BoomEstimator {
                 (theta - v6 / den, 1.0 - t2 * dv6 / (den * den))
             };
             let to_eps = d.abs() / k;
-            let mut iterations = 0;
-            // (Running the search in these two cases too, or at f = 0 moving `a` instead of
-            // `b` below, lands on the same root within `tol`: equivalent.)
-            let root = if w.eps_prior <= 0.0 || to_eps <= tol {
+            // (Running the search in these two cases too lands on the same root within `tol`:
+            // equivalent.)
+            let (root, iterations) = if w.eps_prior <= 0.0 || to_eps <= tol {
                 // v₆ ≡ 0, or e₀ = e₅ and v₆ cannot move the answer.
-                0.0
+                (0.0, 0)
             } else {
-                // Newton safeguarded by bisection on the bracket [0, 1] (h(0) < 0 < h(1) as
-                // T₃₃ ≠ 0 and the numerator of v₆ is > 0), started from the one-solve answer
-                // with ε̇ of the previous cycle.
-                let (mut a, mut b) = (0.0, 1.0);
+                // h(0) < 0 < h(1) as T₃₃ ≠ 0 and the numerator of v₆ is > 0. Started from the
+                // one-solve answer with ε̇ of the previous cycle.
                 let v_prev = self.v6(prev.rate);
-                let mut x = v_prev / (t2 + v_prev);
-                while iterations < max_it {
-                    iterations += 1;
-                    let (f, df) = h(x);
-                    if f < 0.0 {
-                        a = x;
-                    } else {
-                        b = x;
-                    }
-                    let newton = x - f / df;
-                    let next = if df > 0.0 && newton > a && newton < b {
-                        newton
-                    } else {
-                        0.5 * (a + b)
-                    };
-                    let step = (next - x).abs();
-                    x = next;
-                    if step * to_eps <= tol || (b - a) * to_eps <= tol {
-                        break;
-                    }
-                }
-                x
+                newton_in_unit_bracket(h, v_prev / (t2 + v_prev), to_eps, tol, max_it)
             };
             (rate_of(root), iterations)
         };
@@ -565,5 +586,96 @@ mod tests {
         // A triple eigenvalue is a triple root of the characteristic polynomial, known only to
         // ≈ ε^(1/3) ≈ 6e-6 relative: a diagnostic accuracy, documented on `lambda_max_spd3`.
         assert!((cond3(&Matrix3::identity()) - 1.0).abs() < 1e-4);
+    }
+
+    /// Runs the bracketed search on `h`, recording every point it evaluates.
+    fn traced_search(
+        h: impl Fn(f64) -> (f64, f64),
+        x0: f64,
+        scale: f64,
+        tol: f64,
+    ) -> (f64, u32, Vec<f64>) {
+        let mut points = Vec::new();
+        let (x, n) = newton_in_unit_bracket(
+            |x| {
+                points.push(x);
+                h(x)
+            },
+            x0,
+            scale,
+            tol,
+            200,
+        );
+        (x, n, points)
+    }
+
+    fn strictly_inside(points: &[f64]) -> bool {
+        points.iter().all(|&x| x > 0.0 && x < 1.0)
+    }
+
+    /// arctan(20(x − 0.2)) is the classic function on which plain Newton diverges: from
+    /// x₀ = 0.9 its first step lands near −14. The safeguard must bisect instead, stay inside the
+    /// bracket, and still stop within `tol / scale` of the root.
+    #[test]
+    fn newton_steps_that_leave_the_bracket_are_replaced_by_bisection() {
+        let h = |x: f64| {
+            let u = 20.0 * (x - 0.2);
+            (u.atan(), 20.0 / (1.0 + u * u))
+        };
+        assert!(
+            0.9 - h(0.9).0 / h(0.9).1 < 0.0,
+            "the plain Newton step leaves [0, 1]"
+        );
+        for scale in [1.0, 1e-3, 1e3] {
+            let tol = 1e-10;
+            let (x, n, points) = traced_search(h, 0.9, scale, tol);
+            assert!(strictly_inside(&points), "{points:?}");
+            assert_eq!(n as usize, points.len());
+            // It stops at the first step of at most tol/scale, and not before.
+            let mut steps: Vec<f64> = points.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+            steps.push((x - points[points.len() - 1]).abs());
+            let (last, earlier) = steps.split_last().expect("at least one evaluation");
+            assert!(last * scale <= tol, "scale {scale}: last step {last}");
+            assert!(earlier.iter().all(|s| s * scale > tol), "{steps:?}");
+            // Near the root Newton converges quadratically, so the last step (≤ tol/scale)
+            // bounds the error to far below it; a factor 10 leaves room for round-off.
+            assert!((x - 0.2).abs() <= 10.0 * tol / scale, "scale {scale}: {x}");
+            assert!(n < 100, "{n} evaluations");
+        }
+    }
+
+    /// A Newton step landing exactly on an end of the bracket is not taken: the end's sign is
+    /// known, so evaluating there would waste the step (and at 0 or 1 the weight it stands for
+    /// is degenerate). Both functions are piecewise linear, increasing, with the root at 0.5,
+    /// and chosen so the first step is exact in binary.
+    #[test]
+    fn a_newton_step_onto_an_end_of_the_bracket_is_replaced_by_bisection() {
+        // From 0.75, h = x/4: the tangent meets zero at exactly 0, the lower end.
+        let onto_lower = |x: f64| {
+            if x > 0.6 {
+                (x / 4.0, 0.25)
+            } else {
+                (x - 0.5, 1.0)
+            }
+        };
+        assert!((0.75 - onto_lower(0.75).0 / onto_lower(0.75).1).abs() <= 0.0);
+        // From 0.25, h = x − 1: the tangent meets zero at exactly 1, the upper end.
+        let onto_upper = |x: f64| {
+            if x < 0.4 {
+                (x - 1.0, 1.0)
+            } else {
+                (x - 0.5, 1.0)
+            }
+        };
+        assert!((0.25 - onto_upper(0.25).0 / onto_upper(0.25).1 - 1.0).abs() <= 0.0);
+        for (h, x0) in [
+            (&onto_lower as &dyn Fn(f64) -> (f64, f64), 0.75),
+            (&onto_upper, 0.25),
+        ] {
+            let (x, _, points) = traced_search(h, x0, 1.0, 1e-12);
+            assert!(strictly_inside(&points), "{points:?}");
+            // Once inside the linear piece around the root, one Newton step is exact.
+            assert!((x - 0.5).abs() <= 1e-12, "{x}");
+        }
     }
 }
