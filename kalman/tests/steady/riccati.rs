@@ -74,28 +74,34 @@ proptest! {
         prop_assert!(rho(&cl) < 1.0);
     }
 
-    /// LQR: the returned X satisfies X = AᵀXA + Q − AᵀXB(R + BᵀXB)⁻¹BᵀXA (written out here
-    /// independently of the solver) and L = (R + BᵀXB)⁻¹BᵀXA stabilises A − BL.
+    /// LQR: the returned X satisfies X = AᵀXA + Q − (AᵀXB + N)(R + BᵀXB)⁻¹(BᵀXA + Nᵀ)
+    /// (written out here independently of the solver; N = 0 without a cross weight) and
+    /// L = (R + BᵀXB)⁻¹(BᵀXA + Nᵀ) stabilises A − BL.
     #[test]
-    fn lqr_satisfies_its_riccati_equation(seed in any::<u64>(), n in 1usize..=6, p in 1usize..=3, r in 0.2f64..1.5) {
+    fn lqr_satisfies_its_riccati_equation(seed in any::<u64>(), n in 1usize..=6, p in 1usize..=3, r in 0.2f64..1.5, cross in any::<bool>()) {
         let mut g = rng(seed);
         let A = with_radius(&mut g, n, r);
         let B = randn(&mut g, n, p);
-        let Q = spd(&mut g, n, 0.1);
-        let R = spd(&mut g, p, 0.1);
-        let lqr = match Dlqr::new(&A, &B, &Q, &R).and_then(|p| p.solve()) {
+        // [Q N; Nᵀ R] ≥ 0 jointly, as the cost needs.
+        let (Q, R, N) = joint_noise(&mut g, n, p);
+        let N = if cross { N } else { Mat::zeros(n, p) };
+        let mut dlqr = Dlqr::new(&A, &B, &Q, &R).expect("valid shapes");
+        if cross {
+            dlqr = dlqr.cross_weight(&N).expect("valid shape");
+        }
+        let lqr = match dlqr.solve() {
             Ok(l) => l,
-            Err(Error::NotStabilisable { .. }) => return Ok(()),
+            Err(Error::NotStabilisable { .. } | Error::NotDetectable { .. }) => return Ok(()),
             Err(e) => return Err(TestCaseError::fail(format!("{e}"))),
         };
         let X = &lqr.cost;
         let Sig = &R + B.transpose() * X * &B;
         let llt = Sig.llt(Side::Lower).expect("R + BᵀXB > 0");
-        let BtXA = B.transpose() * X * &A;
-        let rhs = A.transpose() * X * &A + &Q - BtXA.transpose() * llt.solve(&BtXA);
+        let BtXA_N = B.transpose() * X * &A + N.transpose();
+        let rhs = A.transpose() * X * &A + &Q - BtXA_N.transpose() * llt.solve(&BtXA_N);
         let res = rel(X, &rhs);
         prop_assert!(res < 1e-10, "LQR residual {res:e}");
-        let L = llt.solve(&BtXA);
+        let L = llt.solve(&BtXA_N);
         prop_assert!(rel(&lqr.gain, &L) < 1e-10);
         prop_assert!(rho(&(&A - &B * &lqr.gain)) < 1.0);
     }
