@@ -103,7 +103,7 @@ fn dare_residual_matrix(form: &FilterForm<'_>, P: MatRef<'_, f64>) -> Option<Mat
 /// A_cl = F − K_p H, the correction E solves the Stein equation E − A_cl E A_clᵀ = Res(P),
 /// here by Smith's doubling E = Σ_k A_cl^k Res (A_clᵀ)^k (squaring A_cl each step). Returns
 /// `None` if the closed loop is not contractive enough for the doubling to converge.
-fn newton_polish(form: &FilterForm<'_>, P: &Mat<f64>) -> Option<Mat<f64>> {
+pub(super) fn newton_polish(form: &FilterForm<'_>, P: &Mat<f64>) -> Option<Mat<f64>> {
     let res = dare_residual_matrix(form, P.as_ref())?;
     let FilterForm { F, H, R, S, .. } = *form;
     let mut Sigma = H * P * H.transpose() + R;
@@ -119,9 +119,14 @@ fn newton_polish(form: &FilterForm<'_>, P: &Mat<f64>) -> Option<Mat<f64>> {
     for _ in 0..64 {
         let mut E_next = &E + &T * &E * T.transpose();
         symmetrise(&mut E_next);
+        // (Either stop alone, or both together, gives the same E to the last bits: once T is
+        // below ε the terms still to come are below rounding, and once a term is below
+        // rounding ‖T‖ < 1 falls below ε within a few squarings: equivalent.)
         let change = (&E_next - &E).norm_l2();
         E = E_next;
         T = &T * &T;
+        // (Requiring both to be non-finite is equivalent: a non-finite T makes E non-finite at
+        // the next step, and a non-finite E that is returned fails the caller's residual.)
         if !all_finite(T.as_ref()) || !all_finite(E.as_ref()) {
             return None;
         }
@@ -134,13 +139,23 @@ fn newton_polish(form: &FilterForm<'_>, P: &Mat<f64>) -> Option<Mat<f64>> {
     None
 }
 
-/// Decorrelate, run the PBH tests, and solve the filter-form DARE for (F, H, Q, R, S);
-/// returns the prior P.
-pub(super) fn discrete_dual(
+/// The doubling's answer for the filter-form DARE before Newton's polish, with the steps it
+/// took and the decorrelated F̃ = F − S R⁻¹ H.
+pub(super) struct DoublingStart {
+    pub(super) X: Mat<f64>,
+    pub(super) iterations: usize,
+    pub(super) Ft: Mat<f64>,
+}
+
+/// Decorrelates (F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ), runs the PBH tests, and doubles from
+/// Q̃, or from Q̃ + δI when the answer from Q̃ would not stabilise (see inside): a stabilising
+/// start for Newton's polish, accurate to the doubling's tolerance on a well-conditioned
+/// problem and within O(δ) of the solution on the δ path.
+pub(super) fn doubling_start(
     form: &FilterForm<'_>,
     opts: &RiccatiOptions,
     names: &Names,
-) -> Result<Solved, Error> {
+) -> Result<DoublingStart, Error> {
     let FilterForm { F, H, Q, R, S } = *form;
     let llt = factor_pd("R", R, "the Riccati solvers need R^-1")?;
     // F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ.
@@ -178,12 +193,6 @@ pub(super) fn discrete_dual(
         opts,
         names.equation,
     )?;
-    // Ill-conditioned problems leave the doubling short of full accuracy (an unstable mode
-    // the noise does not reach, with the closed loop near the unit circle, costs several
-    // digits): Newton corrections, each kept only if it lowers the residual, until the
-    // residual is far inside the tolerance. From a stabilising start they converge
-    // quadratically, so the cap is seldom reached.
-    let newton_steps = 20;
     let rho0 = closed_loop_radius(Ft.as_ref(), H, R, &X);
     if rho0.is_nan() || rho0 >= 1.0 {
         // Q̃ leaves an unstable mode unexcited: the doubling from Q̃ then converges to a
@@ -202,6 +211,28 @@ pub(super) fn discrete_dual(
         X = Xd;
         iterations += it;
     }
+    Ok(DoublingStart { X, iterations, Ft })
+}
+
+/// Decorrelate, run the PBH tests, and solve the filter-form DARE for (F, H, Q, R, S) by
+/// the doubling ([`doubling_start`]) polished by Newton's method; returns the prior P.
+pub(super) fn discrete_dual(
+    form: &FilterForm<'_>,
+    opts: &RiccatiOptions,
+    names: &Names,
+) -> Result<Solved, Error> {
+    let DoublingStart {
+        mut X,
+        iterations,
+        Ft,
+    } = doubling_start(form, opts, names)?;
+    let FilterForm { H, R, .. } = *form;
+    // Ill-conditioned problems leave the doubling short of full accuracy (an unstable mode
+    // the noise does not reach, with the closed loop near the unit circle, costs several
+    // digits): Newton corrections, each kept only if it lowers the residual, until the
+    // residual is far inside the tolerance. From a stabilising start they converge
+    // quadratically, so the cap is seldom reached.
+    let newton_steps = 20;
     // Newton–Hewer iterates from a stabilising start stay stabilising and decrease
     // monotonically (in the PSD order) onto the stabilising solution, but the residual norm
     // need not fall at every step: follow the iteration while the closed loop stays stable

@@ -315,3 +315,129 @@ fn the_last_check_wants_a_closed_loop_strictly_inside() {
         );
     }
 }
+
+/// The filter-form DARE of scalar or small (F, H, Q, R, S) as the solvers take it.
+fn form<'a>(
+    F: &'a Mat<f64>,
+    H: &'a Mat<f64>,
+    Q: &'a Mat<f64>,
+    R: &'a Mat<f64>,
+    S: Option<&'a Mat<f64>>,
+) -> problem::FilterForm<'a> {
+    problem::FilterForm {
+        F: F.as_ref(),
+        H: H.as_ref(),
+        Q: Q.as_ref(),
+        R: R.as_ref(),
+        S: S.map(Mat::as_ref),
+    }
+}
+
+fn filter_names() -> problem::Names {
+    problem::Names {
+        equation: "filter DARE",
+        detect: Pair::Detect("(F, H)"),
+        stab: Pair::Stab("(F, Q^{1/2})"),
+    }
+}
+
+/// The root p > 0 of the scalar DARE p = f²p r/(p + r) + q (h = 1).
+fn scalar_dare(f: f64, q: f64, r: f64) -> f64 {
+    let b = r * (1.0 - f * f) - q;
+    (-b + (b * b + 4.0 * q * r).sqrt()) / 2.0
+}
+
+#[test]
+fn the_doubling_alone_solves_a_well_conditioned_dare_with_cross_covariance() {
+    // f = 0.8, q = 1, r = 1, s = 0.6: w − (s/r)v is uncorrelated with v, so the DARE is that
+    // of f̃ = f − s h/r = 0.2 and q̃ = q − s²/r = 0.64 without a cross term.
+    let (F, H, Q, R, S) = (
+        mat![[0.8]],
+        mat![[1.0]],
+        mat![[1.0]],
+        mat![[1.0]],
+        mat![[0.6]],
+    );
+    let p = scalar_dare(0.2, 0.64, 1.0);
+    let start = dare::doubling_start(
+        &form(&F, &H, &Q, &R, Some(&S)),
+        &RiccatiOptions::default(),
+        &filter_names(),
+    )
+    .expect("well posed");
+    // The doubling converges quadratically to its stopping tolerance of 1e-14 relative:
+    // no Newton step is needed here, so its answer alone must be that accurate.
+    assert!(
+        (start.X[(0, 0)] - p).abs() < 1e-13 * p,
+        "{} vs {p}",
+        start.X[(0, 0)]
+    );
+    assert!((start.Ft[(0, 0)] - 0.2).abs() < 1e-15);
+    let ss = Dare::new(&F, &H, &Q, &R)
+        .and_then(|d| d.cross_covariance(&S))
+        .and_then(|d| d.solve())
+        .expect("well posed");
+    assert!((ss.prior[(0, 0)] - p).abs() < 1e-13 * p);
+}
+
+#[test]
+fn the_doubling_start_of_an_unreached_unstable_mode_is_close_in_any_unit() {
+    // F = 2, Q = 0, H = 1, R = r: P = 3r (see the test above with r = 1). The doubling from
+    // Q̃ = 0 would give the non-stabilising P = 0, so it starts from Q̃ + δI with δ = 1e-8 r
+    // (relative to (Hᵀ R⁻¹ H)⁻¹ = r), which lies within O(δ) of 3r in any unit.
+    for r in [1e-20, 1.0, 1e20] {
+        let (F, H, Q, R) = (mat![[2.0]], mat![[1.0]], mat![[0.0]], mat![[r]]);
+        let start = dare::doubling_start(
+            &form(&F, &H, &Q, &R, None),
+            &RiccatiOptions::default(),
+            &filter_names(),
+        )
+        .expect("a stabilising solution exists");
+        let rel = (start.X[(0, 0)] - 3.0 * r).abs() / (3.0 * r);
+        // δ/P = 1e-8/3 moves P by about that much (∂P/∂q = 1/(1 − a_cl²) = 4/3 here).
+        assert!(
+            rel < 1e-7,
+            "r = {r:e}: start {:e}, relative error {rel:e}",
+            start.X[(0, 0)]
+        );
+        let ss = Dare::new(&F, &H, &Q, &R)
+            .and_then(|d| d.solve())
+            .expect("solve");
+        assert!(
+            (ss.prior[(0, 0)] - 3.0 * r).abs() < 1e-12 * 3.0 * r,
+            "r = {r:e}"
+        );
+    }
+}
+
+#[test]
+fn newton_polish_converges_quadratically_in_any_unit() {
+    // Two states with cross-covariance and a slow closed loop (ρ ≈ 0.9), so the Stein
+    // equation of the Newton step needs several doublings. From P* + η‖P*‖·Z one step must
+    // leave an error of order η², far below the η of a step with a wrong closed loop or a
+    // truncated Stein sum.
+    let F = mat![[0.97, 0.1], [0.0, 0.9]];
+    let H = mat![[1.0, 0.0]];
+    for unit in [1.0, 1e-6, 1e6] {
+        let Q = mat![[0.02, 0.0], [0.0, 0.01]] * unit;
+        let R = mat![[4.0]] * unit;
+        let S = mat![[0.1], [0.05]] * unit;
+        let f = form(&F, &H, &Q, &R, Some(&S));
+        let ss = Dare::new(&F, &H, &Q, &R)
+            .and_then(|d| d.cross_covariance(&S))
+            .and_then(|d| d.solve())
+            .expect("well posed");
+        let P = &ss.prior;
+        let cl = &F - &ss.predictor_gain * &H;
+        assert!(spectral(cl.as_ref(), false) > 0.85, "a slow closed loop");
+        let eta = 1e-4;
+        let scale = P.norm_l2();
+        let P0 = P + mat![[1.0, 0.3], [0.3, 0.5]] * (eta * scale);
+        let P1 = dare::newton_polish(&f, &P0).expect("stabilising start");
+        let e0 = (&P0 - P).norm_l2() / scale;
+        let e1 = (&P1 - P).norm_l2() / scale;
+        // Quadratic: e1 ≈ c·e0² with c of order ‖∂²Res‖/‖∂Res‖ ~ 1–100 here; 1e-6 = 100·η²
+        // is the bound, and a linearly converging step would leave e1 ~ 0.1·e0 = 1e-5.
+        assert!(e1 < 1e-6, "unit {unit:e}: e0 {e0:e} → e1 {e1:e}");
+    }
+}
