@@ -346,7 +346,8 @@ impl<D: Dims> ScheduledFilter<'_, D> {
             // prior of a later fallback both saturate there.)
             self.k = self.k.max(s.gains.len() - 1);
         }
-        self.k += 1;
+        // The place in the schedule stands still during full steps: only the switch into them
+        // reads it, and the return above puts it at the last gain.
         self.taken += 1;
         Ok(())
     }

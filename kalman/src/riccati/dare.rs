@@ -200,11 +200,10 @@ pub(super) fn doubling_start(
         // Q̃ + δI does (every mode is then reachable), and lies within O(δ) of the
         // stabilising solution; Newton's method from a stabilising start stays stabilising
         // and removes the O(δ) in a few quadratic steps. δ is relative to the scale of X
-        // (that of Q̃, or of (Hᵀ R⁻¹ H)⁻¹ when Q̃ vanishes).
-        let gnorm = G.norm_l2();
-        let scale = Qs
-            .norm_l2()
-            .max(if gnorm > 0.0 { 1.0 / gnorm } else { 1.0 });
+        // (that of Q̃, or of (Hᵀ R⁻¹ H)⁻¹ when Q̃ vanishes). G = Hᵀ R⁻¹ H ≠ 0 here: with H = 0
+        // the closed loop is F itself, stable after the PBH test passed, so this path is not
+        // taken.
+        let scale = Qs.norm_l2().max(1.0 / G.norm_l2());
         let n = Qs.nrows();
         let Qd = &Qs + (1e-8 * scale) * Mat::<f64>::identity(n, n);
         let (Xd, it) = sda(Ft.transpose().to_owned(), G, Qd, opts, names.equation)?;

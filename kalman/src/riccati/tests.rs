@@ -407,6 +407,12 @@ fn the_doubling_start_of_an_unreached_unstable_mode_is_close_in_any_unit() {
             (ss.prior[(0, 0)] - 3.0 * r).abs() < 1e-12 * 3.0 * r,
             "r = {r:e}"
         );
+        // The doubling steps count both doublings: more than the second alone, which is the
+        // plain doubling of the DARE with Q = δ.
+        let perturbed = Dare::new(&F, &H, mat![[1e-8 * r]], &R)
+            .and_then(|d| d.solve())
+            .expect("solve");
+        assert!(ss.iterations > perturbed.iterations, "r = {r:e}");
     }
 }
 

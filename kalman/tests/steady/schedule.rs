@@ -471,3 +471,75 @@ fn a_fixed_gain_of_the_wrong_shape_is_named() {
         "{e:?}"
     );
 }
+
+/// The fallback returns to the schedule at the first step after which the full filter's
+/// P_{k+1|k} is within `reentry_tolerance`·max|P∞| of P∞ entrywise, as documented. The model
+/// is diagonal, so P∞ has zero off-diagonal entries and its largest entry is the first
+/// variance: a scale taken from the wrong entries would be 0 or the smaller variance. The
+/// criterion is evaluated here on an independent full filter from P0; it agrees with the
+/// runner's restarted one to rounding, so the test first checks that no step lies within 10 %
+/// of the threshold, where rounding could decide.
+#[test]
+fn the_fallback_returns_at_the_first_step_within_the_reentry_tolerance() {
+    let dims = DynDims::new(2, 2, 0).expect("dims");
+    let model = || {
+        Model::new(
+            dims,
+            &faer::mat![[0.95, 0.0], [0.0, 0.5]],
+            &faer::mat![[1.0, 0.0], [0.0, 1.0]],
+            &faer::mat![[1.0, 0.0], [0.0, 0.01]],
+            &faer::mat![[1.0, 0.0], [0.0, 1.0]],
+        )
+        .expect("model")
+    };
+    let P0 = Mat::<f64>::identity(2, 2);
+    let tol = 1e-6;
+    let opts = ScheduleOptions {
+        reentry_tolerance: tol,
+        ..ScheduleOptions::default()
+    };
+    let sched = GainSchedule::new(model(), &P0, opts).expect("schedule");
+    let miss_at = sched.len() + 5;
+    let Ps = sched.steady_prior().to_owned();
+    let big = Ps[(0, 0)].abs().max(Ps[(1, 1)].abs());
+    assert!(
+        Ps[(0, 0)] > 10.0 * Ps[(1, 1)],
+        "the first variance dominates"
+    );
+    let mut run = sched.runner(&[0.0, 0.0]).expect("runner");
+    let mut full = Filter::new(model(), &[0.0, 0.0], &P0, CovarianceForm::Joseph).expect("filter");
+    let (mut expected, mut back) = (None, None);
+    for k in 0..miss_at + 200 {
+        let z = if k == miss_at {
+            [0.3, f64::NAN]
+        } else {
+            [0.3, -0.2]
+        };
+        run.step(&z, None).expect("scheduled step");
+        full.step(&z, None).expect("full step");
+        if k < miss_at {
+            continue;
+        }
+        let Pp = full.predicted_covariance();
+        let mut diff = 0.0_f64;
+        for j in 0..2 {
+            for i in 0..2 {
+                diff = diff.max((Pp[(i, j)] - Ps[(i, j)]).abs());
+            }
+        }
+        let ratio = diff / (tol * big);
+        assert!(
+            (ratio - 1.0).abs() > 0.1,
+            "step {k}: ratio {ratio} too close to call"
+        );
+        if expected.is_none() && ratio <= 1.0 {
+            expected = Some(k);
+        }
+        if back.is_none() && run.on_schedule() {
+            back = Some(k);
+        }
+    }
+    let expected = expected.expect("the full filter settles within 200 steps");
+    assert!(expected > miss_at, "the missing step must perturb P");
+    assert_eq!(back, Some(expected));
+}
