@@ -246,7 +246,10 @@ pub(super) fn discrete_dual(
             break;
         };
         let r = discrete_residual(form, next.as_ref());
-        // Written so that a NaN residual or radius stops the iteration.
+        // Written so that a NaN residual or radius stops the iteration. (`≤ 1` differs only at
+        // a radius of exactly 1: equivalent. The radius test guards against rounding carrying
+        // an iterate out of the stabilising set, which Newton's iterates from a stabilising
+        // start never leave in exact arithmetic: no test reaches it.)
         if !(r.is_finite() && closed_loop_radius(Ft.as_ref(), H, R, &next) < 1.0) {
             break;
         }
