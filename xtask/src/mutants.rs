@@ -167,7 +167,12 @@ pub(crate) fn mutants(args: &[String]) -> Result<()> {
     // gives them): a mutant in a generic function recompiles the crate's integration tests,
     // about 45 s at the test profile's opt-level 1 against 8 s at 0.
     cmd.env("CARGO_TARGET_DIR", target_dir)
-        .env("CARGO_PROFILE_TEST_OPT_LEVEL", "0");
+        .env("CARGO_PROFILE_TEST_OPT_LEVEL", "0")
+        // A property test that fails on a mutant must neither write its case into the
+        // checkout's `*.proptest-regressions` files (they are the project's, and the failure
+        // is the mutant's) nor spend time shrinking it: failing is all a mutant run needs.
+        .env("PROPTEST_DISABLE_FAILURE_PERSISTENCE", "1")
+        .env("PROPTEST_MAX_SHRINK_ITERS", "0");
     let shown = format!("{cmd:?}");
     eprintln!("$ {shown}");
     let started = Instant::now();
