@@ -88,45 +88,49 @@ fn log_likelihood_is_the_gaussian_density_of_the_innovation() {
 #[test]
 fn singular_innovation_covariance_takes_the_rank_revealing_path() {
     // Two identical exact channels: Σ has rank 1. The update must stay finite, symmetric,
-    // PSD, and report rank 1 with one degree of freedom.
+    // PSD, and report rank 1 with one degree of freedom, in any unit (Q and P0 scaled by c,
+    // the data by √c: the rank decision is relative to Σ's scale).
     use kalman::Model;
     let F = [[1.0, 0.1], [0.0, 1.0]];
     let H = [[1.0, 0.0], [1.0, 0.0]];
-    let Q = [[1e-4, 0.0], [0.0, 1e-3]];
     let R = [[0.0, 0.0], [0.0, 0.0]];
-    for form in [
-        CovarianceForm::Joseph,
-        CovarianceForm::Standard,
-        CovarianceForm::SquareRoot,
-    ] {
-        let model =
-            Model::new(DynDims::new(2, 2, 0).expect("dims"), &F, &H, &Q, &R).expect("model");
-        let mut f =
-            Filter::new(model, &[0.0, 0.0], &[[1.0, 0.0], [0.0, 1.0]], form).expect("filter");
-        for k in 0..50 {
-            let z = 0.1 * k as f64;
-            let info = f.step(&[z, z], None).expect("step");
-            assert_eq!(info.rank, 1, "{form:?} step {k}");
-            assert_eq!(info.observed, 2);
-            let P = f.covariance();
-            // The exactly measured position has zero filtered variance (to round-off of the
-            // prior's scale, ~1).
-            assert!(P[(0, 0)].abs() < 1e-12, "{form:?}: P00 {}", P[(0, 0)]);
+    for c in [1.0_f64, 1e-12, 1e12] {
+        let s = c.sqrt();
+        let Q = [[1e-4 * c, 0.0], [0.0, 1e-3 * c]];
+        for form in [
+            CovarianceForm::Joseph,
+            CovarianceForm::Standard,
+            CovarianceForm::SquareRoot,
+        ] {
+            let model =
+                Model::new(DynDims::new(2, 2, 0).expect("dims"), &F, &H, &Q, &R).expect("model");
+            let P0 = [[c, 0.0], [0.0, c]];
+            let mut f = Filter::new(model, &[0.0, 0.0], &P0, form).expect("filter");
+            for k in 0..50 {
+                let z = 0.1 * k as f64 * s;
+                let info = f.step(&[z, z], None).expect("step");
+                assert_eq!(info.rank, 1, "{form:?} c {c:e} step {k}");
+                assert_eq!(info.observed, 2);
+                let P = f.covariance();
+                // The exactly measured position has zero filtered variance (to round-off of
+                // the prior's scale, ~c).
+                assert!(P[(0, 0)].abs() < 1e-12 * c, "{form:?}: P00 {}", P[(0, 0)]);
+                assert!(
+                    (f.state()[0] - z).abs() < 1e-9 * s,
+                    "{form:?}: x0 {} vs {z}",
+                    f.state()[0]
+                );
+                let ev = P.self_adjoint_eigenvalues(faer::Side::Lower).expect("evd");
+                assert!(ev[0] >= -1e-12 * c && P[(0, 1)].is_finite());
+                assert!((P[(0, 1)] - P[(1, 0)]).abs() <= 0.0);
+            }
+            // Velocity is learned from the exact positions: 0.1·√c per 0.1 s step = √c.
             assert!(
-                (f.state()[0] - z).abs() < 1e-9,
-                "{form:?}: x0 {} vs {z}",
-                f.state()[0]
+                (f.state()[1] - s).abs() < 1e-6 * s,
+                "{form:?} c {c:e}: v {}",
+                f.state()[1]
             );
-            let ev = P.self_adjoint_eigenvalues(faer::Side::Lower).expect("evd");
-            assert!(ev[0] >= -1e-12 && P[(0, 1)].is_finite());
-            assert!((P[(0, 1)] - P[(1, 0)]).abs() <= 0.0);
         }
-        // Velocity is learned from the exact positions: 0.1 per 0.1 s step = 1.
-        assert!(
-            (f.state()[1] - 1.0).abs() < 1e-6,
-            "{form:?}: v {}",
-            f.state()[1]
-        );
     }
 }
 
