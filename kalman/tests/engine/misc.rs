@@ -179,3 +179,44 @@ fn innovation_covariance_is_zero_in_the_rows_of_missing_entries() {
         }
     }
 }
+
+#[test]
+fn a_step_with_every_entry_missing_is_a_pure_prediction() {
+    // After a measured step has filled them, a step with nothing observed must report a zero
+    // innovation, Σ and gain in full (the documented zero rows and columns of missing
+    // entries), leave x_{k|k} = x_{k|k−1} and P_{k|k} = P_{k|k−1}, and predict as usual.
+    let p = FilterProblem::generate(4, 3, ProblemOptions::default(), 32);
+    for form in [
+        CovarianceForm::Standard,
+        CovarianceForm::Joseph,
+        CovarianceForm::SquareRoot,
+    ] {
+        let model = p
+            .model(DynDims::new(4, 3, 0).expect("dims"))
+            .expect("model");
+        let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
+        f.step(&p.z[0], None).expect("step");
+        assert!(
+            f.gain().norm_l2() > 0.0,
+            "{form:?}: a measured step has a gain"
+        );
+        let (x, P) = (
+            f.predicted_state().to_vec(),
+            f.predicted_covariance().to_owned(),
+        );
+        let info = f
+            .step(&[f64::NAN; 3], None)
+            .expect("step with nothing observed");
+        assert_eq!(info.observed, 0, "{form:?}");
+        assert!(f.innovation().iter().all(|e| e.abs() <= 0.0), "{form:?}");
+        assert!(f.innovation_covariance().norm_l2() <= 0.0, "{form:?}");
+        assert!(f.gain().norm_l2() <= 0.0, "{form:?}: {:?}", f.gain());
+        assert_eq!(f.state(), &x[..], "{form:?}");
+        // The square-root form holds P as a factor: equal to round-off.
+        let d = (f.covariance() - &P).norm_l2();
+        assert!(d <= 1e-12 * P.norm_l2(), "{form:?}: {d:e}");
+        let pred = &p.f * &P * p.f.transpose() + &p.q;
+        let d = (f.predicted_covariance() - &pred).norm_l2();
+        assert!(d <= 1e-12 * pred.norm_l2(), "{form:?}: {d:e}");
+    }
+}
