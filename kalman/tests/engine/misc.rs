@@ -220,3 +220,40 @@ fn a_step_with_every_entry_missing_is_a_pure_prediction() {
         assert!(d <= 1e-12 * pred.norm_l2(), "{form:?}: {d:e}");
     }
 }
+
+#[test]
+fn the_forms_differ_where_the_standard_forms_subtraction_cancels() {
+    // Scalar, P⁻ = 1, h = 1, r = 1e-20: the exact posterior is P⁻r/(P⁻ + r) ≈ 1e-20, but
+    // Σ = 1 + r rounds to 1, so K = 1 and the standard form's P⁻ − KΣK cancels to 0, while
+    // Joseph's (1 − K)²P⁻ + K²r = r keeps it to full relative precision, and the square-root
+    // form, orthogonal throughout, keeps it too. This is the robustness the forms trade for
+    // cost: each form must really be the computation it names.
+    let r = 1e-20;
+    let mut posterior = Vec::new();
+    for form in [
+        CovarianceForm::Standard,
+        CovarianceForm::Joseph,
+        CovarianceForm::SquareRoot,
+    ] {
+        let model = Model::new(
+            DynDims::new(1, 1, 0).expect("dims"),
+            &[[1.0]],
+            &[[1.0]],
+            &[[0.0]],
+            &[[r]],
+        )
+        .expect("model");
+        let mut f = Filter::new(model, &[0.0], &[[1.0]], form).expect("filter");
+        f.step(&[0.5], None).expect("step");
+        posterior.push(f.covariance()[(0, 0)]);
+    }
+    let exact = r / (1.0 + r);
+    assert!(
+        (posterior[0] - exact).abs() > 0.5 * exact,
+        "standard: {:e}",
+        posterior[0]
+    );
+    for p in &posterior[1..] {
+        assert!((p - exact).abs() < 1e-6 * exact, "{posterior:?}");
+    }
+}
