@@ -394,7 +394,13 @@ fn the_doubling_start_of_an_unreached_unstable_mode_is_close_in_any_unit() {
         )
         .expect("a stabilising solution exists");
         let rel = (start.X[(0, 0)] - 3.0 * r).abs() / (3.0 * r);
-        // δ/P = 1e-8/3 moves P by about that much (∂P/∂q = 1/(1 − a_cl²) = 4/3 here).
+        // δ/P = 1e-8/3 moves P by about that much (∂P/∂q = 1/(1 − a_cl²) = 4/3 here), and
+        // upwards: the DARE's solution grows with Q, so the start lies above the solution, the
+        // side from which Newton's iterates decrease onto it.
+        assert!(
+            start.X[(0, 0)] > 3.0 * r,
+            "r = {r:e}: start below the solution"
+        );
         assert!(
             rel < 1e-7,
             "r = {r:e}: start {:e}, relative error {rel:e}",
