@@ -193,8 +193,8 @@ impl KalmanBucy {
     ) -> Result<OdeSolution, Error> {
         let n = self.A.nrows();
         check("P0", P0, n, n)?;
-        // Dormand–Prince 5(4) tableau.
-        const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
+        // Dormand–Prince 5(4) tableau (the right-hand side does not depend on t, so the
+        // nodes c_i are not needed).
         const A2: [f64; 1] = [1.0 / 5.0];
         const A3: [f64; 2] = [3.0 / 40.0, 9.0 / 40.0];
         const A4: [f64; 3] = [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0];
@@ -229,7 +229,6 @@ impl KalmanBucy {
             187.0 / 2100.0,
             1.0 / 40.0,
         ];
-        let _ = C;
         let mut P = P0.to_owned();
         symmetrise(&mut P);
         let mut t = 0.0_f64;
@@ -495,6 +494,26 @@ mod tests {
             ..OdeOptions::default()
         };
         assert!(kb.integrate(mat![[0.0]].as_ref(), 1.0, &short).is_err());
+    }
+
+    #[test]
+    fn a_derivative_that_overflows_is_an_error_not_a_nan_covariance() {
+        // ṗ = −p² at p₀ = 1e160: p₀² overflows, every trial step is non-finite whatever its
+        // length, and the integration must end in the typed error (after shrinking the step
+        // below 1e-300), not accept a non-finite P and return it at t₁.
+        let (zero, one) = (mat![[0.0]], mat![[1.0]]);
+        let kb = KalmanBucy::new(zero.as_ref(), one.as_ref(), zero.as_ref(), one.as_ref())
+            .expect("must succeed");
+        let got = kb.integrate(mat![[1e160]].as_ref(), 1.0, &OdeOptions::default());
+        assert!(
+            matches!(got, Err(Error::RiccatiNoConvergence { iterations: 0, .. })),
+            "{got:?}"
+        );
+        // The same equation from p₀ = 1 is harmless: p(t) = 1/(1 + t).
+        let sol = kb
+            .integrate(mat![[1.0]].as_ref(), 1.0, &OdeOptions::default())
+            .expect("must succeed");
+        assert!((sol.covariance[(0, 0)] - 0.5).abs() < 1e-9);
     }
 
     #[test]
