@@ -53,13 +53,13 @@ pub(crate) enum Part {
 /// on the dynamic path (the fixed path always does). Chosen from faer's per-call overhead
 /// (20–75 ns a call), about the cost of this many multiply-adds in plain loops; not tuned
 /// further.
-pub const FAER_THRESHOLD: usize = 8 * 8 * 8;
+pub const FAER_THRESHOLD: usize = 512; // 8³
 
 /// With the `parallel` feature, products of at least this many multiply-adds run on Rayon
 /// (faer's own default of 32 768 was 3.6× slower at n = 50 on a 2-core machine; Rayon paid
 /// off only near n = 1000). On a loaded machine Rayon can lose even there: the feature is
 /// off by default.
-pub const PARALLEL_THRESHOLD: usize = 400 * 400 * 400;
+pub const PARALLEL_THRESHOLD: usize = 64_000_000; // 400³
 
 /// Below this size faer's triangular-output product is slower than its full GEMM (the
 /// upper triangle is then computed too and overwritten when the caller mirrors the lower
@@ -182,7 +182,7 @@ fn par_for(_work: usize) -> Par {
 #[inline(always)]
 pub(crate) fn symmetrise(a: &mut [f64], n: usize) {
     for j in 0..n {
-        for i in j + 1..n {
+        for i in 0..j {
             let s = 0.5 * (a[i + j * n] + a[j + i * n]);
             a[i + j * n] = s;
             a[j + i * n] = s;
@@ -194,8 +194,9 @@ pub(crate) fn symmetrise(a: &mut [f64], n: usize) {
 #[inline(always)]
 pub(crate) fn mirror_lower(a: &mut [f64], n: usize) {
     for j in 0..n {
-        for i in j + 1..n {
-            a[j + i * n] = a[i + j * n];
+        for i in 0..j {
+            // Row i < j, column j (upper) from row j, column i (lower).
+            a[i + j * n] = a[j + i * n];
         }
     }
 }
@@ -251,7 +252,8 @@ pub(crate) fn jacobi_eigen(a: &mut [f64], n: usize, v: &mut [f64], w: &mut [f64]
                 }
             }
         }
-        if off <= 1e-30 * total || off == 0.0 {
+        // (Also when off = 0: total ≥ off ≥ 0.)
+        if off <= 1e-30 * total {
             break;
         }
         for p in 0..n {
@@ -293,7 +295,8 @@ fn rotate(x: &mut [f64], n: usize, at: impl Fn(usize) -> (usize, usize), c: f64,
 
 /// Row-wise Householder LQ on a row-major array (`ld` entries per row): triangularises rows
 /// `rows` over columns `col0..ncols`, applying each reflection to rows `rows.start..apply_end`.
-/// A row whose remaining squared norm is at most `tol2` (or exactly zero) is rank-deficient:
+/// A row whose remaining squared norm is at most `tol2` or at most `f64::MIN_POSITIVE` (where
+/// the reflection's vᵀv could lose all precision to underflow) is rank-deficient:
 /// its remainder is zeroed, `piv[row] = None`, and the pivot column does not advance.
 /// Otherwise `piv[row]` is its pivot column. Returns the number of pivots.
 pub(crate) fn lq_rows(
@@ -367,7 +370,9 @@ mod tests {
             FixedDims::<1, 1>::new(),
             DynDims::new(1, 1, 0).expect("dims"),
         );
-        for (rows, inner, cols) in [(3, 4, 2), (20, 9, 20)] {
+        // 20×20 outputs take the loops' lower-triangle branch (above 16 rows), 130×130 ones
+        // faer's triangular product (from `TRIANGULAR_MIN`).
+        for (rows, inner, cols) in [(3, 4, 2), (20, 9, 20), (130, 3, 130)] {
             // Small integers and halves: every product and partial sum is a multiple of 1/8
             // well inside f64's exact range, so any summation order gives the same number.
             let a: Vec<f64> = (0..rows * inner)
@@ -420,6 +425,75 @@ mod tests {
                         }
                     }
                 }
+            }
+        }
+    }
+
+    /// The Cholesky pivot test is `d ≤ tol` (a pivot exactly at the tolerance is a
+    /// dependence) and refuses a NaN pivot; above it, the factor reproduces the matrix.
+    #[test]
+    fn cholesky_refuses_a_pivot_at_the_tolerance_and_a_nan() {
+        // [[4, 2], [2, 1 + t]]: second pivot (1 + t) − 1 = t exactly for t = 0.25.
+        let t = 0.25;
+        let fresh = || vec![4.0, 2.0, 2.0, 1.0 + t];
+        assert!(!cholesky(&mut fresh(), 2, t), "pivot at the tolerance");
+        let mut a = fresh();
+        assert!(cholesky(&mut a, 2, t / 2.0));
+        // L = [[2, 0], [1, √t]]: every entry exact in binary.
+        assert_eq!((a[0], a[1], a[3]), (2.0, 1.0, t.sqrt()));
+        assert!(!cholesky(&mut [f64::NAN], 1, 0.0), "NaN pivot");
+        assert!(
+            !cholesky(&mut [4.0, f64::NAN, 0.0, 1.0], 2, 0.0),
+            "NaN below the diagonal"
+        );
+    }
+
+    /// Jacobi on a symmetric 3×3 with known spectrum: AV = VΛ and VᵀV = I to round-off.
+    #[test]
+    fn jacobi_reconstructs_a_symmetric_matrix() {
+        // Eigenvalues of [[2, 1, 0], [1, 2, 1], [0, 1, 2]]: 2 − √2, 2, 2 + √2.
+        let a0 = [2.0, 1.0, 0.0, 1.0, 2.0, 1.0, 0.0, 1.0, 2.0];
+        let (mut a, mut v, mut w) = (a0, [0.0; 9], [0.0; 3]);
+        jacobi_eigen(&mut a, 3, &mut v, &mut w);
+        let mut sorted = w;
+        sorted.sort_by(f64::total_cmp);
+        let r = 2f64.sqrt();
+        for (got, want) in sorted.iter().zip([2.0 - r, 2.0, 2.0 + r]) {
+            // Tolerance: a few ulps of the largest eigenvalue (quadratic convergence to 1e-15).
+            assert!((got - want).abs() < 1e-14, "{got} vs {want}");
+        }
+        for k in 0..3 {
+            for i in 0..3 {
+                let av: f64 = (0..3).map(|j| a0[i + 3 * j] * v[j + 3 * k]).sum();
+                assert!((av - w[k] * v[i + 3 * k]).abs() < 1e-14, "A v_{k} row {i}");
+                let vv: f64 = (0..3).map(|j| v[j + 3 * i] * v[j + 3 * k]).sum();
+                let want = if i == k { 1.0 } else { 0.0 };
+                assert!((vv - want).abs() < 1e-14, "v_{i}·v_{k}");
+            }
+        }
+    }
+
+    /// `lq_rows`: a row whose remainder is `f64::MIN_POSITIVE` (2⁻¹⁰²², the square of an
+    /// exact 2⁻⁵¹¹) is dependent even with a zero tolerance, one just above it is not; the
+    /// pivot count and the pivot columns follow.
+    #[test]
+    fn lq_rows_treats_a_remainder_at_the_smallest_normal_as_dependent() {
+        let tiny = 2f64.powi(-511);
+        assert!((tiny * tiny - f64::MIN_POSITIVE).abs() <= 0.0);
+        for (x, dependent) in [(tiny, true), (2.0 * tiny, false)] {
+            // Rows (row-major, ld 2): [2, 0] then [0, x]; the first row's reflection
+            // (v = [4, 0]) leaves the second row as it is, so its remainder is x² exactly.
+            let mut a = [2.0, 0.0, 0.0, x];
+            let mut piv = [None; 2];
+            let k = lq_rows(&mut a, 2, 0..2, 2, 0, 2, 0.0, &mut piv);
+            assert_eq!(piv[0], Some(0));
+            assert!((a[0].abs() - 2.0).abs() <= 0.0 && a[1].abs() <= 0.0);
+            if dependent {
+                assert_eq!((k, piv[1]), (1, None), "x = {x:e}");
+                assert!(a[3].abs() <= 0.0);
+            } else {
+                assert_eq!((k, piv[1]), (2, Some(1)), "x = {x:e}");
+                assert!(a[3].abs() > 0.0);
             }
         }
     }
