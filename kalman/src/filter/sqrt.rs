@@ -18,7 +18,7 @@ use faer::Accum::Replace;
 use super::{LN_2PI, State, StepInfo, innovation, propagate_mean};
 use crate::kernels::Op::{N, T};
 use crate::kernels::Part::{Full, Lower};
-use crate::kernels::{RANK_TOL, lq_rows, mirror_lower, mm};
+use crate::kernels::{RANK_TOL, cholesky, lq_rows, mirror_lower, mm};
 use crate::model::Model;
 use crate::storage::{Buf, Dims};
 
@@ -133,6 +133,11 @@ fn estimates<D: Dims>(
             logdet += 2.0 * dgl.abs().ln();
         }
     }
+    let mask = st.mask.as_slice();
+    if (0..m).any(|i| mask[i] && piv[i].is_none()) {
+        let (w, g) = (st.sig.as_mut_slice(), st.eigv.as_mut_slice());
+        logdet += ln_det_dependent(arr, ld, m, r, (piv, pivrow, mask), w, g);
+    }
     let nis: f64 = y[..r].iter().map(|v| v * v).sum();
     let xf = st.xf.as_mut_slice();
     let xt = st.xtmp.as_mut_slice();
@@ -156,6 +161,53 @@ fn estimates<D: Dims>(
             0.0
         },
         ..StepInfo::default()
+    }
+}
+
+/// What exactly dependent observed z rows add to `ln pdet Σ` beyond the kept pivots'
+/// `ln det(L₁)²`: `ln det(I + W Wᵀ)`. With `A` the first `r` columns of the z rows
+/// (`Σ = A Aᵀ`, full column rank), `L₁` its pivot rows (lower triangular in pivot order) and
+/// `C` its dependent rows, `pdet Σ = det(AᵀA) = det(L₁ᵀL₁ + CᵀC) = det(L₁)² det(I + WᵀW)`
+/// with `W = C L₁⁻¹`, and `det(I + WᵀW) = det(I + WWᵀ)`. Every eigenvalue of `I + WWᵀ` is
+/// at least 1, so its Cholesky fails only on non-finite numbers (a diverged step, which the
+/// caller reports). `w` (q×r) and `g` (q×q) are scratch of at least m² entries.
+fn ln_det_dependent(
+    arr: &[f64],
+    ld: usize,
+    m: usize,
+    r: usize,
+    (piv, pivrow, mask): (&[Option<usize>], &[usize], &[bool]),
+    w: &mut [f64],
+    g: &mut [f64],
+) -> f64 {
+    // Row q of W (row-major, r per row) solves wᵀ L₁ = c, by back substitution.
+    let mut q = 0;
+    for i in 0..m {
+        if !mask[i] || piv[i].is_some() {
+            continue;
+        }
+        let wq = &mut w[q * r..(q + 1) * r];
+        for l in (0..r).rev() {
+            let mut s = arr[i * ld + l];
+            for k in l + 1..r {
+                s -= wq[k] * arr[pivrow[k] * ld + l];
+            }
+            wq[l] = s / arr[pivrow[l] * ld + l];
+        }
+        q += 1;
+    }
+    for b in 0..q {
+        for a in b..q {
+            let wa = &w[a * r..(a + 1) * r];
+            let wb = &w[b * r..(b + 1) * r];
+            let dot: f64 = wa.iter().zip(wb).map(|(x, y)| x * y).sum();
+            g[a + b * q] = dot + if a == b { 1.0 } else { 0.0 };
+        }
+    }
+    if cholesky(g, q, 0.0) {
+        (0..q).map(|i| 2.0 * g[i + i * q].ln()).sum()
+    } else {
+        f64::NAN
     }
 }
 

@@ -169,12 +169,200 @@ fn an_exactly_dependent_channel_adds_nothing() {
             let close = |a: f64, b: f64| (a - b).abs() < 1e-10 * b.abs().max(1.0);
             let (nis2, nis1) = (i2.nis.expect("nis"), i1.nis.expect("nis"));
             assert!(close(nis2, nis1), "{form:?} step {k}: NIS {nis2} vs {nis1}");
+            // The log-likelihood is that of the density on Σ's range (log pdet Σ): the data
+            // (z, 2z) lie on the line along (1, 2)/√5, where their coordinate is √5·z, so
+            // the density there is z's divided by √5.
+            let dl = i2.log_likelihood - i1.log_likelihood;
+            assert!(
+                close(dl, -0.5 * 5.0_f64.ln()),
+                "{form:?} step {k}: log-likelihoods {} vs {}",
+                i2.log_likelihood,
+                i1.log_likelihood
+            );
             let (P2, P1) = (f2.covariance(), f1.covariance());
             for i in 0..2 {
                 assert!(close(f2.state()[i], f1.state()[i]), "{form:?} step {k}: x");
                 for j in 0..2 {
                     assert!(close(P2[(i, j)], P1[(i, j)]), "{form:?} step {k}: P");
                 }
+            }
+        }
+    }
+}
+
+const FORMS: [CovarianceForm; 3] = [
+    CovarianceForm::Joseph,
+    CovarianceForm::Standard,
+    CovarianceForm::SquareRoot,
+];
+
+/// Runs `steps` steps of a two-state filter whose Q, R and P0 are `c` times the given ones,
+/// on the data `√c·z_k`; returns each step's (rank, NIS, log-likelihood).
+fn scaled_run(
+    form: CovarianceForm,
+    H: &[[f64; 2]; 2],
+    R: &[[f64; 2]; 2],
+    c: f64,
+    data: impl Fn(usize) -> [f64; 2],
+    steps: usize,
+) -> Vec<(usize, f64, f64)> {
+    let F = [[0.95, 0.1], [-0.1, 0.9]];
+    let scale = |a: [[f64; 2]; 2]| a.map(|row| row.map(|v| v * c));
+    let (Q, R, P0) = (
+        scale([[0.02, 0.0], [0.0, 0.05]]),
+        scale(*R),
+        scale([[2.0, 0.3], [0.3, 1.0]]),
+    );
+    let dims = DynDims::new(2, 2, 0).expect("dims");
+    let model = kalman::Model::new(dims, &F, H, &Q, &R).expect("model");
+    let mut f = Filter::new(model, &[0.0, 0.0], &P0, form).expect("filter");
+    (0..steps)
+        .map(|k| {
+            let z = data(k).map(|v| v * c.sqrt());
+            let info = f.step(&z, None).expect("step");
+            (info.rank, info.nis.expect("nis"), info.log_likelihood)
+        })
+        .collect()
+}
+
+/// The rank test is relative to Σ's scale: a second channel that repeats the first (times
+/// −0.3) up to an independent part of relative variance ~1e-8 — four orders above
+/// `RANK_TOL` = 1e-12 — is kept (rank 2) whether Q, R and P0 are in units scaled by 1e-12, 1
+/// or 1e12, and its NIS does not depend on the unit.
+#[test]
+fn a_nearly_dependent_channel_is_kept_in_any_unit() {
+    let (r, k) = (0.3, -0.3);
+    let H = [[1.0, 0.5], [k, 0.5 * k]];
+    let R = [[r, k * r], [k * r, (k * k + 1e-8) * r]];
+    let data = |j: usize| {
+        let z = (0.4 * j as f64).sin();
+        [z, k * z + 1e-4 * (1.3 * j as f64).cos()]
+    };
+    for form in FORMS {
+        let unit = scaled_run(form, &H, &R, 1.0, data, 30);
+        for c in [1e-12, 1.0, 1e12] {
+            for (j, (&(rank, nis, _), &(_, nis1, _))) in scaled_run(form, &H, &R, c, data, 30)
+                .iter()
+                .zip(&unit)
+                .enumerate()
+            {
+                assert_eq!(rank, 2, "{form:?} c {c:e} step {j}");
+                // Σ's condition number is ~1e9: the same numbers in another unit agree to
+                // about 1e9·ε.
+                assert!(
+                    (nis - nis1).abs() < 1e-5 * nis1.max(1.0),
+                    "{form:?} c {c:e} step {j}: NIS {nis} vs {nis1}"
+                );
+            }
+        }
+    }
+}
+
+/// In units where Π L_ii = (det Σ)^{1/2} leaves f64's normal range (c = 1e±240 with three
+/// channels: det Σ ~ c³), the log-likelihood is still the unit-1 one shifted by the Jacobian
+/// of the change of unit, −½·m·ln c per step, and NIS and rank are unchanged.
+#[test]
+fn the_log_likelihood_survives_units_where_det_sigma_overflows() {
+    use kalman::Model;
+    let F = [[0.9, 0.2, 0.0], [0.0, 0.8, 0.1], [0.1, 0.0, 0.7]];
+    let H = [[1.0, 0.2, 0.0], [0.3, 1.0, -0.4], [0.0, 0.5, 1.0]];
+    let dims = DynDims::new(3, 3, 0).expect("dims");
+    let run = |form: CovarianceForm, c: f64| -> Vec<(usize, f64, f64)> {
+        let diag = |a: [f64; 3]| {
+            let mut m = [[0.0; 3]; 3];
+            for i in 0..3 {
+                m[i][i] = a[i] * c;
+            }
+            m
+        };
+        let model = Model::new(
+            dims,
+            &F,
+            &H,
+            &diag([0.1, 0.2, 0.05]),
+            &diag([0.5, 0.3, 0.4]),
+        )
+        .expect("model");
+        let mut f = Filter::new(model, &[0.0; 3], &diag([1.0, 2.0, 0.5]), form).expect("filter");
+        (0..20)
+            .map(|k| {
+                let t = k as f64;
+                let z = [t.sin(), (0.7 * t).cos(), 0.1 * t].map(|v| v * c.sqrt());
+                let info = f.step(&z, None).expect("step");
+                (info.rank, info.nis.expect("nis"), info.log_likelihood)
+            })
+            .collect()
+    };
+    for form in FORMS {
+        let unit = run(form, 1.0);
+        for c in [1e-240_f64, 1e240] {
+            let shift = -1.5 * c.ln();
+            for (k, (&(rank, nis, ll), &(rank1, nis1, ll1))) in
+                run(form, c).iter().zip(&unit).enumerate()
+            {
+                assert_eq!(rank, rank1, "{form:?} c {c:e} step {k}");
+                // The shift is ±829; rounding in it and in the three logarithms of pivots
+                // ~1e120 is ~1e-13. NIS: the same O(1) numbers in another unit.
+                assert!(
+                    (ll - shift - ll1).abs() < 1e-9,
+                    "{form:?} c {c:e} step {k}: {ll} − ({shift}) vs {ll1}"
+                );
+                assert!(
+                    (nis - nis1).abs() < 1e-9 * nis1.max(1.0),
+                    "{form:?} step {k}"
+                );
+            }
+        }
+    }
+}
+
+/// A third channel that is a fixed combination `a z₁ + b z₂` of two independent ones
+/// leaves rank, NIS and estimates those of the two-channel filter; the data lie on the plane
+/// `(z₁, z₂) ↦ J (z₁, z₂)`, `J = [I; (a, b)]`, whose area element is `√det(JᵀJ) =
+/// √(1 + a² + b²)`, so the log-likelihood (the density on Σ's range) is the two-channel one
+/// minus `½ ln(1 + a² + b²)`.
+#[test]
+fn a_channel_combining_two_others_costs_only_the_jacobian() {
+    use kalman::Model;
+    let F = [[0.95, 0.1], [-0.1, 0.9]];
+    let Q = [[0.02, 0.0], [0.0, 0.05]];
+    let P0 = [[2.0, 0.3], [0.3, 1.0]];
+    let (a, b) = (0.7, -1.3);
+    let H2 = [[1.0, 0.5], [-0.2, 1.0]];
+    let R2 = [[0.3, 0.05], [0.05, 0.2]];
+    let comb = |u: [f64; 2], v: [f64; 2]| [a * u[0] + b * v[0], a * u[1] + b * v[1]];
+    let H3 = [H2[0], H2[1], comb(H2[0], H2[1])];
+    // R₃ = J R₂ Jᵀ: its third row is (a, b) R₂, then that row times (a, b).
+    let row = comb(R2[0], R2[1]);
+    let R3 = [
+        [R2[0][0], R2[0][1], row[0]],
+        [R2[1][0], R2[1][1], row[1]],
+        [row[0], row[1], a * row[0] + b * row[1]],
+    ];
+    let jac = -0.5 * (1.0 + a * a + b * b).ln();
+    let dims = |m| DynDims::new(2, m, 0).expect("dims");
+    for form in FORMS {
+        let three = Model::new(dims(3), &F, &H3, &Q, &R3).expect("model");
+        let two = Model::new(dims(2), &F, &H2, &Q, &R2).expect("model");
+        let mut f3 = Filter::new(three, &[0.5, -0.5], &P0, form).expect("filter");
+        let mut f2 = Filter::new(two, &[0.5, -0.5], &P0, form).expect("filter");
+        for k in 0..30 {
+            let (z1, z2) = ((0.4 * k as f64).sin(), (0.9 * k as f64).cos());
+            let i3 = f3.step(&[z1, z2, a * z1 + b * z2], None).expect("step");
+            let i2 = f2.step(&[z1, z2], None).expect("step");
+            assert_eq!((i3.rank, i2.rank), (2, 2), "{form:?} step {k}");
+            // O(1) computations of the same numbers, one with a rank cut.
+            let close = |x: f64, y: f64| (x - y).abs() < 1e-10 * y.abs().max(1.0);
+            let (n3, n2) = (i3.nis.expect("nis"), i2.nis.expect("nis"));
+            assert!(close(n3, n2), "{form:?} step {k}: NIS {n3} vs {n2}");
+            assert!(
+                close(i3.log_likelihood - i2.log_likelihood, jac),
+                "{form:?} step {k}: {} vs {} + {jac}",
+                i3.log_likelihood,
+                i2.log_likelihood
+            );
+            for i in 0..2 {
+                assert!(close(f3.state()[i], f2.state()[i]), "{form:?} step {k}");
             }
         }
     }
