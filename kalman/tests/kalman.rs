@@ -3,6 +3,13 @@
 //! `steady/`, the nonlinear filters in `nonlinear/`, and the counting global allocator both use in `common/`.
 #![allow(non_snake_case)]
 
+/// The three covariance forms, for tests that must hold in each.
+const FORMS: [kalman::CovarianceForm; 3] = [
+    kalman::CovarianceForm::Joseph,
+    kalman::CovarianceForm::Standard,
+    kalman::CovarianceForm::SquareRoot,
+];
+
 mod common {
     pub mod counting;
 }

@@ -1,16 +1,11 @@
 //! Agreement: the engine (every form, both storage paths) against the reference filter and
 //! against itself.
 
+use crate::FORMS;
 use kalman::strategies::{FilterProblem, ProblemOptions};
 use kalman::{CovarianceForm, Dims, DynDims, Filter, FixedDims};
 
 use super::reference;
-
-const FORMS: [CovarianceForm; 3] = [
-    CovarianceForm::Joseph,
-    CovarianceForm::Standard,
-    CovarianceForm::SquareRoot,
-];
 
 /// Largest |a − b| relative to max(1, max|b|) over the entries.
 fn rel_vec(a: &[f64], b: &[f64]) -> f64 {

@@ -1,6 +1,7 @@
 //! Zero heap allocations per step, for each covariance form and both storage paths, with a
 //! counting global allocator (`common/counting.rs`).
 
+use crate::FORMS;
 use kalman::strategies::{FilterProblem, ProblemOptions};
 use kalman::{CovarianceForm, Dims, DynDims, Filter, FixedDims};
 
@@ -25,11 +26,7 @@ fn count<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> usize {
 
 #[test]
 fn no_allocation_per_step() {
-    for form in [
-        CovarianceForm::Joseph,
-        CovarianceForm::Standard,
-        CovarianceForm::SquareRoot,
-    ] {
+    for form in FORMS {
         for (correlated, exact_channel) in [(false, false), (true, true)] {
             let opts = ProblemOptions {
                 steps: 10,

@@ -2,14 +2,9 @@
 //! the step, in every covariance form, on both storage paths and in the gain schedule; and
 //! a step without a measurement says so in its NIS.
 
+use crate::FORMS;
 use kalman::schedule::{GainSchedule, ScheduleOptions};
 use kalman::{CovarianceForm, Dims, DynDims, Error, Filter, FixedDims, Model};
-
-const FORMS: [CovarianceForm; 3] = [
-    CovarianceForm::Joseph,
-    CovarianceForm::Standard,
-    CovarianceForm::SquareRoot,
-];
 
 /// F = diag(1e10, 0.5) with the unstable state first (`unstable` = 0) or second (1), only
 /// the stable state measured, Q = I, R = 1. Both orders, so the check must read the whole

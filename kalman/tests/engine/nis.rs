@@ -1,6 +1,7 @@
 //! Consistency: the NIS of a consistent filter lies in its 95 % χ² band, and the
 //! log-likelihood is the Gaussian density of the innovation.
 
+use crate::FORMS;
 use kalman::strategies::{FilterProblem, ProblemOptions};
 use kalman::{CovarianceForm, DynDims, Filter, FixedDims, chi2_quantile};
 
@@ -14,11 +15,7 @@ fn nis_of_a_consistent_filter_is_in_the_95_percent_band() {
         ..ProblemOptions::default()
     };
     let p = FilterProblem::generate(4, 3, opts, 5);
-    for form in [
-        CovarianceForm::Joseph,
-        CovarianceForm::Standard,
-        CovarianceForm::SquareRoot,
-    ] {
+    for form in FORMS {
         let mut f = Filter::new(
             p.model(FixedDims::<4, 3, 0>::new()).expect("model"),
             &p.x0,
@@ -97,11 +94,7 @@ fn singular_innovation_covariance_takes_the_rank_revealing_path() {
     for c in [1.0_f64, 1e-12, 1e12] {
         let s = c.sqrt();
         let Q = [[1e-4 * c, 0.0], [0.0, 1e-3 * c]];
-        for form in [
-            CovarianceForm::Joseph,
-            CovarianceForm::Standard,
-            CovarianceForm::SquareRoot,
-        ] {
+        for form in FORMS {
             let model =
                 Model::new(DynDims::new(2, 2, 0).expect("dims"), &F, &H, &Q, &R).expect("model");
             let P0 = [[c, 0.0], [0.0, c]];
@@ -149,11 +142,7 @@ fn an_exactly_dependent_channel_adds_nothing() {
     let H2 = [[1.0, 0.5], [2.0, 1.0]];
     let R2 = [[r, 2.0 * r], [2.0 * r, 4.0 * r]];
     let P0 = [[2.0, 0.3], [0.3, 1.0]];
-    for form in [
-        CovarianceForm::Joseph,
-        CovarianceForm::Standard,
-        CovarianceForm::SquareRoot,
-    ] {
+    for form in FORMS {
         let two = Model::new(dims2, &F, &H2, &Q, &R2).expect("model");
         let one = Model::new(dims1, &F, &[[1.0, 0.5]], &Q, &[[r]]).expect("model");
         let mut f2 = Filter::new(two, &[0.5, -0.5], &P0, form).expect("filter");
@@ -189,12 +178,6 @@ fn an_exactly_dependent_channel_adds_nothing() {
         }
     }
 }
-
-const FORMS: [CovarianceForm; 3] = [
-    CovarianceForm::Joseph,
-    CovarianceForm::Standard,
-    CovarianceForm::SquareRoot,
-];
 
 /// Runs `steps` steps of a two-state filter whose Q, R and P0 are `c` times the given ones,
 /// on the data `√c·z_k`; returns each step's (rank, NIS, log-likelihood).

@@ -1,8 +1,8 @@
 //! The log-likelihood against the dense multivariate normal of the stacked series, and the
 //! exact gradient against central differences.
 
+use crate::FORMS;
 use faer::Mat;
-use kalman::CovarianceForm;
 use kalman::fit::{
     Derivative, FnMap, Free, ParamMap, Series, StandardMap, Structure, System, log_likelihood,
     log_likelihood_gradient,
@@ -109,11 +109,7 @@ fn loglik_equals_dense_multivariate_normal() {
             .and_then(|s| s.with_inputs(&u, 1))
             .expect("series");
         let dense = dense_log_density(&sys, &z, &u);
-        for form in [
-            CovarianceForm::Joseph,
-            CovarianceForm::Standard,
-            CovarianceForm::SquareRoot,
-        ] {
+        for form in FORMS {
             let ll = log_likelihood(&sys, &data, form).expect("loglik");
             assert!(
                 (ll - dense).abs() <= 1e-10 * dense.abs().max(1.0),
