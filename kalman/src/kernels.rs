@@ -98,7 +98,8 @@ fn gemm_loops(c: &mut [f64], part: Part, accum: Accum, alpha: f64, a: Op<'_>, b:
     let (b, ldb, tb) = b.parts();
     let ldc = rows;
     // Small outputs: full columns vectorise better than the shrinking lower-triangle ones
-    // (every `Lower` product is mirrored by its caller, so the extra upper part is harmless).
+    // (every `Lower` product is mirrored by its caller, so the extra upper part is harmless;
+    // any other size threshold, or none, gives the same results).
     let lower = part == Part::Lower && rows > 16;
     for j in 0..cols {
         let i0 = if lower { j } else { 0 };
@@ -164,6 +165,8 @@ fn gemm_faer(c: &mut [f64], part: Part, accum: Accum, alpha: f64, a: Op<'_>, b: 
     }
 }
 
+/// Threads for a product of `work` multiply-adds. The threshold is a matter of speed alone:
+/// a parallel product at most sums in another order, the same results to round-off.
 #[cfg(feature = "parallel")]
 fn par_for(work: usize) -> Par {
     if work >= PARALLEL_THRESHOLD {
