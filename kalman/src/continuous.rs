@@ -233,6 +233,7 @@ impl KalmanBucy {
         symmetrise(&mut P);
         let mut t = 0.0_f64;
         let mut k1 = self.derivative(P.as_ref());
+        // The first step is a guess the error control corrects (a rejected step shrinks).
         let scale = (self.A.norm_l2() + self.G.norm_l2() * P.norm_l2().max(1.0)).max(1e-12);
         let mut h = (0.01 / scale).min(t1.max(f64::MIN_POSITIVE));
         let mut steps = 0usize;
@@ -349,6 +350,7 @@ pub fn expm(A: impl MatrixInput) -> Result<Mat<f64>, Error> {
     let norm1 = (0..n)
         .map(|j| (0..n).map(|i| A[(i, j)].abs()).sum::<f64>())
         .fold(0.0, f64::max);
+    // At norm1 = θ₁₃ exactly, s = ⌈log₂ 1⌉ = 0 either way.
     let s = if norm1 > THETA13 {
         (norm1 / THETA13).log2().ceil() as i32
     } else {
@@ -430,6 +432,21 @@ pub fn van_loan(
 mod tests {
     use super::*;
     use faer::mat;
+
+    /// A sampling interval that is zero, negative, infinite or NaN is named, not integrated
+    /// (a negative one would run the model backwards, an infinite one overflow).
+    #[test]
+    fn van_loan_refuses_a_sampling_interval_that_is_not_positive_and_finite() {
+        let (A, Q) = (mat![[-1.0]], mat![[1.0]]);
+        for dt in [0.0, -0.1, f64::INFINITY, f64::NAN] {
+            let err = van_loan(A.as_ref(), Q.as_ref(), dt).expect_err("a bad dt");
+            assert!(
+                matches!(err, Error::Dimension { name: "dt", .. }),
+                "dt {dt}: {err}"
+            );
+        }
+        assert!(van_loan(A.as_ref(), Q.as_ref(), 0.1).is_ok());
+    }
 
     #[test]
     fn expm_rotation_and_nilpotent() {

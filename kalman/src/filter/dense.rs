@@ -158,6 +158,8 @@ fn gain<D: Dims>(
     let kbar = st.kbar.as_mut_slice();
     let K = st.gain.as_mut_slice();
     let y = st.y.as_mut_slice();
+    // Any acceptance that sends more Σ to the eigen-decomposition below gives the same
+    // results to round-off (it handles every Σ; the Cholesky is the fast path).
     st.chol = cholesky(fact, m, RANK_TOL * maxdiag);
     if st.chol {
         // kbar = U L⁻ᵀ, K = kbar L⁻¹, y = L⁻¹ e.

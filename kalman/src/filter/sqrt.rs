@@ -200,6 +200,7 @@ fn ln_det_dependent(
         for a in b..q {
             let wa = &w[a * r..(a + 1) * r];
             let wb = &w[b * r..(b + 1) * r];
+            // (zip stops at wa's r entries: wb's end only bounds the slice)
             let dot: f64 = wa.iter().zip(wb).map(|(x, y)| x * y).sum();
             g[a + b * q] = dot + if a == b { 1.0 } else { 0.0 };
         }

@@ -299,6 +299,49 @@ fn the_log_likelihood_survives_units_where_det_sigma_overflows() {
     }
 }
 
+/// Two extra channels that are fixed combinations of two independent ones (J = [I; (a, b);
+/// (c, d)]): the log-likelihood is the two-channel one minus `½ ln det(JᵀJ)`, and rank and NIS
+/// are the two-channel ones.
+#[test]
+fn two_dependent_channels_cost_the_jacobian_of_their_plane() {
+    use kalman::Model;
+    let F = [[0.95, 0.1], [-0.1, 0.9]];
+    let Q = [[0.02, 0.0], [0.0, 0.05]];
+    let P0 = [[2.0, 0.3], [0.3, 1.0]];
+    let J = [[1.0, 0.0], [0.0, 1.0], [0.7, -1.3], [-0.4, 0.9]];
+    let H2 = [[1.0, 0.5], [-0.2, 1.0]];
+    let R2 = [[0.3, 0.05], [0.05, 0.2]];
+    // H₄ = J H₂, R₄ = J R₂ Jᵀ, by their sums.
+    let H4: [[f64; 2]; 4] = J.map(|u| [0, 1].map(|c| u[0] * H2[0][c] + u[1] * H2[1][c]));
+    let JR: [[f64; 2]; 4] = J.map(|u| [0, 1].map(|c| u[0] * R2[0][c] + u[1] * R2[1][c]));
+    let R4: [[f64; 4]; 4] = JR.map(|u| J.map(|v| u[0] * v[0] + u[1] * v[1]));
+    // det(JᵀJ) of the 2×2 Gram matrix.
+    let g = |i: usize, k: usize| J.iter().map(|u| u[i] * u[k]).sum::<f64>();
+    let jac = -0.5 * (g(0, 0) * g(1, 1) - g(0, 1) * g(0, 1)).ln();
+    for form in FORMS {
+        let dims = |m| DynDims::new(2, m, 0).expect("dims");
+        let four = Model::new(dims(4), &F, &H4, &Q, &R4).expect("model");
+        let two = Model::new(dims(2), &F, &H2, &Q, &R2).expect("model");
+        let mut f4 = Filter::new(four, &[0.5, -0.5], &P0, form).expect("filter");
+        let mut f2 = Filter::new(two, &[0.5, -0.5], &P0, form).expect("filter");
+        for k in 0..30 {
+            let z = [(0.4 * k as f64).sin(), (0.9 * k as f64).cos()];
+            let z4 = J.map(|u| u[0] * z[0] + u[1] * z[1]);
+            let (i4, i2) = (
+                f4.step(&z4, None).expect("step"),
+                f2.step(&z, None).expect("step"),
+            );
+            assert_eq!(i4.rank, 2, "{form:?} step {k}");
+            // O(1) computations of the same numbers, one with two rank cuts.
+            let close = |x: f64, y: f64| (x - y).abs() < 1e-10 * y.abs().max(1.0);
+            let (n4, n2) = (i4.nis.expect("nis"), i2.nis.expect("nis"));
+            assert!(close(n4, n2), "{form:?} step {k}: NIS {n4} vs {n2}");
+            let dl = i4.log_likelihood - i2.log_likelihood;
+            assert!(close(dl, jac), "{form:?} step {k}: {dl} vs {jac}");
+        }
+    }
+}
+
 /// A third channel that is a fixed combination `a z₁ + b z₂` of two independent ones
 /// leaves rank, NIS and estimates those of the two-channel filter; the data lie on the plane
 /// `(z₁, z₂) ↦ J (z₁, z₂)`, `J = [I; (a, b)]`, whose area element is `√det(JᵀJ) =
