@@ -299,97 +299,64 @@ fn the_log_likelihood_survives_units_where_det_sigma_overflows() {
     }
 }
 
-/// Two extra channels that are fixed combinations of two independent ones (J = [I; (a, b);
-/// (c, d)]): the log-likelihood is the two-channel one minus `½ ln det(JᵀJ)`, and rank and NIS
-/// are the two-channel ones.
-#[test]
-fn two_dependent_channels_cost_the_jacobian_of_their_plane() {
+/// Channels `J z` that repeat two independent ones `z` through fixed combinations (J's first
+/// rows the identity) leave rank, NIS and estimates those of the two-channel filter; the data
+/// lie on the plane `z ↦ J z`, whose area element is `√det(JᵀJ)`, so the log-likelihood (the
+/// density on Σ's range) is the two-channel one minus `½ ln det(JᵀJ)`.
+fn dependent_channels_cost_the_jacobian<const M: usize>(J: [[f64; 2]; M])
+where
+    [[f64; 2]; M]: kalman::MatrixInput,
+    [[f64; M]; M]: kalman::MatrixInput,
+{
     use kalman::Model;
     let F = [[0.95, 0.1], [-0.1, 0.9]];
     let Q = [[0.02, 0.0], [0.0, 0.05]];
     let P0 = [[2.0, 0.3], [0.3, 1.0]];
-    let J = [[1.0, 0.0], [0.0, 1.0], [0.7, -1.3], [-0.4, 0.9]];
     let H2 = [[1.0, 0.5], [-0.2, 1.0]];
     let R2 = [[0.3, 0.05], [0.05, 0.2]];
-    // H₄ = J H₂, R₄ = J R₂ Jᵀ, by their sums.
-    let H4: [[f64; 2]; 4] = J.map(|u| [0, 1].map(|c| u[0] * H2[0][c] + u[1] * H2[1][c]));
-    let JR: [[f64; 2]; 4] = J.map(|u| [0, 1].map(|c| u[0] * R2[0][c] + u[1] * R2[1][c]));
-    let R4: [[f64; 4]; 4] = JR.map(|u| J.map(|v| u[0] * v[0] + u[1] * v[1]));
+    // H = J H₂, R = J R₂ Jᵀ, by their sums.
+    let H: [[f64; 2]; M] = J.map(|u| [0, 1].map(|c| u[0] * H2[0][c] + u[1] * H2[1][c]));
+    let JR: [[f64; 2]; M] = J.map(|u| [0, 1].map(|c| u[0] * R2[0][c] + u[1] * R2[1][c]));
+    let R: [[f64; M]; M] = JR.map(|u| J.map(|v| u[0] * v[0] + u[1] * v[1]));
     // det(JᵀJ) of the 2×2 Gram matrix.
     let g = |i: usize, k: usize| J.iter().map(|u| u[i] * u[k]).sum::<f64>();
     let jac = -0.5 * (g(0, 0) * g(1, 1) - g(0, 1) * g(0, 1)).ln();
     for form in FORMS {
         let dims = |m| DynDims::new(2, m, 0).expect("dims");
-        let four = Model::new(dims(4), &F, &H4, &Q, &R4).expect("model");
+        let many = Model::new(dims(M), &F, &H, &Q, &R).expect("model");
         let two = Model::new(dims(2), &F, &H2, &Q, &R2).expect("model");
-        let mut f4 = Filter::new(four, &[0.5, -0.5], &P0, form).expect("filter");
+        let mut fm = Filter::new(many, &[0.5, -0.5], &P0, form).expect("filter");
         let mut f2 = Filter::new(two, &[0.5, -0.5], &P0, form).expect("filter");
         for k in 0..30 {
             let z = [(0.4 * k as f64).sin(), (0.9 * k as f64).cos()];
-            let z4 = J.map(|u| u[0] * z[0] + u[1] * z[1]);
-            let (i4, i2) = (
-                f4.step(&z4, None).expect("step"),
+            let zm = J.map(|u| u[0] * z[0] + u[1] * z[1]);
+            let (im, i2) = (
+                fm.step(&zm, None).expect("step"),
                 f2.step(&z, None).expect("step"),
             );
-            assert_eq!(i4.rank, 2, "{form:?} step {k}");
-            // O(1) computations of the same numbers, one with two rank cuts.
+            assert_eq!(im.rank, 2, "{form:?} M {M} step {k}");
+            // O(1) computations of the same numbers, one with rank cuts.
             let close = |x: f64, y: f64| (x - y).abs() < 1e-10 * y.abs().max(1.0);
-            let (n4, n2) = (i4.nis.expect("nis"), i2.nis.expect("nis"));
-            assert!(close(n4, n2), "{form:?} step {k}: NIS {n4} vs {n2}");
-            let dl = i4.log_likelihood - i2.log_likelihood;
-            assert!(close(dl, jac), "{form:?} step {k}: {dl} vs {jac}");
+            let (nm, n2) = (im.nis.expect("nis"), i2.nis.expect("nis"));
+            assert!(close(nm, n2), "{form:?} M {M} step {k}: NIS {nm} vs {n2}");
+            let dl = im.log_likelihood - i2.log_likelihood;
+            assert!(close(dl, jac), "{form:?} M {M} step {k}: {dl} vs {jac}");
+            for i in 0..2 {
+                assert!(
+                    close(fm.state()[i], f2.state()[i]),
+                    "{form:?} M {M} step {k}"
+                );
+            }
         }
     }
 }
 
-/// A third channel that is a fixed combination `a z₁ + b z₂` of two independent ones
-/// leaves rank, NIS and estimates those of the two-channel filter; the data lie on the plane
-/// `(z₁, z₂) ↦ J (z₁, z₂)`, `J = [I; (a, b)]`, whose area element is `√det(JᵀJ) =
-/// √(1 + a² + b²)`, so the log-likelihood (the density on Σ's range) is the two-channel one
-/// minus `½ ln(1 + a² + b²)`.
 #[test]
 fn a_channel_combining_two_others_costs_only_the_jacobian() {
-    use kalman::Model;
-    let F = [[0.95, 0.1], [-0.1, 0.9]];
-    let Q = [[0.02, 0.0], [0.0, 0.05]];
-    let P0 = [[2.0, 0.3], [0.3, 1.0]];
-    let (a, b) = (0.7, -1.3);
-    let H2 = [[1.0, 0.5], [-0.2, 1.0]];
-    let R2 = [[0.3, 0.05], [0.05, 0.2]];
-    let comb = |u: [f64; 2], v: [f64; 2]| [a * u[0] + b * v[0], a * u[1] + b * v[1]];
-    let H3 = [H2[0], H2[1], comb(H2[0], H2[1])];
-    // R₃ = J R₂ Jᵀ: its third row is (a, b) R₂, then that row times (a, b).
-    let row = comb(R2[0], R2[1]);
-    let R3 = [
-        [R2[0][0], R2[0][1], row[0]],
-        [R2[1][0], R2[1][1], row[1]],
-        [row[0], row[1], a * row[0] + b * row[1]],
-    ];
-    let jac = -0.5 * (1.0 + a * a + b * b).ln();
-    let dims = |m| DynDims::new(2, m, 0).expect("dims");
-    for form in FORMS {
-        let three = Model::new(dims(3), &F, &H3, &Q, &R3).expect("model");
-        let two = Model::new(dims(2), &F, &H2, &Q, &R2).expect("model");
-        let mut f3 = Filter::new(three, &[0.5, -0.5], &P0, form).expect("filter");
-        let mut f2 = Filter::new(two, &[0.5, -0.5], &P0, form).expect("filter");
-        for k in 0..30 {
-            let (z1, z2) = ((0.4 * k as f64).sin(), (0.9 * k as f64).cos());
-            let i3 = f3.step(&[z1, z2, a * z1 + b * z2], None).expect("step");
-            let i2 = f2.step(&[z1, z2], None).expect("step");
-            assert_eq!((i3.rank, i2.rank), (2, 2), "{form:?} step {k}");
-            // O(1) computations of the same numbers, one with a rank cut.
-            let close = |x: f64, y: f64| (x - y).abs() < 1e-10 * y.abs().max(1.0);
-            let (n3, n2) = (i3.nis.expect("nis"), i2.nis.expect("nis"));
-            assert!(close(n3, n2), "{form:?} step {k}: NIS {n3} vs {n2}");
-            assert!(
-                close(i3.log_likelihood - i2.log_likelihood, jac),
-                "{form:?} step {k}: {} vs {} + {jac}",
-                i3.log_likelihood,
-                i2.log_likelihood
-            );
-            for i in 0..2 {
-                assert!(close(f3.state()[i], f2.state()[i]), "{form:?} step {k}");
-            }
-        }
-    }
+    dependent_channels_cost_the_jacobian([[1.0, 0.0], [0.0, 1.0], [0.7, -1.3]]);
+}
+
+#[test]
+fn two_dependent_channels_cost_the_jacobian_of_their_plane() {
+    dependent_channels_cost_the_jacobian([[1.0, 0.0], [0.0, 1.0], [0.7, -1.3], [-0.4, 0.9]]);
 }
