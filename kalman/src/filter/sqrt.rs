@@ -136,7 +136,7 @@ fn estimates<D: Dims>(
     let mask = st.mask.as_slice();
     if (0..m).any(|i| mask[i] && piv[i].is_none()) {
         let (w, g) = (st.sig.as_mut_slice(), st.eigv.as_mut_slice());
-        logdet += ln_det_dependent(arr, ld, m, r, (piv, pivrow, mask), w, g);
+        logdet += ln_det_dependent(&d, arr, ld, r, (piv, pivrow, mask), w, g);
     }
     let nis: f64 = y[..r].iter().map(|v| v * v).sum();
     let xf = st.xf.as_mut_slice();
@@ -171,10 +171,10 @@ fn estimates<D: Dims>(
 /// with `W = C L₁⁻¹`, and `det(I + WᵀW) = det(I + WWᵀ)`. Every eigenvalue of `I + WWᵀ` is
 /// at least 1, so its Cholesky fails only on non-finite numbers (a diverged step, which the
 /// caller reports). `w` (q×r) and `g` (q×q) are scratch of at least m² entries.
-fn ln_det_dependent(
+fn ln_det_dependent<D: Dims>(
+    d: &D,
     arr: &[f64],
     ld: usize,
-    m: usize,
     r: usize,
     (piv, pivrow, mask): (&[Option<usize>], &[usize], &[bool]),
     w: &mut [f64],
@@ -182,7 +182,7 @@ fn ln_det_dependent(
 ) -> f64 {
     // Row q of W (row-major, r per row) solves wᵀ L₁ = c, by back substitution.
     let mut q = 0;
-    for i in 0..m {
+    for i in 0..d.m() {
         if !mask[i] || piv[i].is_some() {
             continue;
         }
@@ -196,14 +196,10 @@ fn ln_det_dependent(
         }
         q += 1;
     }
-    for b in 0..q {
-        for a in b..q {
-            let wa = &w[a * r..(a + 1) * r];
-            let wb = &w[b * r..(b + 1) * r];
-            // (zip stops at wa's r entries: wb's end only bounds the slice)
-            let dot: f64 = wa.iter().zip(wb).map(|(x, y)| x * y).sum();
-            g[a + b * q] = dot + if a == b { 1.0 } else { 0.0 };
-        }
+    // Stored column-major, w is Wᵀ (r×q): G = W Wᵀ + I, lower triangle.
+    mm(d, g, Lower, Replace, 1.0, T(w, r, q), N(w, r, q));
+    for i in 0..q {
+        g[i + i * q] += 1.0;
     }
     if cholesky(g, q, 0.0) {
         (0..q).map(|i| 2.0 * g[i + i * q].ln()).sum()
