@@ -82,6 +82,8 @@ pub(crate) fn mm<D: Dims>(
     let (rows, inner) = a.shape();
     let (inner_b, cols) = b.shape();
     debug_assert_eq!(inner, inner_b, "inner dimensions of a product");
+    // Both paths form the same product to round-off (a `Lower` one is mirrored by its
+    // caller): the test chooses speed only, and any other test gives the same results.
     if d.is_fixed() || rows * cols * inner < FAER_THRESHOLD {
         gemm_loops(c, part, accum, alpha, a, b);
     } else {
@@ -147,6 +149,7 @@ fn gemm_faer(c: &mut [f64], part: Part, accum: Accum, alpha: f64, a: Op<'_>, b: 
     let (rows, inner) = a.shape();
     let cols = b.shape().1;
     let C = MatMut::from_column_major_slice_with_stride_mut(c, rows, cols, rows);
+    // The work estimate only chooses the threads (see `par_for`).
     let par = par_for(rows * cols * inner);
     if part == Part::Lower && rows >= TRIANGULAR_MIN {
         faer::linalg::matmul::triangular::matmul(
@@ -255,8 +258,9 @@ pub(crate) fn jacobi_eigen(a: &mut [f64], n: usize, v: &mut [f64], w: &mut [f64]
                 }
             }
         }
-        // (Also when off = 0: total ≥ off ≥ 0. A stop that never fired would only run the
-        // 60 sweeps out, rotating a converged matrix by angles below ε.)
+        // (Also when off = 0: total ≥ off ≥ 0. A stop that never fired — a total summed
+        // wrongly, the diagonal counted as off it, x = a/a — would only run the 60 sweeps
+        // out, rotating a converged matrix by angles below ε.)
         if off <= 1e-30 * total {
             break;
         }
@@ -269,6 +273,10 @@ pub(crate) fn jacobi_eigen(a: &mut [f64], n: usize, v: &mut [f64], w: &mut [f64]
                 let app = a[p + p * n];
                 let aqq = a[q + q * n];
                 let theta = (aqq - app) / (2.0 * apq);
+                // The smaller root of t² + 2θt = 1. (Its approximation 1/(2θ) would still
+                // converge on the symmetric PSD matrices this receives: near θ = 0 such a
+                // rotation about triples |θ|, far from 0 it is exact to O(θ⁻³); ~40 sweeps
+                // from θ ~ ε.)
                 let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
                 let t = if theta == 0.0 { 1.0 } else { t };
                 let c = 1.0 / (t * t + 1.0).sqrt();
@@ -499,6 +507,29 @@ mod tests {
                 assert_eq!((k, piv[1]), (2, Some(1)), "x = {x:e}");
                 assert!(a[3].abs() > 0.0);
             }
+        }
+    }
+
+    /// `lq_rows` on rows `1..5` of a 5×2 array (more rows than columns, the block starting
+    /// below row 0): `piv` is indexed from the block's first row, the two independent rows
+    /// take the two pivot columns, and the rows left once the columns run out get `None`.
+    /// Row 0 is outside the block and must not change; the reflections act on the columns,
+    /// so each block row keeps its length.
+    #[test]
+    fn lq_rows_indexes_pivots_from_the_first_row_of_the_block() {
+        // Row-major, ld 2: [7, 7] (outside), [3, 4], [1, 2], [5, 6], [8, 9].
+        let mut a = [7.0, 7.0, 3.0, 4.0, 1.0, 2.0, 5.0, 6.0, 8.0, 9.0];
+        let mut piv = [Some(9); 4];
+        let k = lq_rows(&mut a, 2, 1..5, 2, 0, 2, 0.0, &mut piv);
+        assert_eq!(k, 2);
+        assert_eq!(piv, [Some(0), Some(1), None, None]);
+        assert_eq!(a[..2], [7.0, 7.0]);
+        // Row 1 becomes (∓5, 0): its norm on the pivot column, the rest zero.
+        assert!((a[2].abs() - 5.0).abs() < 1e-15 && a[3].abs() <= 0.0);
+        for (row, len2) in [(2, 5.0), (3, 61.0), (4, 145.0)] {
+            let got = a[2 * row] * a[2 * row] + a[2 * row + 1] * a[2 * row + 1];
+            // A few roundings of O(100) numbers.
+            assert!((got - len2).abs() < 1e-12, "row {row}: {got} vs {len2}");
         }
     }
 }

@@ -35,6 +35,7 @@ mod nonlinear {
     pub mod linear;
     pub mod models;
     pub mod nis;
+    pub mod symmetry;
 }
 
 mod fit {

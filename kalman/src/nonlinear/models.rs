@@ -51,8 +51,10 @@ pub trait NonlinearModel {
     /// The measurement function `h(x, k)` into `out` (length m).
     fn h(&mut self, x: &[f64], k: usize, out: &mut [f64]);
     /// `Q_k` (n×n, symmetric PSD), the covariance of the noise of the step from k to k + 1.
+    /// The filters use its symmetric part `(Q_k + Q_kᵀ)/2` (a `G Gᵀ` formed in floating
+    /// point can differ from its transpose by round-off).
     fn q(&mut self, k: usize, out: &mut [f64]);
-    /// `R_k` (m×m, symmetric PSD).
+    /// `R_k` (m×m, symmetric PSD); as for `Q_k`, its symmetric part is used.
     fn r(&mut self, k: usize, out: &mut [f64]);
     /// The measurement residual `a − b` (override to wrap angles); `out` has length m.
     fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {

@@ -127,10 +127,12 @@ fn singular_innovation_covariance_takes_the_rank_revealing_path() {
     }
 }
 
-/// A channel that is an exact multiple of another (z₂ = 2 z₁, noise included: R = r·[[1, 2],
-/// [2, 4]]) carries no information of its own, so the filter must give the estimates, NIS
+/// A channel that is an exact multiple of another (z₂ = g z₁, noise included: R = r·[[1, g],
+/// [g, g²]]) carries no information of its own, so the filter must give the estimates, NIS
 /// and rank of the one-channel filter. Σ is singular with unequal diagonal entries, so the
-/// dense forms' eigen-decomposition has to rotate by a non-trivial angle.
+/// dense forms' eigen-decomposition has to rotate by a non-trivial angle: by about 63° for
+/// g = 2, and by almost exactly 45° for g = 1.001 (a twin sensor whose gain differs by 0.1 %:
+/// two channels of almost equal variance and correlation 1).
 #[test]
 fn an_exactly_dependent_channel_adds_nothing() {
     use kalman::Model;
@@ -139,40 +141,46 @@ fn an_exactly_dependent_channel_adds_nothing() {
     let r = 0.3;
     let dims2 = DynDims::new(2, 2, 0).expect("dims");
     let dims1 = DynDims::new(2, 1, 0).expect("dims");
-    let H2 = [[1.0, 0.5], [2.0, 1.0]];
-    let R2 = [[r, 2.0 * r], [2.0 * r, 4.0 * r]];
     let P0 = [[2.0, 0.3], [0.3, 1.0]];
-    for form in FORMS {
+    for (g, form) in [2.0, 1.001].into_iter().flat_map(|g| FORMS.map(|f| (g, f))) {
+        let H2 = [[1.0, 0.5], [g, 0.5 * g]];
+        let R2 = [[r, g * r], [g * r, g * g * r]];
         let two = Model::new(dims2, &F, &H2, &Q, &R2).expect("model");
         let one = Model::new(dims1, &F, &[[1.0, 0.5]], &Q, &[[r]]).expect("model");
         let mut f2 = Filter::new(two, &[0.5, -0.5], &P0, form).expect("filter");
         let mut f1 = Filter::new(one, &[0.5, -0.5], &P0, form).expect("filter");
         for k in 0..30 {
             let z = (0.4 * k as f64).sin();
-            let i2 = f2.step(&[z, 2.0 * z], None).expect("step");
+            let i2 = f2.step(&[z, g * z], None).expect("step");
             let i1 = f1.step(&[z], None).expect("step");
-            assert_eq!(i2.rank, 1, "{form:?} step {k}");
+            assert_eq!(i2.rank, 1, "{form:?} g {g} step {k}");
             // Tolerance: both are O(1) computations of the same numbers; the two-channel
             // one adds a rank cut (the dropped eigenvalue is round-off, ~1e-16 of the kept
             // one) and the rotation that finds it.
             let close = |a: f64, b: f64| (a - b).abs() < 1e-10 * b.abs().max(1.0);
             let (nis2, nis1) = (i2.nis.expect("nis"), i1.nis.expect("nis"));
-            assert!(close(nis2, nis1), "{form:?} step {k}: NIS {nis2} vs {nis1}");
+            assert!(
+                close(nis2, nis1),
+                "{form:?} g {g} step {k}: NIS {nis2} vs {nis1}"
+            );
             // The log-likelihood is that of the density on Σ's range (log pdet Σ): the data
-            // (z, 2z) lie on the line along (1, 2)/√5, where their coordinate is √5·z, so
-            // the density there is z's divided by √5.
+            // (z, g z) lie on the line along (1, g)/√(1 + g²), where their coordinate is
+            // √(1 + g²)·z, so the density there is z's divided by √(1 + g²).
             let dl = i2.log_likelihood - i1.log_likelihood;
             assert!(
-                close(dl, -0.5 * 5.0_f64.ln()),
-                "{form:?} step {k}: log-likelihoods {} vs {}",
+                close(dl, -0.5 * (1.0 + g * g).ln()),
+                "{form:?} g {g} step {k}: log-likelihoods {} vs {}",
                 i2.log_likelihood,
                 i1.log_likelihood
             );
             let (P2, P1) = (f2.covariance(), f1.covariance());
             for i in 0..2 {
-                assert!(close(f2.state()[i], f1.state()[i]), "{form:?} step {k}: x");
+                assert!(
+                    close(f2.state()[i], f1.state()[i]),
+                    "{form:?} g {g} step {k}: x"
+                );
                 for j in 0..2 {
-                    assert!(close(P2[(i, j)], P1[(i, j)]), "{form:?} step {k}: P");
+                    assert!(close(P2[(i, j)], P1[(i, j)]), "{form:?} g {g} step {k}: P");
                 }
             }
         }
@@ -303,7 +311,7 @@ fn the_log_likelihood_survives_units_where_det_sigma_overflows() {
 /// rows the identity) leave rank, NIS and estimates those of the two-channel filter; the data
 /// lie on the plane `z ↦ J z`, whose area element is `√det(JᵀJ)`, so the log-likelihood (the
 /// density on Σ's range) is the two-channel one minus `½ ln det(JᵀJ)`.
-fn dependent_channels_cost_the_jacobian<const M: usize>(J: [[f64; 2]; M])
+fn dependent_channels_cost_the_jacobian<const M: usize>(J: [[f64; 2]; M], tol: f64)
 where
     [[f64; 2]; M]: kalman::MatrixInput,
     [[f64; M]; M]: kalman::MatrixInput,
@@ -335,8 +343,7 @@ where
                 f2.step(&z, None).expect("step"),
             );
             assert_eq!(im.rank, 2, "{form:?} M {M} step {k}");
-            // O(1) computations of the same numbers, one with rank cuts.
-            let close = |x: f64, y: f64| (x - y).abs() < 1e-10 * y.abs().max(1.0);
+            let close = |x: f64, y: f64| (x - y).abs() < tol * y.abs().max(1.0);
             let (nm, n2) = (im.nis.expect("nis"), i2.nis.expect("nis"));
             assert!(close(nm, n2), "{form:?} M {M} step {k}: NIS {nm} vs {n2}");
             let dl = im.log_likelihood - i2.log_likelihood;
@@ -351,12 +358,30 @@ where
     }
 }
 
+/// Tolerance of O(1) computations of the same numbers, one with rank cuts.
+const DEPENDENT_TOL: f64 = 1e-10;
+
 #[test]
 fn a_channel_combining_two_others_costs_only_the_jacobian() {
-    dependent_channels_cost_the_jacobian([[1.0, 0.0], [0.0, 1.0], [0.7, -1.3]]);
+    dependent_channels_cost_the_jacobian([[1.0, 0.0], [0.0, 1.0], [0.7, -1.3]], DEPENDENT_TOL);
 }
 
 #[test]
 fn two_dependent_channels_cost_the_jacobian_of_their_plane() {
-    dependent_channels_cost_the_jacobian([[1.0, 0.0], [0.0, 1.0], [0.7, -1.3], [-0.4, 0.9]]);
+    dependent_channels_cost_the_jacobian(
+        [[1.0, 0.0], [0.0, 1.0], [0.7, -1.3], [-0.4, 0.9]],
+        DEPENDENT_TOL,
+    );
+}
+
+/// The rank test is relative to the largest variance among the channels, not to the first
+/// channel's: with the first channel in units 10⁴ times smaller than a dependent pair (and
+/// their covariance ~10⁴ times the first's variance), the pair's round-off pivot (~ε of its
+/// variance, ~1e-8) is far above `RANK_TOL` times the first channel's variance or the
+/// covariance but below `RANK_TOL` times the pair's, and is cut.
+#[test]
+fn the_rank_test_scales_with_the_largest_channel_not_the_first() {
+    // Tolerance: Σ's condition number grows by the 10⁸ ratio of the variances, and so may
+    // the round-off of the filter that cuts the dependent pair (ε·10⁸ ≈ 1e-8).
+    dependent_channels_cost_the_jacobian([[1.0, 0.0], [0.0, 1e4], [0.0, 7e3]], 1e-8);
 }

@@ -1,0 +1,159 @@
+//! The filters use the symmetric part of a model's `Q_k` and `R_k`: a model whose matrices
+//! carry an antisymmetric part (as a `G Gᵀ` summed in another order can, by round-off, or a
+//! hand-typed off-diagonal pair that disagrees) filters as the model with their symmetric
+//! part, and every covariance the filters report is exactly symmetric.
+
+use faer::MatRef;
+use kalman::FixedDims;
+use kalman::nonlinear::{
+    Ekf, EkfUpdate, GenericModel, Jacobians, NonlinearModel, SigmaPoints, Ukf,
+};
+
+use super::models::{RangeBearing, RangeBearingHand};
+
+/// Range and bearing with `S` added to Q's and R's (0, 1) entries and subtracted from their
+/// (1, 0) entries: the symmetric parts are the model's own.
+struct Skewed {
+    inner: RangeBearingHand,
+    s: f64,
+}
+
+impl NonlinearModel for Skewed {
+    fn f(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]) {
+        self.inner.f(x, u, k, out);
+    }
+    fn h(&mut self, x: &[f64], k: usize, out: &mut [f64]) {
+        self.inner.h(x, k, out);
+    }
+    fn q(&mut self, k: usize, out: &mut [f64]) {
+        GenericModel::q(&self.inner.0, k, out);
+        // Q(0, 1) is column 1, row 0 (column-major, n = 4).
+        out[4] += self.s * out[4];
+        out[1] -= self.s * out[1];
+    }
+    fn r(&mut self, k: usize, out: &mut [f64]) {
+        GenericModel::r(&self.inner.0, k, out);
+        out[2] += self.s * out[0];
+        out[1] -= self.s * out[0];
+    }
+    fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+        self.inner.residual(a, b, out);
+    }
+}
+
+impl Jacobians for Skewed {
+    fn f_jacobian(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, jac: &mut [f64]) {
+        self.inner.f_jacobian(x, u, k, jac);
+    }
+    fn h_jacobian(&mut self, x: &[f64], k: usize, jac: &mut [f64]) {
+        self.inner.h_jacobian(x, k, jac);
+    }
+}
+
+fn model(s: f64) -> Skewed {
+    Skewed {
+        inner: RangeBearingHand::default(),
+        s,
+    }
+}
+
+fn assert_symmetric(p: MatRef<'_, f64>, what: &str) {
+    for j in 0..p.ncols() {
+        for i in 0..j {
+            // Exact: a reported covariance is stored once and mirrored.
+            assert!(
+                p[(i, j)].to_bits() == p[(j, i)].to_bits(),
+                "{what}: ({i}, {j}) {} vs {}",
+                p[(i, j)],
+                p[(j, i)]
+            );
+        }
+    }
+}
+
+/// Data along a pass of the target near the origin (range and bearing of the prior's track,
+/// perturbed).
+fn data(k: usize) -> [f64; 2] {
+    let t = k as f64;
+    let x0 = RangeBearing::x0();
+    let (px, py) = (x0[0] + x0[1] * t, x0[2] + x0[3] * t);
+    [
+        (px * px + py * py).sqrt() + 0.3 * (1.7 * t).sin(),
+        py.atan2(px) + 0.005 * (0.9 * t).cos(),
+    ]
+}
+
+#[test]
+fn an_antisymmetric_part_of_q_and_r_is_ignored_and_covariances_stay_symmetric() {
+    let dims = FixedDims::<4, 2, 0>::new();
+    let (x0, p0) = (RangeBearing::x0(), RangeBearing::p0());
+    let updates = [
+        EkfUpdate::Extended,
+        EkfUpdate::Iterated {
+            max_iterations: 4,
+            tolerance: 1e-12,
+        },
+    ];
+    for update in updates {
+        let mut skew = Ekf::new(dims, model(0.3), &x0, &p0, update).expect("ekf");
+        let mut plain = Ekf::new(dims, model(0.0), &x0, &p0, update).expect("ekf");
+        for k in 0..40 {
+            let z = data(k);
+            let a = skew.step(&z, None).expect("step");
+            let b = plain.step(&z, None).expect("step");
+            let what = format!("{update:?} step {k}");
+            assert_symmetric(skew.covariance(), &what);
+            assert_symmetric(skew.predicted_covariance(), &what);
+            compare(
+                skew.state(),
+                plain.state(),
+                skew.covariance(),
+                plain.covariance(),
+                &what,
+            );
+            assert!((a.log_likelihood - b.log_likelihood).abs() < 1e-9, "{what}");
+        }
+    }
+    for points in [SigmaPoints::Cubature, SigmaPoints::merwe(1.0, 2.0, 0.0)] {
+        let mut skew = Ukf::new(dims, model(0.3), &x0, &p0, points).expect("ukf");
+        let mut plain = Ukf::new(dims, model(0.0), &x0, &p0, points).expect("ukf");
+        for k in 0..40 {
+            let z = data(k);
+            let a = skew.step(&z, None).expect("step");
+            let b = plain.step(&z, None).expect("step");
+            let what = format!("{points:?} step {k}");
+            assert_symmetric(skew.covariance(), &what);
+            assert_symmetric(skew.predicted_covariance(), &what);
+            compare(
+                skew.state(),
+                plain.state(),
+                skew.covariance(),
+                plain.covariance(),
+                &what,
+            );
+            assert!((a.log_likelihood - b.log_likelihood).abs() < 1e-9, "{what}");
+        }
+    }
+}
+
+/// The symmetric part of `Q + S` is Q up to the rounding of `(q + s) + (q − s)`, a few ulps
+/// of the entries (~1e2 in range², 1e-4 in rad²): 1e-9 relative covers forty steps of it.
+fn compare(xa: &[f64], xb: &[f64], pa: MatRef<'_, f64>, pb: MatRef<'_, f64>, what: &str) {
+    for i in 0..xa.len() {
+        assert!(
+            (xa[i] - xb[i]).abs() <= 1e-9 * xb[i].abs().max(1.0),
+            "{what}: x[{i}] {} vs {}",
+            xa[i],
+            xb[i]
+        );
+        for j in 0..xa.len() {
+            let scale = (pb[(i, i)] * pb[(j, j)]).sqrt();
+            assert!(
+                (pa[(i, j)] - pb[(i, j)]).abs() <= 1e-9 * scale,
+                "{what}: P({i}, {j}) {} vs {}",
+                pa[(i, j)],
+                pb[(i, j)]
+            );
+        }
+    }
+}
