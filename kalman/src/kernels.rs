@@ -510,24 +510,40 @@ mod tests {
         }
     }
 
-    /// `lq_rows` on rows `1..5` of a 5×2 array (more rows than columns, the block starting
-    /// below row 0): `piv` is indexed from the block's first row, the two independent rows
-    /// take the two pivot columns, and the rows left once the columns run out get `None`.
-    /// Row 0 is outside the block and must not change; the reflections act on the columns,
-    /// so each block row keeps its length.
+    /// `lq_rows` on rows `1..5` and columns `1..3` of a 5×3 array (more rows than columns,
+    /// the block starting below row 0 and right of column 0): `piv` is indexed from the
+    /// block's first row and holds absolute columns, the count is of the pivots taken, the
+    /// two independent rows take the two pivot columns, and the rows left once the columns
+    /// run out get `None`. Row 0 and column 0 are outside the block and must not change; the
+    /// reflections act on the columns, so each block row keeps its length.
     #[test]
     fn lq_rows_indexes_pivots_from_the_first_row_of_the_block() {
-        // Row-major, ld 2: [7, 7] (outside), [3, 4], [1, 2], [5, 6], [8, 9].
-        let mut a = [7.0, 7.0, 3.0, 4.0, 1.0, 2.0, 5.0, 6.0, 8.0, 9.0];
+        // Row-major, ld 3: [7, 7, 7] (outside), then [c₀, 3, 4], [c₀, 1, 2], [c₀, 5, 6],
+        // [c₀, 8, 9] with c₀ outside the block's columns.
+        let c0 = [0.5, 0.25, 0.125, 1.0];
+        let mut a = [7.0; 15];
+        for (r, row) in [[3.0, 4.0], [1.0, 2.0], [5.0, 6.0], [8.0, 9.0]]
+            .iter()
+            .enumerate()
+        {
+            a[3 * (r + 1)..3 * (r + 2)].copy_from_slice(&[c0[r], row[0], row[1]]);
+        }
         let mut piv = [Some(9); 4];
-        let k = lq_rows(&mut a, 2, 1..5, 2, 0, 2, 0.0, &mut piv);
+        let k = lq_rows(&mut a, 3, 1..5, 5, 1, 3, 0.0, &mut piv);
         assert_eq!(k, 2);
-        assert_eq!(piv, [Some(0), Some(1), None, None]);
-        assert_eq!(a[..2], [7.0, 7.0]);
-        // Row 1 becomes (∓5, 0): its norm on the pivot column, the rest zero.
-        assert!((a[2].abs() - 5.0).abs() < 1e-15 && a[3].abs() <= 0.0);
+        assert_eq!(piv, [Some(1), Some(2), None, None]);
+        assert_eq!(a[..3], [7.0; 3]);
+        for r in 0..4 {
+            assert!(
+                (a[3 * (r + 1)] - c0[r]).abs() <= 0.0,
+                "column 0 of row {}",
+                r + 1
+            );
+        }
+        // Row 1 becomes (∓5, 0) on the block's columns: its norm on the pivot column.
+        assert!((a[4].abs() - 5.0).abs() < 1e-15 && a[5].abs() <= 0.0);
         for (row, len2) in [(2, 5.0), (3, 61.0), (4, 145.0)] {
-            let got = a[2 * row] * a[2 * row] + a[2 * row + 1] * a[2 * row + 1];
+            let got = a[3 * row + 1] * a[3 * row + 1] + a[3 * row + 2] * a[3 * row + 2];
             // A few roundings of O(100) numbers.
             assert!((got - len2).abs() < 1e-12, "row {row}: {got} vs {len2}");
         }
