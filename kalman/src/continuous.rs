@@ -277,6 +277,7 @@ impl KalmanBucy {
                 for i in 0..n {
                     let mut e = 0.0;
                     for (k, (b5, b4)) in ks.iter().zip(B5.iter().zip(B4.iter())) {
+                        // (Only |e| is used below.)
                         e += (b5 - b4) * k[(i, j)];
                     }
                     let sc = opts.atol + opts.rtol * P[(i, j)].abs().max(Pn[(i, j)].abs());
@@ -350,7 +351,8 @@ pub fn expm(A: impl MatrixInput) -> Result<Mat<f64>, Error> {
     let norm1 = (0..n)
         .map(|j| (0..n).map(|i| A[(i, j)].abs()).sum::<f64>())
         .fold(0.0, f64::max);
-    // At norm1 = θ₁₃ exactly, s = ⌈log₂ 1⌉ = 0 either way.
+    // At norm1 = θ₁₃ exactly, s = ⌈log₂ 1⌉ = 0 either way. (More halvings than this s, as
+    // from log₂(norm1·θ₁₃), give the same result to round-off; fewer do not.)
     let s = if norm1 > THETA13 {
         (norm1 / THETA13).log2().ceil() as i32
     } else {
@@ -450,10 +452,17 @@ mod tests {
 
     #[test]
     fn expm_rotation_and_nilpotent() {
-        let w = 10.0_f64;
-        let E = expm(mat![[0.0, w], [-w, 0.0]].as_ref()).expect("must succeed");
-        // Tolerance: scaling & squaring error ~ 1e-15 · e^{‖A‖}·steps; 1e-12 is ample.
-        assert!((E[(0, 0)] - w.cos()).abs() < 1e-12 && (E[(0, 1)] - w.sin()).abs() < 1e-12);
+        // ‖A‖₁ = 10 needs one halving before the [13/13] Padé approximant, 40 needs three
+        // (θ₁₃ ≈ 5.37); the Padé approximant alone is far off at 40.
+        for w in [10.0_f64, 40.0] {
+            let E = expm(mat![[0.0, w], [-w, 0.0]].as_ref()).expect("must succeed");
+            // Tolerance: a rotation's squarings keep the norm 1, each adding ~1e-16 of
+            // round-off to the phase; 1e-12 is ample.
+            assert!(
+                (E[(0, 0)] - w.cos()).abs() < 1e-12 && (E[(0, 1)] - w.sin()).abs() < 1e-12,
+                "w {w}"
+            );
+        }
         let E = expm(mat![[0.0, 0.25], [0.0, 0.0]].as_ref()).expect("must succeed");
         assert!((E[(0, 1)] - 0.25).abs() < 1e-15 && (E[(1, 1)] - 1.0).abs() < 1e-15);
     }

@@ -151,6 +151,8 @@ fn gemm_faer(c: &mut [f64], part: Part, accum: Accum, alpha: f64, a: Op<'_>, b: 
     let C = MatMut::from_column_major_slice_with_stride_mut(c, rows, cols, rows);
     // The work estimate only chooses the threads (see `par_for`).
     let par = par_for(rows * cols * inner);
+    // Speed only: the full product is the triangular one plus an upper part the caller
+    // overwrites.
     if part == Part::Lower && rows >= TRIANGULAR_MIN {
         faer::linalg::matmul::triangular::matmul(
             C,
