@@ -3,7 +3,6 @@
 //! hand-typed off-diagonal pair that disagrees) filters as the model with their symmetric
 //! part, and every covariance the filters report is exactly symmetric.
 
-use faer::MatRef;
 use kalman::FixedDims;
 use kalman::nonlinear::{
     Ekf, EkfUpdate, ForwardPass, GenericModel, Jacobians, NonlinearModel, SigmaPoints, Ukf,
@@ -11,8 +10,8 @@ use kalman::nonlinear::{
 
 use super::models::{RangeBearing, RangeBearingHand};
 
-/// Range and bearing with `S` added to Q's and R's (0, 1) entries and subtracted from their
-/// (1, 0) entries: the symmetric parts are the model's own.
+/// Range and bearing with `s` times an entry added to Q's and R's (0, 1) entries and
+/// subtracted from their (1, 0) entries: the symmetric parts are the model's own.
 struct Skewed {
     inner: RangeBearingHand,
     s: f64,
@@ -57,16 +56,13 @@ fn model(s: f64) -> Skewed {
     }
 }
 
-fn assert_symmetric(p: MatRef<'_, f64>, what: &str) {
-    for j in 0..p.ncols() {
+/// The n×n column-major `p` is exactly symmetric.
+fn assert_symmetric(p: &[f64], n: usize, what: &str) {
+    for j in 0..n {
         for i in 0..j {
             // Exact: a reported covariance is stored once and mirrored.
-            assert!(
-                p[(i, j)].to_bits() == p[(j, i)].to_bits(),
-                "{what}: ({i}, {j}) {} vs {}",
-                p[(i, j)],
-                p[(j, i)]
-            );
+            let (a, b) = (p[i + j * n], p[j + i * n]);
+            assert!(a.to_bits() == b.to_bits(), "{what}: ({i}, {j}) {a} vs {b}");
         }
     }
 }
@@ -97,17 +93,11 @@ fn run_pair<F: ForwardPass>(
         let (la, lb) = (step(&mut skew, &z), step(&mut plain, &z));
         let what = format!("{label} step {k}");
         for (x, p) in [skew.filtered(), skew.predicted()] {
-            assert_symmetric(MatRef::from_column_major_slice(p, n, n), &what);
+            assert_symmetric(p, n, &what);
             assert_eq!(x.len(), n);
         }
         let ((xa, pa), (xb, pb)) = (skew.filtered(), plain.filtered());
-        compare(
-            xa,
-            xb,
-            MatRef::from_column_major_slice(pa, n, n),
-            MatRef::from_column_major_slice(pb, n, n),
-            &what,
-        );
+        compare(xa, xb, pa, pb, &what);
         assert!((la - lb).abs() < 1e-9, "{what}: {la} vs {lb}");
     }
 }
@@ -145,21 +135,21 @@ fn an_antisymmetric_part_of_q_and_r_is_ignored_and_covariances_stay_symmetric() 
 
 /// The symmetric part of `Q + S` is Q up to the rounding of `(q + s) + (q − s)`, a few ulps
 /// of the entries (~1e2 in range², 1e-4 in rad²): 1e-9 relative covers forty steps of it.
-fn compare(xa: &[f64], xb: &[f64], pa: MatRef<'_, f64>, pb: MatRef<'_, f64>, what: &str) {
-    for i in 0..xa.len() {
+fn compare(xa: &[f64], xb: &[f64], pa: &[f64], pb: &[f64], what: &str) {
+    let n = xa.len();
+    for i in 0..n {
         assert!(
             (xa[i] - xb[i]).abs() <= 1e-9 * xb[i].abs().max(1.0),
             "{what}: x[{i}] {} vs {}",
             xa[i],
             xb[i]
         );
-        for j in 0..xa.len() {
-            let scale = (pb[(i, i)] * pb[(j, j)]).sqrt();
+        for j in 0..n {
+            let scale = (pb[i + i * n] * pb[j + j * n]).sqrt();
+            let (a, b) = (pa[i + j * n], pb[i + j * n]);
             assert!(
-                (pa[(i, j)] - pb[(i, j)]).abs() <= 1e-9 * scale,
-                "{what}: P({i}, {j}) {} vs {}",
-                pa[(i, j)],
-                pb[(i, j)]
+                (a - b).abs() <= 1e-9 * scale,
+                "{what}: P({i}, {j}) {a} vs {b}"
             );
         }
     }
