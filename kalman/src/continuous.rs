@@ -233,7 +233,8 @@ impl KalmanBucy {
         symmetrise(&mut P);
         let mut t = 0.0_f64;
         let mut k1 = self.derivative(P.as_ref());
-        // The first step is a guess the error control corrects (a rejected step shrinks).
+        // The first step is a guess the error control corrects (a rejected step shrinks, an
+        // accepted one grows), so its scale and the 0.01 in it change the step count only.
         let scale = (self.A.norm_l2() + self.G.norm_l2() * P.norm_l2().max(1.0)).max(1e-12);
         let mut h = (0.01 / scale).min(t1.max(f64::MIN_POSITIVE));
         let mut steps = 0usize;
@@ -285,6 +286,7 @@ impl KalmanBucy {
                 }
             }
             if !err.is_finite() || !Pn.norm_l2().is_finite() {
+                // (`<` and `≤` differ only at a step of exactly 1e-300.)
                 if h_step < 1e-300 {
                     break;
                 }

@@ -250,6 +250,8 @@ fn covariances<D: Dims>(model: &Model<D>, st: &mut State<D>, r: usize) {
         for row in 0..n {
             let mut s = arr[(m + row) * ld + l];
             for i2 in 0..m {
+                // (`c ≥ l` would add the row pivoted at l, whose gain is still the zero it
+                // was filled with.)
                 if piv[i2].is_some_and(|c| c > l) {
                     s -= K[row + i2 * n] * arr[i2 * ld + l];
                 }

@@ -170,3 +170,28 @@ fn continuous_marginal_band_scales_with_the_mode() {
         outside.covariance
     );
 }
+
+/// Ṗ = q − P² (A = 0, H = R = 1) from P(0) = 0 has P(t) = √q·tanh(√q·t). The first step's
+/// guess, 0.01/(‖A‖ + ‖G‖·max(‖P‖, 1)) = 0.01, does not see q: at q = 1e10 (√q·h = 1000)
+/// the Dormand–Prince stages grow as squares, the sixth one overflows, and the step must be
+/// retried shorter rather than taken for divergence.
+#[test]
+fn a_first_step_that_overflows_is_retried_shorter() {
+    let q = 1e10_f64;
+    let (zero, one) = (mat![[0.0]], mat![[1.0]]);
+    let Q = mat![[q]];
+    let kb = KalmanBucy::new(zero.as_ref(), one.as_ref(), Q.as_ref(), one.as_ref()).expect("KB");
+    let t1 = 0.01;
+    let sol = kb
+        .integrate(zero.as_ref(), t1, &OdeOptions::default())
+        .expect("a stiff but finite problem integrates");
+    assert!((sol.time - t1).abs() <= 1e-15 * t1);
+    // √q·t1 = 1000: tanh is 1 to the last bit. Tolerance: the integrator's rtol 1e-10 per
+    // step, at a stable fixed point where errors do not accumulate: 1e-8 relative.
+    let exact = q.sqrt() * (q.sqrt() * t1).tanh();
+    let got = sol.covariance[(0, 0)];
+    assert!(
+        ((got - exact) / exact).abs() < 1e-8,
+        "P(t1) = {got:e}, exact {exact:e}"
+    );
+}
