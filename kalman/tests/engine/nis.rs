@@ -307,50 +307,84 @@ fn the_log_likelihood_survives_units_where_det_sigma_overflows() {
     }
 }
 
-/// Channels `J z` that repeat two independent ones `z` through fixed combinations (J's first
-/// rows the identity) leave rank, NIS and estimates those of the two-channel filter; the data
-/// lie on the plane `z ↦ J z`, whose area element is `√det(JᵀJ)`, so the log-likelihood (the
-/// density on Σ's range) is the two-channel one minus `½ ln det(JᵀJ)`.
-fn dependent_channels_cost_the_jacobian<const M: usize>(J: [[f64; 2]; M], tol: f64)
+/// Rows of the base model's H (two states): the first two are those of a two-channel model,
+/// the others extend it for the tests with more independent channels.
+const H_BASE: [[f64; 2]; 9] = [
+    [1.0, 0.5],
+    [-0.2, 1.0],
+    [0.3, -0.7],
+    [0.8, 0.1],
+    [-0.5, -0.4],
+    [0.2, 0.9],
+    [0.6, -0.3],
+    [-0.9, 0.2],
+    [0.4, 0.4],
+];
+
+/// Entry (i, j) of the base model's R: the two-channel model's block, then a diagonal of
+/// 0.2–0.36 with 0.01 off it (diagonally dominant, so positive definite).
+fn r_base(i: usize, j: usize) -> f64 {
+    match (i, j) {
+        (0, 0) => 0.3,
+        (1, 1) => 0.2,
+        (0, 1) | (1, 0) => 0.05,
+        _ if i == j => 0.2 + 0.02 * i as f64,
+        _ => 0.01,
+    }
+}
+
+/// Channels `J z` that repeat K independent ones `z` through fixed combinations (J's first
+/// rows the identity) leave rank, NIS and estimates those of the K-channel filter; the data
+/// lie on the K-plane `z ↦ J z`, whose volume element is `√det(JᵀJ)`, so the log-likelihood
+/// (the density on Σ's range) is the K-channel one minus `½ ln det(JᵀJ)`.
+fn dependent_channels_cost_the_jacobian<const K: usize, const M: usize>(J: [[f64; K]; M], tol: f64)
 where
     [[f64; 2]; M]: kalman::MatrixInput,
     [[f64; M]; M]: kalman::MatrixInput,
+    [[f64; 2]; K]: kalman::MatrixInput,
+    [[f64; K]; K]: kalman::MatrixInput,
 {
     use kalman::Model;
     let F = [[0.95, 0.1], [-0.1, 0.9]];
     let Q = [[0.02, 0.0], [0.0, 0.05]];
     let P0 = [[2.0, 0.3], [0.3, 1.0]];
-    let H2 = [[1.0, 0.5], [-0.2, 1.0]];
-    let R2 = [[0.3, 0.05], [0.05, 0.2]];
+    let H2: [[f64; 2]; K] = core::array::from_fn(|i| H_BASE[i]);
+    let R2: [[f64; K]; K] = core::array::from_fn(|i| core::array::from_fn(|j| r_base(i, j)));
     // H = J H₂, R = J R₂ Jᵀ, by their sums.
-    let H: [[f64; 2]; M] = J.map(|u| [0, 1].map(|c| u[0] * H2[0][c] + u[1] * H2[1][c]));
-    let JR: [[f64; 2]; M] = J.map(|u| [0, 1].map(|c| u[0] * R2[0][c] + u[1] * R2[1][c]));
-    let R: [[f64; M]; M] = JR.map(|u| J.map(|v| u[0] * v[0] + u[1] * v[1]));
-    // det(JᵀJ) of the 2×2 Gram matrix.
-    let g = |i: usize, k: usize| J.iter().map(|u| u[i] * u[k]).sum::<f64>();
-    let jac = -0.5 * (g(0, 0) * g(1, 1) - g(0, 1) * g(0, 1)).ln();
+    let H: [[f64; 2]; M] = J.map(|u| [0, 1].map(|c| (0..K).map(|i| u[i] * H2[i][c]).sum()));
+    let JR: [[f64; K]; M] =
+        J.map(|u| core::array::from_fn(|c| (0..K).map(|i| u[i] * R2[i][c]).sum()));
+    let R: [[f64; M]; M] = JR.map(|u| J.map(|v| (0..K).map(|i| u[i] * v[i]).sum()));
+    // det(JᵀJ) of the K×K Gram matrix (an LU determinant: JᵀJ is well conditioned here).
+    let gram = faer::Mat::from_fn(K, K, |i, k| J.iter().map(|u| u[i] * u[k]).sum::<f64>());
+    let jac = -0.5 * gram.determinant().ln();
     for form in FORMS {
         let dims = |m| DynDims::new(2, m, 0).expect("dims");
         let many = Model::new(dims(M), &F, &H, &Q, &R).expect("model");
-        let two = Model::new(dims(2), &F, &H2, &Q, &R2).expect("model");
+        let base = Model::new(dims(K), &F, &H2, &Q, &R2).expect("model");
         let mut fm = Filter::new(many, &[0.5, -0.5], &P0, form).expect("filter");
-        let mut f2 = Filter::new(two, &[0.5, -0.5], &P0, form).expect("filter");
+        let mut fk = Filter::new(base, &[0.5, -0.5], &P0, form).expect("filter");
         for k in 0..30 {
-            let z = [(0.4 * k as f64).sin(), (0.9 * k as f64).cos()];
-            let zm = J.map(|u| u[0] * z[0] + u[1] * z[1]);
-            let (im, i2) = (
+            let t = k as f64;
+            let z: [f64; K] = core::array::from_fn(|i| match i {
+                0 => (0.4 * t).sin(),
+                1 => (0.9 * t).cos(),
+                _ => ((0.3 + 0.2 * i as f64) * t + i as f64).sin(),
+            });
+            let zm = J.map(|u| (0..K).map(|i| u[i] * z[i]).sum::<f64>());
+            let (im, ik) = (
                 fm.step(&zm, None).expect("step"),
-                f2.step(&z, None).expect("step"),
+                fk.step(&z, None).expect("step"),
             );
-            assert_eq!(im.rank, 2, "{form:?} M {M} step {k}");
+            assert_eq!(im.rank, K, "{form:?} M {M} step {k}");
             let close = |x: f64, y: f64| (x - y).abs() < tol * y.abs().max(1.0);
-            let (nm, n2) = (im.nis.expect("nis"), i2.nis.expect("nis"));
-            assert!(close(nm, n2), "{form:?} M {M} step {k}: NIS {nm} vs {n2}");
-            let dl = im.log_likelihood - i2.log_likelihood;
+            let (nm, nk) = (im.nis.expect("nis"), ik.nis.expect("nis"));
+            assert!(close(nm, nk), "{form:?} M {M} step {k}: NIS {nm} vs {nk}");
+            let dl = im.log_likelihood - ik.log_likelihood;
             assert!(close(dl, jac), "{form:?} M {M} step {k}: {dl} vs {jac}");
             for i in 0..2 {
                 assert!(
-                    close(fm.state()[i], f2.state()[i]),
+                    close(fm.state()[i], fk.state()[i]),
                     "{form:?} M {M} step {k}"
                 );
             }
@@ -364,6 +398,21 @@ const DEPENDENT_TOL: f64 = 1e-10;
 #[test]
 fn a_channel_combining_two_others_costs_only_the_jacobian() {
     dependent_channels_cost_the_jacobian([[1.0, 0.0], [0.0, 1.0], [0.7, -1.3]], DEPENDENT_TOL);
+}
+
+/// Nine independent channels and one combining them all. In the square-root form the
+/// dependent row's `W = C L₁⁻¹` is a back substitution through the pivot rows of the
+/// pre-array; with nine channels on two states that array is only m + 2n = 14 columns wide,
+/// so an entry read from a wrong place (the end of the row before) is no longer one of the
+/// zeros right of a pivot, as it is with two or three channels.
+#[test]
+fn a_channel_combining_nine_others_costs_only_the_jacobian() {
+    let mut J = [[0.0; 9]; 10];
+    for (i, row) in J.iter_mut().take(9).enumerate() {
+        row[i] = 1.0;
+    }
+    J[9] = [0.7, -1.3, 0.4, 0.9, -0.6, 0.3, -0.8, 0.5, 1.1];
+    dependent_channels_cost_the_jacobian(J, DEPENDENT_TOL);
 }
 
 #[test]
