@@ -404,7 +404,7 @@ fn a_channel_combining_two_others_costs_only_the_jacobian() {
 /// dependent row's `W = C L₁⁻¹` is a back substitution through the pivot rows of the
 /// pre-array; with nine channels on two states that array is only m + 2n = 14 columns wide,
 /// so an entry read from a wrong place (the end of the row before) is no longer one of the
-/// zeros right of a pivot, as it is with two or three channels.
+/// zeros right of a pivot, as it is with a few channels.
 #[test]
 fn a_channel_combining_nine_others_costs_only_the_jacobian() {
     let mut J = [[0.0; 9]; 10];
