@@ -173,8 +173,8 @@ fn continuous_marginal_band_scales_with_the_mode() {
 
 /// Ṗ = q − P² (A = 0, H = R = 1) from P(0) = 0 has P(t) = √q·tanh(√q·t). The first step's
 /// guess, 0.01/(‖A‖ + ‖G‖·max(‖P‖, 1)) = 0.01, does not see q: at q = 1e10 (√q·h = 1000)
-/// the Dormand–Prince stages grow as squares, the sixth one overflows, and the step must be
-/// retried shorter rather than taken for divergence.
+/// the Dormand–Prince stages grow as squares until the derivative at the step's end
+/// overflows, and the step must be retried shorter rather than taken for divergence.
 #[test]
 fn a_first_step_that_overflows_is_retried_shorter() {
     let q = 1e10_f64;
