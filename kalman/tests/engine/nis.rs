@@ -308,7 +308,7 @@ fn the_log_likelihood_survives_units_where_det_sigma_overflows() {
 }
 
 /// Rows of the base model's H (two states): the first two are those of a two-channel model,
-/// the others extend it for the tests with more independent channels.
+/// the others extend it for the tests with more independent channels (K ≤ 9 below).
 const H_BASE: [[f64; 2]; 9] = [
     [1.0, 0.5],
     [-0.2, 1.0],
@@ -348,12 +348,12 @@ where
     let F = [[0.95, 0.1], [-0.1, 0.9]];
     let Q = [[0.02, 0.0], [0.0, 0.05]];
     let P0 = [[2.0, 0.3], [0.3, 1.0]];
-    let H2: [[f64; 2]; K] = core::array::from_fn(|i| H_BASE[i]);
-    let R2: [[f64; K]; K] = core::array::from_fn(|i| core::array::from_fn(|j| r_base(i, j)));
-    // H = J H₂, R = J R₂ Jᵀ, by their sums.
-    let H: [[f64; 2]; M] = J.map(|u| [0, 1].map(|c| (0..K).map(|i| u[i] * H2[i][c]).sum()));
+    let Hb: [[f64; 2]; K] = core::array::from_fn(|i| H_BASE[i]);
+    let Rb: [[f64; K]; K] = core::array::from_fn(|i| core::array::from_fn(|j| r_base(i, j)));
+    // H = J H_b, R = J R_b Jᵀ (the base model's H_b, R_b), by their sums.
+    let H: [[f64; 2]; M] = J.map(|u| [0, 1].map(|c| (0..K).map(|i| u[i] * Hb[i][c]).sum()));
     let JR: [[f64; K]; M] =
-        J.map(|u| core::array::from_fn(|c| (0..K).map(|i| u[i] * R2[i][c]).sum()));
+        J.map(|u| core::array::from_fn(|c| (0..K).map(|i| u[i] * Rb[i][c]).sum()));
     let R: [[f64; M]; M] = JR.map(|u| J.map(|v| (0..K).map(|i| u[i] * v[i]).sum()));
     // det(JᵀJ) of the K×K Gram matrix (an LU determinant: JᵀJ is well conditioned here).
     let gram = faer::Mat::from_fn(K, K, |i, k| J.iter().map(|u| u[i] * u[k]).sum::<f64>());
@@ -361,7 +361,7 @@ where
     for form in FORMS {
         let dims = |m| DynDims::new(2, m, 0).expect("dims");
         let many = Model::new(dims(M), &F, &H, &Q, &R).expect("model");
-        let base = Model::new(dims(K), &F, &H2, &Q, &R2).expect("model");
+        let base = Model::new(dims(K), &F, &Hb, &Q, &Rb).expect("model");
         let mut fm = Filter::new(many, &[0.5, -0.5], &P0, form).expect("filter");
         let mut fk = Filter::new(base, &[0.5, -0.5], &P0, form).expect("filter");
         for k in 0..30 {
