@@ -134,6 +134,8 @@ fn estimates<D: Dims>(
         }
     }
     let mask = st.mask.as_slice();
+    // Only to save the work: with no dependent observed row `ln_det_dependent` adds the
+    // log-determinant of an empty matrix, 0.
     if (0..m).any(|i| mask[i] && piv[i].is_none()) {
         let (w, g) = (st.sig.as_mut_slice(), st.eigv.as_mut_slice());
         logdet += ln_det_dependent(&d, arr, ld, r, (piv, pivrow, mask), w, g);
@@ -155,6 +157,8 @@ fn estimates<D: Dims>(
     StepInfo {
         rank: r,
         nis: Some(nis),
+        // With no pivot every term is 0: the branch only keeps the sign of 0.0 (`r ≥ 0`
+        // would give −0.0, the same number).
         log_likelihood: if r > 0 {
             -0.5 * (nis + logdet + r as f64 * LN_2PI)
         } else {

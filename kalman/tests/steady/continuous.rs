@@ -195,3 +195,35 @@ fn a_first_step_that_overflows_is_retried_shorter() {
         "P(t1) = {got:e}, exact {exact:e}"
     );
 }
+
+/// The step control's tolerance is relative to P: the same problem in units where every
+/// covariance (Q, R, P0) and `atol` is 2⁴⁰ times larger takes exactly the same steps and
+/// ends at exactly 2⁴⁰·P. A power of two scales every product, sum, square root and
+/// quotient of the integration without rounding, and with ‖P0‖ ≥ 1 the first-step guess
+/// `0.01/(‖A‖ + ‖G‖·max(‖P‖, 1))` sees ‖G‖·‖P‖, which does not change (G = HᵀR⁻¹H scales by
+/// 2⁻⁴⁰), so any departure from bit-for-bit equality is a tolerance that is not relative.
+#[test]
+fn a_change_of_units_scales_the_solution_exactly() {
+    let (A, H, Q, R) = oscillator();
+    let P0 = mat![[2.0, 0.5], [0.5, 1.0]];
+    let c = 2.0_f64.powi(40);
+    let opts = OdeOptions::default();
+    let solve = |s: f64, atol: f64| {
+        KalmanBucy::new(A.as_ref(), H.as_ref(), (s * &Q).as_ref(), (s * &R).as_ref())
+            .expect("KB")
+            .integrate((s * &P0).as_ref(), 10.0, &OdeOptions { atol, ..opts })
+            .expect("integrates")
+    };
+    let (one, big) = (solve(1.0, opts.atol), solve(c, c * opts.atol));
+    assert_eq!(one.steps, big.steps, "accepted steps");
+    assert!(one.steps > 10, "a run of {} steps tests little", one.steps);
+    for j in 0..2 {
+        for i in 0..2 {
+            let (p, pc) = (one.covariance[(i, j)], big.covariance[(i, j)]);
+            assert!(
+                (pc - c * p).abs() <= 0.0,
+                "P[{i},{j}]: {pc:e} in the large units against 2^40·{p:e}"
+            );
+        }
+    }
+}
