@@ -423,6 +423,24 @@ fn two_dependent_channels_cost_the_jacobian_of_their_plane() {
     );
 }
 
+/// Two dependent channels over three kept pivots. In the square-root form each dependent
+/// row's `W = C L₁⁻¹` fills its own block of r entries of the scratch; with two pivots (the
+/// test above) a block at a wrong place, such as `w[q·r .. q + 1 + r]`, still has room for
+/// r entries and lands where the right one does, with three it does not.
+#[test]
+fn two_channels_combining_three_others_cost_the_jacobian_of_their_plane() {
+    dependent_channels_cost_the_jacobian(
+        [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.7, -1.3, 0.4],
+            [-0.4, 0.9, 1.1],
+        ],
+        DEPENDENT_TOL,
+    );
+}
+
 /// The rank test is relative to the largest variance among the channels, not to the first
 /// channel's: with the first channel in units 10⁴ times smaller than a dependent pair (and
 /// their covariance ~10⁴ times the first's variance), the pair's round-off pivot (~ε of its
