@@ -425,8 +425,8 @@ fn two_dependent_channels_cost_the_jacobian_of_their_plane() {
 
 /// Two dependent channels over three kept pivots. In the square-root form each dependent
 /// row's `W = C L₁⁻¹` fills its own block of r entries of the scratch; with two pivots (the
-/// test above) a block at a wrong place, such as `w[q·r .. q + 1 + r]`, still has room for
-/// r entries and lands where the right one does, with three it does not.
+/// test above) a block with a wrong end, such as `w[q·r .. q + 1 + r]`, still has room for
+/// the r entries it is given, with three pivots it does not.
 #[test]
 fn two_channels_combining_three_others_cost_the_jacobian_of_their_plane() {
     dependent_channels_cost_the_jacobian(
