@@ -171,6 +171,9 @@ pub enum ValueError {
     /// A number of seconds that is zero, negative or not finite.
     #[error("must be finite and > 0 (seconds)")]
     NotPositiveSeconds,
+    /// A probability that is not a number strictly between 0 and 1.
+    #[error("must be a number strictly between 0 and 1 (a probability such as 0.9999)")]
+    NotProbability,
     /// Not a number where seconds were expected.
     #[error("not a number (seconds, finite and > 0)")]
     NotSeconds,

@@ -16,6 +16,8 @@ mod fueling;
 mod hostile;
 #[path = "cli/input_errors.rs"]
 mod input_errors;
+#[path = "cli/irregular.rs"]
+mod irregular;
 #[path = "cli/output_safety.rs"]
 mod output_safety;
 #[path = "cli/uav.rs"]

@@ -3,7 +3,7 @@
 //!
 //! Data rules: the header names the columns exactly in that order (`t`, then `z1…zm` with
 //! m ≥ 1, then `u1…up`); every row has as many fields as the header; `t` is finite and
-//! strictly increasing; a `z` cell that is empty or `NaN` (any case) is a missing value;
+//! never decreases (rows with the same `t` are one instant); a `z` cell that is empty or `NaN` (any case) is a missing value;
 //! `u` cells must be present and finite. Blank lines are skipped; fields may be quoted and
 //! padded with spaces; a UTF-8 byte-order mark is ignored. The file must end with a newline:
 //! a last line without one is an error, since it usually means the file was cut short or is
@@ -285,12 +285,12 @@ impl<R: Read> DataReader<R> {
             match j {
                 0 => {
                     if let Some(last) = self.last_t
-                        && v <= last
+                        && v < last
                     {
                         return Err(self.at(
                             line,
                             Some(0),
-                            &format!("t = {v} is not after the previous row's t = {last} (t must increase)"),
+                            &format!("t = {v} is before the previous row's t = {last} (t must not decrease; rows with the same t are one instant)"),
                         ));
                     }
                     self.last_t = Some(v);
@@ -415,11 +415,14 @@ mod tests {
         );
         let e = err("t,z1,u1\n0,1,\n");
         assert!(e.contains("line 2, column 3 (u1): missing value"), "{e}");
-        let e = err("t,z1\n0,1\n0,2\n");
+        let e = err("t,z1\n0,1\n-1,2\n");
         assert!(
-            e.contains("line 3, column 1 (t)") && e.contains("must increase"),
+            e.contains("line 3, column 1 (t)") && e.contains("must not decrease"),
             "{e}"
         );
+        // Two rows of one instant are one time stamp, not an error.
+        let (_, _, rows) = parse_data(Path::new("z.csv"), b"t,z1\n0,1\n0,2\n").expect("same t");
+        assert_eq!(rows.len(), 2);
         let e = err("t,z1\n0\n");
         assert!(e.contains("line 2, column 2 (z1): missing field"), "{e}");
         let e = err("t,z1\n0,1,2\n");

@@ -90,6 +90,35 @@ pub struct ContinuousModel {
     pub D: DMatrix<f64>,
     /// Covariance of one sample's measurement noise (m×m), if given.
     pub R: Option<DMatrix<f64>>,
+    /// Initial state mean at the first row's time stamp (n; zero without `x0`).
+    pub x0: DVector<f64>,
+    /// Initial state covariance (n×n), if given (`filter` requires it).
+    pub P0: Option<DMatrix<f64>>,
+}
+
+impl ContinuousModel {
+    /// Number of states n.
+    pub fn n(&self) -> usize {
+        self.A.nrows()
+    }
+    /// Number of measurements m.
+    pub fn m(&self) -> usize {
+        self.C.nrows()
+    }
+    /// Number of control inputs p.
+    pub fn p(&self) -> usize {
+        self.B.ncols()
+    }
+}
+
+/// A model file as `filter` reads it: discrete (with `dt`) or continuous (sampled at the
+/// record's own time stamps), told apart by its keys (`F` or `A`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum AnyModel {
+    /// A discrete model (`dt`, `F`, `H`, …).
+    Discrete(DiscreteModel),
+    /// A continuous model (`A`, `C`, …).
+    Continuous(ContinuousModel),
 }
 
 /// The serialised form of a discrete model (what `discretize` writes and `filter` reads).
@@ -139,6 +168,10 @@ struct ContinuousFile {
     D: Option<Rows>,
     #[serde(default)]
     R: Option<Rows>,
+    #[serde(default)]
+    x0: Option<Vec<f64>>,
+    #[serde(default)]
+    P0: Option<Rows>,
 }
 
 /// Row-major nested arrays of a matrix.
@@ -432,28 +465,7 @@ pub fn discrete_from_file(path: &Path, file: &DiscreteFile) -> Result<DiscreteMo
             )
         })
         .transpose()?;
-    let x0 = match &file.x0 {
-        Some(x) => {
-            if x.len() != n {
-                return Err(Error::invalid(
-                    path,
-                    format!(
-                        "vector x0 has {} entries, expected {n} (shape: x0 must have n entries, n from F)",
-                        x.len()
-                    ),
-                ));
-            }
-            let v = DVector::from_column_slice(x);
-            finite(path, "x0", &DMatrix::from_column_slice(n, 1, x))?;
-            v
-        }
-        None => DVector::zeros(n),
-    };
-    let P0 = file
-        .P0
-        .as_ref()
-        .map(|p0| matrix(path, "P0", p0, Some(n), Some(n), "P0 must be n×n, n from F"))
-        .transpose()?;
+    let (x0, P0) = prior(path, file.x0.as_deref(), file.P0.as_ref(), n, "F")?;
     Ok(DiscreteModel {
         dt: file.dt,
         F,
@@ -502,6 +514,7 @@ pub fn parse_continuous(path: &Path, text: &str) -> Result<ContinuousModel> {
         .as_ref()
         .map(|r| matrix(path, "R", r, Some(m), Some(m), "R must be m×m, m from C"))
         .transpose()?;
+    let (x0, P0) = prior(path, file.x0.as_deref(), file.P0.as_ref(), n, "A")?;
     Ok(ContinuousModel {
         A,
         B,
@@ -510,7 +523,62 @@ pub fn parse_continuous(path: &Path, text: &str) -> Result<ContinuousModel> {
         C,
         D,
         R,
+        x0,
+        P0,
     })
+}
+
+/// The prior `x0` (zero when absent) and `P0` of a model file with n states (n from
+/// matrix `from`).
+fn prior(
+    path: &Path,
+    x0: Option<&[f64]>,
+    P0: Option<&Rows>,
+    n: usize,
+    from: &str,
+) -> Result<(DVector<f64>, Option<DMatrix<f64>>)> {
+    let x0 = match x0 {
+        Some(x) => {
+            if x.len() != n {
+                return Err(Error::invalid(
+                    path,
+                    format!(
+                        "vector x0 has {} entries, expected {n} (shape: x0 must have n entries, n from {from})",
+                        x.len()
+                    ),
+                ));
+            }
+            finite(path, "x0", &DMatrix::from_column_slice(n, 1, x))?;
+            DVector::from_column_slice(x)
+        }
+        None => DVector::zeros(n),
+    };
+    let rule = format!("P0 must be n×n, n from {from}");
+    let P0 = P0
+        .map(|p0| matrix(path, "P0", p0, Some(n), Some(n), &rule))
+        .transpose()?;
+    Ok((x0, P0))
+}
+
+/// Parses a model file of either kind (see [`AnyModel`]).
+///
+/// # Errors
+/// As [`parse_discrete`] or [`parse_continuous`].
+pub fn parse_any(path: &Path, text: &str) -> Result<AnyModel> {
+    let keys: serde_json::Value = deserialize(path, text)?;
+    if keys.get("A").is_some() && keys.get("F").is_none() {
+        parse_continuous(path, text).map(AnyModel::Continuous)
+    } else {
+        parse_discrete(path, text).map(AnyModel::Discrete)
+    }
+}
+
+/// Reads and parses a model file of either kind.
+///
+/// # Errors
+/// [`Error::Read`] if the file cannot be read, otherwise as [`parse_any`].
+pub fn load_any(path: &Path) -> Result<AnyModel> {
+    parse_any(path, &crate::config::read_text(path)?)
 }
 
 /// Reads and parses a discrete model file.

@@ -1,0 +1,362 @@
+//! Wild-point gating: measurement entries that the filter's prior makes implausible are
+//! rejected before the update, and every rejection is reported.
+//!
+//! With the prior `x⁻ = x_{k|k−1}`, `P⁻ = P_{k|k−1}` of the next step and the model that step
+//! uses, the innovation of the present entries is `e = z − H x⁻` with covariance `Σ = H P⁻ Hᵀ
+//! + R`. Two rules:
+//!
+//! - [`GateRule::Entries`]: entry i is rejected when its own normalised innovation `e_i² /
+//!   Σ_ii` exceeds the χ²(1) quantile of the gate's probability; the update then uses the
+//!   entries kept, its Σ recomputed over them by the filter.
+//! - [`GateRule::Vector`]: the whole step is rejected when `eᵀ Σ⁺ e` exceeds the χ²(r)
+//!   quantile, r the rank of Σ over the present entries (the engine's rule for a singular
+//!   Σ, an exact channel).
+//!
+//! A rejected entry becomes a missing one (NaN) in the vector [`Gate::screen`] returns, which
+//! the caller passes to the step: the gate works with every covariance form, the smoother
+//! and the diagnostics, since they see the step as it was taken. A screen allocates nothing.
+//!
+//! # Example
+//! ```
+//! use kalman::gate::{Gate, GateRule};
+//! use kalman::{CovarianceForm, Filter, Model};
+//!
+//! let model = Model::from_matrices(&[[1.0]], &[[1.0], [1.0]], &[[0.01]], &[[1.0, 0.0], [0.0, 1.0]])?;
+//! let mut kf = Filter::new(model.clone(), &[0.0], &[[1.0]], CovarianceForm::Joseph)?;
+//! let mut gate = Gate::new(GateRule::Entries, 0.999, &model)?;
+//! // The second sensor reads 40 where the prior says 0 ± 1.4: rejected, the first kept.
+//! let kept = gate.screen(&kf, &model, &[0.3, 40.0])?.to_vec();
+//! assert!(kept[1].is_nan() && (kept[0] - 0.3).abs() < 1e-15);
+//! assert_eq!(gate.rejected()[0].entry, 1);
+//! kf.step(&kept, None)?;
+//! # Ok::<(), kalman::Error>(())
+//! ```
+#![allow(non_snake_case)]
+
+use crate::kernels::{RANK_TOL, cholesky, jacobi_eigen};
+use crate::storage::{Buf, Dims};
+use crate::{Error, Filter, Model, chi2_quantile};
+
+/// Which statistic a [`Gate`] tests.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GateRule {
+    /// Each present entry on its own: `e_i² / Σ_ii` against χ²(1).
+    Entries,
+    /// The present entries together: `eᵀ Σ⁺ e` against χ²(rank Σ).
+    Vector,
+}
+
+/// One rejected measurement entry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rejection {
+    /// The step (row) index k.
+    pub step: usize,
+    /// The entry (channel) index i, 0-based.
+    pub entry: usize,
+    /// The value rejected.
+    pub value: f64,
+    /// The statistic that rejected it: `e_i²/Σ_ii` ([`GateRule::Entries`]) or the step's
+    /// `eᵀ Σ⁺ e` ([`GateRule::Vector`]).
+    pub nis: f64,
+}
+
+/// A wild-point gate with its workspaces, sized for one model's m and n.
+#[derive(Debug, Clone)]
+pub struct Gate {
+    rule: GateRule,
+    probability: f64,
+    /// The χ²(d) quantile of the probability, for d = 0…m.
+    thresholds: Vec<f64>,
+    n: usize,
+    m: usize,
+    kept: Vec<f64>,
+    e: Vec<f64>,
+    present: Vec<usize>,
+    hp: Vec<f64>,
+    sig: Vec<f64>,
+    eigv: Vec<f64>,
+    eigw: Vec<f64>,
+    rejected: Vec<Rejection>,
+}
+
+impl Gate {
+    /// A gate of rule `rule` at `probability` (in (0, 1): the fraction of consistent
+    /// entries or steps it keeps) for the dimensions of `model`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] naming `probability` outside (0, 1).
+    pub fn new<D: Dims>(rule: GateRule, probability: f64, model: &Model<D>) -> Result<Self, Error> {
+        if !(probability > 0.0 && probability < 1.0) {
+            return Err(Error::InvalidOption {
+                name: "probability",
+                value: probability,
+                rule: "a gate's probability must lie strictly between 0 and 1",
+            });
+        }
+        let (n, m) = (model.dims().n(), model.dims().m());
+        let thresholds = (0..=m).map(|d| chi2_quantile(probability, d)).collect();
+        Ok(Gate {
+            rule,
+            probability,
+            thresholds,
+            n,
+            m,
+            kept: vec![0.0; m],
+            e: vec![0.0; m],
+            present: Vec::with_capacity(m),
+            hp: vec![0.0; m * n],
+            sig: vec![0.0; m * m],
+            eigv: vec![0.0; m * m],
+            eigw: vec![0.0; m],
+            rejected: Vec::with_capacity(m),
+        })
+    }
+
+    /// The rule.
+    pub fn rule(&self) -> GateRule {
+        self.rule
+    }
+    /// The probability.
+    pub fn probability(&self) -> f64 {
+        self.probability
+    }
+    /// The threshold of `dof` degrees of freedom (for [`GateRule::Entries`], `dof` = 1).
+    pub fn threshold(&self, dof: usize) -> f64 {
+        self.thresholds.get(dof).copied().unwrap_or(f64::INFINITY)
+    }
+
+    /// The measurement vector of the last [`Gate::screen`], rejected entries NaN.
+    pub fn kept(&self) -> &[f64] {
+        &self.kept
+    }
+
+    /// The rejections of the last [`Gate::screen`].
+    pub fn rejected(&self) -> &[Rejection] {
+        &self.rejected
+    }
+
+    /// Screens `z` (NaN entries missing) against the prior of `filter`'s next step under
+    /// `model` (the model that step will use): returns `z` with every rejected entry set to
+    /// NaN, and records the rejections ([`Gate::rejected`]).
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] if `model` or `z` does not have the gate's m and n.
+    pub fn screen<D: Dims>(
+        &mut self,
+        filter: &Filter<D>,
+        model: &Model<D>,
+        z: &[f64],
+    ) -> Result<&[f64], Error> {
+        let (n, m) = (self.n, self.m);
+        if model.dims().n() != n || model.dims().m() != m || z.len() != m {
+            return Err(Error::Dimension {
+                name: "m",
+                value: z.len(),
+                rule: "a gate screens the measurements of the model it was built for",
+            });
+        }
+        self.rejected.clear();
+        self.kept.copy_from_slice(z);
+        self.present.clear();
+        self.present.extend((0..m).filter(|&i| !z[i].is_nan()));
+        let r = self.present.len();
+        if r == 0 {
+            return Ok(&self.kept);
+        }
+        let (H, R) = (model.H.as_slice(), model.R.as_slice());
+        let x = filter.predicted_state();
+        let P = filter.predicted_covariance();
+        // e and H P for the present rows (row a of hp is present entry a).
+        for (a, &i) in self.present.iter().enumerate() {
+            let mut hx = 0.0;
+            for j in 0..n {
+                hx += H[i + j * m] * x[j];
+            }
+            self.e[a] = z[i] - hx;
+            for c in 0..n {
+                let mut s = 0.0;
+                for j in 0..n {
+                    s += H[i + j * m] * P[(j, c)];
+                }
+                self.hp[a + c * r] = s;
+            }
+        }
+        // Σ over the present entries (all of it for the vector rule, its diagonal for the
+        // entries' rule).
+        let whole = self.rule == GateRule::Vector;
+        for (b, &ib) in self.present.iter().enumerate() {
+            for (a, &ia) in self.present.iter().enumerate() {
+                if !whole && a != b {
+                    continue;
+                }
+                let mut s = R[ia + ib * m];
+                for c in 0..n {
+                    s += self.hp[a + c * r] * H[ib + c * m];
+                }
+                self.sig[a + b * r] = s;
+            }
+        }
+        let step = filter.steps();
+        match self.rule {
+            GateRule::Entries => {
+                let limit = self.thresholds[1];
+                for (a, &i) in self.present.iter().enumerate() {
+                    let nis = self.e[a] * self.e[a] / self.sig[a + a * r];
+                    if nis > limit {
+                        self.kept[i] = f64::NAN;
+                        self.rejected.push(Rejection {
+                            step,
+                            entry: i,
+                            value: z[i],
+                            nis,
+                        });
+                    }
+                }
+            }
+            GateRule::Vector => {
+                let (nis, rank) = self.vector_nis(r);
+                if nis > self.thresholds[rank] {
+                    for &i in &self.present {
+                        self.kept[i] = f64::NAN;
+                        self.rejected.push(Rejection {
+                            step,
+                            entry: i,
+                            value: z[i],
+                            nis,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(&self.kept)
+    }
+
+    /// `eᵀ Σ⁺ e` and the rank of the r×r Σ in `sig`: by Cholesky, or, when Σ is singular to
+    /// the engine's [`RANK_TOL`], by its eigen-decomposition over the eigenvalues above it.
+    fn vector_nis(&mut self, r: usize) -> (f64, usize) {
+        let scale = (0..r).fold(0.0_f64, |s, a| s.max(self.sig[a + a * r]));
+        let sig = &mut self.sig[..r * r];
+        self.eigv[..r * r].copy_from_slice(sig);
+        if cholesky(&mut self.eigv[..r * r], r, RANK_TOL * scale) {
+            // Forward substitution L y = e; NIS = |y|².
+            let L = &self.eigv;
+            let mut nis = 0.0;
+            for a in 0..r {
+                let mut s = self.e[a];
+                for b in 0..a {
+                    s -= L[a + b * r] * self.eigw[b];
+                }
+                self.eigw[a] = s / L[a + a * r];
+                nis += self.eigw[a] * self.eigw[a];
+            }
+            return (nis, r);
+        }
+        jacobi_eigen(sig, r, &mut self.eigv[..r * r], &mut self.eigw[..r]);
+        let lmax = self.eigw[..r].iter().fold(0.0_f64, |s, &l| s.max(l));
+        let (mut nis, mut rank) = (0.0, 0);
+        for c in 0..r {
+            let l = self.eigw[c];
+            if l > RANK_TOL * lmax {
+                let proj: f64 = (0..r).map(|a| self.eigv[a + c * r] * self.e[a]).sum();
+                nis += proj * proj / l;
+                rank += 1;
+            }
+        }
+        (nis, rank)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::CovarianceForm;
+
+    fn two_sensors() -> Model<crate::DynDims> {
+        Model::from_matrices(
+            &[[1.0, 0.1], [0.0, 1.0]],
+            &[[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]],
+            &[[0.01, 0.0], [0.0, 0.01]],
+            &[[1.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 2.0]],
+        )
+        .expect("valid")
+    }
+
+    /// The per-entry statistic is e_i²/Σ_ii with Σ = H P⁻ Hᵀ + R, computed here by hand on
+    /// a prior P⁻ = diag(1, 1) ⇒ Σ_ii = 2, 5, 4.
+    #[test]
+    fn each_entry_is_tested_on_its_own_innovation_variance() {
+        let model = two_sensors();
+        let kf = Filter::new(
+            model.clone(),
+            &[0.0, 0.0],
+            &[[1.0, 0.0], [0.0, 1.0]],
+            CovarianceForm::Joseph,
+        )
+        .expect("valid");
+        let mut gate = Gate::new(GateRule::Entries, 0.99, &model).expect("valid");
+        let limit = gate.threshold(1);
+        // χ²(1) at 0.99 is 6.6349: sqrt(limit·Σ_ii) is each entry's bound.
+        assert!((limit - 6.634_896_601_021_214).abs() < 1e-9);
+        let bounds = [2.0_f64, 5.0, 4.0].map(|s| (limit * s).sqrt());
+        let z = [bounds[0] * 0.99, bounds[1] * 1.01, f64::NAN];
+        let kept = gate.screen(&kf, &model, &z).expect("screened").to_vec();
+        assert!((kept[0] - z[0]).abs() < f64::MIN_POSITIVE);
+        assert!(kept[1].is_nan() && kept[2].is_nan());
+        let rej = gate.rejected();
+        assert_eq!(rej.len(), 1);
+        assert_eq!((rej[0].step, rej[0].entry), (0, 1));
+        assert!((rej[0].nis - z[1] * z[1] / 5.0).abs() < 1e-12 * rej[0].nis);
+    }
+
+    /// The vector statistic is eᵀ Σ⁻¹ e: checked against a 2×2 inverse written out.
+    #[test]
+    fn the_vector_rule_tests_the_whole_step() {
+        let model = two_sensors();
+        let kf = Filter::new(
+            model.clone(),
+            &[0.0, 0.0],
+            &[[1.0, 0.5], [0.5, 1.0]],
+            CovarianceForm::Joseph,
+        )
+        .expect("valid");
+        let mut gate = Gate::new(GateRule::Vector, 0.95, &model).expect("valid");
+        // Entries 0 and 2 present: Σ = [[2, 1.5], [1.5, 5]] (H rows [1,0], [1,1]).
+        let (a, b, d) = (2.0, 1.5, 5.0);
+        let det = a * d - b * b;
+        let e = [2.0, f64::NAN, 4.5];
+        let nis = (d * e[0] * e[0] - 2.0 * b * e[0] * e[2] + a * e[2] * e[2]) / det;
+        let limit = gate.threshold(2);
+        let kept = gate.screen(&kf, &model, &e).expect("screened").to_vec();
+        assert_eq!(nis > limit, kept[0].is_nan());
+        let scaled = e.map(|v| v * (1.01 * limit / nis).sqrt());
+        gate.screen(&kf, &model, &scaled).expect("screened");
+        assert_eq!(gate.rejected().len(), 2);
+        assert!((gate.rejected()[0].nis - 1.01 * limit).abs() < 1e-9 * limit);
+        let inside = e.map(|v| v * (0.99 * limit / nis).sqrt());
+        gate.screen(&kf, &model, &inside).expect("screened");
+        assert!(gate.rejected().is_empty());
+    }
+
+    #[test]
+    fn bad_probabilities_and_sizes_are_named() {
+        let model = two_sensors();
+        for p in [0.0, 1.0, -0.5, f64::NAN] {
+            assert!(matches!(
+                Gate::new(GateRule::Entries, p, &model),
+                Err(Error::InvalidOption {
+                    name: "probability",
+                    ..
+                })
+            ));
+        }
+        let kf = Filter::new(
+            model.clone(),
+            &[0.0, 0.0],
+            &[[1.0, 0.0], [0.0, 1.0]],
+            CovarianceForm::Joseph,
+        )
+        .expect("valid");
+        let mut gate = Gate::new(GateRule::Entries, 0.9, &model).expect("valid");
+        assert!(gate.screen(&kf, &model, &[1.0]).is_err());
+    }
+}
