@@ -16,7 +16,7 @@ All inputs are NumPy arrays (integer arrays are converted to float64); lists, ot
 and non-finite values are refused with a one-line TypeError/ValueError naming the argument.
 """
 
-from typing import Any, Final, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Final, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -25,6 +25,9 @@ Array = npt.NDArray[np.float64]
 MatrixLike = Union[npt.NDArray[Any], float]
 _Series = Union[Sequence[Any], npt.NDArray[Any]]
 _Measurement = Union[None, float, Sequence[float], npt.NDArray[Any]]
+# One matrix per step: a sequence of len(zs) matrices (each an array, a scalar s for s*I
+# where square (not B), or None for the filter's own), or an array (len(zs), rows, cols).
+_PerStep = Union[Sequence[Optional[MatrixLike]], npt.NDArray[Any]]
 
 class KalmanFilter:
     """FilterPy's ``KalmanFilter`` (predict/update, correlated update, batch filter, RTS
@@ -50,9 +53,13 @@ class KalmanFilter:
       definite) rather than with inv(S); SI is computed from the factor when read. A
       singular S raises ValueError (FilterPy raises LinAlgError). ``kf.inv`` is not used.
     - ``z`` after a skipped update holds NaN (FilterPy: an object array of None).
-    - batch_filter and rts_smoother use the filter's own F, Q, H, R, B: the per-step
-      ``Fs, Qs, Hs, Rs, Bs``, ``saver`` and ``inv`` arguments raise TypeError (loop over
-      predict/update for time-varying models).
+    - batch_filter and rts_smoother take FilterPy's per-step ``Fs, Qs, Hs, Rs, Bs`` (and
+      ``Fs, Qs``) but check them first: a list of another length than zs (FilterPy's zip
+      silently stops at the shorter), a step of another shape, a non-finite entry or a Q/R
+      that is not symmetric PSD raises ValueError naming the argument and the step
+      (``Qs[3]``). A None item of rts_smoother's Fs/Qs is the filter's own (FilterPy fails
+      on it). ``saver`` raises TypeError, and so does an ``inv`` other than
+      numpy.linalg.inv (the smoother solves rather than inverts).
     - Arrays read from the filter are kept until the filter changes them, so ``kf.x is
       kf.x`` and in-place edits (``kf.x[0] = 1``, ``kf.P *= 10``) reach the filter, as in
       FilterPy; arrays read before a predict/update are snapshots (``xs.append(kf.x)``).
@@ -105,16 +112,34 @@ class KalmanFilter:
         """S = H P H^T + H M + M^T H^T + R, K = (P H^T + M) S^-1, x <- x + K y,
         P <- P - K (H P + M^T)."""
     def batch_filter(
-        self, zs: _Series, Fs: None = None, Qs: None = None, Hs: None = None, Rs: None = None,
-        Bs: None = None, us: Optional[_Series] = None, update_first: bool = False, saver: None = None,
+        self, zs: _Series, Fs: Optional[_PerStep] = None, Qs: Optional[_PerStep] = None,
+        Hs: Optional[_PerStep] = None, Rs: Optional[_PerStep] = None,
+        Bs: Optional[_PerStep] = None, us: Optional[_Series] = None,
+        update_first: bool = False, saver: None = None,
     ) -> Tuple[Array, Array, Array, Array]:
-        """(means, covariances, means_p, covariances_p): (N, dim_x, 1), (N, dim_x, dim_x),
-        ... in one call into Rust. Missing measurements: None items or NaN entries."""
+        """(means, covariances, means_p, covariances_p): (N, dim_x, 1) (or (N, dim_x) for a
+        1-d x), (N, dim_x, dim_x), ... in one call into Rust, as FilterPy's.
+
+        Step k runs predict(u=us[k], B=Bs[k], F=Fs[k], Q=Qs[k]) then update(zs[k],
+        R=Rs[k], H=Hs[k]) (update first with update_first); means/covariances are after
+        the update, means_p/covariances_p after the prediction. Each of Fs, Qs, Hs, Rs, Bs
+        is None (the filter's own at every step) or one matrix per step, len(zs) of them; a
+        None item is the filter's own at that step. us (N, dim_u[, 1]) acts only where there
+        is a B (the filter's or Bs[k]); a None item is no control. The filter's F, Q, H, R,
+        B are not changed; x, P, K, y, S, ... are those of the last step, as in FilterPy.
+        Missing measurements: None items or NaN entries of zs. Bad per-step input raises
+        ValueError naming the argument and the step."""
     def rts_smoother(
-        self, Xs: Array, Ps: Array, Fs: None = None, Qs: None = None, inv: None = None
+        self, Xs: Array, Ps: Array, Fs: Optional[_PerStep] = None,
+        Qs: Optional[_PerStep] = None,
+        inv: Optional[Callable[[Array], Array]] = ...,
     ) -> Tuple[Array, Array, Array, Array]:
         """(x, P, K, Pp): smoothed means and covariances, smoother gains, predicted
-        covariances; K[k] = P[k] F^T Pp[k]^-1 by a solve."""
+        covariances, as FilterPy's. The step from k to k + 1 uses Fs[k + 1] and Qs[k + 1]
+        (FilterPy's index: the matrices batch_filter predicted step k + 1 with; Fs[0] and
+        Qs[0] are not used): Pp[k] = Fs[k+1] P[k] Fs[k+1]^T + Qs[k+1],
+        K[k] = P[k] Fs[k+1]^T Pp[k]^-1 by a solve. Fs, Qs: None for the filter's own F, Q,
+        or one matrix per step (len(Xs)). inv: only numpy.linalg.inv (or None)."""
 
 FilterResult = dict[str, Array]
 

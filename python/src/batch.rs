@@ -1,114 +1,131 @@
 //! The whole-series methods of `KalmanFilter` (`batch_filter`, `rts_smoother`): one call
-//! into Rust that loops over the steps without returning to Python.
+//! into Rust that loops over the steps without returning to Python, with the filter's own
+//! model or FilterPy's per-step matrices (`Fs`, `Qs`, `Hs`, `Rs`, `Bs`).
 #![allow(non_snake_case)]
 
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::convert::{
-    array3_out, copy_finite, float_array, read_vector, shape_str, type_error, type_name,
-    value_error,
-};
-use crate::kf_core::{Core, UpdateError, rts};
+use crate::convert::{array3_out, copy_finite, float_array, shape_str, value_error};
+use crate::kf_core::{Core, Steps, UpdateError, rts};
 use crate::linalg::add_mul_vec;
+use crate::series::{
+    Along, Gaps, Rule, Spec, control_columns, read_series, read_series_with, read_steps, reusable,
+};
 
-/// Reads a whole series of vectors (`zs`, `us`): an array (N, len), (N, len, 1), or (N,)
-/// when len = 1, or a sequence whose items are vectors, scalars or None (missing).
-pub(crate) fn read_series(
-    obj: &Bound<'_, PyAny>,
-    name: &str,
-    len: usize,
-    missing_ok: bool,
-) -> PyResult<(usize, Vec<f64>)> {
-    if let Ok(arr) = float_array(obj, name) {
-        let ro = arr.readonly();
-        let view = ro.as_array();
-        let steps = match view.shape() {
-            [s] if len == 1 => *s,
-            [s, l] if *l == len => *s,
-            [s, l, 1] if *l == len => *s,
-            s => {
-                return Err(value_error(format!(
-                    "{name} has shape {}, expected (N, {len}){}",
-                    shape_str(s),
-                    if len == 1 { " or (N,)" } else { "" }
-                )));
-            }
-        };
-        let out = match view.as_slice() {
-            Some(contiguous) => contiguous.to_vec(),
-            None => view.iter().copied().collect(),
-        };
-        for &v in &out {
-            if v.is_infinite() || (v.is_nan() && !missing_ok) {
-                return Err(value_error(format!(
-                    "{name} has a non-finite entry ({v}){}",
-                    if missing_ok {
-                        "; NaN marks a missing entry, infinities are refused"
-                    } else {
-                        ""
-                    }
-                )));
-            }
-        }
-        return Ok((steps, out));
-    }
-    if obj.is_instance_of::<pyo3::types::PyString>() {
-        return Err(type_error(format!(
-            "{name} must be a sequence or a numpy.ndarray, not str"
-        )));
-    }
-    let items = obj.try_iter().map_err(|_| {
-        type_error(format!(
-            "{name} must be a sequence or a numpy.ndarray, not {}",
-            type_name(obj)
-        ))
-    })?;
-    let mut out = Vec::new();
-    let mut steps = 0;
-    for item in items {
-        let item = item?;
-        let mut buf = vec![f64::NAN; len];
-        if !(item.is_none() && missing_ok) {
-            read_vector(
-                &item,
-                &format!("{name}[{steps}]"),
-                len,
-                true,
-                missing_ok,
-                &mut buf,
-            )?;
-        }
-        out.extend_from_slice(&buf);
-        steps += 1;
-    }
-    Ok((steps, out))
+/// `batch_filter`'s per-step model arguments as given: each None (the filter's own matrix
+/// at every step) or one matrix per step.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct PerStepArgs<'a, 'py> {
+    pub Fs: Option<&'a Bound<'py, PyAny>>,
+    pub Qs: Option<&'a Bound<'py, PyAny>>,
+    pub Hs: Option<&'a Bound<'py, PyAny>>,
+    pub Rs: Option<&'a Bound<'py, PyAny>>,
+    pub Bs: Option<&'a Bound<'py, PyAny>>,
 }
 
-/// `KalmanFilter.batch_filter` with the filter's own F, Q, H, R, B. The four outputs are
-/// numpy arrays allocated once and written in place (numpy backs large arrays with huge
-/// pages, so 10⁵ steps cost few page faults), and the loop runs with the GIL released.
+/// The per-step model as read: each `None` (the filter's own) or the matrices of every step,
+/// row-major, one after another.
+#[derive(Clone, Copy, Debug, Default)]
+struct Model<'a> {
+    F: Option<&'a [f64]>,
+    Q: Option<&'a [f64]>,
+    H: Option<&'a [f64]>,
+    R: Option<&'a [f64]>,
+    B: Option<&'a [f64]>,
+    /// The columns of B's matrices (the number of controls).
+    p: usize,
+}
+
+/// `KalmanFilter.batch_filter`, FilterPy's: step k predicts with `Fs[k]`, `Qs[k]`, `Bs[k]`,
+/// `us[k]` and updates with `zs[k]`, `Hs[k]`, `Rs[k]` (in that order, or the update first),
+/// each per-step argument None for the filter's own matrix at every step, and a None item
+/// for the filter's own at that step (FilterPy hands the item to `predict`/`update`, which
+/// read None so). Controls act only where there is a B (the filter's, or `Bs[k]`); a None
+/// item of `us` is no control. The four outputs are numpy arrays allocated once and written
+/// in place (numpy backs large arrays with huge pages, so 10⁵ steps cost few page faults),
+/// and the loop runs with the GIL released.
 pub(crate) fn batch_filter<'py>(
     core: &mut Core,
     x_col: bool,
     py: Python<'py>,
     zs: &Bound<'py, PyAny>,
+    per_step: PerStepArgs<'_, 'py>,
     us: Option<&Bound<'py, PyAny>>,
     update_first: bool,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let (n, m) = (core.n, core.m);
     let (steps, z) = read_series(zs, "zs", m, true)?;
-    let p = if core.B.is_some() { core.p } else { 0 };
+    let along = Along { name: "zs", steps };
+    let spec = |name, rows, cols, rule, own| Spec {
+        name,
+        rows,
+        cols,
+        rule,
+        own,
+    };
+    let Fs = read_steps(
+        per_step.Fs,
+        &spec("Fs", n, n, Rule::Matrix, Some(&core.F)),
+        along,
+    )?;
+    let Qs = read_steps(
+        per_step.Qs,
+        &spec("Qs", n, n, Rule::Covariance, Some(&core.Q)),
+        along,
+    )?;
+    let Hs = read_steps(
+        per_step.Hs,
+        &spec("Hs", m, n, Rule::Matrix, Some(&core.H)),
+        along,
+    )?;
+    let Rs = read_steps(
+        per_step.Rs,
+        &spec("Rs", m, m, Rule::Covariance, Some(&core.R)),
+        along,
+    )?;
+    // The number of controls: the filter's (its B's columns, else dim_u), else that of the
+    // first matrix of Bs; no control at all without a B anywhere.
+    let Bs_arg = reusable(per_step.Bs)?;
+    let Bs_cols = control_columns(Bs_arg.as_ref())?;
+    let p = match (&core.B, Bs_cols) {
+        (Some(_), _) => core.p,
+        (None, None) => 0,
+        (None, Some(_)) if core.p > 0 => core.p,
+        (None, Some(c)) => c,
+    };
+    let Bs = read_steps(
+        Bs_arg.as_ref(),
+        &spec("Bs", n, p, Rule::Control, core.B.as_deref()),
+        along,
+    )?
+    .filter(|_| p > 0);
     let u = match us {
         Some(us) if !us.is_none() && p > 0 => {
-            let (k, u) = read_series(us, "us", p, false)?;
+            let (k, u) = read_series_with(us, "us", p, Gaps::Zero)?;
             if k != steps {
-                return Err(value_error(format!("us has {k} steps but zs has {steps}")));
+                return Err(value_error(format!(
+                    "us has {k} steps but zs has {steps} (us[{}] is {})",
+                    k.min(steps),
+                    if k < steps {
+                        "missing"
+                    } else {
+                        "past the last step"
+                    }
+                )));
             }
             Some(u)
         }
         _ => None,
+    };
+    let model = Model {
+        F: Fs.as_deref(),
+        Q: Qs.as_deref(),
+        H: Hs.as_deref(),
+        R: Rs.as_deref(),
+        B: Bs.as_deref(),
+        p,
     };
     let mean_shape = if x_col {
         vec![steps, n, 1]
@@ -133,6 +150,7 @@ pub(crate) fn batch_filter<'py>(
         let u = u.as_deref();
         let batch = Batch {
             core,
+            model,
             z: &z,
             u,
             update_first,
@@ -199,10 +217,11 @@ macro_rules! with_dim {
     };
 }
 
-/// One `batch_filter` call: the filter, the series zs (N×m) and us (N×p), the step order
-/// and where the results go.
+/// One `batch_filter` call: the filter, the per-step model, the series zs (N×m) and us
+/// (N×p), the step order and where the results go.
 struct Batch<'a> {
     core: &'a mut Core,
+    model: Model<'a>,
     z: &'a [f64],
     u: Option<&'a [f64]>,
     update_first: bool,
@@ -220,12 +239,15 @@ fn run(b: Batch<'_>) -> Result<(), usize> {
 /// The loop itself. Each step reads the previous step's output rows (the filter's own state
 /// at the first step) and writes its own rows of the four outputs. Steps whose z is complete
 /// take the fast kernels below; a step with a missing entry, a P that is not exactly
-/// symmetric or an S that is not positive definite (the general path then tries LU), and the
-/// last step (so that K, y, S, the priors and posteriors the filter exposes afterwards are
-/// those of the last step, as in FilterPy) take `Core`'s general update and predict.
+/// symmetric or an S that is not positive definite (the general path then tries LU), the
+/// last step (so that y, the priors and posteriors the filter exposes afterwards are those
+/// of the last step, as in FilterPy) and the last step with a measurement (so that K, S and
+/// the likelihood are those of the last update made, as FilterPy keeps them over skipped
+/// updates) take `Core`'s general update and predict.
 fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), usize> {
     let Batch {
         core,
+        model,
         z,
         u,
         update_first,
@@ -235,20 +257,24 @@ fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), usize> {
     let nn = n * n;
     let steps = z.len() / m;
     let p = u.map_or(0, |u| u.len() / steps.max(1));
-    let mut w = Work::new(core, n, m);
+    let mut w = Work::new(core, n, m, model);
     let (x0, P0) = (core.x.clone(), core.P.clone());
-    // A prediction leaves P exactly symmetric when Q is (F P Fᵀ by its upper triangle,
+    // A prediction leaves P exactly symmetric when its Q is (F P Fᵀ by its upper triangle,
     // mirrored, plus Q); only the first update of an update-first run sees the initial P.
-    let symmetric_q = is_symmetric(&w.Q, n);
-    let symmetric_p0 = is_symmetric(&P0, n);
+    // `symmetric`: whether the P the next update starts from is.
+    let mut symmetric = is_symmetric(&P0, n);
     let Outputs {
         means,
         covs,
         means_p,
         covs_p,
     } = out;
+    let last_update = (0..steps)
+        .rev()
+        .find(|&k| z[k * m..(k + 1) * m].iter().any(|v| !v.is_nan()));
     for k in 0..steps {
-        let general = k + 1 == steps;
+        w.load(k, n, m, &model);
+        let general = k + 1 == steps || last_update == Some(k);
         let zk = &z[k * m..(k + 1) * m];
         let uk = u.map(|u| &u[k * p..(k + 1) * p]);
         let (x_done, x_post) = means.split_at_mut(k * n);
@@ -264,18 +290,19 @@ fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), usize> {
             (_, false) => (&x_done[(k - 1) * n..], &P_done[(k - 1) * nn..]),
         };
         if update_first {
-            let symmetric = if k == 0 { symmetric_p0 } else { symmetric_q };
             w.update(d, e, core, general, symmetric, zk, start, post)
                 .map_err(|_| k)?;
             w.predict(d, core, general, uk, (&x_post[..n], &P_post[..nn]), prior);
+            symmetric = w.q_symmetric;
         } else {
             w.predict(d, core, general, uk, start, prior);
+            symmetric = w.q_symmetric;
             w.update(
                 d,
                 e,
                 core,
                 general,
-                symmetric_q,
+                symmetric,
                 zk,
                 (&x_prior[..n], &P_prior[..nn]),
                 post,
@@ -338,12 +365,15 @@ fn via_core<T>(
     result
 }
 
-/// The model (copied from the filter) and the workspaces of the fast kernels, row-major.
+/// The model of the current step (copied from the filter, or from the per-step matrices at
+/// each step) and the workspaces of the fast kernels, row-major.
 struct Work {
     F: Vec<f64>,
     /// Fᵀ: F x is a sum of its rows.
     Ft: Vec<f64>,
     Q: Vec<f64>,
+    /// Whether Q is exactly symmetric.
+    q_symmetric: bool,
     H: Vec<f64>,
     R: Vec<f64>,
     B: Option<Vec<f64>>,
@@ -363,22 +393,33 @@ struct Work {
     y: Vec<f64>,
 }
 
+/// `out = aᵀ` for the n×n `a`.
+fn transpose(a: &[f64], n: usize, out: &mut [f64]) {
+    for (i, row) in a.chunks_exact(n).enumerate() {
+        for (j, &v) in row.iter().enumerate() {
+            out[j * n + i] = v;
+        }
+    }
+}
+
 impl Work {
-    fn new(core: &Core, n: usize, m: usize) -> Self {
+    /// The filter's model (the per-step B, when there is one, is loaded by [`Work::load`]).
+    fn new(core: &Core, n: usize, m: usize, model: Model<'_>) -> Self {
         let zeros = |rows: usize, cols: usize| vec![0.0; rows * cols];
         let mut Ft = zeros(n, n);
-        for (i, row) in core.F.chunks_exact(n).enumerate() {
-            for (j, &f) in row.iter().enumerate() {
-                Ft[j * n + i] = f;
-            }
-        }
+        transpose(&core.F, n, &mut Ft);
+        let B = match model.B {
+            Some(_) => Some(vec![0.0; n * model.p]),
+            None => core.B.clone(),
+        };
         Self {
             F: core.F.clone(),
             Ft,
             Q: core.Q.clone(),
+            q_symmetric: is_symmetric(&core.Q, n),
             H: core.H.clone(),
             R: core.R.clone(),
-            B: core.B.clone(),
+            B,
             alpha_sq: core.alpha_sq,
             fp: zeros(n, n),
             hp: zeros(m, n),
@@ -388,6 +429,32 @@ impl Work {
             kt: zeros(m, n),
             ct: zeros(m, n),
             y: zeros(m, 1),
+        }
+    }
+
+    /// Takes step k's matrices from the per-step model (those it has; the others stay the
+    /// filter's).
+    fn load(&mut self, k: usize, n: usize, m: usize, model: &Model<'_>) {
+        let at = |all: &[f64], size: usize, out: &mut [f64]| {
+            out.copy_from_slice(&all[k * size..(k + 1) * size]);
+        };
+        if let Some(Fs) = model.F {
+            at(Fs, n * n, &mut self.F);
+            transpose(&self.F, n, &mut self.Ft);
+        }
+        if let Some(Qs) = model.Q {
+            at(Qs, n * n, &mut self.Q);
+            self.q_symmetric = is_symmetric(&self.Q, n);
+        }
+        if let Some(Hs) = model.H {
+            at(Hs, m * n, &mut self.H);
+        }
+        if let Some(Rs) = model.R {
+            at(Rs, m * m, &mut self.R);
+        }
+        if let (Some(Bs), Some(B)) = (model.B, self.B.as_mut()) {
+            let size = B.len();
+            at(Bs, size, B);
         }
     }
 
@@ -404,7 +471,8 @@ impl Work {
         to: StateMut<'_>,
     ) {
         if general {
-            return via_core(core, from, to, |core| core.predict(u, None, None, None));
+            let (F, Q, B) = (&self.F, &self.Q, self.B.as_deref());
+            return via_core(core, from, to, |core| core.predict(u, Some(F), Some(Q), B));
         }
         let n = d.get();
         let (F, Ft, Q) = (&self.F[..n * n], &self.Ft[..n * n], &self.Q[..n * n]);
@@ -450,7 +518,10 @@ impl Work {
         if fast && self.joseph(d, e, z, from, (&mut *to.0, &mut *to.1)) {
             return Ok(());
         }
-        via_core(core, from, to, |core| core.update(z, None, None, false))
+        let (R, H) = (&self.R, &self.H);
+        via_core(core, from, to, |core| {
+            core.update(z, Some(R), Some(H), false)
+        })
     }
 
     /// The Joseph update of [`Work::update`]; `false`, with `to` not written, when S is not
@@ -557,12 +628,16 @@ impl Work {
     }
 }
 
-/// `KalmanFilter.rts_smoother` with the filter's own F and Q.
+/// `KalmanFilter.rts_smoother`, FilterPy's: the step from k to k + 1 uses `Fs[k + 1]` and
+/// `Qs[k + 1]` (each None for the filter's own at every step; a None item the filter's own
+/// at that step), so `Fs[0]` and `Qs[0]` are read and checked but not used.
 pub(crate) fn rts_smoother<'py>(
     core: &Core,
     py: Python<'py>,
     Xs: &Bound<'py, PyAny>,
     Ps: &Bound<'py, PyAny>,
+    Fs: Option<&Bound<'py, PyAny>>,
+    Qs: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let n = core.n;
     let xa = float_array(Xs, "Xs")?;
@@ -588,9 +663,30 @@ pub(crate) fn rts_smoother<'py>(
     copy_finite(&xa.readonly().as_array(), "Xs", &mut xs)?;
     let mut ps = vec![0.0; steps * n * n];
     copy_finite(&pa.readonly().as_array(), "Ps", &mut ps)?;
-    let (x, P, K, Pp) = rts(&xs, &ps, steps, n, &core.F, &core.Q).map_err(|k| {
+    let along = Along { name: "Xs", steps };
+    let spec = |name, rule, own| Spec {
+        name,
+        rows: n,
+        cols: n,
+        rule,
+        own,
+    };
+    let Fs = read_steps(Fs, &spec("Fs", Rule::Matrix, Some(&core.F)), along)?;
+    let Qs = read_steps(Qs, &spec("Qs", Rule::Covariance, Some(&core.Q)), along)?;
+    let F = Fs.as_deref().map_or(Steps::Same(&core.F), Steps::Each);
+    let Q = Qs.as_deref().map_or(Steps::Same(&core.Q), Steps::Each);
+    let (x, P, K, Pp) = rts(&xs, &ps, steps, n, F, Q).map_err(|k| {
+        let name = |given: bool, own: &str, each: &str| {
+            if given {
+                format!("{each}[{}]", k + 1)
+            } else {
+                own.to_string()
+            }
+        };
+        let (f, q) = (name(Fs.is_some(), "F", "Fs"), name(Qs.is_some(), "Q", "Qs"));
         value_error(format!(
-            "rts_smoother: the predicted covariance F Ps[{k}] Fᵀ + Q is singular"
+            "rts_smoother: the predicted covariance Pp[{k}] = {f} Ps[{k}] {f}ᵀ + {q} is \
+             singular"
         ))
     })?;
     let x_out = if xs_shape.len() == 3 {

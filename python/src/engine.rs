@@ -106,7 +106,7 @@ fn series(
     m: usize,
     p: usize,
 ) -> PyResult<(usize, Vec<f64>, Option<Vec<f64>>)> {
-    let (steps, z) = crate::batch::read_series(zs, "zs", m, true)?;
+    let (steps, z) = crate::series::read_series(zs, "zs", m, true)?;
     let u = match us {
         Some(us) if !us.is_none() => {
             if p == 0 {
@@ -114,7 +114,7 @@ fn series(
                     "us is given but there is no B (no control input)",
                 ));
             }
-            let (k, u) = crate::batch::read_series(us, "us", p, false)?;
+            let (k, u) = crate::series::read_series(us, "us", p, false)?;
             if k != steps {
                 return Err(value_error(format!("us has {k} steps but zs has {steps}")));
             }

@@ -70,7 +70,7 @@ fn run_fit<'py>(
         p0_diag: free_p0_diag,
     };
     let map = StandardMap::new(base, free).map_err(err)?;
-    let (_, z) = crate::batch::read_series(zs, "zs", m, true)?;
+    let (_, z) = crate::series::read_series(zs, "zs", m, true)?;
     let data = Series::new(&z, m).map_err(err)?;
     let result = match method {
         "em" => {

@@ -12,6 +12,7 @@ use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
+use crate::batch::PerStepArgs;
 use crate::convert::{
     check_psd, float_array, matrix_out, read_matrix, read_vector, scalar, shape_str, type_error,
     type_name, value_error, vector_out,
@@ -606,9 +607,16 @@ pymethods_with_attributes! {
         })
     }
 
-    /// batch_filter(zs, us=None, update_first=False) → (means, covariances, means_p,
-    /// covariances_p), in one call into Rust. Per-step Fs, Qs, Hs, Rs, Bs and saver are not
-    /// supported (TypeError): loop over predict/update for those.
+    /// batch_filter(zs, Fs=None, Qs=None, Hs=None, Rs=None, Bs=None, us=None,
+    /// update_first=False, saver=None) → (means, covariances, means_p, covariances_p), in one
+    /// call into Rust, as FilterPy's: step k runs predict(u=us[k], B=Bs[k], F=Fs[k],
+    /// Q=Qs[k]) and update(zs[k], R=Rs[k], H=Hs[k]) (the update first with update_first).
+    /// Each of Fs, Qs, Hs, Rs, Bs is None (the filter's own at every step) or one matrix per
+    /// step (a sequence or a 3-d array of len(zs)); a None item is the filter's own at that
+    /// step. us acts only where there is a B; a None item of us is no control. A per-step
+    /// list of another length, a step of another shape, a non-finite entry or a Q/R that is
+    /// not symmetric PSD raises ValueError naming the argument and the step. saver is not
+    /// supported (TypeError).
     #[pyo3(signature = (zs, Fs = None, Qs = None, Hs = None, Rs = None, Bs = None, us = None, update_first = false, saver = None))]
     fn batch_filter<'py>(
         &mut self,
@@ -626,20 +634,31 @@ pymethods_with_attributes! {
         guard(|| {
             unsupported(
                 "batch_filter",
-                [("Fs", Fs), ("Qs", Qs), ("Hs", Hs), ("Rs", Rs), ("Bs", Bs), ("saver", saver)],
-                "call predict/update in a loop for per-step matrices",
+                [("saver", saver)],
+                "call predict/update in a loop and save after each step",
             )?;
             self.sync(py)?;
-            let out =
-                crate::batch::batch_filter(&mut self.core, self.x_col, py, zs, us, update_first);
+            let per_step = PerStepArgs { Fs, Qs, Hs, Rs, Bs };
+            let out = crate::batch::batch_filter(
+                &mut self.core,
+                self.x_col,
+                py,
+                zs,
+                per_step,
+                us,
+                update_first,
+            );
             self.invalidate(&PREDICTED);
             self.invalidate(&UPDATED);
             out
         })
     }
 
-    /// rts_smoother(Xs, Ps) → (x, P, K, Pp): the RTS smoother over batch_filter's output with
-    /// the filter's F and Q. Per-step Fs, Qs and a custom inv are not supported (TypeError).
+    /// rts_smoother(Xs, Ps, Fs=None, Qs=None, inv=numpy.linalg.inv) → (x, P, K, Pp): the RTS
+    /// smoother over batch_filter's output, as FilterPy's: the step from k to k + 1 uses
+    /// Fs[k + 1] and Qs[k + 1] (Fs[0] and Qs[0] are not used), each None for the filter's
+    /// own F and Q. K[k] = P[k] Fᵀ Pp[k]⁻¹ is solved rather than formed with inv: only
+    /// numpy.linalg.inv (the default) is accepted, another inv raises TypeError.
     #[pyo3(signature = (Xs, Ps, Fs = None, Qs = None, inv = None))]
     fn rts_smoother<'py>(
         &mut self,
@@ -651,13 +670,20 @@ pymethods_with_attributes! {
         inv: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyTuple>> {
         guard(|| {
-            unsupported(
-                "rts_smoother",
-                [("Fs", Fs), ("Qs", Qs), ("inv", inv)],
-                "the filter's F and Q are used",
-            )?;
+            if let Some(inv) = inv.filter(|i| !i.is_none()) {
+                let numpy_inv = py.import("numpy.linalg")?.getattr("inv")?;
+                if !inv.is(&numpy_inv) {
+                    return Err(type_error(format!(
+                        "rts_smoother: inv = {} is not supported; the gain is solved with a \
+                         factorisation of Pp[k] (numpy.linalg.inv's result up to rounding)",
+                        inv.getattr("__name__")
+                            .and_then(|n| n.str())
+                            .map_or_else(|_| type_name(inv), |n| n.to_string())
+                    )));
+                }
+            }
             self.sync(py)?;
-            crate::batch::rts_smoother(&self.core, py, Xs, Ps)
+            crate::batch::rts_smoother(&self.core, py, Xs, Ps, Fs, Qs)
         })
     }
 

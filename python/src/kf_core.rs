@@ -343,16 +343,37 @@ impl Core {
 /// The smoother's outputs: means, covariances, gains, predicted covariances (row-major).
 pub(crate) type Smoothed = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
 
-/// FilterPy's `rts_smoother` for constant F and Q: returns (x, P, K, Pp) with the smoothed
-/// means (n_steps×n), covariances and gains (n_steps×n×n) and the predicted covariances.
-/// K_k = P_k Fᵀ Pp_k⁻¹ is solved (Pp_k K_kᵀ = F P_kᵀ), not formed with an inverse.
+/// A model matrix over a series of steps: the same at every step, or one per step (the
+/// row-major matrices one after another).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Steps<'a> {
+    Same(&'a [f64]),
+    Each(&'a [f64]),
+}
+
+impl<'a> Steps<'a> {
+    /// The matrix of step k (`size` entries).
+    pub(crate) fn at(self, k: usize, size: usize) -> &'a [f64] {
+        match self {
+            Steps::Same(a) => a,
+            Steps::Each(a) => &a[k * size..(k + 1) * size],
+        }
+    }
+}
+
+/// FilterPy's `rts_smoother`: returns (x, P, K, Pp) with the smoothed means (n_steps×n),
+/// covariances and gains (n_steps×n×n) and the predicted covariances. The step from k to
+/// k + 1 uses F_{k+1} and Q_{k+1}, FilterPy's index (the matrices `batch_filter` predicted
+/// step k + 1 with), so F_0 and Q_0 are not used: Pp_k = F_{k+1} P_k F_{k+1}ᵀ + Q_{k+1}.
+/// K_k = P_k F_{k+1}ᵀ Pp_k⁻¹ is solved (Pp_k K_kᵀ = F_{k+1} P_kᵀ), not formed with an
+/// inverse. `Err(k)`: Pp_k is singular.
 pub(crate) fn rts(
     xs: &[f64],
     ps: &[f64],
     steps: usize,
     n: usize,
-    F: &[f64],
-    Q: &[f64],
+    Fs: Steps<'_>,
+    Qs: Steps<'_>,
 ) -> Result<Smoothed, usize> {
     let mut x = xs.to_vec();
     let mut P = ps.to_vec();
@@ -368,6 +389,7 @@ pub(crate) fn rts(
     let mut fac = Factor::new(n);
     for k in (0..steps.saturating_sub(1)).rev() {
         let (pk, pk1) = (k * nn, (k + 1) * nn);
+        let (F, Q) = (Fs.at(k + 1, nn), Qs.at(k + 1, nn));
         mul(F, &P[pk..pk + nn], n, n, n, &mut t1); // F P_k
         mul_bt(&t1, F, n, n, n, &mut t2);
         for (o, (a, q)) in Pp[pk..pk + nn].iter_mut().zip(t2.iter().zip(Q)) {

@@ -67,6 +67,7 @@ mod kf_core;
 mod linalg;
 mod model_fns;
 mod nonlinear;
+mod series;
 mod wls_fns;
 
 use pyo3::exceptions::PyRuntimeError;

@@ -62,7 +62,7 @@ fn run<'py>(
     let mut x0v = vec![0.0; n];
     read_vector(x0, "x0", n, false, false, &mut x0v)?;
     let P0 = mat(P0, "P0")?;
-    let (steps, z) = crate::batch::read_series(zs, "zs", m, true)?;
+    let (steps, z) = crate::series::read_series(zs, "zs", m, true)?;
     let (p, u) = match us {
         Some(us) if !us.is_none() => {
             let arr = float_array(us, "us")?;
@@ -76,7 +76,7 @@ fn run<'py>(
                     )));
                 }
             };
-            let (k, u) = crate::batch::read_series(us, "us", p, false)?;
+            let (k, u) = crate::series::read_series(us, "us", p, false)?;
             if k != steps {
                 return Err(value_error(format!("us has {k} steps but zs has {steps}")));
             }

@@ -20,6 +20,26 @@ def setattr_(name, value, n=2, m=1, p=0):
     return lambda: setattr(kf(n, m, p), name, value)
 
 
+I2 = np.eye(2)
+
+
+def batch(m=1, p=0, **kwargs):
+    """batch_filter over three steps of a 2-state filter, with the per-step arguments given."""
+    return kf(m=m, p=p).batch_filter(np.zeros((3, m)), **kwargs)
+
+
+def rts(**kwargs):
+    """rts_smoother over four steps of a 2-state filter, with the per-step arguments given."""
+    return kf().rts_smoother(np.zeros((4, 2)), np.stack([I2] * 4), **kwargs)
+
+
+def steps_with(matrix, k, index, value, steps=3):
+    """An array of `steps` copies of `matrix` whose step k has `value` at `index`."""
+    out = np.stack([matrix] * steps).astype(float)
+    out[(k,) + index] = value
+    return out
+
+
 NAN = float("nan")
 INF = float("inf")
 CASES = {
@@ -99,11 +119,66 @@ CASES = {
         ValueError,
         "us",
     ),
-    "batch Fs unsupported": (lambda: kf().batch_filter(np.zeros(3), Fs=[np.eye(2)] * 3), TypeError, "Fs"),
+    "batch saver unsupported": (lambda: kf().batch_filter(np.zeros(3), saver=object()), TypeError, "saver"),
+    # per-step matrices of batch_filter (three steps): the argument and the step are named
+    "batch Fs too short": (lambda: batch(Fs=[I2] * 2), ValueError, "Fs[2]"),
+    "batch Fs too long": (lambda: batch(Fs=[I2] * 4), ValueError, "Fs[3]"),
+    "batch Fs generator too long": (lambda: batch(Fs=(I2 for _ in range(4))), ValueError, "Fs[3]"),
+    "batch Fs generator too short": (lambda: batch(Fs=(I2 for _ in range(2))), ValueError, "Fs[2]"),
+    "batch Fs step wrong shape": (lambda: batch(Fs=[I2, np.eye(3), I2]), ValueError, "Fs[1]"),
+    "batch Fs array wrong shape": (lambda: batch(Fs=np.zeros((3, 3, 3))), ValueError, "Fs[0]"),
+    "batch Fs array wrong length": (lambda: batch(Fs=np.zeros((4, 2, 2))), ValueError, "Fs[3]"),
+    "batch Fs one matrix": (lambda: batch(Fs=I2), ValueError, "Fs"),
+    "batch Fs float": (lambda: batch(Fs=1.0), TypeError, "Fs"),
+    "batch Fs string": (lambda: batch(Fs="eye"), TypeError, "Fs"),
+    "batch Fs step list": (lambda: batch(Fs=[I2, [[1.0, 0.0], [0.0, 1.0]], I2]), TypeError, "Fs[1]"),
+    "batch Fs step NaN": (lambda: batch(Fs=[I2, I2, np.array([[1.0, NAN], [0.0, 1.0]])]), ValueError, "Fs[2]"),
+    "batch Fs step complex": (lambda: batch(Fs=[I2, I2 * 1j, I2]), TypeError, "Fs[1]"),
+    "batch Qs step not symmetric": (lambda: batch(Qs=[I2, np.array([[1.0, 0.5], [0.0, 1.0]]), I2]), ValueError, "Qs[1]"),
+    "batch Qs step not PSD": (lambda: batch(Qs=[-1.0, I2, I2]), ValueError, "Qs[0]"),
+    "batch Qs array NaN": (lambda: batch(Qs=steps_with(I2, 2, (0, 0), NAN)), ValueError, "Qs[2]"),
+    "batch Qs array not symmetric": (lambda: batch(Qs=steps_with(I2, 1, (0, 1), 0.3)), ValueError, "Qs[1]"),
+    "batch Rs step not symmetric": (
+        lambda: batch(Rs=[np.eye(2), np.array([[1.0, 0.2], [0.1, 1.0]]), np.eye(2)], m=2),
+        ValueError,
+        "Rs[1]",
+    ),
+    "batch Rs step inf": (lambda: batch(Rs=[1.0, 1.0, np.array([[INF]])]), ValueError, "Rs[2]"),
+    "batch Rs too short": (lambda: batch(Rs=[1.0]), ValueError, "Rs[1]"),
+    "batch Hs step wrong shape": (lambda: batch(Hs=[np.ones((1, 2)), np.ones((1, 2)), np.ones((2, 2))]), ValueError, "Hs[2]"),
+    "batch Hs array inf": (lambda: batch(Hs=steps_with(np.ones((1, 2)), 1, (0, 1), INF)), ValueError, "Hs[1]"),
+    "batch Bs step wrong shape": (
+        lambda: batch(p=1, Bs=[np.ones((2, 1)), np.ones((2, 2)), np.ones((2, 1))], us=np.ones(3)),
+        ValueError,
+        "Bs[1]",
+    ),
+    "batch Bs too long": (lambda: batch(p=1, Bs=[np.ones((2, 1))] * 4, us=np.ones(3)), ValueError, "Bs[3]"),
+    "batch Bs step scalar": (lambda: batch(p=1, Bs=[np.ones((2, 1)), 1.0, np.ones((2, 1))], us=np.ones(3)), TypeError, "Bs[1]"),
+    "batch us step wrong length with Bs": (
+        lambda: batch(Bs=[np.ones((2, 1))] * 3, us=[[1.0], [1.0, 2.0], [1.0]]),
+        ValueError,
+        "us[1]",
+    ),
+    "batch us NaN with Bs": (lambda: batch(Bs=[np.ones((2, 1))] * 3, us=np.array([1.0, 1.0, NAN])), ValueError, "us[2]"),
+    "batch us too short with Bs": (lambda: batch(Bs=[np.ones((2, 1))] * 3, us=np.ones(2)), ValueError, "us[2]"),
     "rts Xs Ps lengths": (lambda: kf().rts_smoother(np.zeros((4, 2, 1)), np.zeros((3, 2, 2))), ValueError, "Ps"),
     "rts Xs wrong shape": (lambda: kf().rts_smoother(np.zeros((4, 3)), np.zeros((4, 2, 2))), ValueError, "Xs"),
     "rts Ps NaN": (lambda: kf().rts_smoother(np.zeros((2, 2)), np.full((2, 2, 2), NAN)), ValueError, "Ps"),
     "rts Xs list": (lambda: kf().rts_smoother([[0.0, 0.0]], np.zeros((1, 2, 2))), TypeError, "Xs"),
+    # per-step matrices of rts_smoother (four steps)
+    "rts Fs too short": (lambda: rts(Fs=[I2] * 3), ValueError, "Fs[3]"),
+    "rts Fs step wrong shape": (lambda: rts(Fs=[I2, I2, np.eye(3), I2]), ValueError, "Fs[2]"),
+    "rts Fs step inf": (lambda: rts(Fs=[I2, I2, I2, np.full((2, 2), INF)]), ValueError, "Fs[3]"),
+    "rts Qs step not symmetric": (lambda: rts(Qs=[I2, np.array([[1.0, 0.0], [0.5, 1.0]]), I2, I2]), ValueError, "Qs[1]"),
+    "rts Qs array NaN": (lambda: rts(Qs=steps_with(I2, 3, (1, 1), NAN, steps=4)), ValueError, "Qs[3]"),
+    "rts Qs too long": (lambda: rts(Qs=np.stack([I2] * 5)), ValueError, "Qs[4]"),
+    "rts Qs string": (lambda: rts(Qs="Q"), TypeError, "Qs"),
+    "rts inv other": (lambda: rts(inv=np.linalg.pinv), TypeError, "inv"),
+    "rts singular Pp per step": (
+        lambda: kf().rts_smoother(np.zeros((3, 2)), np.zeros((3, 2, 2)), Qs=[I2, I2, 0.0]),
+        ValueError,
+        "Qs[2]",
+    ),
     "rts singular Pp": (
         lambda: (lambda f: (setattr(f, "Q", 0.0), f.rts_smoother(np.zeros((3, 2)), np.zeros((3, 2, 2)))))(kf()),
         ValueError,

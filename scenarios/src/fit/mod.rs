@@ -25,8 +25,8 @@ use nalgebra::DMatrix;
 use serde_json::json;
 
 use crate::error::{Error, Result};
-use crate::userdata::data::parse_data;
-use crate::userdata::model_file::{DiscreteFile, DiscreteModel, load_discrete, to_rows};
+use crate::userdata::data::{DataReader, Row};
+use crate::userdata::model_file::{AnyModel, DiscreteFile, DiscreteModel, load_any, to_rows};
 
 /// Estimator of `fit --method`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -242,6 +242,25 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
     }))
 }
 
+/// The rows of the data CSV `data`, each spaced `dt` after the one before (the discrete
+/// model `model`'s interval; [`crate::userdata::timing::check_regular`]).
+fn read_regular(data: &Path, model: &Path, dt: f64) -> Result<(usize, usize, Vec<Row>)> {
+    let file = std::fs::File::open(data).map_err(|source| Error::Read {
+        path: data.to_path_buf(),
+        source,
+    })?;
+    let mut reader = DataReader::new(data, std::io::BufReader::new(file))?;
+    let mut rows: Vec<Row> = Vec::new();
+    let mut row = Row::default();
+    while reader.read_row(&mut row)? {
+        if let Some(last) = rows.last() {
+            crate::userdata::timing::check_regular(data, reader.line(), model, dt, last.t, row.t)?;
+        }
+        rows.push(row.clone());
+    }
+    Ok((reader.m(), reader.p(), rows))
+}
+
 /// `scenarios fit`.
 ///
 /// # Errors
@@ -257,18 +276,23 @@ pub fn fit(args: &FitArgs) -> Result<()> {
         &args.out,
         &[("--model", &args.model), ("--data", &args.data)],
     )?;
-    let model = load_discrete(&args.model)?;
+    let model = match load_any(&args.model)? {
+        AnyModel::Discrete(d) => d,
+        AnyModel::Continuous(_) => {
+            return Err(Error::invalid(
+                &args.model,
+                "fit takes a discrete model (dt, F, H, Q, R): fitting a continuous model over \
+                 a record's own time stamps is not supported yet",
+            ));
+        }
+    };
     if model.S.is_some() {
         return Err(Error::invalid(
             &args.model,
             "fit does not handle the cross-covariance S (remove S, or fit without it)",
         ));
     }
-    let bytes = std::fs::read(&args.data).map_err(|source| Error::Read {
-        path: args.data.clone(),
-        source,
-    })?;
-    let (m, p, rows) = parse_data(&args.data, &bytes)?;
+    let (m, p, rows) = read_regular(&args.data, &args.model, model.dt)?;
     if m != model.m() || p != model.p() {
         return Err(Error::invalid(
             &args.data,

@@ -141,6 +141,15 @@ fn bad_time_stamps_and_a_fixed_interval_on_an_irregular_record_are_refused() {
         &["z.csv: line 5", "dt = 0.1", "continuous form"],
         2,
     );
+    refused(
+        &dir,
+        &argv_with(
+            "fit --model d.json --data z.csv --free Q:scalar --out f.json",
+            &[],
+        ),
+        &["z.csv: line 5", "dt = 0.1", "continuous form"],
+        2,
+    );
     // Regular to round-off (0.1 steps accumulated in binary) is accepted.
     let mut regular = String::from("t,z1\n");
     let mut t = 0.0_f64;
@@ -183,6 +192,16 @@ fn bad_time_stamps_and_a_fixed_interval_on_an_irregular_record_are_refused() {
             2,
         );
     }
+    write(&dir, "z.csv", "t,z1\n0,1\n1,2\n");
+    refused(
+        &dir,
+        &argv_with(
+            "fit --model c.json --data z.csv --free R:scalar --out f.json",
+            &[],
+        ),
+        &["c.json", "fit takes a discrete model"],
+        2,
+    );
     // Two rows of one instant are one time stamp: Δt = 0 between them.
     write(&dir, "z.csv", "t,z1\n0,1\n0,1.5\n1,2\n");
     ok(
