@@ -314,11 +314,13 @@ impl KalmanBucy {
     }
 }
 
-/// Matrix exponential e^{A} by scaling and squaring with the [13/13] Padé approximant
-/// (Higham 2005); the Padé quotient is a solve, not an inverse.
+/// Matrix exponential e^{A} by scaling and squaring with the Padé approximant of the degree
+/// (3, 5, 7, 9 or 13) that A's 1-norm needs (Higham 2005); the Padé quotient is a solve, not
+/// an inverse. The crate's one exponential (`crate::expm`), also behind [`crate::sampling`].
 ///
 /// # Errors
-/// [`Error::Shape`] if A is not square, [`Error::NonFinite`] for a non-finite entry.
+/// [`Error::Shape`] if A is not square, [`Error::NonFinite`] for a non-finite entry, and
+/// [`Error::NonFinite`] naming `e^A` if the exponential overflows f64.
 ///
 /// # Example
 /// ```
@@ -329,58 +331,27 @@ impl KalmanBucy {
 /// # Ok::<(), kalman::Error>(())
 /// ```
 pub fn expm(A: impl MatrixInput) -> Result<Mat<f64>, Error> {
-    let A = owned(&A);
-    let A = A.as_ref();
     let n = A.nrows();
-    check("A", A, n, n)?;
-    const B: [f64; 14] = [
-        64764752532480000.0,
-        32382376266240000.0,
-        7771770303897600.0,
-        1187353796428800.0,
-        129060195264000.0,
-        10559470521600.0,
-        670442572800.0,
-        33522128640.0,
-        1323241920.0,
-        40840800.0,
-        960960.0,
-        16380.0,
-        182.0,
-        1.0,
-    ];
-    const THETA13: f64 = 5.371920351148152;
-    let norm1 = (0..n)
-        .map(|j| (0..n).map(|i| A[(i, j)].abs()).sum::<f64>())
-        .fold(0.0, f64::max);
-    // At norm1 = θ₁₃ exactly, s = ⌈log₂ 1⌉ = 0 either way. (More halvings than this s, as
-    // from log₂(norm1·θ₁₃), give the same result to round-off; fewer do not.)
-    let s = if norm1 > THETA13 {
-        (norm1 / THETA13).log2().ceil() as i32
-    } else {
-        0
-    };
-    let As = A * (0.5_f64).powi(s);
-    let I = Mat::<f64>::identity(n, n);
-    let A2 = &As * &As;
-    let A4 = &A2 * &A2;
-    let A6 = &A4 * &A2;
-    let inner_u = &A6 * (B[13] * &A6 + B[11] * &A4 + B[9] * &A2)
-        + B[7] * &A6
-        + B[5] * &A4
-        + B[3] * &A2
-        + B[1] * &I;
-    let U = &As * inner_u;
-    let V = &A6 * (B[12] * &A6 + B[10] * &A4 + B[8] * &A2)
-        + B[6] * &A6
-        + B[4] * &A4
-        + B[2] * &A2
-        + B[0] * &I;
-    let mut E = (&V - &U).partial_piv_lu().solve(&V + &U);
-    for _ in 0..s {
-        E = &E * &E;
+    check("A", &A, n, n)?;
+    let mut work = crate::expm::Expm::new(n);
+    let input = work.input(n);
+    for j in 0..n {
+        for i in 0..n {
+            input[i + j * n] = A.at(i, j);
+        }
     }
-    Ok(E)
+    let mut out = vec![0.0; n * n];
+    if !work.run(n, &mut out) {
+        let bad = out.iter().position(|x| !x.is_finite()).unwrap_or(0);
+        return Err(Error::NonFinite {
+            name: "e^A",
+            rows: n,
+            cols: n,
+            row: bad % n.max(1),
+            col: bad / n.max(1),
+        });
+    }
+    Ok(Mat::from_fn(n, n, |i, j| out[i + j * n]))
 }
 
 /// Van Loan's sampling of ẋ = A x + w (w of intensity `Q`, n×n, as it enters the state) at

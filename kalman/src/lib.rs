@@ -164,6 +164,7 @@ pub mod continuous;
 mod convert;
 pub mod diagnostics;
 mod error;
+mod expm;
 mod filter;
 pub mod fit;
 pub mod gate;

@@ -426,6 +426,45 @@ impl<D: Dims> Model<D> {
         Ok(self)
     }
 
+    /// Overwrites F, Q and B of a model without cross-covariance S (a sampled interval of a
+    /// continuous model, [`crate::sampling`]): Q is checked symmetric and PSD by the crate's
+    /// rule and symmetrised, and the joint noise factor is that of `[[R, 0], [0, Q]]`. Allocates
+    /// nothing unless R or Q is singular (then the eigen-decomposition path).
+    pub(crate) fn resample(&mut self, F: &[f64], Q: &[f64], B: &[f64]) -> Result<(), Error> {
+        let (n, m, p) = (self.dims.n(), self.dims.m(), self.dims.p());
+        self.F.as_mut_slice()[..n * n].copy_from_slice(&F[..n * n]);
+        self.Q.as_mut_slice()[..n * n].copy_from_slice(&Q[..n * n]);
+        symmetrise("Q", self.Q.as_mut_slice(), n)?;
+        self.B.as_mut_slice()[..n * p].copy_from_slice(&B[..n * p]);
+        if self.S.is_some() {
+            return self.refactor_joint();
+        }
+        // The Cholesky factors of the two blocks, with psd_factor's fast-path rule (pivots
+        // above 1e-8 of the scale prove definiteness); anything else takes the general path.
+        let fast = |a: &[f64], k: usize, out: &mut [f64]| -> bool {
+            let scale = a[..k * k].iter().fold(0.0_f64, |s, x| s.max(x.abs()));
+            out[..k * k].copy_from_slice(&a[..k * k]);
+            if !crate::kernels::cholesky(&mut out[..k * k], k, 1e-8 * scale) {
+                return false;
+            }
+            for j in 1..k {
+                for i in 0..j {
+                    out[i + j * k] = 0.0;
+                }
+            }
+            true
+        };
+        let J = &mut self.joint;
+        if !(fast(self.R.as_slice(), m, J.vv.as_mut_slice())
+            && fast(self.Q.as_slice(), n, J.ww.as_mut_slice()))
+        {
+            return self.refactor_joint();
+        }
+        J.vw.as_mut_slice()[..m * n].iter_mut().for_each(|x| *x = 0.0);
+        J.wv.as_mut_slice()[..n * m].iter_mut().for_each(|x| *x = 0.0);
+        Ok(())
+    }
+
     fn refactor_joint(&mut self) -> Result<(), Error> {
         let (n, m) = (self.dims.n(), self.dims.m());
         let d = n + m;

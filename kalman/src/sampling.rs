@@ -9,7 +9,7 @@
 //! interval Δt:
 //!
 //! - `F = e^{AΔt}` and `Q_d = ∫₀^Δt e^{Aτ} W e^{Aᵀτ} dτ` by Van Loan's block exponential
-//!   ([`crate::continuous::van_loan`]);
+//!   (the one of [`crate::continuous::van_loan`], on preallocated buffers);
 //! - the input by zero-order hold, `B_d = ∫₀^Δt e^{Aτ} dτ B`, read from `e^{[[A, B], [0,
 //!   0]]Δt}`;
 //! - `Δt = 0` (two rows of one instant) is `F = I`, `B_d = 0`, `Q_d = 0` exactly.
@@ -54,7 +54,9 @@
 
 use faer::{Mat, MatRef};
 
-use crate::continuous::{expm, van_loan};
+use std::collections::HashMap;
+
+use crate::expm::Expm;
 use crate::model::{check, owned};
 use crate::storage::DynDims;
 use crate::{Error, MatrixInput, Model, ModelSource};
@@ -163,66 +165,8 @@ impl ContinuousModel {
     /// long that `e^{AΔt}` or `Q_d` overflows (the model grows by more than f64 can hold over
     /// it).
     pub fn sample(&self, dt: f64) -> Result<Model<DynDims>, Error> {
-        let (n, m, p) = (self.n(), self.m(), self.p());
-        let dims = DynDims::new(n, m, p)?;
-        if !(dt.is_finite() && dt >= 0.0) {
-            return Err(Error::InvalidOption {
-                name: "dt",
-                value: dt,
-                rule: "a sampling interval must be finite and >= 0 (time stamps must not go back)",
-            });
-        }
-        if dt == 0.0 {
-            let model = Model::new(
-                dims,
-                &self.identity(),
-                &self.H,
-                &Mat::<f64>::zeros(n, n),
-                &self.R,
-            )?;
-            return if p > 0 {
-                model.with_control(&Mat::<f64>::zeros(n, p))
-            } else {
-                Ok(model)
-            };
-        }
-        let overflow = || Error::InvalidOption {
-            name: "dt",
-            value: dt,
-            rule: "e^{A dt} or the noise integrated over dt overflows: the model grows beyond \
-                   f64 over this interval",
-        };
-        let (F, Qd) = van_loan(self.A.as_ref(), self.W.as_ref(), dt).map_err(|_| overflow())?;
-        if !all_finite(F.as_ref()) || !all_finite(Qd.as_ref()) {
-            return Err(overflow());
-        }
-        let model = Model::new(dims, &F, &self.H, &Qd, &self.R)?;
-        if p == 0 {
-            return Ok(model);
-        }
-        // Zero-order hold: e^{[[A, B], [0, 0]]Δt} = [[F, B_d], [0, I]].
-        let mut M = Mat::<f64>::zeros(n + p, n + p);
-        for j in 0..n {
-            for i in 0..n {
-                M[(i, j)] = self.A[(i, j)] * dt;
-            }
-        }
-        for j in 0..p {
-            for i in 0..n {
-                M[(i, n + j)] = self.B[(i, j)] * dt;
-            }
-        }
-        let E = expm(M.as_ref()).map_err(|_| overflow())?;
-        let Bd = E.as_ref().submatrix(0, n, n, p);
-        if !all_finite(Bd) {
-            return Err(overflow());
-        }
-        model.with_control(&Bd)
+        Ok(Sampler::new(self.clone(), 1)?.at(dt)?.clone())
     }
-}
-
-fn all_finite(a: MatRef<'_, f64>) -> bool {
-    (0..a.ncols()).all(|j| (0..a.nrows()).all(|i| a[(i, j)].is_finite()))
 }
 
 /// A checked faer copy of a matrix input.
@@ -283,12 +227,30 @@ fn as_intensity(e: Error) -> Error {
 #[derive(Debug, Clone)]
 pub struct Sampler {
     model: ContinuousModel,
+    /// The model of Δt = 0, which each new cache entry starts from.
+    template: Model<DynDims>,
     keys: Vec<u64>,
+    index: HashMap<u64, usize>,
     models: Vec<Model<DynDims>>,
     capacity: usize,
     oldest: usize,
     misses: usize,
+    work: Expm,
+    /// The exponential of the block matrix, F, Q_d and B_d of the interval being sampled.
+    e: Vec<f64>,
+    f: Vec<f64>,
+    q: Vec<f64>,
+    b: Vec<f64>,
 }
+
+/// The key of an interval: its bit pattern, +0 and −0 one key.
+fn key(dt: f64) -> u64 {
+    if dt == 0.0 { 0 } else { dt.to_bits() }
+}
+
+/// The key of a cache slot whose model failed to sample (NaN's bit pattern, never a key of a
+/// valid interval).
+const EMPTY: u64 = u64::MAX;
 
 impl Sampler {
     /// A sampler of `model` keeping at most `capacity` sampled models (≥ 1).
@@ -303,13 +265,32 @@ impl Sampler {
                 rule: "the sampler's cache must hold at least one model",
             });
         }
+        let (n, m, p) = (model.n(), model.m(), model.p());
+        let mut template = Model::new(
+            DynDims::new(n, m, p)?,
+            &model.identity(),
+            &model.H,
+            &Mat::<f64>::zeros(n, n),
+            &model.R,
+        )?;
+        if p > 0 {
+            template = template.with_control(&Mat::<f64>::zeros(n, p))?;
+        }
+        let k = (2 * n).max(n + p);
         Ok(Sampler {
             model,
+            template,
             keys: Vec::with_capacity(capacity),
+            index: HashMap::with_capacity(capacity),
             models: Vec::with_capacity(capacity),
             capacity,
             oldest: 0,
             misses: 0,
+            work: Expm::new(k),
+            e: vec![0.0; k * k],
+            f: vec![0.0; n * n],
+            q: vec![0.0; n * n],
+            b: vec![0.0; n * p],
         })
     }
 
@@ -329,25 +310,116 @@ impl Sampler {
     /// # Errors
     /// As [`ContinuousModel::sample`].
     pub fn at(&mut self, dt: f64) -> Result<&Model<DynDims>, Error> {
-        // +0.0 and −0.0 are one interval.
-        let key = if dt == 0.0 { 0 } else { dt.to_bits() };
-        if let Some(i) = self.keys.iter().position(|&k| k == key) {
+        let key = key(dt);
+        if let Some(&i) = self.index.get(&key) {
             return Ok(&self.models[i]);
         }
-        let model = self.model.sample(dt)?;
+        self.interval(dt)?;
         self.misses += 1;
         let i = if self.models.len() < self.capacity {
-            self.keys.push(key);
-            self.models.push(model);
+            self.models.push(self.template.clone());
+            self.keys.push(EMPTY);
             self.models.len() - 1
         } else {
             let i = self.oldest;
-            self.keys[i] = key;
-            self.models[i] = model;
+            self.index.remove(&self.keys[i]);
+            self.keys[i] = EMPTY;
             self.oldest = (i + 1) % self.capacity;
             i
         };
+        self.models[i].resample(&self.f, &self.q, &self.b)?;
+        self.keys[i] = key;
+        self.index.insert(key, i);
         Ok(&self.models[i])
+    }
+
+    /// F, Q_d and B_d of the interval `dt` into `f`, `q`, `b`: Van Loan's
+    /// `e^{[[−A, W], [0, Aᵀ]]Δt} = [[·, F⁻¹Q_d], [0, Fᵀ]]` and the zero-order hold
+    /// `e^{[[A, B], [0, 0]]Δt} = [[F, B_d], [0, I]]`.
+    fn interval(&mut self, dt: f64) -> Result<(), Error> {
+        let (n, p) = (self.model.n(), self.model.p());
+        if !(dt.is_finite() && dt >= 0.0) {
+            return Err(Error::InvalidOption {
+                name: "dt",
+                value: dt,
+                rule: "a sampling interval must be finite and >= 0 (time stamps must not go back)",
+            });
+        }
+        let (f, q, b) = (&mut self.f, &mut self.q, &mut self.b);
+        if dt == 0.0 {
+            f.iter_mut().for_each(|x| *x = 0.0);
+            (0..n).for_each(|i| f[i + i * n] = 1.0);
+            q.iter_mut().for_each(|x| *x = 0.0);
+            b.iter_mut().for_each(|x| *x = 0.0);
+            return Ok(());
+        }
+        let overflow = Error::InvalidOption {
+            name: "dt",
+            value: dt,
+            rule: "e^{A dt} or the noise integrated over dt overflows: the model grows beyond \
+                   f64 over this interval",
+        };
+        let (A, W) = (&self.model.A, &self.model.W);
+        let k = 2 * n;
+        let M = self.work.input(k);
+        M.iter_mut().for_each(|x| *x = 0.0);
+        for j in 0..n {
+            for i in 0..n {
+                M[i + j * k] = -A[(i, j)] * dt;
+                M[i + (n + j) * k] = W[(i, j)] * dt;
+                M[n + i + (n + j) * k] = A[(j, i)] * dt;
+            }
+        }
+        let E = &mut self.e[..k * k];
+        if !self.work.run(k, E) {
+            return Err(overflow);
+        }
+        // F = (E₂₂)ᵀ, Q_d = F E₁₂, symmetrised.
+        for j in 0..n {
+            for i in 0..n {
+                f[i + j * n] = E[n + j + (n + i) * k];
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                q[i + j * n] = (0..n).map(|l| f[i + l * n] * E[l + (n + j) * k]).sum();
+            }
+        }
+        for j in 0..n {
+            for i in 0..j {
+                let s = 0.5 * (q[i + j * n] + q[j + i * n]);
+                q[i + j * n] = s;
+                q[j + i * n] = s;
+            }
+        }
+        if !q.iter().all(|x| x.is_finite()) {
+            return Err(overflow);
+        }
+        if p > 0 {
+            let (Bc, k) = (&self.model.B, n + p);
+            let M = self.work.input(k);
+            M.iter_mut().for_each(|x| *x = 0.0);
+            for j in 0..n {
+                for i in 0..n {
+                    M[i + j * k] = A[(i, j)] * dt;
+                }
+            }
+            for j in 0..p {
+                for i in 0..n {
+                    M[i + (n + j) * k] = Bc[(i, j)] * dt;
+                }
+            }
+            let E = &mut self.e[..k * k];
+            if !self.work.run(k, E) {
+                return Err(overflow);
+            }
+            for j in 0..p {
+                for i in 0..n {
+                    b[i + j * n] = E[i + (n + j) * k];
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The models of the steps of a record at the time stamps `t` (non-decreasing): step k
