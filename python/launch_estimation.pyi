@@ -3,6 +3,9 @@
 Notation: n states, m measurements, p control inputs;
 x[k+1] = F x[k] + B u[k] + w[k],  z[k] = H x[k] + v[k],
 cov(w) = Q, cov(v) = R, E[w[k] v[k]^T] = S (the engine's cross-covariance).
+The continuous-discrete functions (filter_continuous, smooth_continuous) take
+dx/dt = A x + B u + w, E[w(t) w(s)^T] = W delta(t - s), measured at time stamps t[k]:
+z[k] = C x(t[k]) + v[k], cov(v[k]) = R.
 
 FilterPy's ``M`` (``KalmanFilter.update_correlated``) is a different quantity: the
 cross-covariance of the *prior state error* x[k] - x[k|k-1] with v[k]. When the prior comes
@@ -142,12 +145,18 @@ class KalmanFilter:
         or one matrix per step (len(Xs)). inv: only numpy.linalg.inv (or None)."""
 
 FilterResult = dict[str, Array]
+# filter/smooth and their continuous forms: the arrays below, plus, when a gate is given,
+# "rejected": a dict of 1-d arrays "step" and "channel" (int64: the row of zs and the
+# 0-based entry), "value" (the rejected measurement) and "nis" (the statistic that rejected
+# it), one element per rejected entry, in step then channel order (empty if none).
+SeriesResult = dict[str, Any]
+_Probability = Optional[float]
 
 def filter(
     F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
     us: Optional[_Series] = None, B: Optional[Array] = None, S: Optional[Array] = None,
-    form: str = "joseph",
-) -> FilterResult:
+    form: str = "joseph", gate: _Probability = None, gate_rule: str = "entries",
+) -> SeriesResult:
     """The engine's filter over a whole series in one call.
 
     (x0, P0) is the prior of the first measurement; step k updates with zs[k] (NaN entries
@@ -155,13 +164,58 @@ def filter(
     form: "joseph", "standard" or "sqrt". Returns "x", "P" (x_{k|k}: (N, n), (N, n, n)),
     "x_pred", "P_pred" (x_{k+1|k}), "log_likelihood" (N,) (0 with no measurement) and
     "nis" (N,) (NaN with no measurement).
+
+    gate: None, or a probability in (0, 1) (e.g. 0.9999) of a wild-point gate. Before the
+    update of step k, the present entries of zs[k] are screened against the prior
+    x_{k|k-1}, P_{k|k-1}: with gate_rule "entries" each entry i whose e_i^2 / Sigma_ii
+    (e = z - H x_{k|k-1}, Sigma = H P_{k|k-1} H^T + R) exceeds the chi2(1) quantile of
+    gate is rejected; with "vector" every present entry of a step whose e^T Sigma^+ e
+    exceeds the chi2(rank Sigma) quantile is. Rejected entries are skipped like NaN ones
+    (a step with every entry rejected has nis NaN) and listed in "rejected".
     """
 
 def smooth(
     F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
     us: Optional[_Series] = None, B: Optional[Array] = None, S: Optional[Array] = None,
-) -> FilterResult:
-    """Rauch-Tung-Striebel smoothing of the engine's filter: "x" (N, n), "P" (N, n, n)."""
+    form: str = "joseph", gate: _Probability = None, gate_rule: str = "entries",
+) -> SeriesResult:
+    """Rauch-Tung-Striebel smoothing of the engine's filter: "x" (N, n), "P" (N, n, n).
+    The forward pass is ``filter``'s (form, gate); with a gate also "rejected"."""
+
+def filter_continuous(
+    A: Array, C: Array, W: Array, R: Array, x0: Array, P0: Array, t: _Series, zs: _Series,
+    us: Optional[_Series] = None, B: Optional[Array] = None, form: str = "joseph",
+    gate: _Probability = None, gate_rule: str = "entries",
+) -> SeriesResult:
+    """The engine's filter of a continuous model at a record's own time stamps.
+
+    Model: dx/dt = A x + B u + w with W (n, n) the intensity of w as it enters the state
+    (G Qc G^T for a noise input G of intensity Qc), measured at the stamps t (N,), finite
+    and non-decreasing: z(t[k]) = C x(t[k]) + v[k], cov(v[k]) = R (m, m), zs (N, m) with
+    NaN for a missing entry. Each interval is sampled exactly: F = e^{A dt}, the input by
+    zero-order hold (u held over the interval), Q_d = int_0^dt e^{A s} W e^{A^T s} ds (Van
+    Loan); dt = 0 is F = I, Q_d = 0.
+
+    The time rule: (x0, P0) is the prior of the first row's measurement; step k updates
+    with zs[k] and predicts with us[k] over t[k+1] - t[k] (the last row over 0, so its
+    "x_pred", "P_pred" are its "x", "P"). Rows with equal stamps are one instant, processed
+    in order. Returns ``filter``'s dict (and "rejected" with a gate; form, gate,
+    gate_rule as in ``filter``).
+
+    Raises ValueError naming the argument: a non-finite t[k], a t[k] before t[k-1], an
+    interval t[k+1] - t[k] over which the model overflows f64, a gate outside (0, 1), and
+    shapes that do not fit (A (n, n), C (m, n), W (n, n), R (m, m), B (n, p), x0 (n,),
+    P0 (n, n), t (N,), zs (N, m), us (N, p)).
+    """
+
+def smooth_continuous(
+    A: Array, C: Array, W: Array, R: Array, x0: Array, P0: Array, t: _Series, zs: _Series,
+    us: Optional[_Series] = None, B: Optional[Array] = None, form: str = "joseph",
+    gate: _Probability = None, gate_rule: str = "entries",
+) -> SeriesResult:
+    """Rauch-Tung-Striebel smoothing over ``filter_continuous``'s (gated) pass, each step
+    recorded with the model sampled for its interval: "x" (N, n), "P" (N, n, n), and with
+    a gate "rejected". Rows at one instant get the same smoothed estimate."""
 
 def dare(F: Array, H: Array, Q: Array, R: Array, S: Optional[Array] = None) -> FilterResult:
     """The filter's discrete algebraic Riccati equation: "P" (prior), "P_post", "K",

@@ -316,7 +316,7 @@ impl KalmanBucy {
 
 /// Matrix exponential e^{A} by scaling and squaring with the Padé approximant of the degree
 /// (3, 5, 7, 9 or 13) that A's 1-norm needs (Higham 2005); the Padé quotient is a solve, not
-/// an inverse. The crate's one exponential (`crate::expm`), also behind [`crate::sampling`].
+/// an inverse. The crate's one exponential, also behind the sampler of continuous models.
 ///
 /// # Errors
 /// [`Error::Shape`] if A is not square, [`Error::NonFinite`] for a non-finite entry, and

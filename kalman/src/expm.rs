@@ -4,7 +4,7 @@
 //! each used up to its θ_m, where the approximant's backward error is below the unit
 //! round-off of f64), on column-major slices in a workspace sized once, so a call allocates
 //! nothing. The Padé quotient is an LU solve with partial pivoting, not an inverse.
-//! [`crate::continuous::expm`] is its public face; [`crate::sampling`] calls it per interval.
+//! `continuous::expm` is its public face; `sampling` calls it per interval.
 
 /// Higham's θ_m for m = 3, 5, 7, 9, 13 (double precision).
 const THETA: [f64; 5] = [
@@ -102,7 +102,12 @@ impl Expm {
     pub(crate) fn run(&mut self, k: usize, out: &mut [f64]) -> bool {
         let kk = k * k;
         let norm1 = (0..k)
-            .map(|j| self.a[j * k..(j + 1) * k].iter().map(|x| x.abs()).sum::<f64>())
+            .map(|j| {
+                self.a[j * k..(j + 1) * k]
+                    .iter()
+                    .map(|x| x.abs())
+                    .sum::<f64>()
+            })
             .fold(0.0_f64, f64::max);
         if !norm1.is_finite() {
             return false;
@@ -117,7 +122,12 @@ impl Expm {
             let f = 0.5_f64.powi(s);
             self.a[..kk].iter_mut().for_each(|x| *x *= f);
         }
-        let (a, a2, a4, a6) = (&self.a[..kk], &mut self.a2[..kk], &mut self.a4[..kk], &mut self.a6[..kk]);
+        let (a, a2, a4, a6) = (
+            &self.a[..kk],
+            &mut self.a2[..kk],
+            &mut self.a4[..kk],
+            &mut self.a6[..kk],
+        );
         let (u, v, t) = (&mut self.u[..kk], &mut self.v[..kk], &mut self.t[..kk]);
         mm(a2, a, a, k);
         match degree {
@@ -162,7 +172,12 @@ impl Expm {
                 mm(a4, a2, a2, k);
                 mm(a6, a4, a2, k);
                 // U = A [A6 (b13 A6 + b11 A4 + b9 A2) + b7 A6 + b5 A4 + b3 A2 + b1 I].
-                combine(t, &[(B13[13], &*a6), (B13[11], &*a4), (B13[9], &*a2)], 0.0, k);
+                combine(
+                    t,
+                    &[(B13[13], &*a6), (B13[11], &*a4), (B13[9], &*a2)],
+                    0.0,
+                    k,
+                );
                 mm(v, a6, t, k);
                 for i in 0..kk {
                     t[i] = v[i] + B13[7] * a6[i] + B13[5] * a4[i] + B13[3] * a2[i];
@@ -170,7 +185,12 @@ impl Expm {
                 add_identity(t, B13[1], k);
                 mm(u, a, t, k);
                 // V = A6 (b12 A6 + b10 A4 + b8 A2) + b6 A6 + b4 A4 + b2 A2 + b0 I.
-                combine(t, &[(B13[12], &*a6), (B13[10], &*a4), (B13[8], &*a2)], 0.0, k);
+                combine(
+                    t,
+                    &[(B13[12], &*a6), (B13[10], &*a4), (B13[8], &*a2)],
+                    0.0,
+                    k,
+                );
                 mm(v, a6, t, k);
                 for i in 0..kk {
                     v[i] += B13[6] * a6[i] + B13[4] * a4[i] + B13[2] * a2[i];

@@ -16,6 +16,12 @@
 //! the caller passes to the step: the gate works with every covariance form, the smoother
 //! and the diagnostics, since they see the step as it was taken. A screen allocates nothing.
 //!
+//! [`Huber`] is the soft alternative: no entry is dropped, but an entry whose standardised
+//! innovation `r_i = e_i/√Σ_ii` exceeds `c` enters the update with its measurement noise
+//! inflated to the variance `R_ii·|r_i|/c` (the Huber weight `w_i = c/|r_i|` of an
+//! iteratively re-weighted least-squares step), so its pull on the state grows like `√|r_i|`
+//! instead of `|r_i|`.
+//!
 //! # Example
 //! ```
 //! use kalman::gate::{Gate, GateRule};
@@ -266,6 +272,106 @@ impl Gate {
     }
 }
 
+/// The Huber-weighted update (see the module docs): the model of the next step with the
+/// measurement noise of its outlying entries inflated.
+#[derive(Debug, Clone)]
+pub struct Huber<D: Dims> {
+    c: f64,
+    n: usize,
+    m: usize,
+    scaled: Model<D>,
+    d: Vec<f64>,
+    weights: Vec<f64>,
+}
+
+impl<D: Dims> Huber<D> {
+    /// A Huber weighting with threshold `c` (> 0, in standard deviations; 1.345 gives 95 %
+    /// efficiency on Gaussian data) for models shaped like `model`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] naming `c` if it is not finite and positive.
+    pub fn new(c: f64, model: &Model<D>) -> Result<Self, Error> {
+        if !(c.is_finite() && c > 0.0) {
+            return Err(Error::InvalidOption {
+                name: "c",
+                value: c,
+                rule: "the Huber threshold must be finite and > 0 (standard deviations)",
+            });
+        }
+        let m = model.dims().m();
+        Ok(Huber {
+            c,
+            n: model.dims().n(),
+            m,
+            scaled: model.clone(),
+            d: vec![1.0; m],
+            weights: vec![1.0; m],
+        })
+    }
+
+    /// The Huber weight `w_i = min(1, c/|r_i|)` of each entry in the last [`Huber::weigh`]
+    /// (1 for a missing entry).
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// The model for the next step of `filter` with measurement `z` (NaN entries missing):
+    /// `model` with the noise of each entry whose `|e_i|/√Σ_ii` exceeds c scaled by
+    /// `√(|r_i|/c)` (variance `R_ii·|r_i|/c`; S and the square-root form's noise factor
+    /// scaled alike). Pass it to [`Filter::step_with`] with `z` itself; that step's NIS and
+    /// log-likelihood are then those of the inflated model. Allocates nothing.
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] if `model` or `z` is not of the shape the weighting was built for,
+    /// or `model` and that shape differ in having a cross-covariance S.
+    pub fn weigh(
+        &mut self,
+        filter: &Filter<D>,
+        model: &Model<D>,
+        z: &[f64],
+    ) -> Result<&Model<D>, Error> {
+        let (n, m) = (self.n, self.m);
+        if model.dims().n() != n
+            || model.dims().m() != m
+            || z.len() != m
+            || model.S.is_some() != self.scaled.S.is_some()
+        {
+            return Err(Error::Dimension {
+                name: "m",
+                value: z.len(),
+                rule: "a Huber weighting applies to models of the shape it was built for",
+            });
+        }
+        let (H, R) = (model.H.as_slice(), model.R.as_slice());
+        let x = filter.predicted_state();
+        let P = filter.predicted_covariance();
+        for i in 0..m {
+            self.weights[i] = 1.0;
+            self.d[i] = 1.0;
+            if z[i].is_nan() {
+                continue;
+            }
+            let mut e = z[i];
+            let mut sig = R[i + i * m];
+            for j in 0..n {
+                e -= H[i + j * m] * x[j];
+                let mut hp = 0.0;
+                for l in 0..n {
+                    hp += H[i + l * m] * P[(l, j)];
+                }
+                sig += hp * H[i + j * m];
+            }
+            let r = e.abs() / sig.sqrt();
+            if r > self.c {
+                self.weights[i] = self.c / r;
+                self.d[i] = (r / self.c).sqrt();
+            }
+        }
+        self.scaled.scaled_measurement_noise(model, &self.d);
+        Ok(&self.scaled)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -358,5 +464,48 @@ mod tests {
         .expect("valid");
         let mut gate = Gate::new(GateRule::Entries, 0.9, &model).expect("valid");
         assert!(gate.screen(&kf, &model, &[1.0]).is_err());
+    }
+
+    /// On a scalar random walk the Huber step is the closed form: r = e/√(P + R); beyond c
+    /// the update uses R' = R·|r|/c, so x⁺ = x⁻ + P/(P + R') e; within c it is the plain step.
+    #[test]
+    fn the_huber_update_is_the_closed_form_on_a_scalar_model() {
+        for form in [
+            CovarianceForm::Joseph,
+            CovarianceForm::Standard,
+            CovarianceForm::SquareRoot,
+        ] {
+            let model =
+                Model::from_matrices(&[[1.0]], &[[1.0]], &[[0.5]], &[[2.0]]).expect("valid");
+            let (x0, p0) = (1.0, 3.0);
+            let c = 1.5;
+            for z in [1.5, 40.0, -30.0] {
+                let mut kf = Filter::new(model.clone(), &[x0], &[[p0]], form).expect("valid");
+                let mut huber = Huber::new(c, &model).expect("valid");
+                let weighted = huber.weigh(&kf, &model, &[z]).expect("weighed").clone();
+                kf.step_with(&weighted, &[z], None).expect("step");
+                let e = z - x0;
+                let r = e.abs() / (p0 + 2.0_f64).sqrt();
+                let R = if r > c { 2.0 * r / c } else { 2.0 };
+                let want = x0 + p0 / (p0 + R) * e;
+                // Tolerance: a handful of flops on numbers of order 10.
+                assert!(
+                    (kf.state()[0] - want).abs() < 1e-12 * want.abs().max(1.0),
+                    "{form:?} z {z}"
+                );
+                assert!((huber.weights()[0] - (c / r).min(1.0)).abs() < 1e-15);
+            }
+        }
+    }
+
+    #[test]
+    fn a_huber_threshold_must_be_positive() {
+        let model = two_sensors();
+        for c in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(matches!(
+                Huber::new(c, &model),
+                Err(Error::InvalidOption { name: "c", .. })
+            ));
+        }
     }
 }

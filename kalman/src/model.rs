@@ -427,7 +427,7 @@ impl<D: Dims> Model<D> {
     }
 
     /// Overwrites F, Q and B of a model without cross-covariance S (a sampled interval of a
-    /// continuous model, [`crate::sampling`]): Q is checked symmetric and PSD by the crate's
+    /// continuous model, in `sampling`): Q is checked symmetric and PSD by the crate's
     /// rule and symmetrised, and the joint noise factor is that of `[[R, 0], [0, Q]]`. Allocates
     /// nothing unless R or Q is singular (then the eigen-decomposition path).
     pub(crate) fn resample(&mut self, F: &[f64], Q: &[f64], B: &[f64]) -> Result<(), Error> {
@@ -460,9 +460,57 @@ impl<D: Dims> Model<D> {
         {
             return self.refactor_joint();
         }
-        J.vw.as_mut_slice()[..m * n].iter_mut().for_each(|x| *x = 0.0);
-        J.wv.as_mut_slice()[..n * m].iter_mut().for_each(|x| *x = 0.0);
+        J.vw.as_mut_slice()[..m * n]
+            .iter_mut()
+            .for_each(|x| *x = 0.0);
+        J.wv.as_mut_slice()[..n * m]
+            .iter_mut()
+            .for_each(|x| *x = 0.0);
         Ok(())
+    }
+
+    /// Makes this model `from` with its measurement noise scaled entry by entry, `v' = D v`
+    /// for `D = diag(d)`: `R' = D R D`, `S' = S D`, and the joint factor's measurement rows
+    /// scaled by D (so no refactorisation). Both models must have the same dimensions and
+    /// the same presence of S (a clone of `from` has both); allocates nothing.
+    pub(crate) fn scaled_measurement_noise(&mut self, from: &Model<D>, d: &[f64]) {
+        let (n, m, p) = (self.dims.n(), self.dims.m(), self.dims.p());
+        let copy =
+            |dst: &mut [f64], src: &[f64], len: usize| dst[..len].copy_from_slice(&src[..len]);
+        copy(self.F.as_mut_slice(), from.F.as_slice(), n * n);
+        copy(self.H.as_mut_slice(), from.H.as_slice(), m * n);
+        copy(self.Q.as_mut_slice(), from.Q.as_slice(), n * n);
+        copy(self.B.as_mut_slice(), from.B.as_slice(), n * p);
+        let R = self.R.as_mut_slice();
+        let R0 = from.R.as_slice();
+        for j in 0..m {
+            for i in 0..m {
+                R[i + j * m] = d[i] * R0[i + j * m] * d[j];
+            }
+        }
+        if let (Some(S), Some(S0)) = (&mut self.S, &from.S) {
+            let (S, S0) = (S.as_mut_slice(), S0.as_slice());
+            for j in 0..m {
+                for i in 0..n {
+                    S[i + j * n] = S0[i + j * n] * d[j];
+                }
+            }
+        }
+        let (J, J0) = (&mut self.joint, &from.joint);
+        let (vv, vv0) = (J.vv.as_mut_slice(), J0.vv.as_slice());
+        for j in 0..m {
+            for i in 0..m {
+                vv[i + j * m] = d[i] * vv0[i + j * m];
+            }
+        }
+        let (vw, vw0) = (J.vw.as_mut_slice(), J0.vw.as_slice());
+        for j in 0..n {
+            for i in 0..m {
+                vw[i + j * m] = d[i] * vw0[i + j * m];
+            }
+        }
+        copy(J.wv.as_mut_slice(), J0.wv.as_slice(), n * m);
+        copy(J.ww.as_mut_slice(), J0.ww.as_slice(), n * n);
     }
 
     fn refactor_joint(&mut self) -> Result<(), Error> {

@@ -1,18 +1,22 @@
 //! The engine's own functions, Pythonic: `filter` and `smooth` run a whole series through
 //! `kalman::Filter` (the engine's step: update with z_k, then predict with u_k; exact
-//! cross-covariance S; singular R; NaN entries skipped) in one call, and `dare`, `dlqr`,
-//! `care` solve the Riccati equations. Engine errors become `ValueError`s carrying the
-//! engine's message, which names the matrix and the rule.
+//! cross-covariance S; singular R; NaN entries skipped; optionally a wild-point gate) in
+//! one call, `filter_continuous` and `smooth_continuous` do the same for a continuous model
+//! at a record's own time stamps (`kalman::sampling`), and `dare`, `dlqr`, `care` solve the
+//! Riccati equations. Engine errors become `ValueError`s carrying the engine's message,
+//! which names the matrix and the rule.
 #![allow(non_snake_case)]
 
 use kalman::faer::Mat;
-use kalman::{CovarianceForm, DynDims, Filter, Model, StepInfo, riccati, smoother::RtsSmoother};
-use numpy::PyArray2;
-use numpy::ndarray::Array2;
+use kalman::sampling::{ContinuousModel, Sampler};
+use kalman::{DynDims, Filter, Model, riccati};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{FilterRecord, array3_out, copy_mat, faer_out, mat, value_error};
+use crate::convert::{faer_out, mat, value_error};
+use crate::pass::{
+    Pass, SAMPLER_CAPACITY, Timing, covariance_form, engine, gate_option, time_stamps,
+};
 
 /// An optional matrix argument (`None` → absent).
 fn opt_mat(obj: Option<&Bound<'_, PyAny>>, name: &str) -> PyResult<Option<Mat<f64>>> {
@@ -29,178 +33,202 @@ fn vector(obj: &Bound<'_, PyAny>, name: &str, len: usize) -> PyResult<Vec<f64>> 
     Ok(out)
 }
 
-/// Maps an engine error to a `ValueError` naming the function.
-fn engine(context: &str) -> impl Fn(kalman::Error) -> PyErr + '_ {
-    move |e| value_error(format!("{context}: {e}"))
+/// What a whole-series function returns: the filtered or the smoothed estimates.
+#[derive(Clone, Copy)]
+enum Output {
+    /// `filter`'s dict (x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k}, log-likelihood, NIS).
+    Filtered,
+    /// `smooth`'s dict (the RTS-smoothed x, P).
+    Smoothed,
 }
 
-/// The engine's filter of `filter`/`smooth` and the series it runs over: zs (N, m) and
-/// us (N, p), row-major.
-struct Run {
-    filter: Filter<DynDims>,
-    n: usize,
-    m: usize,
-    p: usize,
-    steps: usize,
-    z: Vec<f64>,
-    u: Option<Vec<f64>>,
-    context: &'static str,
-}
-
-impl Run {
-    /// Validates the model and the series given as the Python signature lists them:
-    /// `(F, H, Q, R, x0, P0, zs)` and the optional `(us, B, S)`.
-    fn new(
-        [F, H, Q, R, x0, P0, zs]: [&Bound<'_, PyAny>; 7],
-        [us, B, S]: [Option<&Bound<'_, PyAny>>; 3],
-        form: CovarianceForm,
-        context: &'static str,
-    ) -> PyResult<Self> {
-        let F = mat(F, "F")?;
-        let H = mat(H, "H")?;
-        let Q = mat(Q, "Q")?;
-        let R = mat(R, "R")?;
-        let B = opt_mat(B, "B")?;
-        let S = opt_mat(S, "S")?;
-        let (n, m) = (F.nrows(), H.nrows());
-        let p = B.as_ref().map_or(0, |b| b.ncols());
-        let err = engine(context);
-        let mut model =
-            Model::new(DynDims::new(n, m, p).map_err(&err)?, &F, &H, &Q, &R).map_err(&err)?;
-        if let Some(B) = &B {
-            model = model.with_control(B).map_err(&err)?;
+impl Output {
+    /// Runs `pass` for this output.
+    fn run(self, py: Python<'_>, pass: Pass) -> PyResult<Bound<'_, PyDict>> {
+        match self {
+            Output::Filtered => pass.filtered(py),
+            Output::Smoothed => pass.smoothed(py),
         }
-        if let Some(S) = &S {
-            model = model.with_cross_covariance(S).map_err(&err)?;
-        }
-        let x0 = vector(x0, "x0", n)?;
-        let P0 = mat(P0, "P0")?;
-        let filter = Filter::new(model, &x0, &P0, form).map_err(&err)?;
-        let (steps, z, u) = series(zs, us, m, p)?;
-        Ok(Self {
-            filter,
-            n,
-            m,
-            p,
-            steps,
-            z,
-            u,
-            context,
-        })
     }
 
-    /// Step k: the update with zs[k], then the prediction with us[k].
-    fn step(&mut self, k: usize) -> PyResult<StepInfo> {
-        let (m, p) = (self.m, self.p);
-        let uk = self.u.as_ref().map(|u| &u[k * p..(k + 1) * p]);
-        self.filter
-            .step(&self.z[k * m..(k + 1) * m], uk)
-            .map_err(engine(self.context))
-    }
-}
-
-/// Reads `zs` (N, m) and `us` (N, p) for a model with m measurements and p inputs.
-fn series(
-    zs: &Bound<'_, PyAny>,
-    us: Option<&Bound<'_, PyAny>>,
-    m: usize,
-    p: usize,
-) -> PyResult<(usize, Vec<f64>, Option<Vec<f64>>)> {
-    let (steps, z) = crate::series::read_series(zs, "zs", m, true)?;
-    let u = match us {
-        Some(us) if !us.is_none() => {
-            if p == 0 {
-                return Err(value_error(
-                    "us is given but there is no B (no control input)",
-                ));
-            }
-            let (k, u) = crate::series::read_series(us, "us", p, false)?;
-            if k != steps {
-                return Err(value_error(format!("us has {k} steps but zs has {steps}")));
-            }
-            Some(u)
+    /// The name of the discrete (`filter`/`smooth`) or continuous-discrete function.
+    fn context(self, continuous: bool) -> &'static str {
+        match (self, continuous) {
+            (Output::Filtered, false) => "filter",
+            (Output::Smoothed, false) => "smooth",
+            (Output::Filtered, true) => "filter_continuous",
+            (Output::Smoothed, true) => "smooth_continuous",
         }
-        _ => None,
-    };
-    Ok((steps, z, u))
+    }
 }
 
 py_function! {
-    /// filter(F, H, Q, R, x0, P0, zs, us=None, B=None, S=None, form="joseph") → dict with
-    /// "x", "P" (filtered, x_{k|k}), "x_pred", "P_pred" (x_{k+1|k}), "log_likelihood", "nis"
-    /// (NaN on a step with no measurement). (x0, P0) is the prior of the first measurement;
-    /// step k updates with zs[k] and predicts with us[k]. S = E[w_k v_kᵀ] enters the
-    /// prediction.
-    fn filter(F, H, Q, R, x0, P0, zs; us = None, B = None, S = None; form: &str = "joseph")
-        => run_filter
+    /// filter(F, H, Q, R, x0, P0, zs, us=None, B=None, S=None, form="joseph", gate=None,
+    /// gate_rule="entries") → dict with "x", "P" (filtered, x_{k|k}), "x_pred", "P_pred"
+    /// (x_{k+1|k}), "log_likelihood", "nis" (NaN on a step with no measurement). (x0, P0) is
+    /// the prior of the first measurement; step k updates with zs[k] and predicts with
+    /// us[k]. S = E[w_k v_kᵀ] enters the prediction. With gate (a probability in (0, 1)),
+    /// each step's measurements are screened against the prior before the update
+    /// (gate_rule "entries": each entry's e_i²/Σ_ii against χ²(1); "vector": the step's
+    /// eᵀΣ⁺e against χ²(rank Σ)), the rejected ones are skipped like NaN entries, and
+    /// "rejected" is a dict of 1-d arrays "step", "channel" (int64), "value", "nis".
+    fn filter(F, H, Q, R, x0, P0, zs; us = None, B = None, S = None;
+              form: &str = "joseph", gate: Option<Bound<'py, PyAny>> = None, gate_rule: &str = "entries")
+        => run_discrete(Output::Filtered)
 }
 
-/// [`filter`]'s work.
-fn run_filter<'py>(
+py_function! {
+    /// smooth(F, H, Q, R, x0, P0, zs, us=None, B=None, S=None, form="joseph", gate=None,
+    /// gate_rule="entries") → dict with the RTS-smoothed "x" (N, n) and "P" (N, n, n): the
+    /// engine's filter recorded step by step (gated as in `filter`, and then with
+    /// "rejected"), then `kalman::smoother::RtsSmoother`.
+    fn smooth(F, H, Q, R, x0, P0, zs; us = None, B = None, S = None;
+              form: &str = "joseph", gate: Option<Bound<'py, PyAny>> = None, gate_rule: &str = "entries")
+        => run_discrete(Output::Smoothed)
+}
+
+/// [`filter`]'s and [`smooth`]'s work: the discrete model of the Python signature
+/// `(F, H, Q, R, x0, P0, zs)` and the optional `(us, B, S)`, its filter, and the pass.
+fn run_discrete<'py>(
+    output: Output,
     py: Python<'py>,
-    model: [&Bound<'py, PyAny>; 7],
-    controls: [Option<&Bound<'py, PyAny>>; 3],
+    [F, H, Q, R, x0, P0, zs]: [&Bound<'py, PyAny>; 7],
+    [us, B, S]: [Option<&Bound<'py, PyAny>>; 3],
     form: &str,
+    gate: Option<Bound<'py, PyAny>>,
+    gate_rule: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let form = match form {
-        "joseph" => CovarianceForm::Joseph,
-        "standard" => CovarianceForm::Standard,
-        "sqrt" => CovarianceForm::SquareRoot,
-        other => {
+    let context = output.context(false);
+    let form = covariance_form(form)?;
+    let gate = gate_option(gate.as_ref(), gate_rule)?;
+    let F = mat(F, "F")?;
+    let H = mat(H, "H")?;
+    let Q = mat(Q, "Q")?;
+    let R = mat(R, "R")?;
+    let B = opt_mat(B, "B")?;
+    let S = opt_mat(S, "S")?;
+    let (n, m) = (F.nrows(), H.nrows());
+    let p = B.as_ref().map_or(0, |b| b.ncols());
+    let err = engine(context);
+    let mut model =
+        Model::new(DynDims::new(n, m, p).map_err(&err)?, &F, &H, &Q, &R).map_err(&err)?;
+    if let Some(B) = &B {
+        model = model.with_control(B).map_err(&err)?;
+    }
+    if let Some(S) = &S {
+        model = model.with_cross_covariance(S).map_err(&err)?;
+    }
+    let x0 = vector(x0, "x0", n)?;
+    let P0 = mat(P0, "P0")?;
+    let filter = Filter::new(model, &x0, &P0, form).map_err(&err)?;
+    let pass = Pass::new(filter, Timing::Own, zs, us, gate, context)?;
+    output.run(py, pass)
+}
+
+py_function! {
+    /// filter_continuous(A, C, W, R, x0, P0, t, zs, us=None, B=None, form="joseph",
+    /// gate=None, gate_rule="entries") → `filter`'s dict for a continuous model
+    /// ẋ = A x + B u + w (W the intensity of w as it enters the state, G Qc Gᵀ) measured at
+    /// the time stamps t (N,), non-decreasing: z(t_k) = C x(t_k) + v_k, cov(v_k) = R. Each
+    /// interval is sampled exactly (F = e^{AΔt}, the input by zero-order hold, Q by Van
+    /// Loan); (x0, P0) is the prior of the first row's measurement, step k updates with
+    /// zs[k] and predicts with us[k] over t[k+1] − t[k] (the last row over 0: its "x_pred"
+    /// is its "x"). Equal stamps are one instant. gate and gate_rule as in `filter`.
+    fn filter_continuous(A, C, W, R, x0, P0, t, zs; us = None, B = None;
+                         form: &str = "joseph", gate: Option<Bound<'py, PyAny>> = None,
+                         gate_rule: &str = "entries")
+        => run_continuous(Output::Filtered)
+}
+
+py_function! {
+    /// smooth_continuous(A, C, W, R, x0, P0, t, zs, us=None, B=None, form="joseph",
+    /// gate=None, gate_rule="entries") → `smooth`'s dict for the continuous model of
+    /// `filter_continuous`: the RTS smoother over its (gated) pass, each step recorded with
+    /// the model sampled for it.
+    fn smooth_continuous(A, C, W, R, x0, P0, t, zs; us = None, B = None;
+                         form: &str = "joseph", gate: Option<Bound<'py, PyAny>> = None,
+                         gate_rule: &str = "entries")
+        => run_continuous(Output::Smoothed)
+}
+
+/// [`filter_continuous`]'s and [`smooth_continuous`]'s work: the continuous model of the
+/// Python signature `(A, C, W, R, x0, P0, t, zs)` and the optional `(us, B)`, its sampler,
+/// the filter (built on the Δt = 0 model) and the pass at the time stamps.
+fn run_continuous<'py>(
+    output: Output,
+    py: Python<'py>,
+    [A, C, W, R, x0, P0, t, zs]: [&Bound<'py, PyAny>; 8],
+    [us, B]: [Option<&Bound<'py, PyAny>>; 2],
+    form: &str,
+    gate: Option<Bound<'py, PyAny>>,
+    gate_rule: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let context = output.context(true);
+    let form = covariance_form(form)?;
+    let gate = gate_option(gate.as_ref(), gate_rule)?;
+    let mut sampler = sampler([A, C, W, R], B, context)?;
+    let n = sampler.continuous().n();
+    let err = engine(context);
+    let first = sampler.at(0.0).map_err(&err)?.clone();
+    let x0 = vector(x0, "x0", n)?;
+    let P0 = mat(P0, "P0")?;
+    let filter = Filter::new(first, &x0, &P0, form).map_err(&err)?;
+    let t = time_stamps(t)?;
+    let timing = Timing::Sampled {
+        sampler: Box::new(sampler),
+        t,
+    };
+    let pass = Pass::new(filter, timing, zs, us, gate, context)?;
+    output.run(py, pass)
+}
+
+/// The sampler of the continuous model `(A, C, W, R)` with the optional `B`: shapes are
+/// checked here, naming the argument as Python spells it (the engine calls C "H"), then
+/// `kalman::sampling::ContinuousModel` checks W and R (symmetric PSD).
+fn sampler(
+    [A, C, W, R]: [&Bound<'_, PyAny>; 4],
+    B: Option<&Bound<'_, PyAny>>,
+    context: &str,
+) -> PyResult<Sampler> {
+    let (A, C, W, R) = (mat(A, "A")?, mat(C, "C")?, mat(W, "W")?, mat(R, "R")?);
+    let B = opt_mat(B, "B")?;
+    let shape = |a: &Mat<f64>| format!("({}, {})", a.nrows(), a.ncols());
+    let n = A.nrows();
+    if n == 0 || A.ncols() != n {
+        return Err(value_error(format!(
+            "{context}: A has shape {}, expected a square (n, n) matrix with n ≥ 1",
+            shape(&A)
+        )));
+    }
+    let m = C.nrows();
+    if m == 0 || C.ncols() != n {
+        return Err(value_error(format!(
+            "{context}: C has shape {}, expected (m, {n}) with m ≥ 1: one row per measurement,              one column per state of A",
+            shape(&C)
+        )));
+    }
+    for (name, a, rows) in [("W", &W, n), ("R", &R, m)] {
+        if (a.nrows(), a.ncols()) != (rows, rows) {
             return Err(value_error(format!(
-                "form = {other:?}; expected \"joseph\", \"standard\" or \"sqrt\""
+                "{context}: {name} has shape {}, expected ({rows}, {rows})",
+                shape(a)
             )));
         }
-    };
-    let mut run = Run::new(model, controls, form, "filter")?;
-    let mut rec = FilterRecord::new(run.steps, run.n);
-    for k in 0..run.steps {
-        let info = run.step(k)?;
-        let f = &run.filter;
-        rec.set(
-            k,
-            f.state(),
-            f.covariance(),
-            f.predicted_state(),
-            f.predicted_covariance(),
-            info.log_likelihood,
-            info.nis,
-        );
     }
-    rec.into_dict(py)
-}
-
-py_function! {
-    /// smooth(F, H, Q, R, x0, P0, zs, us=None, B=None, S=None) → dict with the RTS-smoothed
-    /// "x" (N, n) and "P" (N, n, n): the engine's filter (Joseph form) recorded step by step,
-    /// then `kalman::smoother::RtsSmoother`.
-    fn smooth(F, H, Q, R, x0, P0, zs; us = None, B = None, S = None) => run_smooth
-}
-
-/// [`smooth`]'s work.
-fn run_smooth<'py>(
-    py: Python<'py>,
-    model: [&Bound<'py, PyAny>; 7],
-    controls: [Option<&Bound<'py, PyAny>>; 3],
-) -> PyResult<Bound<'py, PyDict>> {
-    let mut run = Run::new(model, controls, CovarianceForm::Joseph, "smooth")?;
-    let (steps, n) = (run.steps, run.n);
-    let mut rts = RtsSmoother::new();
-    for k in 0..steps {
-        run.step(k)?;
-        rts.record(&run.filter).map_err(engine("smooth"))?;
+    if let Some(B) = &B
+        && (B.nrows() != n || B.ncols() == 0)
+    {
+        return Err(value_error(format!(
+            "{context}: B has shape {}, expected ({n}, p) with p ≥ 1",
+            shape(B)
+        )));
     }
-    let sm = rts.smooth().map_err(engine("smooth"))?;
-    let nn = n * n;
-    let mut ps = vec![0.0; steps * nn];
-    for (out, c) in ps.chunks_exact_mut(nn).zip(&sm.covariances) {
-        copy_mat(out, c.as_ref());
+    let err = engine(context);
+    let mut model = ContinuousModel::new(&A, &C, &W, &R).map_err(&err)?;
+    if let Some(B) = &B {
+        model = model.with_control(B).map_err(&err)?;
     }
-    let xs = Array2::from_shape_fn((steps, n), |(k, i)| sm.means[(i, k)]);
-    let out = PyDict::new(py);
-    out.set_item("x", PyArray2::from_owned_array(py, xs))?;
-    out.set_item("P", array3_out(py, ps, steps, n, n))?;
-    Ok(out)
+    Sampler::new(model, SAMPLER_CAPACITY).map_err(&err)
 }
 
 /// The two discrete Riccati equations behind `dare` and `dlqr`.

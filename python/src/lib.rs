@@ -67,6 +67,7 @@ mod kf_core;
 mod linalg;
 mod model_fns;
 mod nonlinear;
+mod pass;
 mod series;
 mod wls_fns;
 
@@ -104,6 +105,8 @@ fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<kf::KalmanFilter>()?;
     m.add_function(wrap_pyfunction!(engine::filter, m)?)?;
     m.add_function(wrap_pyfunction!(engine::smooth, m)?)?;
+    m.add_function(wrap_pyfunction!(engine::filter_continuous, m)?)?;
+    m.add_function(wrap_pyfunction!(engine::smooth_continuous, m)?)?;
     m.add_function(wrap_pyfunction!(engine::dare, m)?)?;
     m.add_function(wrap_pyfunction!(engine::dlqr, m)?)?;
     m.add_function(wrap_pyfunction!(engine::care, m)?)?;

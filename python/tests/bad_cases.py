@@ -40,6 +40,32 @@ def steps_with(matrix, k, index, value, steps=3):
     return out
 
 
+def continuous(function="filter_continuous", **kwargs):
+    """filter_continuous (or another whole-series function of the continuous model) of a
+    constant-velocity model over three rows at t = 0, 0.5, 1, with the arguments given
+    replacing the defaults."""
+    args = dict(
+        A=np.array([[0.0, 1.0], [0.0, 0.0]]),
+        C=np.array([[1.0, 0.0]]),
+        W=np.diag([0.0, 0.5]),
+        R=np.array([[4.0]]),
+        x0=np.zeros(2),
+        P0=np.eye(2),
+        t=np.array([0.0, 0.5, 1.0]),
+        zs=np.zeros((3, 1)),
+    )
+    args.update(kwargs)
+    return getattr(le, function)(**args)
+
+
+def discrete(function="filter", **kwargs):
+    """filter (or smooth) of a 2-state model over three rows, with the arguments given."""
+    args = dict(F=I2, H=np.ones((1, 2)), Q=I2, R=np.eye(1), x0=np.zeros(2), P0=I2,
+                zs=np.zeros((3, 1)))
+    args.update(kwargs)
+    return getattr(le, function)(**args)
+
+
 NAN = float("nan")
 INF = float("inf")
 CASES = {
@@ -184,6 +210,59 @@ CASES = {
         ValueError,
         "singular",
     ),
+    # filter_continuous / smooth_continuous: the argument and the index are named
+    "continuous t NaN": (lambda: continuous(t=np.array([0.0, NAN, 1.0])), ValueError, "t[1]"),
+    "continuous t inf": (lambda: continuous(t=np.array([-INF, 0.0, 1.0])), ValueError, "t[0]"),
+    "continuous t goes back": (lambda: continuous(t=np.array([0.0, 1.0, 0.5])), ValueError, "t[2]"),
+    "smooth_continuous t goes back": (
+        lambda: continuous("smooth_continuous", t=np.array([2.0, 1.0, 3.0])),
+        ValueError,
+        "t[1]",
+    ),
+    "continuous dt overflows e^{A dt}": (
+        lambda: continuous(A=np.array([[800.0, 0.0], [0.0, 0.0]]), t=np.array([0.0, 0.0, 10.0])),
+        ValueError,
+        "t[2] − t[1]",
+    ),
+    "continuous dt overflows f64": (
+        lambda: continuous(t=np.array([-1e308, 1e308, 1e308])), ValueError, "t[1] − t[0]",
+    ),
+    "continuous t too short": (lambda: continuous(t=np.array([0.0, 1.0])), ValueError, "t"),
+    "continuous t 2-d": (lambda: continuous(t=np.zeros((3, 2))), ValueError, "t"),
+    "continuous t string": (lambda: continuous(t="0 1 2"), TypeError, "t"),
+    "continuous gate 1": (lambda: continuous(gate=1.0), ValueError, "gate"),
+    "continuous gate 0": (lambda: continuous(gate=0.0), ValueError, "gate"),
+    "continuous gate NaN": (lambda: continuous(gate=NAN), ValueError, "gate"),
+    "continuous gate negative": (lambda: continuous(gate=-0.5), ValueError, "gate"),
+    "continuous gate string": (lambda: continuous(gate="0.99"), TypeError, "gate"),
+    "continuous gate_rule": (lambda: continuous(gate=0.99, gate_rule="chi2"), ValueError, "gate_rule"),
+    "continuous form": (lambda: continuous(form="fast"), ValueError, "form"),
+    "continuous A not square": (lambda: continuous(A=np.zeros((2, 3))), ValueError, "A"),
+    "continuous A list": (lambda: continuous(A=[[0.0, 1.0], [0.0, 0.0]]), TypeError, "A"),
+    "continuous C wrong columns": (lambda: continuous(C=np.ones((1, 3))), ValueError, "C"),
+    "continuous C NaN": (lambda: continuous(C=np.array([[1.0, NAN]])), ValueError, "C"),
+    "continuous W wrong shape": (lambda: continuous(W=np.eye(3)), ValueError, "W"),
+    "continuous W not PSD": (lambda: continuous(W=np.diag([0.0, -0.5])), ValueError, "W"),
+    "continuous W not symmetric": (lambda: continuous(W=np.array([[0.0, 0.1], [0.0, 0.5]])), ValueError, "W"),
+    "continuous R wrong shape": (lambda: continuous(R=np.eye(2)), ValueError, "R"),
+    "continuous R not PSD": (lambda: continuous(R=np.array([[-1.0]])), ValueError, "R"),
+    "continuous B wrong rows": (lambda: continuous(B=np.ones((3, 1)), us=np.zeros(3)), ValueError, "B"),
+    "continuous us without B": (lambda: continuous(us=np.zeros((3, 1))), ValueError, "us"),
+    "continuous us wrong length": (lambda: continuous(B=np.ones((2, 1)), us=np.zeros(4)), ValueError, "us"),
+    "continuous x0 wrong length": (lambda: continuous(x0=np.zeros(3)), ValueError, "x0"),
+    "continuous P0 not PSD": (lambda: continuous(P0=-np.eye(2)), ValueError, "P0"),
+    "continuous zs wrong columns": (lambda: continuous(zs=np.zeros((3, 2))), ValueError, "zs"),
+    "continuous zs inf": (lambda: continuous(zs=np.array([0.0, INF, 0.0])), ValueError, "zs[1]"),
+    "smooth_continuous no rows": (
+        lambda: continuous("smooth_continuous", t=np.zeros(0), zs=np.zeros((0, 1))),
+        ValueError,
+        "smooth_continuous",
+    ),
+    # the gate of the discrete filter and smoother
+    "filter gate above 1": (lambda: discrete(gate=1.5), ValueError, "gate"),
+    "smooth gate 0": (lambda: discrete("smooth", gate=0.0), ValueError, "gate"),
+    "smooth gate_rule": (lambda: discrete("smooth", gate=0.9, gate_rule="all"), ValueError, "gate_rule"),
+    "smooth form": (lambda: discrete("smooth", form="fast"), ValueError, "form"),
 }
 
 

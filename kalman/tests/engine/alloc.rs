@@ -57,3 +57,53 @@ fn no_allocation_per_step() {
         }
     }
 }
+
+/// A time-stamped record through `kalman::sampling` and `kalman::gate`: once the cache is
+/// full, neither a cache hit, nor a miss that resamples the oldest entry in place, nor a
+/// gate's screen allocates, in any covariance form.
+#[test]
+fn a_sampled_record_with_a_gate_allocates_nothing_once_the_cache_is_full() {
+    use kalman::gate::{Gate, GateRule};
+    use kalman::sampling::{ContinuousModel, Sampler};
+    let cv = ContinuousModel::new(
+        &[[0.0, 1.0], [0.0, -0.1]],
+        &[[1.0, 0.0], [0.0, 1.0]],
+        &[[0.0, 0.0], [0.0, 0.5]],
+        &[[4.0, 0.0], [0.0, 0.04]],
+    )
+    .and_then(|m| m.with_control(&[[0.0], [1.0]]))
+    .expect("model");
+    for form in FORMS {
+        let mut sampler = Sampler::new(cv.clone(), 4).expect("sampler");
+        let mut kf = Filter::new(
+            sampler.at(0.1).expect("sampled").clone(),
+            &[0.0, 1.0],
+            &[[10.0, 0.0], [0.0, 10.0]],
+            form,
+        )
+        .expect("filter");
+        let mut gate = Gate::new(GateRule::Entries, 0.999, kf.model()).expect("gate");
+        let mut vector = Gate::new(GateRule::Vector, 0.999, kf.model()).expect("gate");
+        // Fill the cache (these allocate: each new slot is a model).
+        for dt in [0.1, 0.2, 0.3, 0.4] {
+            sampler.at(dt).expect("sampled");
+        }
+        let before = allocations();
+        for k in 0..200 {
+            // Repeating intervals (hits) and new ones (misses that evict).
+            let dt = if k % 3 == 0 {
+                0.05 + 1e-3 * k as f64
+            } else {
+                0.1
+            };
+            let z = [k as f64 * 0.1, if k == 50 { 1e6 } else { 1.0 }];
+            let model = sampler.at(dt).expect("sampled");
+            vector.screen(&kf, model, &z).expect("screened");
+            gate.screen(&kf, model, &z).expect("screened");
+            kf.step_with(model, gate.kept(), Some(&[0.01]))
+                .expect("step");
+        }
+        assert_eq!(allocations() - before, 0, "{form:?}");
+        assert!(sampler.distinct() > 60);
+    }
+}
