@@ -8,9 +8,12 @@
 //!   `P0` (n×n, required by `filter`). Matrices are row-major nested arrays.
 //! - **Continuous model**: `A` (n×n), `C` (m×n), optional `B` (n×p), `D` (m×p), `G` (n×q,
 //!   default I), `Qc` (q×q noise intensity, default 0), `R` (m×m, covariance of one
-//!   sample's measurement noise, copied to the discrete model).
-//! - **Data CSV**: header `t,z1,…,zm[,u1,…,up]`; an empty or `NaN` z cell is missing.
-//!   `u` on row k drives the transition from row k to row k + 1 (and `D u_k` enters z_k).
+//!   sample's measurement noise, copied to the discrete model), `x0`, `P0` (the prior at the
+//!   first row; `filter` samples the model at the record's own intervals, [`timing`]).
+//! - Either kind may name its channels: `channels` (m names, checked by [`model_file`]).
+//! - **Data CSV**: header `t,z1,…,zm[,u1,…,up]` (or the channel names for the z columns); an
+//!   empty or `NaN` z cell is missing; `t` never decreases. `u` on row k drives the
+//!   transition from row k to row k + 1 (and `D u_k` enters z_k).
 //! - **Estimates CSV**: `t,x1,…,xn,P1_1,…,Pn_n,nis` (every `Pi_j` with
 //!   `--full-covariance`); row k is the posterior after the update with data row k; `nis` is
 //!   `NaN` on a row without measurements.
@@ -171,6 +174,7 @@ pub fn discretize(args: &DiscretizeArgs) -> Result<()> {
         e => err(e),
     })?;
     let mut file = discrete_file(&d, c.R.as_ref()).map_err(err)?;
+    file.channels = c.channels.clone();
     // The prior carries over when the continuous file gives one.
     if let Some(P0) = &c.P0 {
         file.x0 = Some(c.x0.iter().copied().collect());
@@ -197,6 +201,7 @@ fn discrete_file(d: &model::DiscreteSs, R: Option<&DMatrix<f64>>) -> model::Resu
         S: noise.s.as_ref().map(to_rows),
         x0: None,
         P0: None,
+        channels: None,
     })
 }
 
@@ -252,6 +257,7 @@ fn model_json(f: &DiscreteFile) -> String {
         ("S", opt(&f.S)),
         ("x0", f.x0.as_ref().map(|x| json!(x))),
         ("P0", opt(&f.P0)),
+        ("channels", f.channels.as_ref().map(|c| json!(c))),
     ])
 }
 

@@ -188,6 +188,7 @@ fn fitted_file(model: &DiscreteModel, sys: &System) -> DiscreteFile {
         S: None,
         x0: Some(sys.x0.clone()),
         P0: Some(faer_rows(&sys.p0)),
+        channels: model.channels.clone(),
     }
 }
 
@@ -244,12 +245,17 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
 
 /// The rows of the data CSV `data`, each spaced `dt` after the one before (the discrete
 /// model `model`'s interval; [`crate::userdata::timing::check_regular`]).
-fn read_regular(data: &Path, model: &Path, dt: f64) -> Result<(usize, usize, Vec<Row>)> {
+fn read_regular(
+    data: &Path,
+    model: &Path,
+    dt: f64,
+    channels: Option<&[String]>,
+) -> Result<(usize, usize, Vec<Row>)> {
     let file = std::fs::File::open(data).map_err(|source| Error::Read {
         path: data.to_path_buf(),
         source,
     })?;
-    let mut reader = DataReader::new(data, std::io::BufReader::new(file))?;
+    let mut reader = DataReader::with_channels(data, std::io::BufReader::new(file), channels)?;
     let mut rows: Vec<Row> = Vec::new();
     let mut row = Row::default();
     while reader.read_row(&mut row)? {
@@ -292,7 +298,7 @@ pub fn fit(args: &FitArgs) -> Result<()> {
             "fit does not handle the cross-covariance S (remove S, or fit without it)",
         ));
     }
-    let (m, p, rows) = read_regular(&args.data, &args.model, model.dt)?;
+    let (m, p, rows) = read_regular(&args.data, &args.model, model.dt, model.channels.as_deref())?;
     if m != model.m() || p != model.p() {
         return Err(Error::invalid(
             &args.data,

@@ -65,15 +65,9 @@ pub struct DataReader<R: Read> {
     m: usize,
     p: usize,
     last_t: Option<f64>,
-}
-
-/// The column name of 0-based column `j` of a file with `m` measurements.
-fn column_name(j: usize, m: usize) -> String {
-    match j {
-        0 => "t".into(),
-        j if j <= m => format!("z{j}"),
-        j => format!("u{}", j - m),
-    }
+    /// The measurement columns' names as the header gives them (`z1…zm`, or the model's
+    /// channel names).
+    names: Vec<String>,
 }
 
 impl<R: Read> DataReader<R> {
@@ -83,6 +77,16 @@ impl<R: Read> DataReader<R> {
     /// [`Error::Invalid`] for an empty file or a header that is not `t,z1,…,zm[,u1,…,up]`;
     /// [`Error::Read`] for an I/O error.
     pub fn new(path: &Path, reader: R) -> Result<Self> {
+        Self::with_channels(path, reader, None)
+    }
+
+    /// As [`DataReader::new`], for a model whose measurement channels are named `channels`:
+    /// the header may then name its measurement columns either `z1…zm` or by those names,
+    /// in the model's order.
+    ///
+    /// # Errors
+    /// As [`DataReader::new`].
+    pub fn with_channels(path: &Path, reader: R, channels: Option<&[String]>) -> Result<Self> {
         let csv = csv::ReaderBuilder::new()
             .has_headers(false)
             .flexible(true)
@@ -99,6 +103,7 @@ impl<R: Read> DataReader<R> {
             m: 0,
             p: 0,
             last_t: None,
+            names: Vec::new(),
         };
         if !this.next_record()? {
             return Err(this.at(
@@ -110,6 +115,7 @@ impl<R: Read> DataReader<R> {
         let line = this.line();
         let mut m = 0;
         let mut p = 0;
+        let mut by_name = false;
         for (j, field) in this.record.iter().enumerate() {
             let field = if j == 0 {
                 field.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(field)
@@ -117,10 +123,20 @@ impl<R: Read> DataReader<R> {
                 field
             };
             let name = shown(&String::from_utf8_lossy(field));
+            // The measurement columns are `z1…zm` or, if the model names its channels, those
+            // names: the first one decides.
+            if j == 1 {
+                by_name = channels.is_some_and(|c| c.first() == Some(&name));
+            }
+            let next_z = match channels {
+                Some(c) if by_name => c.get(m).cloned(),
+                _ => Some(format!("z{}", m + 1)),
+            };
             let ok = match j {
                 0 => name == "t",
-                _ if p == 0 && name == format!("z{}", m + 1) => {
+                _ if p == 0 && next_z.as_ref() == Some(&name) => {
                     m += 1;
+                    this.names.push(name.clone());
                     true
                 }
                 _ if m > 0 && name == format!("u{}", p + 1) => {
@@ -130,10 +146,15 @@ impl<R: Read> DataReader<R> {
                 _ => false,
             };
             if !ok {
+                let next_z = match (channels, next_z) {
+                    (Some(c), _) if m == 0 => format!("`z1` or `{}`", c[0]),
+                    (_, Some(z)) => format!("`{z}` or `u1`"),
+                    (_, None) => "`u1`".to_string(),
+                };
                 let expected = match j {
                     0 => "`t`".to_string(),
-                    _ if m == 0 => "`z1`".to_string(),
-                    _ if p == 0 => format!("`z{}` or `u1`", m + 1),
+                    _ if m == 0 => next_z.trim_end_matches(" or `u1`").to_string(),
+                    _ if p == 0 => next_z,
                     _ => format!("`u{}`", p + 1),
                 };
                 return Err(this.at(
@@ -165,6 +186,11 @@ impl<R: Read> DataReader<R> {
         self.p
     }
 
+    /// The name of measurement column `i` (0-based) as the header gives it.
+    pub fn channel(&self, i: usize) -> &str {
+        &self.names[i]
+    }
+
     /// The file this reader reads (for error messages).
     pub fn path(&self) -> &Path {
         &self.path
@@ -175,11 +201,20 @@ impl<R: Read> DataReader<R> {
         self.record.position().map_or(0, csv::Position::line)
     }
 
+    /// The name of 0-based column `j`.
+    fn column_name(&self, j: usize) -> String {
+        match j {
+            0 => "t".into(),
+            j if j <= self.m => self.names[j - 1].clone(),
+            j => format!("u{}", j - self.m),
+        }
+    }
+
     /// An [`Error::Invalid`] at `line` and, if given, 0-based column `col`.
     fn at(&self, line: u64, col: Option<usize>, what: &str) -> Error {
         let place = match col {
             Some(j) if self.m > 0 => {
-                format!("line {line}, column {} ({})", j + 1, column_name(j, self.m))
+                format!("line {line}, column {} ({})", j + 1, self.column_name(j))
             }
             Some(j) => format!("line {line}, column {}", j + 1),
             None => format!("line {line}"),

@@ -33,8 +33,9 @@ pub struct FilterArgs {
     /// x0; the record's spacing must then be dt).
     #[arg(long, value_name = "MODEL")]
     pub model: PathBuf,
-    /// Data CSV: header t,z1,…,zm[,u1,…,up]; an empty or NaN z cell is a missing value; t
-    /// never decreases (two rows with one t are one instant).
+    /// Data CSV: header t,z1,…,zm[,u1,…,up] (or the model's channel names for z1…zm); an
+    /// empty or NaN z cell is a missing value; t never decreases (two rows with one t are one
+    /// instant).
     #[arg(long, value_name = "Z.csv")]
     pub data: PathBuf,
     /// Estimates CSV to write: t,x1,…,xn,P1_1,…,Pn_n,nis (`-`: standard output).
@@ -212,6 +213,7 @@ const SAMPLER_CAPACITY: usize = 256;
 /// and the filter.
 struct Engine {
     n: usize,
+    channels: Option<Vec<String>>,
     D: DMatrix<f64>,
     m: usize,
     p: usize,
@@ -231,6 +233,7 @@ fn engine(path: &Path, model: &AnyModel, form: Form) -> Result<Engine> {
     match model {
         AnyModel::Discrete(d) => Ok(Engine {
             n: d.n(),
+            channels: d.channels.clone(),
             D: d.D.clone(),
             m: d.m(),
             p: d.p(),
@@ -245,6 +248,7 @@ fn engine(path: &Path, model: &AnyModel, form: Form) -> Result<Engine> {
                 .map_err(|e| model_error(path, e))?;
             Ok(Engine {
                 n: c.n(),
+                channels: c.channels.clone(),
                 D: c.D.clone(),
                 m: c.m(),
                 p: c.p(),
@@ -294,7 +298,11 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
         path: args.data.clone(),
         source,
     })?;
-    let mut reader = DataReader::new(&args.data, std::io::BufReader::with_capacity(1 << 16, file))?;
+    let mut reader = DataReader::with_channels(
+        &args.data,
+        std::io::BufReader::with_capacity(1 << 16, file),
+        engine.channels.as_deref(),
+    )?;
     check_columns(&args.model, engine.m, engine.p, &reader)?;
     let mut pass = Pass {
         args,
@@ -320,7 +328,10 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
         crate::output::write_bytes_to(&d, text.as_bytes())?;
     }
     match rejected_dest {
-        Some(d) => crate::output::write_bytes_to(&d, rejected_csv(&pass.rejected).as_bytes()),
+        Some(d) => {
+            let text = rejected_csv(&pass.rejected, pass.reader);
+            crate::output::write_bytes_to(&d, text.as_bytes())
+        }
         None => Ok(()),
     }
 }
@@ -358,13 +369,16 @@ fn side_destination(
 /// One rejected entry: the row's time, the channel (0-based), the value and its e_i²/Σ_ii.
 type RejectedEntry = (f64, usize, f64, f64);
 
-/// The `--rejected` CSV: `t,channel,value,nis`, numbers in their shortest round-trip form.
-fn rejected_csv(rows: &[RejectedEntry]) -> String {
+/// The `--rejected` CSV: `t,channel,value,nis`, the channel named as the data header names
+/// its column, numbers in their shortest round-trip form.
+fn rejected_csv<R: std::io::Read>(rows: &[RejectedEntry], names: &DataReader<R>) -> String {
     let mut buf = zmij::Buffer::new();
     let mut text = String::from("t,channel,value,nis\n");
     for &(t, i, v, nis) in rows {
         text.push_str(buf.format(t));
-        text.push_str(&format!(",z{},", i + 1));
+        text.push(',');
+        text.push_str(names.channel(i));
+        text.push(',');
         text.push_str(buf.format(v));
         text.push(',');
         text.push_str(buf.format(nis));

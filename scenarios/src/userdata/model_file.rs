@@ -49,6 +49,8 @@ pub struct DiscreteModel {
     pub x0: DVector<f64>,
     /// Initial state covariance (n×n), if given (`filter` requires it).
     pub P0: Option<DMatrix<f64>>,
+    /// Names of the m measurement channels, if given (the data header may use them).
+    pub channels: Option<Vec<String>>,
 }
 
 impl DiscreteModel {
@@ -94,6 +96,8 @@ pub struct ContinuousModel {
     pub x0: DVector<f64>,
     /// Initial state covariance (n×n), if given (`filter` requires it).
     pub P0: Option<DMatrix<f64>>,
+    /// Names of the m measurement channels, if given (the data header may use them).
+    pub channels: Option<Vec<String>>,
 }
 
 impl ContinuousModel {
@@ -151,6 +155,9 @@ pub struct DiscreteFile {
     /// `P0`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub P0: Option<Rows>,
+    /// `channels`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub channels: Option<Vec<String>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -172,6 +179,8 @@ struct ContinuousFile {
     x0: Option<Vec<f64>>,
     #[serde(default)]
     P0: Option<Rows>,
+    #[serde(default)]
+    channels: Option<Vec<String>>,
 }
 
 /// Row-major nested arrays of a matrix.
@@ -466,6 +475,7 @@ pub fn discrete_from_file(path: &Path, file: &DiscreteFile) -> Result<DiscreteMo
         })
         .transpose()?;
     let (x0, P0) = prior(path, file.x0.as_deref(), file.P0.as_ref(), n, "F")?;
+    let channels = channel_names(path, file.channels.as_deref(), m, "H")?;
     Ok(DiscreteModel {
         dt: file.dt,
         F,
@@ -477,6 +487,7 @@ pub fn discrete_from_file(path: &Path, file: &DiscreteFile) -> Result<DiscreteMo
         S,
         x0,
         P0,
+        channels,
     })
 }
 
@@ -515,6 +526,7 @@ pub fn parse_continuous(path: &Path, text: &str) -> Result<ContinuousModel> {
         .map(|r| matrix(path, "R", r, Some(m), Some(m), "R must be m×m, m from C"))
         .transpose()?;
     let (x0, P0) = prior(path, file.x0.as_deref(), file.P0.as_ref(), n, "A")?;
+    let channels = channel_names(path, file.channels.as_deref(), m, "C")?;
     Ok(ContinuousModel {
         A,
         B,
@@ -525,7 +537,59 @@ pub fn parse_continuous(path: &Path, text: &str) -> Result<ContinuousModel> {
         R,
         x0,
         P0,
+        channels,
     })
+}
+
+/// The measurement channels' names: m of them (m rows of `from`), distinct, each a
+/// non-empty name of letters, digits, `_`, `-` or `.` that is not `t`, `z<k>` or `u<k>` (so a
+/// data header stays unambiguous).
+fn channel_names(
+    path: &Path,
+    names: Option<&[String]>,
+    m: usize,
+    from: &str,
+) -> Result<Option<Vec<String>>> {
+    let Some(names) = names else {
+        return Ok(None);
+    };
+    let bad = |what: String| Err(Error::invalid(path, format!("channels: {what}")));
+    if names.len() != m {
+        return bad(format!(
+            "{} names for m = {m} measurements (one name per row of {from})",
+            names.len()
+        ));
+    }
+    let reserved = |s: &str| {
+        s == "t"
+            || ["z", "u"].iter().any(|p| {
+                s.strip_prefix(p)
+                    .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+            })
+    };
+    for (i, name) in names.iter().enumerate() {
+        let ok_chars = !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_alphanumeric() || matches!(c, '_' | '-' | '.'));
+        if !ok_chars {
+            return bad(format!(
+                "channel {} `{}` must be a non-empty name of letters, digits, _, - or .",
+                i + 1,
+                name.escape_debug()
+            ));
+        }
+        if reserved(name) {
+            return bad(format!(
+                "channel {} `{name}` is a name the data header reserves (t, z1…, u1…)",
+                i + 1
+            ));
+        }
+        if names[..i].contains(name) {
+            return bad(format!("channel `{name}` is named twice"));
+        }
+    }
+    Ok(Some(names.to_vec()))
 }
 
 /// The prior `x0` (zero when absent) and `P0` of a model file with n states (n from

@@ -252,6 +252,7 @@ proptest! {
             S: Some(rows(n, m)),
             x0: Some(rows(1, n).remove(0)),
             P0: Some(rows(n, n)),
+            channels: None,
         };
         let (name, text) = if toml_format {
             ("m.toml", toml::to_string(&file).expect("toml"))

@@ -236,3 +236,69 @@ fn gate_options_are_checked() {
     assert_eq!(out.status.code(), Some(2));
     assert!(!dir.join("e.csv").exists() && !dir.join("r.csv").exists());
 }
+
+/// Channel names in the model file name the data header's columns and the rejections.
+#[test]
+fn channel_names_from_the_model_name_the_header_and_the_rejections() {
+    let dir = scratch("irregular", "channels");
+    let model = read(&data("model.json"));
+    let named = model.replacen(
+        '{',
+        "{\n  \"channels\": [\"gnss_x\", \"gnss_y\", \"vel_x\"],",
+        1,
+    );
+    write(&dir, "model.json", &named);
+    let record = read(&data("record.csv")).replacen("t,z1,z2,z3", "t,gnss_x,gnss_y,vel_x", 1);
+    write(&dir, "record.csv", &record);
+    ok(
+        &dir,
+        &argv_with(
+            "filter --model model.json --data record.csv --out e.csv --gate 0.9999 --rejected r.csv",
+            &[],
+        ),
+    );
+    assert_matches(&dir.join("e.csv"), &data("gated.csv"));
+    let rename = |c: &str| match c {
+        "z1" => "gnss_x",
+        "z2" => "gnss_y",
+        _ => "vel_x",
+    };
+    let want: Vec<(String, String)> = entries(&data("wild.csv"))
+        .into_iter()
+        .map(|(t, c)| (t, rename(&c).to_string()))
+        .collect();
+    assert_eq!(entries(&dir.join("r.csv")), want);
+    // The z1… header still reads; a header with other names is refused naming the column.
+    write(&dir, "z.csv", "t,z1,z2,z3\n0,1,2,3\n");
+    ok(
+        &dir,
+        &argv_with("filter --model model.json --data z.csv --out e2.csv", &[]),
+    );
+    write(&dir, "z.csv", "t,gnss_x,gnss_z,vel_x\n0,1,2,3\n");
+    let err = crate::common::fails(
+        &dir,
+        &argv_with("filter --model model.json --data z.csv --out e3.csv", &[]),
+    );
+    assert!(
+        err.contains("line 1, column 3") && err.contains("`gnss_y`"),
+        "{err}"
+    );
+    // Bad names are refused in the model file.
+    for (channels, expect) in [
+        ("[\"a\", \"b\"]", "2 names for m = 3"),
+        ("[\"a\", \"a\", \"b\"]", "named twice"),
+        ("[\"a\", \"z2\", \"b\"]", "reserves"),
+        ("[\"a\", \"b c\", \"d\"]", "must be a non-empty name"),
+    ] {
+        let bad = model.replacen('{', &format!("{{\n  \"channels\": {channels},"), 1);
+        write(&dir, "bad.json", &bad);
+        let err = crate::common::fails(
+            &dir,
+            &argv_with("filter --model bad.json --data z.csv --out e4.csv", &[]),
+        );
+        assert!(
+            err.contains("bad.json") && err.contains(expect),
+            "{channels}: {err}"
+        );
+    }
+}
