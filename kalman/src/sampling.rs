@@ -371,7 +371,7 @@ impl Sampler {
             }
         }
         let E = &mut self.e[..k * k];
-        if !self.work.run(k, E) {
+        if !self.work.run_block(k, n, E) {
             return Err(overflow);
         }
         // F = (E₂₂)ᵀ, Q_d = F E₁₂, symmetrised.
@@ -410,7 +410,7 @@ impl Sampler {
                 }
             }
             let E = &mut self.e[..k * k];
-            if !self.work.run(k, E) {
+            if !self.work.run_block(k, n, E) {
                 return Err(overflow);
             }
             for j in 0..p {

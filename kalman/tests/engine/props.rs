@@ -64,12 +64,16 @@ fn check_sym_psd(f: faer::MatRef<'_, f64>, scale: f64) -> Result<(), TestCaseErr
     Ok(())
 }
 
+/// The sizes at which the fixed-size path is compared with the dynamic one.
+const FIXED_N: [usize; 6] = [1, 2, 3, 5, 8, 12];
+const FIXED_M: [usize; 4] = [1, 2, 3, 6];
+
 /// Dispatches a runtime (n, m) to `FixedDims<N, M, 1>`.
 macro_rules! fixed_run {
     ($p:expr, $form:expr, $n:expr, $m:expr; [$($N:literal)*]; $ms:tt) => {{
         let mut out: Option<Vec<Vec<f64>>> = None;
         $( if $n == $N { fixed_run!(@m out, $p, $form, $m, $N, $ms); } )*
-        out.expect("n, m within 1..=12, 1..=6")
+        out.expect("n, m among the fixed sizes")
     }};
     (@m $out:ident, $p:expr, $form:expr, $m:expr, $N:literal, [$($M:literal)*]) => {
         $( if $m == $M { $out = Some(run($p, FixedDims::<$N, $M, 1>::new(), $form)); } )*
@@ -106,12 +110,17 @@ proptest! {
             prop_assert!(w < 1e-9, "{form:?} vs Joseph: {w:e} (n={n}, m={m})");
         }
         // 1e-12 between storage paths: identical kernels; only the order of the
-        // multiply-adds differs where the dynamic path hands a product to faer.
-        for form in [CovarianceForm::Joseph, CovarianceForm::Standard, CovarianceForm::SquareRoot] {
-            let d = run(&p, dims, form);
-            let f = fixed_run!(&p, form, n, m; [1 2 3 4 5 6 7 8 9 10 11 12]; [1 2 3 4 5 6]);
-            let w = worst(&f, &d);
-            prop_assert!(w < 1e-12, "{form:?} fixed vs dyn: {w:e} (n={n}, m={m})");
+        // multiply-adds differs where the dynamic path hands a product to faer. The fixed
+        // path is instantiated at representative sizes only (n = 1, 2, 3, 5, 8, 12 and
+        // m = 1, 2, 3, 6: one state, one channel, m = n, m > n, m < n, the largest drawn),
+        // since each (N, M) is a whole monomorphised filter in this test binary.
+        if FIXED_N.contains(&n) && FIXED_M.contains(&m) {
+            for form in [CovarianceForm::Joseph, CovarianceForm::Standard, CovarianceForm::SquareRoot] {
+                let d = run(&p, dims, form);
+                let f = fixed_run!(&p, form, n, m; [1 2 3 5 8 12]; [1 2 3 6]);
+                let w = worst(&f, &d);
+                prop_assert!(w < 1e-12, "{form:?} fixed vs dyn: {w:e} (n={n}, m={m})");
+            }
         }
         for form in [CovarianceForm::Joseph, CovarianceForm::Standard, CovarianceForm::SquareRoot] {
             let model = p.model(dims).expect("model");
