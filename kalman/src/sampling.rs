@@ -17,7 +17,7 @@
 //! [`Sampler`] caches the sampled models by Δt (bit-exact keys, a bounded cache), so a
 //! regular or quantised clock pays for one discretisation per distinct interval and a step
 //! that hits the cache allocates nothing. [`Sampler::sequence`] samples a whole time vector
-//! once into a [`Sampled`], a [`ModelSource`] for [`Filter::step_source`], the smoother and
+//! once into a [`Sampled`], a [`ModelSource`] for [`crate::Filter::step_source`], the smoother and
 //! the fitting code.
 //!
 //! The time rule, for rows at `t_0 ≤ t_1 ≤ …`: `(x0, P0)` is the prior of the first row's
