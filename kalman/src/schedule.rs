@@ -183,8 +183,7 @@ impl<D: Dims> GainSchedule<D> {
         self.gains.len()
     }
 
-    /// Always false: a schedule holds at least the steady gain (so a body of `false` would
-    /// be equivalent).
+    /// Always false: a schedule holds at least the steady gain.
     pub fn is_empty(&self) -> bool {
         self.gains.is_empty()
     }
@@ -411,8 +410,8 @@ fn cross_gain(S: MatRef<'_, f64>, Sigma: MatRef<'_, f64>) -> Result<Mat<f64>, Er
         let dmin = (0..m)
             .map(|i| L[(i, i)] * L[(i, i)])
             .fold(f64::INFINITY, f64::min);
-        // `==`, `>=` or `RANK_TOL + smax` here would be equivalent: they send a regular Σ
-        // down the eigen-decomposition, whose S Σ⁺ equals S Σ⁻¹ to round-off (only slower).
+        // A regular Σ could also go down the eigen-decomposition (S Σ⁺ = S Σ⁻¹ to round-off,
+        // only slower): this test chooses the faster path.
         if dmin > crate::RANK_TOL * smax {
             return Ok(llt.solve(S.transpose()).transpose().to_owned());
         }

@@ -433,10 +433,8 @@ pub(crate) fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f6
     let n = A.nrows();
     let amax = (0..n).map(|i| A[(i, i)].abs()).fold(0.0, f64::max);
     if let Ok(llt) = A.llt(Side::Lower) {
-        // Accept the Cholesky factor only if its pivots are not tiny relative to the diagonal.
-        // (Rejecting it always, or accepting it at a pivot equal to the bound, would give the
-        // same solution to round-off through the eigen-decomposition below, only slower: a
-        // mutation of this test is equivalent.)
+        // Accept the Cholesky factor only if its pivots are not tiny relative to the diagonal
+        // (the eigen-decomposition below gives the same solution to round-off, only slower).
         let L = llt.L();
         let dmin = (0..n)
             .map(|i| L[(i, i)] * L[(i, i)])

@@ -245,8 +245,7 @@ pub fn discrete_lyapunov(f: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<DMatrix<f
         p += &add;
         ak = &ak * &ak;
         // Later terms are bounded by ‖Fᵏ‖²·(this one): stop once it is below rounding and
-        // Fᵏ is contracting. (`< 1.0` and `≤ 1.0` differ only at a norm of exactly 1, where
-        // the next term is at most this one, already below rounding: equivalent.)
+        // Fᵏ is contracting.
         if add.amax() <= f64::EPSILON * p.amax() && ak.norm() < 1.0 {
             return Ok(validate::symmetrize(&p));
         }

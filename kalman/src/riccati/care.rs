@@ -101,8 +101,8 @@ pub(super) fn continuous_dual(
     let mut H0 = (2.0 * gamma) * V_lu.solve_transpose(Y.transpose()); // V⁻ᵀ Q A_γ⁻¹
     symmetrise(&mut G0);
     symmetrise(&mut H0);
-    // All three come from the factorisations of A_γ and V, and a non-finite value in either
-    // reaches all three (inf·0 is NaN), so `&&` in place of either `||` is equivalent.
+    // All three come from the factorisations of A_γ and V: a non-finite value in either
+    // reaches all three (inf·0 is NaN).
     if !all_finite(A0.as_ref()) || !all_finite(G0.as_ref()) || !all_finite(H0.as_ref()) {
         return Err(Error::RiccatiNoConvergence {
             equation: names.equation,

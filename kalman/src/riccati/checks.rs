@@ -93,8 +93,6 @@ pub(super) fn pbh(
     for &(re, im) in modes {
         // Real embedding of the complex matrix M = [λI − F; C]: [[Re M, −Im M], [Im M, Re M]]
         // has the singular values of M, each twice.
-        // (`>=` would be equivalent: for a real λ the embedding is block diagonal, with the
-        // same singular values, each twice.)
         let complex = im > 0.0;
         let (rows, cols) = if complex {
             (2 * (n + p), 2 * n)

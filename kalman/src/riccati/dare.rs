@@ -119,14 +119,9 @@ pub(super) fn newton_polish(form: &FilterForm<'_>, P: &Mat<f64>) -> Option<Mat<f
     for _ in 0..64 {
         let mut E_next = &E + &T * &E * T.transpose();
         symmetrise(&mut E_next);
-        // (Either stop alone, or both together, gives the same E to the last bits: once T is
-        // below ε the terms still to come are below rounding, and once a term is below
-        // rounding ‖T‖ < 1 falls below ε within a few squarings: equivalent.)
         let change = (&E_next - &E).norm_l2();
         E = E_next;
         T = &T * &T;
-        // (Requiring both to be non-finite is equivalent: a non-finite T makes E non-finite at
-        // the next step, and a non-finite E that is returned fails the caller's residual.)
         if !all_finite(T.as_ref()) || !all_finite(E.as_ref()) {
             return None;
         }
@@ -246,16 +241,12 @@ pub(super) fn discrete_dual(
             break;
         };
         let r = discrete_residual(form, next.as_ref());
-        // Written so that a NaN residual or radius stops the iteration. (`≤ 1` differs only at
-        // a radius of exactly 1: equivalent. The radius test guards against rounding carrying
-        // an iterate out of the stabilising set, which Newton's iterates from a stabilising
-        // start never leave in exact arithmetic: no test reaches it.)
+        // Written so that a NaN residual or radius stops the iteration. The radius test guards
+        // against rounding carrying an iterate out of the stabilising set, which Newton's
+        // iterates from a stabilising start never leave in exact arithmetic.
         if !(r.is_finite() && closed_loop_radius(Ft.as_ref(), H, R, &next) < 1.0) {
             break;
         }
-        // `<=` would be equivalent: it keeps the later of two iterates whose residuals agree
-        // to the last bit, which happens only once Newton has stalled at round-off, where the
-        // two differ by round-off and pass the acceptance below alike.
         if r < relative_residual {
             X = next.clone();
             relative_residual = r;

@@ -71,9 +71,6 @@ fn lambda_max_spd3(G: &Matrix3<f64>) -> f64 {
         let step = p / dp;
         if step.is_nan() || step <= 4.0 * f64::EPSILON * x {
             // Converged, or rounding made p ≤ 0 at the root: stop without overshooting.
-            // (Stopping only on NaN is equivalent to round-off: the iterates then stay within
-            // a few ulps of the root until the iteration cap. So is skipping this last step,
-            // or taking it the other way: it is at most 4ε·x.)
             if step > 0.0 {
                 x -= step;
             }
@@ -121,8 +118,6 @@ impl Reduced {
         let t = T[(2, 2)];
         // T₃₃ and √v₆ are O(1)–O(10³) here: no overflow guard (hypot) needed.
         let rho = (t * t + v6).sqrt();
-        // (At ρ = 0, `≥` would write 0/0 into q₃, but the solve below refuses the zero pivot
-        // T₃₃ either way: equivalent.)
         if rho > 0.0 {
             q[2] = (t * q[2] + v6 * e0) / rho;
             T[(2, 2)] = rho;
@@ -140,8 +135,7 @@ fn householder<const M: usize>(a: &mut [[f64; 4]; M]) {
         if norm <= 0.0 {
             continue;
         }
-        // α against the sign of x₀, so v₀ = x₀ − α never cancels (`≥` differs only at x₀ = 0,
-        // where neither sign cancels: equivalent).
+        // α against the sign of x₀, so v₀ = x₀ − α never cancels.
         let alpha = if a[j][j] > 0.0 { -norm } else { norm };
         // v = x − α·e₁, stored in a scratch column; β = 2/(vᵀv) = 1/(norm·(norm + |x₀|)).
         let mut v = [0.0; M];
@@ -188,7 +182,6 @@ fn newton_in_unit_bracket(
     while evaluations < max_it {
         evaluations += 1;
         let (f, df) = h(x);
-        // (At f = 0 moving `a` instead lands on the same root within `tol`: equivalent.)
         if f < 0.0 {
             a = x;
         } else {
@@ -371,7 +364,6 @@ impl BoomEstimator {
         // so the root is found by the Illinois variant of regula falsi on [0, 1]. The full
         // solution is back-substituted once with the converged v₆.
         let t = reduced.T[(2, 2)];
-        // (`≤` differs only at |T₃₃| = f64::MIN_POSITIVE exactly: equivalent.)
         let (rate, iterations) = if t.abs() < f64::MIN_POSITIVE {
             // The five rows say nothing about ε: e = e₀ whatever v₆ > 0.
             (0.0, 0)
@@ -389,14 +381,11 @@ impl BoomEstimator {
                 let r = r0 + theta * r1;
                 let u = 1.0 + w.eps_rate_gain * r.abs();
                 let v6 = w.eps_prior / (u * u);
-                // (Dividing by r.signum() = ±1 instead of multiplying is exact: equivalent.)
                 let dv6 = -2.0 * w.eps_prior * w.eps_rate_gain * r.signum() * r1 / (u * u * u);
                 let den = t2 + v6;
                 (theta - v6 / den, 1.0 - t2 * dv6 / (den * den))
             };
             let to_eps = d.abs() / k;
-            // (Running the search in these two cases too lands on the same root within `tol`:
-            // equivalent.)
             let (root, iterations) = if w.eps_prior <= 0.0 || to_eps <= tol {
                 // v₆ ≡ 0, or e₀ = e₅ and v₆ cannot move the answer.
                 (0.0, 0)
