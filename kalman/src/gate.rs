@@ -169,39 +169,7 @@ impl Gate {
         if r == 0 {
             return Ok(&self.kept);
         }
-        let (H, R) = (model.H.as_slice(), model.R.as_slice());
-        let x = filter.predicted_state();
-        let P = filter.predicted_covariance();
-        // e and H P for the present rows (row a of hp is present entry a).
-        for (a, &i) in self.present.iter().enumerate() {
-            let mut hx = 0.0;
-            for j in 0..n {
-                hx += H[i + j * m] * x[j];
-            }
-            self.e[a] = z[i] - hx;
-            for c in 0..n {
-                let mut s = 0.0;
-                for j in 0..n {
-                    s += H[i + j * m] * P[(j, c)];
-                }
-                self.hp[a + c * r] = s;
-            }
-        }
-        // Σ over the present entries (all of it for the vector rule, its diagonal for the
-        // entries' rule).
-        let whole = self.rule == GateRule::Vector;
-        for (b, &ib) in self.present.iter().enumerate() {
-            for (a, &ia) in self.present.iter().enumerate() {
-                if !whole && a != b {
-                    continue;
-                }
-                let mut s = R[ia + ib * m];
-                for c in 0..n {
-                    s += self.hp[a + c * r] * H[ib + c * m];
-                }
-                self.sig[a + b * r] = s;
-            }
-        }
+        self.innovations(filter, model, z, self.rule == GateRule::Vector);
         let step = filter.steps();
         match self.rule {
             GateRule::Entries => {
@@ -235,6 +203,51 @@ impl Gate {
             }
         }
         Ok(&self.kept)
+    }
+
+    /// The prior innovation `e` of the present entries (`present`, `r` of them) and their
+    /// innovation covariance `Σ = H P⁻ Hᵀ + R` in `sig` (r×r): all of it when `whole`, else
+    /// its diagonal only. `present` must already hold the present entries of `z`.
+    fn innovations<D: Dims>(
+        &mut self,
+        filter: &Filter<D>,
+        model: &Model<D>,
+        z: &[f64],
+        whole: bool,
+    ) {
+        let (n, m, r) = (self.n, self.m, self.present.len());
+        let (H, R) = (model.H.as_slice(), model.R.as_slice());
+        let x = filter.predicted_state();
+        let P = filter.predicted_covariance();
+        // e and H P for the present rows (row a of hp is present entry a).
+        for (a, &i) in self.present.iter().enumerate() {
+            let mut hx = 0.0;
+            for j in 0..n {
+                hx += H[i + j * m] * x[j];
+            }
+            self.e[a] = z[i] - hx;
+            for c in 0..n {
+                let mut s = 0.0;
+                for j in 0..n {
+                    s += H[i + j * m] * P[(j, c)];
+                }
+                self.hp[a + c * r] = s;
+            }
+        }
+        // Σ over the present entries (all of it for the vector rule, its diagonal for the
+        // entries' rule).
+        for (b, &ib) in self.present.iter().enumerate() {
+            for (a, &ia) in self.present.iter().enumerate() {
+                if !whole && a != b {
+                    continue;
+                }
+                let mut s = R[ia + ib * m];
+                for c in 0..n {
+                    s += self.hp[a + c * r] * H[ib + c * m];
+                }
+                self.sig[a + b * r] = s;
+            }
+        }
     }
 
     /// `eᵀ Σ⁺ e` and the rank of the r×r Σ in `sig`: by Cholesky, or, when Σ is singular to
@@ -277,8 +290,8 @@ impl Gate {
 #[derive(Debug, Clone)]
 pub struct Huber<D: Dims> {
     c: f64,
-    n: usize,
-    m: usize,
+    /// Its workspaces compute the prior innovations.
+    gate: Gate,
     scaled: Model<D>,
     d: Vec<f64>,
     weights: Vec<f64>,
@@ -301,8 +314,7 @@ impl<D: Dims> Huber<D> {
         let m = model.dims().m();
         Ok(Huber {
             c,
-            n: model.dims().n(),
-            m,
+            gate: Gate::new(GateRule::Entries, 0.5, model)?,
             scaled: model.clone(),
             d: vec![1.0; m],
             weights: vec![1.0; m],
@@ -330,7 +342,7 @@ impl<D: Dims> Huber<D> {
         model: &Model<D>,
         z: &[f64],
     ) -> Result<&Model<D>, Error> {
-        let (n, m) = (self.n, self.m);
+        let (n, m) = (self.gate.n, self.gate.m);
         if model.dims().n() != n
             || model.dims().m() != m
             || z.len() != m
@@ -342,29 +354,18 @@ impl<D: Dims> Huber<D> {
                 rule: "a Huber weighting applies to models of the shape it was built for",
             });
         }
-        let (H, R) = (model.H.as_slice(), model.R.as_slice());
-        let x = filter.predicted_state();
-        let P = filter.predicted_covariance();
-        for i in 0..m {
-            self.weights[i] = 1.0;
-            self.d[i] = 1.0;
-            if z[i].is_nan() {
-                continue;
-            }
-            let mut e = z[i];
-            let mut sig = R[i + i * m];
-            for j in 0..n {
-                e -= H[i + j * m] * x[j];
-                let mut hp = 0.0;
-                for l in 0..n {
-                    hp += H[i + l * m] * P[(l, j)];
-                }
-                sig += hp * H[i + j * m];
-            }
-            let r = e.abs() / sig.sqrt();
-            if r > self.c {
-                self.weights[i] = self.c / r;
-                self.d[i] = (r / self.c).sqrt();
+        self.weights.iter_mut().for_each(|w| *w = 1.0);
+        self.d.iter_mut().for_each(|d| *d = 1.0);
+        let g = &mut self.gate;
+        g.present.clear();
+        g.present.extend((0..m).filter(|&i| !z[i].is_nan()));
+        g.innovations(filter, model, z, false);
+        let r = g.present.len();
+        for (a, &i) in g.present.iter().enumerate() {
+            let std = g.e[a].abs() / g.sig[a + a * r].sqrt();
+            if std > self.c {
+                self.weights[i] = self.c / std;
+                self.d[i] = (std / self.c).sqrt();
             }
         }
         self.scaled.scaled_measurement_noise(model, &self.d);

@@ -385,13 +385,7 @@ impl Sampler {
                 q[i + j * n] = (0..n).map(|l| f[i + l * n] * E[l + (n + j) * k]).sum();
             }
         }
-        for j in 0..n {
-            for i in 0..j {
-                let s = 0.5 * (q[i + j * n] + q[j + i * n]);
-                q[i + j * n] = s;
-                q[j + i * n] = s;
-            }
-        }
+        crate::kernels::symmetrise(q, n);
         if !q.iter().all(|x| x.is_finite()) {
             return Err(overflow);
         }
@@ -430,7 +424,7 @@ impl Sampler {
     /// [`Error::InvalidOption`] naming `t` for a non-finite stamp or one that goes back, and
     /// as [`ContinuousModel::sample`].
     pub fn sequence(&mut self, t: &[f64]) -> Result<Sampled, Error> {
-        let mut keys: Vec<u64> = Vec::new();
+        let mut slots: HashMap<u64, usize> = HashMap::new();
         let mut models = Vec::new();
         let mut index = Vec::with_capacity(t.len());
         for k in 0..t.len() {
@@ -459,12 +453,11 @@ impl Sampler {
                 Some(&next) => next - t[k],
                 None => 0.0,
             };
-            let key = if dt == 0.0 { 0 } else { dt.to_bits() };
-            let i = match keys.iter().position(|&k| k == key) {
-                Some(i) => i,
+            let i = match slots.get(&key(dt)) {
+                Some(&i) => i,
                 None => {
                     models.push(self.at(dt)?.clone());
-                    keys.push(key);
+                    slots.insert(key(dt), models.len() - 1);
                     models.len() - 1
                 }
             };

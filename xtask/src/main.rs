@@ -155,6 +155,11 @@ fn known(args: &[String], flags: &[&str], options: &[&str]) -> Result<()> {
     Ok(())
 }
 
+/// The packages `cargo test` builds: the workspace without the Python extension, which has no
+/// Rust tests (its suite is pytest, run by `python::test`) and which maturin builds anew with
+/// its own flags, so compiling it in the test build would only cost time.
+const RUST_TESTED: [&str; 3] = ["--workspace", "--exclude", "launch-estimation-python"];
+
 fn test(args: &[String]) -> Result<()> {
     known(args, &[], &["--proptest-cases"])?;
     let cases = option(args, "--proptest-cases")?.unwrap_or("256");
@@ -164,30 +169,16 @@ fn test(args: &[String]) -> Result<()> {
     tidy_task()?;
     // Unit, integration and property tests of every crate with every feature, so the
     // `proptest` strategy features are exercised too. Benches are built (not run) by clippy.
-    // The Python extension has no Rust tests (its suite is pytest, below) and maturin builds
-    // it anew with its own flags, so compiling it here would only cost time.
     let mut cmd = cargo();
-    cmd.args([
-        "test",
-        "--workspace",
-        "--exclude",
-        "launch-estimation-python",
-        "--all-features",
-        "--lib",
-        "--bins",
-        "--tests",
-    ])
-    .env("PROPTEST_CASES", cases.to_string());
+    cmd.args(["test"])
+        .args(RUST_TESTED)
+        .args(["--all-features", "--lib", "--bins", "--tests"])
+        .env("PROPTEST_CASES", cases.to_string());
     run(cmd)?;
     let mut cmd = cargo();
-    cmd.args([
-        "test",
-        "--workspace",
-        "--exclude",
-        "launch-estimation-python",
-        "--all-features",
-        "--doc",
-    ]);
+    cmd.args(["test"])
+        .args(RUST_TESTED)
+        .args(["--all-features", "--doc"]);
     run(cmd)?;
     downstream()?;
     python::test()
