@@ -157,8 +157,15 @@ fn known(args: &[String], flags: &[&str], options: &[&str]) -> Result<()> {
 
 /// The packages `cargo test` builds: the workspace without the Python extension, which has no
 /// Rust tests (its suite is pytest, run by `python::test`) and which maturin builds anew with
-/// its own flags, so compiling it in the test build would only cost time.
-const RUST_TESTED: [&str; 3] = ["--workspace", "--exclude", "launch-estimation-python"];
+/// its own flags, and without the benchmarks, whose criterion dependency would only cost build
+/// time (clippy checks them; `cargo xtask bench` runs them).
+const RUST_TESTED: [&str; 5] = [
+    "--workspace",
+    "--exclude",
+    "launch-estimation-python",
+    "--exclude",
+    "stochest-benches",
+];
 
 fn test(args: &[String]) -> Result<()> {
     known(args, &[], &["--proptest-cases"])?;

@@ -1,12 +1,12 @@
 """Times statsmodels' UnobservedComponents MLE (local linear trend) on the 3000-sample
-series of benches/fit.rs (rebuilt bit for bit: same LCG, same Box-Muller), with the same
+series of benches/kalman/fit.rs (rebuilt bit for bit: same LCG, same Box-Muller), with the same
 known prior and the same start (all three variances 1), so that both reach the same
 optimum; both times include the standard errors (ours: the observed information in the
 returned Fit; statsmodels': `bse`, forced inside the timed region). Compare with
-`cargo bench -p stochest-kalman --features argmin --bench fit` (group fit_llt3000).
+`cargo bench -p stochest-benches --bench fit` (group fit_llt3000).
 
     python3 -m venv /tmp/venv-fit && /tmp/venv-fit/bin/pip install statsmodels numpy
-    /tmp/venv-fit/bin/python kalman/benches/statsmodels_fit.py   -> median and best of 10, ms
+    /tmp/venv-fit/bin/python benches/kalman/statsmodels_fit.py   -> median and best of 10, ms
 """
 import math
 import time

@@ -1,8 +1,8 @@
-"""Times FilterPy on the (7, 2) problem of benches/step.rs (same matrices and data).
+"""Times FilterPy on the (7, 2) problem of benches/kalman/step.rs (same matrices and data).
 
 Joseph form (FilterPy's KalmanFilter.update uses (I-KH)P(I-KH)' + KRK') plus predict,
 one step per measurement, cycling through the same 64 measurement vectors.
-Usage: python3 kalman/benches/filterpy_step.py [n m]   -> prints ns/step
+Usage: python3 benches/kalman/filterpy_step.py [n m]   -> prints ns/step
 """
 import math
 import sys

@@ -5,7 +5,7 @@
 //!   filter iterated from P0 = I until P_{k+1|k} settles (`baseline_iterated_filter`; the
 //!   number of steps it needs is printed once per size).
 //!
-//! Deterministic problem: `benches/common/mod.rs`, shared with `benches/step.rs`.
+//! Deterministic problem: `benches/kalman/common/mod.rs`, shared with `benches/kalman/step.rs`.
 #![allow(non_snake_case, missing_docs, clippy::unwrap_used)]
 
 mod common;

@@ -3,7 +3,7 @@
 //! a circular track cycled (no jump at the wrap, no RNG). The baseline in the same group is
 //! the EKF with hand-written Jacobians; the others are the EKF with forward-mode AD
 //! Jacobians (target: within 2× of the baseline), the iterated EKF, and the UKF with
-//! Merwe's scaled and the cubature sigma points. `benches/filterpy_ukf_step.py` builds the
+//! Merwe's scaled and the cubature sigma points. `benches/kalman/filterpy_ukf_step.py` builds the
 //! same problem and times FilterPy's UKF on it.
 #![allow(non_snake_case, missing_docs, clippy::unwrap_used)]
 
@@ -16,7 +16,7 @@ use kalman::nonlinear::{AutoDiff, Ekf, EkfUpdate, SigmaPoints, Ukf};
 
 // The test models: the bench uses range and bearing only.
 #[allow(dead_code)]
-#[path = "../tests/nonlinear/models.rs"]
+#[path = "../../kalman/tests/nonlinear/models.rs"]
 mod models;
 
 use models::{Hand, RangeBearing};

@@ -4,7 +4,7 @@ model, prior, sigma points and measurements).
 One step = update + predict (FilterPy's own UKF loop; the Rust filter redraws its sigma
 points before the update, which costs it one extra Cholesky factorisation, so the
 comparison does not favour Rust), cycling through the same 64 measurements.
-Usage: python3 kalman/benches/filterpy_ukf_step.py   -> prints us/step
+Usage: python3 benches/kalman/filterpy_ukf_step.py   -> prints us/step
 """
 import math
 import time

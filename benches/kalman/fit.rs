@@ -1,5 +1,5 @@
 //! Fitting benches: MLE (Q diag, R diag) of a 3000-sample local linear trend (compare with
-//! `benches/statsmodels_fit.py` on the same data), and one EM iteration against its
+//! `benches/kalman/statsmodels_fit.py` on the same data), and one EM iteration against its
 //! baseline, one filter pass plus one RTS smoother pass.
 #![allow(non_snake_case)]
 

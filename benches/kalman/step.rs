@@ -3,7 +3,7 @@
 //! same group: a straightforward fixed-size nalgebra Joseph filter at the two small sizes
 //! (`baseline_nalgebra_fixed`), nalgebra `DMatrix` with preallocated matrices at the large
 //! ones (`baseline_nalgebra_dyn`). The problem is deterministic (no RNG needed) and identical
-//! to the one `benches/filterpy_step.py` builds, so the FilterPy timing is comparable.
+//! to the one `benches/kalman/filterpy_step.py` builds, so the FilterPy timing is comparable.
 #![allow(non_snake_case, missing_docs, clippy::unwrap_used)]
 
 mod common;

@@ -1,5 +1,5 @@
-//! The deterministic bench problem shared by `benches/step.rs` and `benches/steady.rs`
-//! (identical to the one `benches/filterpy_step.py` builds), and its engine model.
+//! The deterministic bench problem shared by `benches/kalman/step.rs` and `benches/kalman/steady.rs`
+//! (identical to the one `benches/kalman/filterpy_step.py` builds), and its engine model.
 
 use faer::Mat;
 use kalman::{Dims, Model};
