@@ -11,7 +11,16 @@ use crate::{root, run};
 /// What the venv holds: the build tool, the package's one dependency, the test runner and
 /// the reference implementation the tests compare against. The venv's directory name is a
 /// hash of this list (and of the interpreter's version), so changing it makes a new venv.
-const REQUIREMENTS: &[&str] = &["maturin>=1.9.4,<2", "numpy>=1.23", "pytest>=8", "filterpy"];
+const REQUIREMENTS: &[&str] = &[
+    "maturin>=1.9.4,<2",
+    "numpy>=1.23",
+    "pytest>=8",
+    "filterpy==2.0.0",
+];
+
+/// The FilterPy release whose own test files the conformance run takes from its source
+/// distribution (the same version as the venv's, whose other names those files still use).
+const FILTERPY_SDIST: &str = "filterpy==2.0.0";
 
 /// The interpreter to build the venv from: `$PYTHON`, else `python3`, else `python`.
 fn interpreter() -> Result<(String, String)> {
@@ -88,6 +97,36 @@ fn venv() -> Result<PathBuf> {
     Ok(venv)
 }
 
+/// Downloads (once) FilterPy's source distribution into `target/filterpy-sdist/`, returning
+/// the archive's path: the conformance run (`tests/test_filterpy_suite.py`) takes FilterPy's
+/// own test files from it. Nothing is installed; pip only fetches the archive.
+fn filterpy_sdist(venv: &Path) -> Result<PathBuf> {
+    let dir = root().join("target").join("filterpy-sdist");
+    let version = FILTERPY_SDIST.trim_start_matches("filterpy==");
+    let archive = dir.join(format!("filterpy-{version}.tar.gz"));
+    if archive.exists() {
+        return Ok(archive);
+    }
+    let mut cmd = Command::new(venv_python(venv));
+    cmd.args([
+        "-m",
+        "pip",
+        "download",
+        "--quiet",
+        "--no-deps",
+        "--no-binary",
+        ":all:",
+    ])
+    .arg("--dest")
+    .arg(&dir)
+    .arg(FILTERPY_SDIST);
+    run(cmd).context("downloading FilterPy's source distribution from PyPI")?;
+    if !archive.exists() {
+        bail!("pip download left no {}", archive.display());
+    }
+    Ok(archive)
+}
+
 /// Builds the extension into the venv (a debug build: it reuses the workspace's optimised
 /// dependencies, so only the bindings compile) and runs the pytest suite.
 pub(crate) fn test() -> Result<()> {
@@ -106,9 +145,11 @@ pub(crate) fn test() -> Result<()> {
         .env("VIRTUAL_ENV", &venv)
         .env("PATH", &path);
     run(cmd).context("building the Python package (maturin develop)")?;
+    let sdist = filterpy_sdist(&venv)?;
     let mut cmd = Command::new(venv_python(&venv));
     cmd.current_dir(root().join("python"))
         .args(["-m", "pytest", "-q", "tests"])
+        .env("FILTERPY_SDIST", &sdist)
         .env("VIRTUAL_ENV", &venv)
         .env("PATH", &path);
     run(cmd).context("the Python package's tests (pytest)")
