@@ -39,3 +39,32 @@ pub mod userdata;
 
 pub use campaign::Campaign;
 pub use error::{Error, ValueError};
+
+/// The README's and the guide's Rust snippets, compiled and run as this crate's doc tests
+/// (`cargo test --doc`): the crate depends on every library the snippets use, so a snippet
+/// that stops matching the code fails the test command.
+#[cfg(doctest)]
+mod guide {
+    #[doc = include_str!("../../README.md")]
+    struct Readme;
+    #[doc = include_str!("../../docs/getting-started.md")]
+    struct GettingStarted;
+    #[doc = include_str!("../../docs/records.md")]
+    struct Records;
+    #[doc = include_str!("../../docs/library.md")]
+    struct Library;
+    #[doc = include_str!("../../docs/fitting.md")]
+    struct Fitting;
+    #[doc = include_str!("../../docs/nonlinear.md")]
+    struct Nonlinear;
+    #[doc = include_str!("../../docs/cli.md")]
+    struct Cli;
+    #[doc = include_str!("../../docs/python.md")]
+    struct Python;
+    #[doc = include_str!("../../docs/filterpy.md")]
+    struct FilterPy;
+    #[doc = include_str!("../../docs/papers.md")]
+    struct Papers;
+    #[doc = include_str!("../../docs/math.md")]
+    struct Math;
+}

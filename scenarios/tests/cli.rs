@@ -20,6 +20,8 @@ mod input_errors;
 mod irregular;
 #[path = "cli/output_safety.rs"]
 mod output_safety;
+#[path = "cli/transcripts.rs"]
+mod transcripts;
 #[path = "cli/uav.rs"]
 mod uav;
 #[path = "cli/userdata.rs"]

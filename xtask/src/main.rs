@@ -5,6 +5,7 @@
 
 mod bench;
 mod examples;
+mod guide;
 mod mutants;
 mod notation;
 mod python;
@@ -37,6 +38,10 @@ const TASKS: &[(&str, &str)] = &[
     (
         "ci",
         "fmt check, clippy -D warnings, docs with warnings denied, then `test`",
+    ),
+    (
+        "docs",
+        "build the guide (docs/, an mdBook) into target/guide/, installing mdbook if missing",
     ),
     (
         "tidy",
@@ -74,6 +79,7 @@ fn main() -> ExitCode {
         "bench" => bench::bench(rest),
         "reproduce" => reproduce(rest),
         "ci" => ci(rest),
+        "docs" => known(rest, &[], &[]).and_then(|()| guide::docs()),
         "tidy" => tidy_task(),
         "doc-examples" => doc_examples(),
         "fuzz" => fuzz(rest),
