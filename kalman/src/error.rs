@@ -229,6 +229,14 @@ pub enum Error {
         /// The tolerance (relative to the largest diagonal entry).
         tol: f64,
     },
+    /// An error in one series of a [`crate::batch::BatchFilter`] run.
+    #[error("series {series}: {error}")]
+    InSeries {
+        /// The series (0-based).
+        series: usize,
+        /// What went wrong in it.
+        error: Box<Error>,
+    },
     /// An option of a filter is out of its valid range.
     #[error("{name} = {value} is invalid: {rule}")]
     InvalidOption {

@@ -158,6 +158,7 @@ assert_eq!(k.shape(), (2, 1));
 // which checks every link; without the feature they have no target.
 #![cfg_attr(not(feature = "nalgebra"), allow(rustdoc::broken_intra_doc_links))]
 
+pub mod batch;
 mod consistency;
 pub mod continuous;
 #[cfg(feature = "nalgebra")]

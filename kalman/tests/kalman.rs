@@ -17,6 +17,7 @@ mod common {
 mod engine {
     pub mod agreement;
     pub mod alloc;
+    pub mod batch;
     pub mod correlated;
     pub mod diverge;
     pub mod errors;
@@ -40,12 +41,15 @@ mod nonlinear {
 
 mod fit {
     pub mod common;
+    pub mod coverage;
+    pub mod entries;
     pub mod estimators;
     pub mod golden;
     pub mod likelihood;
 }
 
 mod steady {
+    pub mod benchmarks;
     pub mod common;
     pub mod continuous;
     pub mod riccati;
