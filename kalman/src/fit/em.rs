@@ -504,7 +504,8 @@ pub fn em(map: &StandardMap, data: &Series<'_>, opts: &EmOptions) -> Result<Fit,
 /// cross-covariances.
 ///
 /// # Errors
-/// As [`em`], without the identifiability check.
+/// As [`em`], without the identifiability check; [`FitError::Unsupported`] for a map with
+/// free entry parameters ([`StandardMap::with_params`]), which have no closed-form M-step.
 ///
 /// # Example
 /// ```
@@ -526,6 +527,13 @@ pub fn em_step(
     theta: &[f64],
     data: &Series<'_>,
 ) -> Result<(f64, Vec<f64>), FitError> {
+    if !map.params().is_empty() {
+        let names: Vec<&str> = map.params().iter().map(|p| p.name()).collect();
+        return Err(FitError::Unsupported(format!(
+            "EM's M-step updates Q, R, x0 and P0 as whole blocks; the free entries {} need the MLE",
+            names.join(", ")
+        )));
+    }
     let (n, m, N) = (map.base().n(), map.base().m(), data.len());
     let free = map.free();
     let sys = map.system(theta)?;

@@ -15,7 +15,7 @@ pub enum FitError {
     #[error("the data hold no measurement (every entry is missing)")]
     NoMeasurements,
     /// Nothing is free: there is nothing to fit.
-    #[error("nothing is free: free at least one of Q, R, x0, P0")]
+    #[error("nothing is free: free at least one of Q, R, x0, P0 or a matrix entry")]
     NothingFree,
     /// A free quantity cannot be identified from the data.
     #[error("{what} cannot be identified from the data: {why}")]

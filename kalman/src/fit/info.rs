@@ -46,6 +46,16 @@ pub struct Fit {
     pub covariance: Option<Mat<f64>>,
     /// The standard errors of θ (square roots of the covariance's diagonal).
     pub std_errors: Option<Vec<f64>>,
+    /// The correlation matrix of θ (`cov_ij / (se_i se_j)`), `None` with the covariance.
+    /// To first order it is also the correlation of the parameters' values `v_i(θ_i)` (each
+    /// transform is monotone, so the delta method rescales rows and columns only).
+    pub correlation: Option<Mat<f64>>,
+    /// When the observed information is singular: one entry per direction it does not
+    /// identify (an eigenvector of an eigenvalue below [`NULL_EIGENVALUE`] of the largest),
+    /// the parameters spanning it with their weights in it (the eigenvector's entries, of
+    /// magnitude at least 0.2), largest first. Empty when the information is positive
+    /// definite.
+    pub unidentified: Vec<Vec<(String, f64)>>,
     /// Number of observed scalar measurements.
     pub n_obs: usize,
     /// Akaike's information criterion `2k − 2 ln L`.
@@ -143,6 +153,66 @@ pub(crate) fn spd_inverse(a: &Mat<f64>) -> Option<Mat<f64>> {
     Some(m)
 }
 
+/// An eigenvalue of the observed information below this fraction of the largest marks a
+/// direction the data do not identify (its standard error would exceed the best-determined
+/// one's by 10⁴ or more).
+pub const NULL_EIGENVALUE: f64 = 1e-8;
+
+/// The directions of θ that `information` does not identify, named (see
+/// [`Fit::unidentified`]). With no eigenvalue below the threshold (a matrix that is only
+/// just indefinite to its Cholesky factorisation) the smallest one's direction is given.
+pub(crate) fn unidentified(information: &Mat<f64>, names: &[String]) -> Vec<Vec<(String, f64)>> {
+    let k = information.nrows();
+    if k == 0 {
+        return Vec::new();
+    }
+    let mut a = super::flat(information);
+    let mut v = vec![0.0; k * k];
+    let mut w = vec![0.0; k];
+    crate::kernels::jacobi_eigen(&mut a, k, &mut v, &mut w);
+    let top = w.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
+    let mut null: Vec<usize> = (0..k).filter(|&j| w[j] <= NULL_EIGENVALUE * top).collect();
+    if null.is_empty()
+        && let Some(j) = (0..k).min_by(|&a, &b| w[a].total_cmp(&w[b]))
+    {
+        null.push(j);
+    }
+    null.into_iter()
+        .map(|j| {
+            let col = &v[j * k..(j + 1) * k];
+            // a sign convention: the largest entry positive
+            let big = col
+                .iter()
+                .fold(0.0_f64, |a, &x| if x.abs() > a.abs() { x } else { a });
+            let sign = if big < 0.0 { -1.0 } else { 1.0 };
+            let mut named: Vec<(String, f64)> = col
+                .iter()
+                .enumerate()
+                .filter(|(_, x)| x.abs() >= 0.2)
+                .map(|(i, &x)| (names[i].clone(), sign * x))
+                .collect();
+            named.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+            named
+        })
+        .collect()
+}
+
+/// The correlation matrix of a covariance (`None` if a variance is not positive).
+pub(crate) fn correlation(cov: &Mat<f64>) -> Option<Mat<f64>> {
+    let k = cov.nrows();
+    let sd: Vec<f64> = (0..k).map(|i| cov[(i, i)].sqrt()).collect();
+    if sd.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        return None;
+    }
+    Some(Mat::from_fn(k, k, |i, j| {
+        if i == j {
+            1.0
+        } else {
+            (cov[(i, j)] / (sd[i] * sd[j])).clamp(-1.0, 1.0)
+        }
+    }))
+}
+
 /// Builds the [`Fit`] at θ: log-likelihood, information, standard errors, boundary flags.
 pub(crate) fn finish<M: ParamMap + ?Sized>(
     map: &M,
@@ -177,9 +247,24 @@ pub(crate) fn finish<M: ParamMap + ?Sized>(
             boundary.join(", ")
         ));
     }
-    if covariance.is_none() {
-        message.push_str("; the observed information is not positive definite (a direction the data do not identify): no standard errors");
-    }
+    let unidentified = if covariance.is_none() {
+        let dirs = unidentified(&information, &names);
+        let text: Vec<String> = dirs
+            .iter()
+            .map(|d| {
+                let parts: Vec<String> = d.iter().map(|(n, w)| format!("{w:+.2}·{n}")).collect();
+                format!("[{}]", parts.join(" "))
+            })
+            .collect();
+        message.push_str(&format!(
+            "; the observed information is not positive definite: the data do not identify the direction(s) {} of θ; no standard errors",
+            text.join(", ")
+        ));
+        dirs
+    } else {
+        Vec::new()
+    };
+    let correlation = covariance.as_ref().and_then(correlation);
     let n_obs = data.observed();
     let k = theta.len();
     Ok(Fit {
@@ -193,6 +278,8 @@ pub(crate) fn finish<M: ParamMap + ?Sized>(
         information,
         covariance,
         std_errors,
+        correlation,
+        unidentified,
         n_obs,
         aic: aic(loglik, k),
         bic: bic(loglik, k, n_obs),

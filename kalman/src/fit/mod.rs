@@ -24,9 +24,37 @@
 //! A [`ParamMap`] maps an unconstrained vector `θ` to a [`System`]. [`StandardMap`] frees
 //! `Q` and `R` as [`Structure::Scalar`] (`σ²·I`), [`Structure::Diag`] or
 //! [`Structure::Full`] (a Cholesky factor with log-diagonal, so every iterate is PSD),
-//! optionally `x0` and a diagonal `P0`, the rest fixed at a base system's values. Any other
-//! map (a shaping filter's `σ, μ, ω`, a discretised continuous model at a given Δt) is a
-//! user type implementing [`ParamMap`], or a closure in [`FnMap`].
+//! optionally `x0` and a diagonal `P0`, and any number of [`Param`]s: a single entry of
+//! `F`, `B`, `H`, `Q`, `R`, `x0` or `P0` ([`Param::entry`]: an AR coefficient, a scale
+//! factor, a bias), or one value shared by several entries with a coefficient each
+//! ([`Param::shared`]: the intensity of a constant-velocity model's whole `Q`), through a
+//! [`Transform`] (identity, log for a variance, tanh for a bounded coefficient). Every
+//! entry not freed keeps the base system's value exactly, and the exact gradient runs
+//! through `∂F`, `∂B`, `∂H`, `∂Q`, `∂R`, `∂x0`, `∂P0` alike. Any other map (a shaping
+//! filter's `σ, μ, ω`, a discretised continuous model at a given Δt) is a user type
+//! implementing [`ParamMap`], or a closure in [`FnMap`] (derivatives supplied, or by
+//! central differences).
+//!
+//! ```
+//! use kalman::fit::{Free, Matrix, MleOptions, Param, Series, StandardMap, System, mle};
+//! # fn main() -> Result<(), kalman::fit::FitError> {
+//! // An AR(1) seen through noise: φ = F[0,0], Q[0,0] and R[0,0] free, from φ = 0.
+//! let base = System::new(&[[0.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[1.0]])?;
+//! let free = [Matrix::F, Matrix::Q, Matrix::R].map(|m| Param::entry(m, 0, 0)).to_vec();
+//! let map = StandardMap::with_params(base.clone(), Free::default(), free)?;
+//! let z: Vec<f64> = (0..200).map(|k| (0.3 * k as f64).sin() + 0.2 * (2.1 * k as f64).cos()).collect();
+//! let data = Series::new(&z, 1)?;
+//! let fit = mle(&map, map.theta_of(&base, Some(&data)), &data, &MleOptions::default())?;
+//! let values = map.param_values(&fit.theta)?; // [("F[0,0]", φ̂), ("Q[0,0]", …), ("R[0,0]", …)]
+//! assert_eq!(values[0].0, "F[0,0]");
+//! assert!(values[0].1 > 0.5, "a slow sinusoid is a persistent AR(1)");
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! The observed information gives the standard errors, the correlation matrix
+//! ([`Fit::correlation`]) and, when it is singular, the parameters spanning each direction
+//! the data do not identify ([`Fit::unidentified`], named in the message too).
 //!
 //! # Estimators
 //! - [`mle`] (feature `argmin`): L-BFGS on `−ln L` with the exact gradient, Nelder–Mead as a
@@ -58,6 +86,7 @@
 
 mod dense;
 mod em;
+mod entries;
 mod error;
 mod info;
 #[cfg(feature = "argmin")]
@@ -68,8 +97,9 @@ mod score;
 use faer::Mat;
 
 pub use em::{EmOptions, check_identifiable, em, em_step};
+pub use entries::{Entry, Matrix, Param, Transform};
 pub use error::FitError;
-pub use info::{Fit, Method, aic, bic, observed_information};
+pub use info::{Fit, Method, NULL_EIGENVALUE, aic, bic, observed_information};
 #[cfg(feature = "argmin")]
 pub use mle::{MleOptions, mle};
 pub use params::{Derivative, FnMap, Free, MatrixStdErrors, ParamMap, StandardMap, Structure};

@@ -3,6 +3,7 @@
 
 use faer::Mat;
 
+use super::entries::{self, Matrix, Param, Transform};
 use super::{FitError, Series, System};
 
 /// A map from an unconstrained parameter vector θ to a [`System`], with the derivative of
@@ -41,6 +42,8 @@ pub trait ParamMap {
 pub struct Derivative {
     /// ∂F/∂θ_i.
     pub f: Option<Mat<f64>>,
+    /// ∂B/∂θ_i.
+    pub b: Option<Mat<f64>>,
     /// ∂H/∂θ_i.
     pub h: Option<Mat<f64>>,
     /// ∂Q/∂θ_i.
@@ -99,6 +102,7 @@ fn central_differences<M: ParamMap + ?Sized>(
             .collect();
         out.push(Derivative {
             f: d(&hi.f, &lo.f),
+            b: d(&hi.b, &lo.b),
             h: d(&hi.h, &lo.h),
             q: d(&hi.q, &lo.q),
             r: d(&hi.r, &lo.r),
@@ -190,8 +194,10 @@ pub struct Free {
 }
 
 /// The standard parameterisation: `Q` and `R` freed with a [`Structure`], optionally `x0`
-/// and a diagonal `P0`; everything else fixed at the base system. θ is laid out as
-/// `[Q | R | x0 | P0]`.
+/// and a diagonal `P0`, and any number of [`Param`]s — single entries of `F`, `B`, `H`,
+/// `Q`, `R`, `x0`, `P0`, or one value shared by several entries, each through its
+/// [`Transform`]; every entry not freed keeps the base system's value exactly. θ is laid
+/// out as `[Q | R | x0 | P0 | params]`.
 ///
 /// # Example
 /// ```
@@ -209,6 +215,7 @@ pub struct Free {
 pub struct StandardMap {
     base: System,
     free: Free,
+    params: Vec<Param>,
 }
 
 /// Standard errors of the free entries, in the shapes of the free matrices (delta method
@@ -223,6 +230,8 @@ pub struct MatrixStdErrors {
     pub x0: Option<Vec<f64>>,
     /// Of P0's diagonal.
     pub p0: Option<Vec<f64>>,
+    /// Of each free [`Param`]'s value `v(θ)`, by its name, in the map's order.
+    pub params: Vec<(String, f64)>,
 }
 
 fn cov_count(s: Structure, n: usize) -> usize {
@@ -331,11 +340,78 @@ impl StandardMap {
     /// # Errors
     /// [`FitError::NothingFree`] if nothing is free.
     pub fn new(base: System, free: Free) -> Result<Self, FitError> {
-        let map = Self { base, free };
+        Self::with_params(base, free, Vec::new())
+    }
+
+    /// Frees `free` of `base` and the entries of `params`.
+    ///
+    /// # Errors
+    /// [`FitError::NothingFree`] if nothing is free; [`FitError::Parameters`] for an entry
+    /// outside its matrix, a zero or non-finite coefficient, a parameter without entries,
+    /// two parameters of one name, an entry set twice, or an entry of a matrix that `free`
+    /// already frees as a whole.
+    ///
+    /// # Example
+    /// ```
+    /// use kalman::fit::{Free, Matrix, Param, ParamMap, StandardMap, System};
+    /// # fn main() -> Result<(), kalman::fit::FitError> {
+    /// // AR(2) plus noise: F = [φ1 1; φ2 0], Q = diag(σ², 0), R = σ²_ε.
+    /// let base = System::new(&[[0.5, 1.0], [0.2, 0.0]], &[[1.0, 0.0]], &[[1.0, 0.0], [0.0, 0.0]], &[[0.5]], &[0.0, 0.0], &[[1.0, 0.0], [0.0, 1.0]])?;
+    /// let params = vec![
+    ///     Param::entry(Matrix::F, 0, 0),
+    ///     Param::entry(Matrix::F, 1, 0),
+    ///     Param::entry(Matrix::Q, 0, 0),
+    ///     Param::entry(Matrix::R, 0, 0),
+    /// ];
+    /// let map = StandardMap::with_params(base.clone(), Free::default(), params)?;
+    /// let theta = map.theta_of(&base, None);
+    /// assert_eq!(theta, vec![0.5, 0.2, 0.0, 0.5_f64.ln()]);
+    /// let sys = map.system(&[0.6, -0.3, 2.0_f64.ln(), 0.0])?;
+    /// assert!((sys.f[(1, 0)] + 0.3).abs() < 1e-15 && (sys.q[(0, 0)] - 2.0).abs() < 1e-15);
+    /// assert!((sys.f[(0, 1)] - 1.0).abs() < 1e-15); // not freed: kept exactly
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn with_params(base: System, free: Free, params: Vec<Param>) -> Result<Self, FitError> {
+        let mut taken = Vec::new();
+        if free.q != Structure::Fixed {
+            taken.push(Matrix::Q);
+        }
+        if free.r != Structure::Fixed {
+            taken.push(Matrix::R);
+        }
+        if free.x0 {
+            taken.push(Matrix::X0);
+        }
+        if free.p0_diag {
+            taken.push(Matrix::P0);
+        }
+        entries::check(&params, &base, &taken)?;
+        let map = Self { base, free, params };
         if map.n_params() == 0 {
             return Err(FitError::NothingFree);
         }
         Ok(map)
+    }
+
+    /// The free entry parameters (the last `params().len()` entries of θ).
+    pub fn params(&self) -> &[Param] {
+        &self.params
+    }
+
+    /// The value `v(θ)` of each free [`Param`], by its name.
+    ///
+    /// # Errors
+    /// [`FitError::Parameters`] for a θ of the wrong length or with a non-finite entry.
+    pub fn param_values(&self, theta: &[f64]) -> Result<Vec<(String, f64)>, FitError> {
+        check_theta(theta, self.n_params())?;
+        let t = self.split(theta)[4];
+        Ok(self
+            .params
+            .iter()
+            .zip(t)
+            .map(|(p, &t)| (p.name().to_string(), p.transform().value(t).0))
+            .collect())
     }
 
     /// The base system.
@@ -348,13 +424,14 @@ impl StandardMap {
         self.free
     }
 
-    fn counts(&self) -> [usize; 4] {
+    fn counts(&self) -> [usize; 5] {
         let (n, m) = (self.base.n(), self.base.m());
         [
             cov_count(self.free.q, n),
             cov_count(self.free.r, m),
             if self.free.x0 { n } else { 0 },
             if self.free.p0_diag { n } else { 0 },
+            self.params.len(),
         ]
     }
 
@@ -377,16 +454,24 @@ impl StandardMap {
                 }
             }));
         }
+        t.extend(self.params.iter().map(|p| {
+            let v = p.value_in(sys);
+            p.transform().theta(v).unwrap_or(match p.transform() {
+                Transform::Log => fallback.ln(),
+                Transform::Identity | Transform::Tanh => 0.0,
+            })
+        }));
         t
     }
 
-    /// Splits θ into its `[Q | R | x0 | P0]` blocks.
-    fn split<'t>(&self, theta: &'t [f64]) -> [&'t [f64]; 4] {
+    /// Splits θ into its `[Q | R | x0 | P0 | params]` blocks.
+    fn split<'t>(&self, theta: &'t [f64]) -> [&'t [f64]; 5] {
         let c = self.counts();
         let (q, rest) = theta.split_at(c[0]);
         let (r, rest) = rest.split_at(c[1]);
-        let (x, p) = rest.split_at(c[2]);
-        [q, r, x, p]
+        let (x, rest) = rest.split_at(c[2]);
+        let (p, e) = rest.split_at(c[3]);
+        [q, r, x, p, e]
     }
 
     /// Standard errors of the free matrix entries from the covariance of θ (`cov`,
@@ -436,6 +521,18 @@ impl StandardMap {
                     .map(|i| se(&|di| di.p0.as_ref().map(|a| a[(i, i)])))
                     .collect()
             }),
+            params: {
+                let off = k - self.params.len();
+                self.params
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        let (_, dv) = p.transform().value(theta[off + i]);
+                        let var = cov[(off + i, off + i)].max(0.0);
+                        (p.name().to_string(), dv.abs() * var.sqrt())
+                    })
+                    .collect()
+            },
         })
     }
 }
@@ -495,12 +592,13 @@ impl ParamMap for StandardMap {
         if self.free.p0_diag {
             out.extend((0..n).map(|i| format!("ln P0[{i},{i}]")));
         }
+        out.extend(self.params.iter().map(|p| p.name().to_string()));
         out
     }
 
     fn system(&self, theta: &[f64]) -> Result<System, FitError> {
         check_theta(theta, self.n_params())?;
-        let [tq, tr, tx, tp] = self.split(theta);
+        let [tq, tr, tx, tp, te] = self.split(theta);
         let (n, m) = (self.base.n(), self.base.m());
         let mut s = self.base.clone();
         if self.free.q != Structure::Fixed {
@@ -515,12 +613,13 @@ impl ParamMap for StandardMap {
         if self.free.p0_diag {
             s.p0 = Mat::from_fn(n, n, |i, j| if i == j { tp[i].exp() } else { 0.0 });
         }
+        entries::apply(&self.params, te, &mut s);
         Ok(s)
     }
 
     fn derivatives(&self, theta: &[f64]) -> Result<Vec<Derivative>, FitError> {
         check_theta(theta, self.n_params())?;
-        let [tq, tr, _, tp] = self.split(theta);
+        let [tq, tr, _, tp, te] = self.split(theta);
         let (n, m) = (self.base.n(), self.base.m());
         let mut out = Vec::with_capacity(theta.len());
         for i in 0..tq.len() {
@@ -555,6 +654,9 @@ impl ParamMap for StandardMap {
                 });
             }
         }
+        for (p, &t) in self.params.iter().zip(te) {
+            out.push(entries::derivative(p, t, &self.base));
+        }
         Ok(out)
     }
 
@@ -580,6 +682,14 @@ impl ParamMap for StandardMap {
         if self.free.p0_diag {
             out.extend(c[0] + c[1] + c[2]..c[0] + c[1] + c[2] + c[3]);
         }
+        let off = c[0] + c[1] + c[2] + c[3];
+        out.extend(
+            self.params
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.transform() == Transform::Log)
+                .map(|(i, _)| off + i),
+        );
         out
     }
 }

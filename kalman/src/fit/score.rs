@@ -49,6 +49,7 @@ impl Flat {
 
 struct FlatDeriv {
     F: Option<Vec<f64>>,
+    B: Option<Vec<f64>>,
     H: Option<Vec<f64>>,
     Q: Option<Vec<f64>>,
     R: Option<Vec<f64>>,
@@ -60,6 +61,7 @@ impl FlatDeriv {
     fn new(d: &Derivative) -> Self {
         Self {
             F: d.f.as_ref().map(flat),
+            B: d.b.as_ref().map(flat),
             H: d.h.as_ref().map(flat),
             Q: d.q.as_ref().map(flat),
             R: d.r.as_ref().map(flat),
@@ -69,12 +71,18 @@ impl FlatDeriv {
     }
 }
 
-/// The prediction's part of the state derivative, `dxn = F ∂x + ∂F x`.
-fn predict_dx(dxn: &mut [f64], s: &Flat, di: &FlatDeriv, dx: &[f64], x: &[f64]) {
+/// The prediction's part of the state derivative, `dxn = F ∂x + ∂F x + ∂B u` (`u` empty
+/// without inputs).
+fn predict_dx(dxn: &mut [f64], s: &Flat, di: &FlatDeriv, dx: &[f64], x: &[f64], u: &[f64]) {
     let n = s.n;
     gemm(dxn, n, 1, n, 1.0, &s.F, n, false, dx, n, false, 0.0);
     if let Some(df) = &di.F {
         gemm(dxn, n, 1, n, 1.0, df, n, false, x, n, false, 1.0);
+    }
+    if let Some(db) = &di.B
+        && !u.is_empty()
+    {
+        gemm(dxn, n, 1, s.p, 1.0, db, n, false, u, s.p, false, 1.0);
     }
 }
 
@@ -119,6 +127,7 @@ fn check_deriv(d: &Derivative, s: &System) -> Result<(), FitError> {
         Ok(())
     };
     bad("dF", &d.f, n, n)?;
+    bad("dB", &d.b, n, s.p())?;
     bad("dH", &d.h, m, n)?;
     bad("dQ", &d.q, n, n)?;
     bad("dR", &d.r, m, m)?;
@@ -467,7 +476,7 @@ impl Work {
             let a_de: f64 = (0..mo).map(|r| alpha[r] * de[r]).sum();
             grad[i] -= 0.5 * (*tr - a_ds_a + 2.0 * a_de);
             // dx' = dF x + F dx + dM α − G dΣ α + G de
-            predict_dx(dxn, s, di, dx, &self.x);
+            predict_dx(dxn, s, di, dx, &self.x, u);
             gemm(dxn, n, 1, mo, 1.0, dM, n, false, alpha, mo, false, 1.0);
             for r in 0..mo {
                 dsa[r] = de[r] - dsa[r];
@@ -522,7 +531,7 @@ impl Work {
         self.predict_P(s);
         s.predict_mean(&mut self.xn, &self.x, u);
         for (w, di) in self.par.iter_mut().zip(d) {
-            predict_dx(&mut w.dxn, s, di, &w.dx, &self.x);
+            predict_dx(&mut w.dxn, s, di, &w.dx, &self.x, u);
             predict_dP(&mut w.dPn, &mut self.tn, &s.F, &w.dP, di, &self.FP, n);
         }
         symmetrise(&mut self.Pn, n);
