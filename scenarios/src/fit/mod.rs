@@ -1,16 +1,29 @@
 //! `scenarios fit`: learns the free parts of a discrete model file (Q, R as scalar, diagonal
-//! or full; x0; a diagonal P0) from a data CSV by maximum likelihood or EM, and writes the
-//! fitted model file and a summary. The mathematics is `kalman::fit`'s; this module parses,
-//! checks and writes.
+//! or full; x0; a diagonal P0; single entries of F, B, H, Q, R, x0, P0; the intensity of a
+//! constant-velocity or constant-acceleration model's Q) from a data CSV by maximum
+//! likelihood or EM, and writes the fitted model file and a summary. The mathematics is
+//! `kalman::fit`'s; this module parses, checks and writes.
+//!
+//! `--free` is repeatable and each value a comma-separated list of `Q:scalar|diag|full`,
+//! `R:scalar|diag|full`, `x0`, `P0:diag`, entries named 0-based as the summary names them
+//! (`F[0,0]`, `B[2,0]`, `H[1,0]`, `Q[0,0]`, `R[1,1]`, `P0[0,0]`, `x0[1]`; a diagonal entry
+//! of a covariance is fitted through its logarithm, an off-diagonal one sets its mirror
+//! too) and `Q:white-acceleration` (Q = q·∫₀^Δt e^{Aτ} G Gᵀ e^{Aᵀτ} dτ with A = log(F)/Δt a
+//! chain of integrators and G the unit inputs of its last states: the one intensity q of
+//! a constant-velocity or constant-acceleration model). Every entry not freed keeps its
+//! value exactly.
 //!
 //! `FITTED` is a model file in the input's format with the free entries replaced, read by
 //! `scenarios filter` as is. `--summary FIT.json` holds `loglik` (the exact Gaussian
 //! log-likelihood of the data under the fitted model, with the `−½ m_k ln 2π` terms),
-//! `method`, `iterations`, `converged`, `message`, `std_errors` (observed-information
-//! standard errors in the shapes of the free matrices; `null` when the information is not
-//! positive definite), `boundary` (free variances at zero), `aic`, `bic`, `n_params`,
-//! `n_obs`. A fit that does not converge is an error (exit code 1) unless
-//! `--allow-unconverged`.
+//! `method`, `iterations`, `converged`, `message`, `estimates` (each freed entry's value by
+//! its name), `std_errors` (observed-information standard errors: in the shapes of the
+//! matrices freed as a whole, and by name for each freed entry; `null` when the information
+//! is not positive definite), `correlation` (`names` and the correlation `matrix` of the
+//! parameters, `null` with the standard errors), `unidentified` (for a singular
+//! information, each direction it does not identify as the parameters spanning it and
+//! their weights), `boundary` (free variances at zero), `aic`, `bic`, `n_params`, `n_obs`.
+//! A fit that does not converge is an error (exit code 1) unless `--allow-unconverged`.
 #![allow(non_snake_case)]
 
 pub mod shaping;
@@ -19,7 +32,8 @@ use std::path::{Path, PathBuf};
 
 use faer::Mat;
 use kalman::fit::{
-    EmOptions, Fit, FitError, Free, MleOptions, Series, StandardMap, Structure, System,
+    EmOptions, Fit, FitError, Free, Matrix, MleOptions, Param, Series, StandardMap, Structure,
+    System, Transform,
 };
 use nalgebra::DMatrix;
 use serde_json::json;
@@ -46,9 +60,12 @@ pub struct FitArgs {
     /// Data CSV: header t,z1,…,zm[,u1,…,up]; an empty or NaN z cell is a missing value.
     #[arg(long, value_name = "Z.csv")]
     pub data: PathBuf,
-    /// What to fit, comma-separated: Q:scalar|diag|full, R:scalar|diag|full, x0, P0:diag.
-    #[arg(long, value_name = "LIST", value_parser = parse_free, allow_hyphen_values = true)]
-    pub free: Free,
+    /// What to fit, comma-separated and repeatable: Q:scalar|diag|full, R:scalar|diag|full
+    /// (scalar is σ²·I), x0, P0:diag; single entries, 0-based: F[i,j], B[i,j], H[i,j],
+    /// Q[i,j], R[i,j], P0[i,j], x0[i] (the rest keeps its value exactly);
+    /// Q:white-acceleration (the one intensity of a constant-velocity or -acceleration Q).
+    #[arg(long, value_name = "LIST", value_parser = parse_free, allow_hyphen_values = true, required = true)]
+    pub free: Vec<FreeSpec>,
     /// Estimator.
     #[arg(long, value_enum, default_value_t = FitMethod::Mle)]
     pub method: FitMethod,
@@ -61,18 +78,168 @@ pub struct FitArgs {
     /// Write the result even if the estimator did not converge.
     #[arg(long)]
     pub allow_unconverged: bool,
-    /// Iteration cap (default: 500 for mle, 10000 for em).
+    /// Iteration cap: L-BFGS iterations for mle (default 500; the Nelder–Mead fallback gets
+    /// 20 times as many), E/M cycles for em (default 10000).
     #[arg(long, value_name = "N")]
     pub max_iter: Option<usize>,
 }
 
-/// Parses `--free`: `Q:scalar|diag|full`, `R:scalar|diag|full`, `x0`, `P0:diag`, each at
-/// most once. An empty list parses (and is rejected by `fit` as "nothing is free").
-pub fn parse_free(s: &str) -> Result<Free> {
+/// One `--free` value: the matrices freed as a whole, the single entries, and whether Q is
+/// the white-acceleration intensity.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FreeSpec {
+    /// Q, R, x0, P0 freed as a whole.
+    pub free: Free,
+    /// Single entries `(matrix, row, column)`, in the order given.
+    pub entries: Vec<(Matrix, usize, usize)>,
+    /// `Q:white-acceleration`.
+    pub white_acceleration: bool,
+}
+
+impl FreeSpec {
+    /// Several `--free` values as one; a whole-matrix item given twice is refused.
+    ///
+    /// # Errors
+    /// [`Error::Usage`] naming the item given twice.
+    pub fn merge(specs: &[FreeSpec]) -> Result<FreeSpec> {
+        let twice = |name: &str| Error::Usage(format!("--free: {name} is listed twice"));
+        let mut out = FreeSpec::default();
+        for s in specs {
+            if s.free.q != Structure::Fixed {
+                if out.free.q != Structure::Fixed || out.white_acceleration {
+                    return Err(twice("Q"));
+                }
+                out.free.q = s.free.q;
+            }
+            if s.free.r != Structure::Fixed {
+                if out.free.r != Structure::Fixed {
+                    return Err(twice("R"));
+                }
+                out.free.r = s.free.r;
+            }
+            if s.free.x0 {
+                if out.free.x0 {
+                    return Err(twice("x0"));
+                }
+                out.free.x0 = true;
+            }
+            if s.free.p0_diag {
+                if out.free.p0_diag {
+                    return Err(twice("P0"));
+                }
+                out.free.p0_diag = true;
+            }
+            if s.white_acceleration {
+                if out.free.q != Structure::Fixed || out.white_acceleration {
+                    return Err(twice("Q"));
+                }
+                out.white_acceleration = true;
+            }
+            for e in &s.entries {
+                if out.entries.contains(e) {
+                    return Err(twice(&entry_name(*e)));
+                }
+                out.entries.push(*e);
+            }
+        }
+        Ok(out)
+    }
+
+    fn is_empty(&self) -> bool {
+        self.free == Free::default() && self.entries.is_empty() && !self.white_acceleration
+    }
+}
+
+fn entry_name((m, i, j): (Matrix, usize, usize)) -> String {
+    Param::entry(m, i, j).name().to_string()
+}
+
+/// Splits at the commas outside brackets (`F[0,0],Q:diag` is two items).
+fn split_items(s: &str) -> Vec<&str> {
+    let mut out = Vec::new();
+    let (mut depth, mut start) = (0_i32, 0);
+    for (i, c) in s.char_indices() {
+        match c {
+            '[' => depth += 1,
+            ']' => depth -= 1,
+            ',' if depth == 0 => {
+                out.push(&s[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    out.push(&s[start..]);
+    out.into_iter()
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .collect()
+}
+
+/// Parses an entry item `NAME[i,j]` (or `x0[i]`); `None` when `item` has no bracket.
+fn parse_entry(item: &str) -> Option<Result<(Matrix, usize, usize)>> {
+    let (name, rest) = item.split_once('[')?;
     let usage = |m: String| Error::Usage(format!("--free: {m}"));
-    let mut free = Free::default();
+    let Some(inner) = rest.strip_suffix(']') else {
+        return Some(Err(usage(format!("{item}: an entry is written NAME[i,j]"))));
+    };
+    let matrix = match name.trim() {
+        "F" => Matrix::F,
+        "B" => Matrix::B,
+        "H" => Matrix::H,
+        "Q" => Matrix::Q,
+        "R" => Matrix::R,
+        "P0" => Matrix::P0,
+        "x0" => Matrix::X0,
+        other => {
+            return Some(Err(usage(format!(
+                "unknown matrix '{other}' in {item}: entries of F, B, H, Q, R, P0 (NAME[i,j], 0-based) or x0[i]"
+            ))));
+        }
+    };
+    let idx: Vec<std::result::Result<usize, _>> = inner
+        .split(',')
+        .map(|t| t.trim().parse::<usize>())
+        .collect();
+    let want = if matrix == Matrix::X0 { 1 } else { 2 };
+    if idx.len() != want || idx.iter().any(std::result::Result::is_err) {
+        return Some(Err(usage(format!(
+            "{item}: {} (0-based non-negative integers)",
+            if want == 1 {
+                "x0 takes one index, x0[i]"
+            } else {
+                "an entry takes two indices, NAME[i,j]"
+            }
+        ))));
+    }
+    let idx: Vec<usize> = idx.into_iter().flatten().collect();
+    Some(Ok((matrix, idx[0], idx.get(1).copied().unwrap_or(0))))
+}
+
+/// Parses one `--free` value: `Q:scalar|diag|full`, `R:scalar|diag|full`, `x0`, `P0:diag`,
+/// `Q:white-acceleration` (each at most once) and entries `F[i,j]` …, `x0[i]`. An empty
+/// list parses (and is rejected by `fit` as "nothing is free").
+pub fn parse_free(s: &str) -> Result<FreeSpec> {
+    let usage = |m: String| Error::Usage(format!("--free: {m}"));
+    let mut spec = FreeSpec::default();
     let mut seen = Vec::new();
-    for item in s.split(',').map(str::trim).filter(|t| !t.is_empty()) {
+    for item in split_items(s) {
+        if let Some(entry) = parse_entry(item) {
+            let e = entry?;
+            if spec.entries.contains(&e) {
+                return Err(usage(format!("{} is listed twice", entry_name(e))));
+            }
+            spec.entries.push(e);
+            continue;
+        }
+        if item == "Q:white-acceleration" {
+            if seen.contains(&"Q".to_string()) {
+                return Err(usage("Q is listed twice".into()));
+            }
+            seen.push("Q".to_string());
+            spec.white_acceleration = true;
+            continue;
+        }
         let (name, kind) = match item.split_once(':') {
             Some((a, b)) => (a.trim(), Some(b.trim())),
             None => (item, None),
@@ -92,6 +259,7 @@ pub fn parse_free(s: &str) -> Result<Free> {
                 "{name} needs a structure: {name}:scalar, {name}:diag or {name}:full"
             ))),
         };
+        let free = &mut spec.free;
         match name {
             "Q" => free.q = structure(kind)?,
             "R" => free.r = structure(kind)?,
@@ -105,12 +273,14 @@ pub fn parse_free(s: &str) -> Result<Free> {
             }
             other => {
                 return Err(usage(format!(
-                    "unknown free item '{other}': use Q:…, R:…, x0, P0:diag"
+                    "unknown free item '{other}'{}: use Q:scalar|diag|full|white-acceleration, R:…, x0, P0:diag or entries such as F[0,0]",
+                    kind.map(|k| format!(" with structure '{k}'"))
+                        .unwrap_or_default()
                 )));
             }
         }
     }
-    Ok(free)
+    Ok(spec)
 }
 
 fn to_faer(m: &DMatrix<f64>) -> Mat<f64> {
@@ -158,11 +328,82 @@ fn system_of(path: &Path, model: &DiscreteModel, free: Free) -> Result<System> {
     Ok(sys)
 }
 
+/// The unit white-acceleration covariance of a model whose F is a chain of integrators
+/// sampled at `dt`: A = log(F)/Δt (F − I nilpotent, so the series ends), the noise entering
+/// every state whose row of A is zero (the last state of each chain), Q₁ = ∫₀^Δt e^{Aτ} G Gᵀ
+/// e^{Aᵀτ} dτ by Van Loan; e^{AΔt} must give F back.
+fn white_acceleration(path: &Path, F: &Mat<f64>, dt: f64) -> Result<Mat<f64>> {
+    let n = F.nrows();
+    let refuse = |why: &str| {
+        Error::invalid(
+            path,
+            format!(
+                "Q:white-acceleration needs F to be chains of integrators (constant velocity or constant acceleration) sampled at dt: {why}"
+            ),
+        )
+    };
+    let N = Mat::from_fn(n, n, |i, j| F[(i, j)] - if i == j { 1.0 } else { 0.0 });
+    // log(I + N) = N − N²/2 + N³/3 − … (finite when N is nilpotent)
+    let mut log = Mat::<f64>::zeros(n, n);
+    let mut power = N.clone();
+    for k in 1..=n {
+        let sign = if k % 2 == 1 { 1.0 } else { -1.0 };
+        log += Mat::from_fn(n, n, |i, j| sign * power[(i, j)] / k as f64);
+        power = &power * &N;
+    }
+    let scale = F.norm_max().max(1.0);
+    if power.norm_max() > 1e-9 * scale {
+        return Err(refuse("F − I is not nilpotent"));
+    }
+    let A = Mat::from_fn(n, n, |i, j| log[(i, j)] / dt);
+    let W = Mat::from_fn(n, n, |i, j| {
+        let zero_row = (0..n).all(|c| A[(i, c)].abs() <= 1e-12 * scale / dt);
+        if i == j && zero_row { 1.0 } else { 0.0 }
+    });
+    let (Fs, Q1) = kalman::continuous::van_loan(&A, &W, dt).map_err(|e| refuse(&e.to_string()))?;
+    if (&Fs - F).norm_max() > 1e-9 * scale || Q1.norm_max() <= 0.0 {
+        return Err(refuse("e^{log(F)} does not give F back"));
+    }
+    Ok(Q1)
+}
+
+/// The entry parameters of `spec` on `base`; with white acceleration, also `base.q` set to
+/// q₀·Q₁ (q₀ from the model file's trace, so that every cell outside Q₁'s pattern is 0).
+fn entry_params(path: &Path, spec: &FreeSpec, base: &mut System, dt: f64) -> Result<Vec<Param>> {
+    let mut params: Vec<Param> = spec
+        .entries
+        .iter()
+        .map(|&(m, i, j)| Param::entry(m, i, j))
+        .collect();
+    if spec.white_acceleration {
+        let q1 = white_acceleration(path, &base.f, dt)?;
+        let n = base.n();
+        let tr = |a: &Mat<f64>| (0..n).map(|i| a[(i, i)]).sum::<f64>();
+        let q0 = tr(&base.q) / tr(&q1);
+        base.q = Mat::from_fn(n, n, |i, j| q0 * q1[(i, j)]);
+        let mut p = Param::shared("Q:white-acceleration", Transform::Log);
+        // the diagonal first: the start is read from the first entry
+        for i in (0..n).filter(|&i| q1[(i, i)] > 0.0) {
+            p = p.with(Matrix::Q, i, i, q1[(i, i)]);
+        }
+        for j in 0..n {
+            for i in j + 1..n {
+                if q1[(i, j)] != 0.0 {
+                    p = p.with(Matrix::Q, i, j, q1[(i, j)]);
+                }
+            }
+        }
+        params.push(p);
+    }
+    Ok(params)
+}
+
 fn fit_error(args: &FitArgs, e: FitError) -> Error {
     match e {
         FitError::NothingFree => Error::Usage(
-            "--free: nothing is free; list at least one of Q:…, R:…, x0, P0:diag".into(),
+            "--free: nothing is free; list at least one of Q:…, R:…, x0, P0:diag or an entry such as F[0,0]".into(),
         ),
+        FitError::Unsupported(m) => Error::Usage(format!("--method: {m}")),
         FitError::NoMeasurements | FitError::NotIdentifiable { .. } | FitError::Data(_) => {
             Error::invalid(&args.data, e.to_string())
         }
@@ -174,14 +415,14 @@ fn fit_error(args: &FitArgs, e: FitError) -> Error {
     }
 }
 
-/// The fitted model file: the input with Q, R, x0, P0 from the fit.
+/// The fitted model file: the input with F, B, H, Q, R, x0, P0 from the fit.
 fn fitted_file(model: &DiscreteModel, sys: &System) -> DiscreteFile {
     let p = model.p();
     DiscreteFile {
         dt: model.dt,
-        F: to_rows(&model.F),
-        B: (p > 0).then(|| to_rows(&model.B)),
-        H: to_rows(&model.H),
+        F: faer_rows(&sys.f),
+        B: (p > 0).then(|| faer_rows(&sys.b)),
+        H: faer_rows(&sys.h),
         D: (p > 0).then(|| to_rows(&model.D)),
         Q: faer_rows(&sys.q),
         R: Some(faer_rows(&sys.r)),
@@ -224,17 +465,42 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
             if let Some(p) = p0 {
                 o.insert("P0".into(), json!(p));
             }
+            for (name, v) in se.params {
+                o.insert(name, json!(v));
+            }
             serde_json::Value::Object(o)
         }
         None => serde_json::Value::Null,
     };
+    let estimates: serde_json::Map<String, serde_json::Value> = map
+        .param_values(&fit.theta)
+        .map_err(|source| Error::Fit {
+            context: "fit: the free entries' values",
+            source,
+        })?
+        .into_iter()
+        .map(|(n, v)| (n, json!(v)))
+        .collect();
+    let names = kalman::fit::ParamMap::names(map);
+    let correlation = fit.correlation.as_ref().map_or(
+        serde_json::Value::Null,
+        |c| json!({"names": names, "matrix": faer_rows(c)}),
+    );
+    let unidentified: Vec<serde_json::Value> = fit
+        .unidentified
+        .iter()
+        .map(|d| serde_json::Value::Object(d.iter().map(|(n, w)| (n.clone(), json!(w))).collect()))
+        .collect();
     Ok(json!({
         "loglik": fit.loglik,
         "method": match args.method { FitMethod::Mle => "mle", FitMethod::Em => "em" },
         "iterations": fit.iterations,
         "converged": fit.converged,
         "message": fit.message,
+        "estimates": estimates,
         "std_errors": std_errors,
+        "correlation": correlation,
+        "unidentified": unidentified,
         "boundary": fit.boundary,
         "aic": fit.aic,
         "bic": fit.bic,
@@ -275,7 +541,8 @@ fn read_regular(
 /// [`Error::Fit`] for a fit that fails, [`Error::FitNotConverged`] for one that (without
 /// `--allow-unconverged`) does not converge; [`Error::Write`].
 pub fn fit(args: &FitArgs) -> Result<()> {
-    if args.free == Free::default() {
+    let spec = FreeSpec::merge(&args.free)?;
+    if spec.is_empty() {
         return Err(fit_error(args, FitError::NothingFree));
     }
     let dest = crate::output::destination(
@@ -322,8 +589,12 @@ pub fn fit(args: &FitArgs) -> Result<()> {
     let series = Series::new(&z, m)
         .and_then(|s| if p > 0 { s.with_inputs(&u, p) } else { Ok(s) })
         .map_err(|e| fit_error(args, e))?;
-    let base = system_of(&args.model, &model, args.free)?;
-    let map = StandardMap::new(base.clone(), args.free).map_err(|e| fit_error(args, e))?;
+    let mut base = system_of(&args.model, &model, spec.free)?;
+    let params = entry_params(&args.model, &spec, &mut base, model.dt)?;
+    let map = StandardMap::with_params(base.clone(), spec.free, params).map_err(|e| match e {
+        FitError::Parameters(m) => Error::Usage(format!("--free: {m}")),
+        e => fit_error(args, e),
+    })?;
     let result = match args.method {
         FitMethod::Mle => {
             let mut opts = MleOptions::default();

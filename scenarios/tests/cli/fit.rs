@@ -176,7 +176,7 @@ fn fit_bad_inputs_are_one_line_errors() {
     let args = scenarios::fit::FitArgs {
         model: dir.join("m.json"),
         data: dir.join("z.csv"),
-        free: scenarios::fit::parse_free("Q:scalar,R:diag").expect("free"),
+        free: vec![scenarios::fit::parse_free("Q:scalar,R:diag").expect("free")],
         method: scenarios::fit::FitMethod::Em,
         out: dir.join("o.json"),
         summary: None,
