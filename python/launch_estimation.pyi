@@ -15,8 +15,10 @@ index: the engine's S couples w[k] with v[k] and enters the *prediction*; Filter
 the *update*. A model with E[w[k-1] v[k]^T] = S is run in FilterPy with M = S, and in the
 engine by re-indexing the process noise.
 
-All inputs are NumPy arrays (integer arrays are converted to float64); lists, other dtypes
-and non-finite values are refused with a one-line TypeError/ValueError naming the argument.
+All inputs are NumPy arrays (integer and float32 arrays are converted to float64; R of
+dare/dlqr/care may be a number for one channel); lists, other dtypes and non-finite values
+are refused with a one-line TypeError/ValueError naming the argument. A size that does not
+fit in memory raises MemoryError; Ctrl-C inside a long call raises KeyboardInterrupt.
 """
 
 from typing import Any, Callable, Final, Optional, Sequence, Tuple, Union
@@ -61,14 +63,23 @@ class KalmanFilter:
       silently stops at the shorter), a step of another shape, a non-finite entry or a Q/R
       that is not symmetric PSD raises ValueError naming the argument and the step
       (``Qs[3]``). A None item of rts_smoother's Fs/Qs is the filter's own (FilterPy fails
-      on it). ``saver`` raises TypeError, and so does an ``inv`` other than
-      numpy.linalg.inv (the smoother solves rather than inverts).
+      on it). An ``inv`` other than numpy.linalg.inv raises TypeError (the smoother
+      solves rather than inverts). With a ``saver``, batch_filter runs FilterPy's loop
+      step by step (predict, update, saver.save()); without one, in one call into Rust.
     - Arrays read from the filter are kept until the filter changes them, so ``kf.x is
       kf.x`` and in-place edits (``kf.x[0] = 1``, ``kf.P *= 10``) reach the filter, as in
       FilterPy; arrays read before a predict/update are snapshots (``xs.append(kf.x)``).
-    - Not provided: predict_steadystate, update_steadystate, update_sequential,
-      get_prediction, get_update, residual_of, measurement_of_state, log_likelihood_of,
-      test_matrix_dimensions.
+      An array assigned to an input (x, P, F, Q, H, R, B, M) is kept as it is, of any real
+      dtype (integer and float32 arrays are read converted), so its later in-place edits
+      are used too, as in FilterPy.
+    - copy.copy, copy.deepcopy and pickle give an independent filter with every attribute
+      (FilterPy's copy.copy shares the arrays with the original). ``__dict__`` is a new
+      dict of the attributes (and of log_likelihood, likelihood, mahalanobis), which is
+      what FilterPy's Saver deep-copies; writing into it changes nothing.
+    - Dimensions may be NumPy integer scalars or 0-d integer arrays; x and z may be 0-d
+      arrays when their dimension is 1; z may also be a (1, dim_z) row, as in FilterPy.
+    - Not provided: predict_steadystate, update_steadystate, get_prediction, get_update,
+      residual_of, measurement_of_state, log_likelihood_of.
     """
 
     def __init__(self, dim_x: int, dim_z: int, dim_u: int = 0) -> None: ...
@@ -118,7 +129,7 @@ class KalmanFilter:
         self, zs: _Series, Fs: Optional[_PerStep] = None, Qs: Optional[_PerStep] = None,
         Hs: Optional[_PerStep] = None, Rs: Optional[_PerStep] = None,
         Bs: Optional[_PerStep] = None, us: Optional[_Series] = None,
-        update_first: bool = False, saver: None = None,
+        update_first: bool = False, saver: Any = None,
     ) -> Tuple[Array, Array, Array, Array]:
         """(means, covariances, means_p, covariances_p): (N, dim_x, 1) (or (N, dim_x) for a
         1-d x), (N, dim_x, dim_x), ... in one call into Rust, as FilterPy's.
@@ -132,6 +143,22 @@ class KalmanFilter:
         B are not changed; x, P, K, y, S, ... are those of the last step, as in FilterPy.
         Missing measurements: None items or NaN entries of zs. Bad per-step input raises
         ValueError naming the argument and the step."""
+    def update_sequential(
+        self, start: int, z_i: _Measurement, R_i: Optional[MatrixLike] = None,
+        H_i: Optional[Array] = None,
+    ) -> None:
+        """FilterPy's update with the measurement rows start, start + 1, ... only (z_i: a
+        scalar or their values; R_i: None for those rows of R, a scalar s for s*I, or a
+        matrix; H_i: None for those rows of H). Writes y, K, z in those rows; S and the
+        likelihood stay those of the last full update, as in FilterPy."""
+    def test_matrix_dimensions(
+        self, z: Any = None, H: Any = None, R: Any = None, F: Any = None, Q: Any = None,
+    ) -> None:
+        """FilterPy's shape assertions (AssertionError) on the filter's arrays or those given."""
+    def __copy__(self) -> "KalmanFilter": ...
+    def __deepcopy__(self, memo: Any) -> "KalmanFilter": ...
+    def __getstate__(self) -> dict[str, Any]: ...
+    def __setstate__(self, state: dict[str, Any]) -> None: ...
     def rts_smoother(
         self, Xs: Array, Ps: Array, Fs: Optional[_PerStep] = None,
         Qs: Optional[_PerStep] = None,
@@ -142,7 +169,8 @@ class KalmanFilter:
         (FilterPy's index: the matrices batch_filter predicted step k + 1 with; Fs[0] and
         Qs[0] are not used): Pp[k] = Fs[k+1] P[k] Fs[k+1]^T + Qs[k+1],
         K[k] = P[k] Fs[k+1]^T Pp[k]^-1 by a solve. Fs, Qs: None for the filter's own F, Q,
-        or one matrix per step (len(Xs)). inv: only numpy.linalg.inv (or None)."""
+        or one matrix per step (len(Xs)). inv: only numpy.linalg.inv (or None). Each Ps[k]
+        must be symmetric PSD (ValueError naming Ps[k])."""
 
 FilterResult = dict[str, Array]
 # filter/smooth and their continuous forms: the arrays below, plus, when a gate is given,

@@ -3,11 +3,15 @@
 //! model or FilterPy's per-step matrices (`Fs`, `Qs`, `Hs`, `Rs`, `Bs`).
 #![allow(non_snake_case)]
 
-use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use std::sync::Mutex;
+
+use numpy::{PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::convert::{array3_out, copy_finite, float_array, shape_str, value_error};
+use crate::convert::{
+    array3_out, check_psd, copy_finite, entries, float_array, shape_str, value_error, zeros,
+};
 use crate::kf_core::{Core, Steps, UpdateError, rts};
 use crate::linalg::add_mul_vec;
 use crate::series::{
@@ -133,8 +137,9 @@ pub(crate) fn batch_filter<'py>(
         vec![steps, n]
     };
     let cov_shape = vec![steps, n, n];
-    let outputs = [&mean_shape, &cov_shape, &mean_shape, &cov_shape]
-        .map(|shape| PyArrayDyn::<f64>::zeros(py, shape.clone(), false));
+    let [a, b, c, d] = [&mean_shape, &cov_shape, &mean_shape, &cov_shape]
+        .map(|shape| crate::convert::np_zeros(py, shape));
+    let outputs = [a?, b?, c?, d?];
     {
         let err = |e: &dyn std::fmt::Display| value_error(e.to_string());
         let [means, covs, means_p, covs_p] = outputs.each_ref().map(|a| a.try_readwrite());
@@ -148,6 +153,22 @@ pub(crate) fn batch_filter<'py>(
             covs_p: covs_p.as_slice_mut().map_err(|e| err(&e))?,
         };
         let u = u.as_deref();
+        // Ctrl-C: the loop, which runs without the GIL, takes it back every few thousand
+        // steps to run Python's signal handlers; an exception they raise (KeyboardInterrupt)
+        // stops the loop and the filter is put back as it was before the call.
+        let signal: Mutex<Option<PyErr>> = Mutex::new(None);
+        let interrupted = || {
+            Python::attach(|py| match py.check_signals() {
+                Ok(()) => false,
+                Err(e) => {
+                    if let Ok(mut slot) = signal.lock() {
+                        *slot = Some(e);
+                    }
+                    true
+                }
+            })
+        };
+        let before = core.clone();
         let batch = Batch {
             core,
             model,
@@ -155,13 +176,23 @@ pub(crate) fn batch_filter<'py>(
             u,
             update_first,
             out,
+            interrupted: &interrupted,
         };
-        py.detach(|| run(batch)).map_err(|k| {
-            value_error(format!(
-                "batch_filter: S (the innovation covariance H P Hᵀ + R) is singular at \
+        let result = py.detach(|| run(batch));
+        if let Err(stop) = result {
+            *core = before;
+            return Err(match stop {
+                Stop::Singular(k) => value_error(format!(
+                    "batch_filter: S (the innovation covariance H P Hᵀ + R) is singular at \
                      step {k}"
-            ))
-        })?;
+                )),
+                Stop::Interrupted => signal
+                    .lock()
+                    .ok()
+                    .and_then(|mut e| e.take())
+                    .unwrap_or_else(|| value_error("batch_filter: interrupted")),
+            });
+        }
     }
     PyTuple::new(py, outputs.map(|a| a.into_any()))
 }
@@ -218,7 +249,8 @@ macro_rules! with_dim {
 }
 
 /// One `batch_filter` call: the filter, the per-step model, the series zs (N×m) and us
-/// (N×p), the step order and where the results go.
+/// (N×p), the step order, where the results go, and the check for a pending signal (true:
+/// stop), called every [`signal_interval`] steps.
 struct Batch<'a> {
     core: &'a mut Core,
     model: Model<'a>,
@@ -226,11 +258,34 @@ struct Batch<'a> {
     u: Option<&'a [f64]>,
     update_first: bool,
     out: Outputs<'a>,
+    interrupted: &'a (dyn Fn() -> bool + Sync),
+}
+
+/// The work (multiply-adds, with a per-step overhead) between two looks for a pending
+/// signal (Ctrl-C): about 2²⁴, a few milliseconds.
+const SIGNAL_WORK: usize = 1 << 24;
+
+/// How many steps of an n-state, m-measurement filter make [`SIGNAL_WORK`]: a step costs
+/// about n²(n + m) multiply-adds plus a fixed overhead of some 64, so a large filter looks
+/// at every step and the smallest every 2¹⁸ steps.
+fn signal_interval(n: usize, m: usize) -> usize {
+    let work = n
+        .saturating_mul(n)
+        .saturating_mul(n.saturating_add(m))
+        .saturating_add(64);
+    (SIGNAL_WORK / work).max(1)
+}
+
+/// Why the batch loop stopped early.
+enum Stop {
+    /// S was singular at this step.
+    Singular(usize),
+    /// A signal handler raised (KeyboardInterrupt).
+    Interrupted,
 }
 
 /// The batch loop, compiled per state dimension up to 8 and measurement dimension up to 3.
-/// `Err(k)`: S singular at step k.
-fn run(b: Batch<'_>) -> Result<(), usize> {
+fn run(b: Batch<'_>) -> Result<(), Stop> {
     with_dim!(b.core.n, [1, 2, 3, 4, 5, 6, 7, 8], |d| {
         with_dim!(b.core.m, [1, 2, 3], |e| run_dim(d, e, b))
     })
@@ -244,7 +299,7 @@ fn run(b: Batch<'_>) -> Result<(), usize> {
 /// of the last step, as in FilterPy) and the last step with a measurement (so that K, S and
 /// the likelihood are those of the last update made, as FilterPy keeps them over skipped
 /// updates) take `Core`'s general update and predict.
-fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), usize> {
+fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), Stop> {
     let Batch {
         core,
         model,
@@ -252,6 +307,7 @@ fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), usize> {
         u,
         update_first,
         out,
+        interrupted,
     } = b;
     let (n, m) = (d.get(), e.get());
     let nn = n * n;
@@ -272,7 +328,11 @@ fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), usize> {
     let last_update = (0..steps)
         .rev()
         .find(|&k| z[k * m..(k + 1) * m].iter().any(|v| !v.is_nan()));
+    let every = signal_interval(n, m);
     for k in 0..steps {
+        if k % every == every - 1 && interrupted() {
+            return Err(Stop::Interrupted);
+        }
         w.load(k, n, m, &model);
         let general = k + 1 == steps || last_update == Some(k);
         let zk = &z[k * m..(k + 1) * m];
@@ -291,7 +351,7 @@ fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), usize> {
         };
         if update_first {
             w.update(d, e, core, general, symmetric, zk, start, post)
-                .map_err(|_| k)?;
+                .map_err(|_| Stop::Singular(k))?;
             w.predict(d, core, general, uk, (&x_post[..n], &P_post[..nn]), prior);
             symmetric = w.q_symmetric;
         } else {
@@ -307,7 +367,7 @@ fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), usize> {
                 (&x_prior[..n], &P_prior[..nn]),
                 post,
             )
-            .map_err(|_| k)?;
+            .map_err(|_| Stop::Singular(k))?;
         }
     }
     Ok(())
@@ -659,10 +719,16 @@ pub(crate) fn rts_smoother<'py>(
             shape_str(pa.shape())
         )));
     }
-    let mut xs = vec![0.0; steps * n];
+    let what = "rts_smoother's buffers";
+    let size = entries(steps, entries(n, n, what)?, what)?;
+    let mut xs = zeros(entries(steps, n, what)?, what)?;
     copy_finite(&xa.readonly().as_array(), "Xs", &mut xs)?;
-    let mut ps = vec![0.0; steps * n * n];
+    let mut ps = zeros(size, what)?;
     copy_finite(&pa.readonly().as_array(), "Ps", &mut ps)?;
+    for (k, pk) in ps.chunks_exact(n * n).enumerate() {
+        check_psd(&format!("Ps[{k}]"), pk, n)?;
+    }
+    let (pp, gains) = (zeros(size, what)?, zeros(size, what)?);
     let along = Along { name: "Xs", steps };
     let spec = |name, rule, own| Spec {
         name,
@@ -675,7 +741,7 @@ pub(crate) fn rts_smoother<'py>(
     let Qs = read_steps(Qs, &spec("Qs", Rule::Covariance, Some(&core.Q)), along)?;
     let F = Fs.as_deref().map_or(Steps::Same(&core.F), Steps::Each);
     let Q = Qs.as_deref().map_or(Steps::Same(&core.Q), Steps::Each);
-    let (x, P, K, Pp) = rts(&xs, &ps, steps, n, F, Q).map_err(|k| {
+    let (x, P, K, Pp) = rts((xs, ps), (pp, gains), steps, n, F, Q).map_err(|k| {
         let name = |given: bool, own: &str, each: &str| {
             if given {
                 format!("{each}[{}]", k + 1)

@@ -6,7 +6,7 @@ use numpy::{
     PyArray1, PyArray2, PyArray3, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyUntypedArray,
     PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt};
 
@@ -27,6 +27,55 @@ fn one_line(msg: String) -> String {
     } else {
         msg
     }
+}
+
+/// A `MemoryError` for a buffer of `len` floats (`what` names it) that cannot be allocated.
+pub(crate) fn memory_error(len: usize, what: &str) -> PyErr {
+    PyMemoryError::new_err(format!(
+        "cannot allocate {what}: {len} floats ({:.3e} bytes)",
+        len as f64 * 8.0
+    ))
+}
+
+/// `rows × cols` entries, or a `MemoryError` naming `what` if the count overflows.
+pub(crate) fn entries(rows: usize, cols: usize, what: &str) -> PyResult<usize> {
+    rows.checked_mul(cols)
+        .filter(|&len| len <= isize::MAX as usize / 8)
+        .ok_or_else(|| memory_error(usize::MAX, what))
+}
+
+/// A buffer of `len` copies of `value`, allocated fallibly: a size the user chose (a
+/// dimension, a number of steps) that cannot be allocated is a `MemoryError` naming `what`,
+/// never an abort of the interpreter.
+pub(crate) fn filled(len: usize, value: f64, what: &str) -> PyResult<Vec<f64>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| memory_error(len, what))?;
+    if value.to_bits() == 0 {
+        // Zeros: the reservation showed the room is there; `vec!` then takes zeroed pages
+        // from the system (calloc) instead of writing every one of them.
+        drop(v);
+        return Ok(vec![0.0; len]);
+    }
+    v.resize(len, value);
+    Ok(v)
+}
+
+/// [`filled`] with zeros.
+pub(crate) fn zeros(len: usize, what: &str) -> PyResult<Vec<f64>> {
+    filled(len, 0.0, what)
+}
+
+/// A new float64 array of zeros of `shape`, made by `numpy.zeros`, so that a shape too large
+/// for memory raises NumPy's `MemoryError`.
+pub(crate) fn np_zeros<'py>(
+    py: Python<'py>,
+    shape: &[usize],
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let arr = py
+        .import("numpy")?
+        .call_method1("zeros", (pyo3::types::PyTuple::new(py, shape)?,))?;
+    Ok(arr.cast_into::<PyArrayDyn<f64>>()?)
 }
 
 /// The Python type name of `obj`, for messages.
@@ -69,13 +118,20 @@ pub(crate) fn float_array<'py>(
     )))
 }
 
-/// A real Python scalar (int or float, not bool), if `obj` is one.
+/// A real scalar (a Python int or float, a NumPy integer or float scalar, or a 0-d array
+/// of such a dtype; not a bool), if `obj` is one.
 pub(crate) fn scalar(obj: &Bound<'_, PyAny>) -> Option<f64> {
     if obj.is_instance_of::<PyBool>() {
         return None;
     }
     if obj.is_instance_of::<PyFloat>() || obj.is_instance_of::<PyInt>() {
         return obj.extract::<f64>().ok();
+    }
+    if let Ok(arr) = obj.cast::<PyUntypedArray>() {
+        if arr.ndim() != 0 || !matches!(arr.dtype().kind(), b'i' | b'u' | b'f') {
+            return None;
+        }
+        return obj.call_method0("item").ok()?.extract::<f64>().ok();
     }
     // NumPy scalars (np.float64 is a float subclass; np.int64 is not an int subclass).
     let ty = type_name(obj);
@@ -150,8 +206,10 @@ pub(crate) fn read_matrix(
 }
 
 /// Reads a vector of length `len` given as a `(len, 1)` column, a `(len,)` array, a real
-/// scalar when `len == 1`, or — when `allow_sequence` — any sequence NumPy converts to
-/// floats. `missing_ok` lets NaN through (a missing measurement); infinities never pass.
+/// scalar (a 0-d array included) when `len == 1`, or — when `allow_sequence` — any sequence
+/// NumPy converts to floats. `missing_ok` marks a measurement: NaN passes (a missing entry)
+/// and a `(1, len)` row is taken too, as FilterPy's `reshape_z` takes it; infinities never
+/// pass.
 pub(crate) fn read_vector(
     obj: &Bound<'_, PyAny>,
     name: &str,
@@ -191,12 +249,18 @@ pub(crate) fn read_vector(
     let arr = float_array(source, name)?;
     let ro = arr.readonly();
     let view = ro.as_array();
-    let ok =
-        matches!(view.shape(), [l] if *l == len) || matches!(view.shape(), [l, 1] if *l == len);
+    let ok = matches!(view.shape(), [l] if *l == len)
+        || matches!(view.shape(), [l, 1] if *l == len)
+        || (missing_ok && matches!(view.shape(), [1, l] if *l == len));
     if !ok {
         return Err(value_error(format!(
-            "{name} has shape {}, expected ({len}, 1) or ({len},)",
-            shape_str(view.shape())
+            "{name} has shape {}, expected ({len}, 1) or ({len},){}",
+            shape_str(view.shape()),
+            if missing_ok {
+                format!(" or (1, {len})")
+            } else {
+                String::new()
+            }
         )));
     }
     for (o, v) in out.iter_mut().zip(view.iter()) {
@@ -294,6 +358,18 @@ pub(crate) fn mat(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<kalman::faer::
     Ok(kalman::faer::Mat::from_fn(r, c, |i, j| buf[i * c + j]))
 }
 
+/// [`mat`], or a real scalar s as the 1×1 matrix [s] (a noise variance given as a number).
+pub(crate) fn mat_or_scalar(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+) -> PyResult<kalman::faer::Mat<f64>> {
+    match scalar(obj) {
+        Some(s) if !s.is_finite() => Err(value_error(format!("{name} is {s}; it must be finite"))),
+        Some(s) => Ok(kalman::faer::Mat::from_fn(1, 1, |_, _| s)),
+        None => mat(obj, name),
+    }
+}
+
 /// A 2-d float array argument with finite entries as (rows, columns, row-major entries):
 /// what [`mat`] and the nalgebra readers build their matrices from.
 pub(crate) fn rows_2d(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(usize, usize, Vec<f64>)> {
@@ -307,7 +383,7 @@ pub(crate) fn rows_2d(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<(usize, us
         )));
     };
     let (r, c) = (*r, *c);
-    let mut buf = vec![0.0; r * c];
+    let mut buf = zeros(entries(r, c, name)?, name)?;
     copy_finite(&view, name, &mut buf)?;
     Ok((r, c, buf))
 }
@@ -348,19 +424,24 @@ pub(crate) struct FilterRecord {
 }
 
 impl FilterRecord {
-    /// An empty record of `steps` steps of an n-state filter.
-    pub(crate) fn new(steps: usize, n: usize) -> Self {
-        let nn = n * n;
-        Self {
+    /// An empty record of `steps` steps of an n-state filter (a `MemoryError` if it does not
+    /// fit in memory).
+    pub(crate) fn new(steps: usize, n: usize) -> PyResult<Self> {
+        let what = "the filtered record";
+        let (sn, snn) = (
+            entries(steps, n, what)?,
+            entries(steps, entries(n, n, what)?, what)?,
+        );
+        Ok(Self {
             steps,
             n,
-            xs: vec![0.0; steps * n],
-            ps: vec![0.0; steps * nn],
-            xp: vec![0.0; steps * n],
-            pp: vec![0.0; steps * nn],
-            ll: vec![0.0; steps],
-            nis: vec![f64::NAN; steps],
-        }
+            xs: zeros(sn, what)?,
+            ps: zeros(snn, what)?,
+            xp: zeros(sn, what)?,
+            pp: zeros(snn, what)?,
+            ll: zeros(steps, what)?,
+            nis: filled(steps, f64::NAN, what)?,
+        })
     }
 
     /// Stores step k: the filtered and predicted means and covariances, the step's

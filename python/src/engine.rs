@@ -3,7 +3,8 @@
 //! cross-covariance S; singular R; NaN entries skipped; optionally a wild-point gate) in
 //! one call, `filter_continuous` and `smooth_continuous` do the same for a continuous model
 //! at a record's own time stamps (`kalman::sampling`), and `dare`, `dlqr`, `care` solve the
-//! Riccati equations. Engine errors become `ValueError`s carrying the engine's message,
+//! Riccati equations (their matrices may be integer or float32 arrays, converted, and R a
+//! number for a single channel; the solvers run with the GIL released). Engine errors become `ValueError`s carrying the engine's message,
 //! which names the matrix and the rule.
 #![allow(non_snake_case)]
 
@@ -13,7 +14,7 @@ use kalman::{DynDims, Filter, Model, riccati};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{faer_out, mat, value_error};
+use crate::convert::{faer_out, mat, mat_or_scalar, value_error};
 use crate::pass::{
     Pass, SAMPLER_CAPACITY, Timing, covariance_form, engine, gate_option, time_stamps,
 };
@@ -253,7 +254,7 @@ fn discrete_riccati<'py>(
         Discrete::Lqr => (["A", "B", "Q", "R"], "N", "dlqr"),
     };
     let ([a, b, q, r], [na, nb, nq, nr]) = (args, names);
-    let (a, b, q, r) = (mat(a, na)?, mat(b, nb)?, mat(q, nq)?, mat(r, nr)?);
+    let (a, b, q, r) = (mat(a, na)?, mat(b, nb)?, mat(q, nq)?, mat_or_scalar(r, nr)?);
     let coupling = opt_mat(coupling, coupling_name)?;
     let outputs = match kind {
         Discrete::Filter => {
@@ -261,7 +262,7 @@ fn discrete_riccati<'py>(
             if let Some(s) = &coupling {
                 dare = dare.cross_covariance(s).map_err(engine(context))?;
             }
-            let ss = dare.solve().map_err(engine(context))?;
+            let ss = py.detach(|| dare.solve()).map_err(engine(context))?;
             vec![
                 ("P", ss.prior),
                 ("P_post", ss.posterior),
@@ -275,7 +276,7 @@ fn discrete_riccati<'py>(
             if let Some(n) = &coupling {
                 dlqr = dlqr.cross_weight(n).map_err(engine(context))?;
             }
-            let lqr = dlqr.solve().map_err(engine(context))?;
+            let lqr = py.detach(|| dlqr.solve()).map_err(engine(context))?;
             vec![("K", lqr.gain), ("P", lqr.cost)]
         }
     };
@@ -311,10 +312,14 @@ fn run_care<'py>(
     py: Python<'py>,
     [A, H, Q, R]: [&Bound<'py, PyAny>; 4],
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (A, H, Q, R) = (mat(A, "A")?, mat(H, "H")?, mat(Q, "Q")?, mat(R, "R")?);
-    let ss = riccati::Care::new(&A, &H, &Q, &R)
-        .and_then(|c| c.solve())
-        .map_err(engine("care"))?;
+    let (A, H, Q, R) = (
+        mat(A, "A")?,
+        mat(H, "H")?,
+        mat(Q, "Q")?,
+        mat_or_scalar(R, "R")?,
+    );
+    let care = riccati::Care::new(&A, &H, &Q, &R).map_err(engine("care"))?;
+    let ss = py.detach(|| care.solve()).map_err(engine("care"))?;
     let out = PyDict::new(py);
     out.set_item("P", faer_out(py, ss.covariance.as_ref()))?;
     out.set_item("K", faer_out(py, ss.gain.as_ref()))?;

@@ -3,6 +3,9 @@
 //! missing-row handling FilterPy lacks. The Python layer (`kf.rs`) only moves data in and out.
 #![allow(non_snake_case)]
 
+use pyo3::PyResult;
+
+use crate::convert::{entries, filled, memory_error, zeros};
 use crate::linalg::{Factor, add_mul_vec, mul, mul_bt, mul_vec};
 
 /// Why an update could not be computed.
@@ -58,52 +61,73 @@ pub(crate) struct Core {
 }
 
 impl Core {
-    /// FilterPy's defaults: x = 0, P = Q = F = I, H = 0, R = I, B = None, M = 0.
-    pub(crate) fn new(n: usize, m: usize, p: usize) -> Self {
-        let eye = |k: usize| {
-            let mut e = vec![0.0; k * k];
+    /// FilterPy's defaults: x = 0, P = Q = F = I, H = 0, R = I, B = None, M = 0. Every
+    /// buffer is allocated fallibly: dimensions too large for memory are a `MemoryError`.
+    pub(crate) fn new(n: usize, m: usize, p: usize) -> PyResult<Self> {
+        let what = "the KalmanFilter's buffers";
+        let (nn, mm, nm) = (
+            entries(n, n, what)?,
+            entries(m, m, what)?,
+            entries(n, m, what)?,
+        );
+        let eye = |k: usize, len: usize| -> PyResult<Vec<f64>> {
+            let mut e = zeros(len, what)?;
             for i in 0..k {
                 e[i * k + i] = 1.0;
             }
-            e
+            Ok(e)
         };
-        Self {
+        let z = |len: usize| zeros(len, what);
+        Ok(Self {
             n,
             m,
             p,
-            x: vec![0.0; n],
-            P: eye(n),
-            F: eye(n),
-            Q: eye(n),
-            H: vec![0.0; m * n],
-            R: eye(m),
+            x: z(n)?,
+            P: eye(n, nn)?,
+            F: eye(n, nn)?,
+            Q: eye(n, nn)?,
+            H: z(nm)?,
+            R: eye(m, mm)?,
             B: None,
-            M: vec![0.0; n * m],
+            M: z(nm)?,
             alpha_sq: 1.0,
-            K: vec![0.0; n * m],
-            y: vec![0.0; m],
-            S: vec![0.0; m * m],
-            z: vec![f64::NAN; m],
-            x_prior: vec![0.0; n],
-            P_prior: eye(n),
-            x_post: vec![0.0; n],
-            P_post: eye(n),
+            K: z(nm)?,
+            y: z(m)?,
+            S: z(mm)?,
+            z: filled(m, f64::NAN, what)?,
+            x_prior: z(n)?,
+            P_prior: eye(n, nn)?,
+            x_post: z(n)?,
+            P_post: eye(n, nn)?,
             rows: Vec::with_capacity(m),
-            fac: Factor::new(m),
+            fac: Factor::try_new(m).ok_or_else(|| memory_error(mm, what))?,
             factored: false,
-            hr: vec![0.0; m * n],
-            rr: vec![0.0; m * m],
-            mr: vec![0.0; n * m],
-            yr: vec![0.0; m],
-            pht: vec![0.0; n * m],
-            kr: vec![0.0; n * m],
-            sr: vec![0.0; m * m],
-            st: vec![0.0; m * m],
-            hp: vec![0.0; m * n],
-            t1: vec![0.0; n * n],
-            t2: vec![0.0; n * n],
-            tx: vec![0.0; n],
+            hr: z(nm)?,
+            rr: z(mm)?,
+            mr: z(nm)?,
+            yr: z(m)?,
+            pht: z(nm)?,
+            kr: z(nm)?,
+            sr: z(mm)?,
+            st: z(mm)?,
+            hp: z(nm)?,
+            t1: z(nn)?,
+            t2: z(nn)?,
+            tx: z(n)?,
+        })
+    }
+
+    /// Factors S over `rows` again (after the state was restored from a pickle), so the
+    /// likelihood, the Mahalanobis distance and SI read as before; `false` if S is singular.
+    pub(crate) fn refactor(&mut self) -> bool {
+        let (m, r) = (self.m, self.rows.len());
+        for (a, &i) in self.rows.iter().enumerate() {
+            for (b, &j) in self.rows.iter().enumerate() {
+                self.st[b * r + a] = self.S[i * m + j];
+            }
         }
+        self.factored = self.fac.factor(&self.st[..r * r], r);
+        self.factored
     }
 
     /// x = F x + B u (B u only with a control matrix and an input), P = α² F P Fᵀ + Q.
@@ -287,6 +311,80 @@ impl Core {
         Ok(())
     }
 
+    /// FilterPy's `update_sequential`: the Joseph-form update with the r rows of the
+    /// measurement starting at row `start` (z_i, their noise covariance R_i r×r and their
+    /// measurement rows H_i r×n), writing y, K and z in those rows only and leaving S and
+    /// the likelihood of the last full update as they were (as FilterPy does).
+    pub(crate) fn update_sequential(
+        &mut self,
+        start: usize,
+        z_i: &[f64],
+        R_i: &[f64],
+        H_i: &[f64],
+    ) -> Result<(), UpdateError> {
+        let (n, m, r) = (self.n, self.m, z_i.len());
+        let mut y = vec![0.0; r];
+        mul_vec(H_i, &self.x, r, n, &mut y);
+        for (yi, zi) in y.iter_mut().zip(z_i) {
+            *yi = zi - *yi;
+        }
+        // S_i = H_i P H_iᵀ + R_i; K_iᵀ solves S_iᵀ K_iᵀ = (P H_iᵀ)ᵀ = H_i Pᵀ.
+        let mut pht = vec![0.0; n * r];
+        mul_bt(&self.P, H_i, n, n, r, &mut pht);
+        let mut s = vec![0.0; r * r];
+        mul(H_i, &pht, r, n, r, &mut s);
+        let mut st = vec![0.0; r * r];
+        for a in 0..r {
+            for b in 0..r {
+                st[a * r + b] = s[b * r + a] + R_i[b * r + a];
+            }
+        }
+        let mut fac = Factor::new(r);
+        if !fac.factor(&st, r) {
+            return Err(UpdateError::SingularS);
+        }
+        let mut kt = vec![0.0; r * n];
+        for a in 0..r {
+            for k in 0..n {
+                kt[a * n + k] = pht[k * r + a];
+            }
+        }
+        fac.solve(&mut kt, n);
+        let mut K = vec![0.0; n * r];
+        for a in 0..r {
+            for k in 0..n {
+                K[k * r + a] = kt[a * n + k];
+            }
+        }
+        // x += K_i y_i; P = (I − K_i H_i) P (I − K_i H_i)ᵀ + K_i R_i K_iᵀ, as FilterPy writes it.
+        add_mul_vec(&K, &y, &mut self.x);
+        let mut ikh = vec![0.0; n * n];
+        mul(&K, H_i, n, r, n, &mut ikh);
+        for (i, v) in ikh.iter_mut().enumerate() {
+            let identity = if i % (n + 1) == 0 { 1.0 } else { 0.0 };
+            *v = identity - *v;
+        }
+        let (mut a, mut b) = (vec![0.0; n * n], vec![0.0; n * n]);
+        mul(&ikh, &self.P, n, n, n, &mut a);
+        mul_bt(&a, &ikh, n, n, n, &mut b);
+        let mut kr = vec![0.0; n * r];
+        mul(&K, R_i, n, r, r, &mut kr);
+        mul_bt(&kr, &K, n, r, n, &mut a);
+        for ((p, u), v) in self.P.iter_mut().zip(&b).zip(&a) {
+            *p = u + v;
+        }
+        for a in 0..r {
+            self.y[start + a] = y[a];
+            self.z[start + a] = z_i[a];
+            for k in 0..n {
+                self.K[k * m + start + a] = K[k * r + a];
+            }
+        }
+        self.x_post.copy_from_slice(&self.x);
+        self.P_post.copy_from_slice(&self.P);
+        Ok(())
+    }
+
     /// The y of the rows used by the last update.
     fn y_rows(&self, out: &mut Vec<f64>) {
         out.clear();
@@ -366,19 +464,19 @@ impl<'a> Steps<'a> {
 /// k + 1 uses F_{k+1} and Q_{k+1}, FilterPy's index (the matrices `batch_filter` predicted
 /// step k + 1 with), so F_0 and Q_0 are not used: Pp_k = F_{k+1} P_k F_{k+1}ᵀ + Q_{k+1}.
 /// K_k = P_k F_{k+1}ᵀ Pp_k⁻¹ is solved (Pp_k K_kᵀ = F_{k+1} P_kᵀ), not formed with an
-/// inverse. `Err(k)`: Pp_k is singular.
+/// inverse. `x` and `P` come in holding the filtered means and covariances and are
+/// smoothed in place; `Pp` and `K` are the caller's buffers of `P`'s size (allocated
+/// fallibly there). `Err(k)`: Pp_k is singular.
 pub(crate) fn rts(
-    xs: &[f64],
-    ps: &[f64],
+    (mut x, mut P): (Vec<f64>, Vec<f64>),
+    (mut Pp, mut K): (Vec<f64>, Vec<f64>),
     steps: usize,
     n: usize,
     Fs: Steps<'_>,
     Qs: Steps<'_>,
 ) -> Result<Smoothed, usize> {
-    let mut x = xs.to_vec();
-    let mut P = ps.to_vec();
-    let mut Pp = ps.to_vec();
-    let mut K = vec![0.0; steps * n * n];
+    Pp.copy_from_slice(&P);
+    K.fill(0.0);
     let (nn, mut t1, mut t2, mut d, mut fx) = (
         n * n,
         vec![0.0; n * n],

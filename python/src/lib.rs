@@ -63,6 +63,8 @@ mod convert;
 mod engine;
 mod fit_fns;
 mod kf;
+mod kf_attrs;
+mod kf_compat;
 mod kf_core;
 mod linalg;
 mod model_fns;

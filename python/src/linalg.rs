@@ -106,6 +106,22 @@ impl Factor {
         }
     }
 
+    /// [`Factor::new`], allocated fallibly (`None`: n×n floats do not fit in memory).
+    pub(crate) fn try_new(n: usize) -> Option<Self> {
+        let mut lu = Vec::new();
+        lu.try_reserve_exact(n.checked_mul(n)?).ok()?;
+        lu.resize(n * n, 0.0);
+        let mut piv = Vec::new();
+        piv.try_reserve_exact(n).ok()?;
+        piv.resize(n, 0);
+        Some(Self {
+            kind: Kind::Cholesky,
+            n: 0,
+            lu,
+            piv,
+        })
+    }
+
     /// Factors the n×n matrix `a`; `false` if it is singular.
     pub(crate) fn factor(&mut self, a: &[f64], n: usize) -> bool {
         self.n = n;

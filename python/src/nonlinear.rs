@@ -15,7 +15,8 @@ use pyo3::types::PyDict;
 use crate::convert::{FilterRecord, float_array, mat, read_vector, shape_str, value_error};
 
 /// Calls `func(*args)` and reads its result as a vector of length `len` into `out`; on any
-/// failure keeps the first error in `slot` and writes NaN (which the engine then refuses).
+/// failure (a pending signal included) keeps the first error in `slot` and writes NaN
+/// (which the engine then refuses).
 fn call_into<'py>(
     slot: &RefCell<Option<PyErr>>,
     name: &str,
@@ -27,7 +28,11 @@ fn call_into<'py>(
         out.fill(f64::NAN);
         return;
     }
-    let res = call().and_then(|v| read_vector(&v, name, len, true, false, out));
+    // A signal (Ctrl-C) that arrived while Rust was running is raised here, before the
+    // next callable, and stops the filter like any exception from the callables.
+    let res = Python::attach(|py| py.check_signals())
+        .and_then(|()| call())
+        .and_then(|v| read_vector(&v, name, len, true, false, out));
     if let Err(e) = res {
         *slot.borrow_mut() = Some(e);
         out.fill(f64::NAN);
@@ -100,7 +105,7 @@ fn run<'py>(
         });
     };
     let model = FnModel::new(dims, fcall, hcall, &Q, &R).map_err(err)?;
-    let mut rec = FilterRecord::new(steps, n);
+    let mut rec = FilterRecord::new(steps, n)?;
     macro_rules! drive {
         ($filter:expr) => {{
             let mut flt = $filter;

@@ -17,7 +17,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{
-    FilterRecord, array3_out, copy_mat, scalar, type_error, type_name, value_error,
+    FilterRecord, array3_out, copy_mat, entries, memory_error, scalar, type_error, type_name,
+    value_error, zeros,
 };
 use crate::series::read_series;
 
@@ -213,8 +214,11 @@ impl Pass {
     /// `filter`'s dict: x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k}, the log-likelihood, the NIS,
     /// and with a gate the rejections.
     pub(crate) fn filtered(mut self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-        let mut rec = FilterRecord::new(self.steps, self.n);
+        let mut rec = FilterRecord::new(self.steps, self.n)?;
         for k in 0..self.steps {
+            if k % 4096 == 4095 {
+                py.check_signals()?; // Ctrl-C raises KeyboardInterrupt
+            }
             let info = self.step(k, None)?;
             let f = &self.filter;
             rec.set(
@@ -236,13 +240,29 @@ impl Pass {
     /// with a gate the rejections of the forward pass.
     pub(crate) fn smoothed(mut self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
         let (steps, n) = (self.steps, self.n);
+        // The smoother records the forward pass step by step (kalman's RtsSmoother, which
+        // grows its record infallibly): the record and the smoothed output must fit, so
+        // their size is checked here, before the pass, by reserving it once.
+        let per_step = 8 * (3 * n + 5 * n.next_multiple_of(8) * n) + 5 * 64;
+        let bytes = steps.saturating_mul(per_step);
+        let mut probe: Vec<u8> = Vec::new();
+        probe
+            .try_reserve_exact(bytes)
+            .map_err(|_| memory_error(bytes / 8, "the smoother's record"))?;
+        drop(probe);
         let mut rts = RtsSmoother::new();
         for k in 0..steps {
+            if k % 4096 == 4095 {
+                py.check_signals()?;
+            }
             self.step(k, Some(&mut rts))?;
         }
         let sm = rts.smooth().map_err(engine(self.context))?;
         let nn = n * n;
-        let mut ps = vec![0.0; steps * nn];
+        let mut ps = zeros(
+            entries(steps, nn, "the smoothed record")?,
+            "the smoothed record",
+        )?;
         for (out, c) in ps.chunks_exact_mut(nn).zip(&sm.covariances) {
             copy_mat(out, c.as_ref());
         }

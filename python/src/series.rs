@@ -9,7 +9,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyString;
 
 use crate::convert::{
-    check_psd, float_array, read_matrix, read_vector, shape_str, type_error, type_name, value_error,
+    check_psd, entries, float_array, read_matrix, read_vector, shape_str, type_error, type_name,
+    value_error, zeros,
 };
 
 /// What a None item of a series stands for, and whether NaN entries pass.
@@ -62,10 +63,11 @@ pub(crate) fn read_series_with(
                 )));
             }
         };
-        let out = match view.as_slice() {
-            Some(contiguous) => contiguous.to_vec(),
-            None => view.iter().copied().collect(),
-        };
+        let mut out = zeros(view.len(), name)?;
+        match view.as_slice() {
+            Some(contiguous) => out.copy_from_slice(contiguous),
+            None => out.iter_mut().zip(view.iter()).for_each(|(o, v)| *o = *v),
+        }
         for (i, &v) in out.iter().enumerate() {
             if v.is_infinite() || (v.is_nan() && !missing_ok) {
                 return Err(value_error(format!(
@@ -191,7 +193,8 @@ pub(crate) fn read_steps(
         ))
     })?;
     let size = rows * cols;
-    let mut out = Vec::with_capacity(along.steps * size);
+    let mut out = zeros(entries(along.steps, size, name)?, name)?;
+    out.clear(); // the capacity stays: one fallible allocation for every step
     let mut buf = vec![0.0; size];
     let mut k = 0;
     for item in items {
@@ -240,7 +243,7 @@ fn read_array(obj: &Bound<'_, PyAny>, spec: &Spec<'_>, along: Along<'_>) -> PyRe
         )));
     }
     let size = rows * cols;
-    let mut out = vec![0.0; along.steps * size];
+    let mut out = zeros(entries(along.steps, size, name)?, name)?;
     for (k, (chunk, step)) in out
         .chunks_exact_mut(size)
         .zip(view.outer_iter())

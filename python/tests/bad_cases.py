@@ -145,7 +145,6 @@ CASES = {
         ValueError,
         "us",
     ),
-    "batch saver unsupported": (lambda: kf().batch_filter(np.zeros(3), saver=object()), TypeError, "saver"),
     # per-step matrices of batch_filter (three steps): the argument and the step are named
     "batch Fs too short": (lambda: batch(Fs=[I2] * 2), ValueError, "Fs[2]"),
     "batch Fs too long": (lambda: batch(Fs=[I2] * 4), ValueError, "Fs[3]"),

@@ -46,8 +46,9 @@ ARTEFACTS = {
         "the solve of S by a factorisation instead of FilterPy's inv(S) differs by an ulp"
     ),
     ("test_mmae.py", "test_MMAE2"): (
-        "builds Q = Q_discrete_white_noise(…) * 0 + a non-PSD matrix; launch_estimation "
-        "refuses an indefinite Q (ValueError naming Q), FilterPy runs with it"
+        "sets cv.Q[2, 2] = 0 on a discrete white-noise Q whose Q[0, 2] and Q[1, 2] stay "
+        "nonzero, an indefinite Q: launch_estimation refuses it (ValueError naming Q), "
+        "FilterPy runs with it"
     ),
 }
 
