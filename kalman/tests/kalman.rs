@@ -45,6 +45,7 @@ mod fit {
     pub mod entries;
     pub mod estimators;
     pub mod golden;
+    pub mod honest;
     pub mod likelihood;
 }
 

@@ -7,6 +7,7 @@ use faer::Mat;
 use super::dense::{chol_solve, cholesky, gemm, symmetrise};
 use super::info::{Fit, Method, finish};
 use super::score::Flat;
+use super::score::log_likelihood_gradient;
 use super::{FitError, LN_2PI, ParamMap, Series, StandardMap, Structure};
 
 /// Options of [`em`].
@@ -443,8 +444,15 @@ fn to_mat(v: &[f64], n: usize) -> Mat<f64> {
 /// unconverged). The starting point is the base system (non-positive free variances start
 /// at a tenth of the data's variance).
 ///
+/// A small increase is not yet an optimum (EM crawls along flat ridges), so the stop is
+/// checked with the exact gradient `g` and the observed information `I`: if the Newton
+/// decrement `gᵀI⁻¹g` (twice the gain of ln L a Newton step would still make) exceeds
+/// [`EM_DECREMENT`], the fit is flagged unconverged, with that gain in the message.
+///
 /// # Errors
-/// [`FitError::NotIdentifiable`] if a free block cannot be learned from the data;
+/// [`FitError::NotIdentifiable`] if a free block cannot be learned from the data, or if
+/// `x0` is free while `P0` (fixed) has a zero variance: the smoothed `x_{0|N}` EM
+/// replaces `x0` with then equals `x0` in that component, so EM could never move it;
 /// [`FitError::NotPositiveDefinite`] if a covariance degenerates; model errors.
 ///
 /// # Example
@@ -470,6 +478,20 @@ fn to_mat(v: &[f64], n: usize) -> Mat<f64> {
 pub fn em(map: &StandardMap, data: &Series<'_>, opts: &EmOptions) -> Result<Fit, FitError> {
     data.check(map.base())?;
     check_identifiable(map, data)?;
+    let free = map.free();
+    if free.x0 && !free.p0_diag {
+        let p0 = &map.base().p0;
+        let scale = (0..p0.nrows()).fold(0.0_f64, |a, i| a.max(p0[(i, i)].abs()));
+        if let Some(i) = (0..p0.nrows()).find(|&i| p0[(i, i)] <= 1e-12 * scale) {
+            return Err(FitError::NotIdentifiable {
+                what: format!("x0[{i}] by EM"),
+                why: format!(
+                    "P0[{i},{i}] = {} makes the smoothed first state equal x0[{i}], so EM's update never moves it; free P0:diag too, give P0 a variance, or use the MLE",
+                    p0[(i, i)]
+                ),
+            });
+        }
+    }
     let mut theta = map.theta_of(map.base(), Some(data));
     map.system(&theta)?.model()?;
     let mut prev = f64::NEG_INFINITY;
@@ -496,8 +518,35 @@ pub fn em(map: &StandardMap, data: &Series<'_>, opts: &EmOptions) -> Result<Fit,
             opts.max_iter
         )
     };
-    finish(map, theta, data, Method::Em, iterations, converged, message)
+    let mut fit = finish(map, theta, data, Method::Em, iterations, converged, message)?;
+    if fit.converged
+        && let Some(cov) = &fit.covariance
+    {
+        let (_, g) = log_likelihood_gradient(map, &fit.theta, data)?;
+        let k = g.len();
+        let dec: f64 = (0..k)
+            .map(|i| (0..k).map(|j| g[i] * cov[(i, j)] * g[j]).sum::<f64>())
+            .sum();
+        if dec > EM_DECREMENT {
+            fit.converged = false;
+            fit.message = format!(
+                "EM not converged: its increase fell below {:e} relative after {iterations} iterations, but the gradient says a Newton step would still raise ln L by about {:.2e}; raise the cap and lower the tolerance, or use the MLE (L-BFGS) method{}",
+                opts.tol,
+                0.5 * dec,
+                fit.message
+                    .split_once(';')
+                    .map(|(_, rest)| format!(";{rest}"))
+                    .unwrap_or_default()
+            );
+        }
+    }
+    Ok(fit)
 }
+
+/// The largest Newton decrement `gᵀI⁻¹g` at which [`em`] calls a stop converged: a Newton
+/// step could still raise ln L by at most half of it, 5e-4 — below the 1e-3 to which the
+/// MLE and EM are expected to agree, and far below a standard error's worth (½).
+pub const EM_DECREMENT: f64 = 1e-3;
 
 /// One EM iteration at θ: the log-likelihood at θ (from the E-step's filter pass) and the
 /// θ of the M-step. Its cost is one filter pass and one RTS smoother pass with the lag-one
