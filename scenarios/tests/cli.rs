@@ -22,6 +22,8 @@ mod input_errors;
 mod irregular;
 #[path = "cli/output_safety.rs"]
 mod output_safety;
+#[path = "cli/plots.rs"]
+mod plots;
 #[path = "cli/transcripts.rs"]
 mod transcripts;
 #[path = "cli/uav.rs"]

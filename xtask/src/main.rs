@@ -211,6 +211,24 @@ fn downstream() -> Result<()> {
 }
 
 fn reproduce(args: &[String]) -> Result<()> {
+    // Progress as plain lines with the elapsed time (readable in a log as on a terminal):
+    // the build, then one line per scenario from `scenarios all`, then where the reports are.
+    let start = std::time::Instant::now();
+    let stamp = |what: &str| {
+        let s = start.elapsed().as_secs();
+        eprintln!("reproduce: [{:>2} min {:>2} s] {what}", s / 60, s % 60);
+    };
+    stamp("building the scenarios program (release; several minutes on a cold build)");
+    let mut cmd = cargo();
+    cmd.args(["build", "--release", "--quiet", "--package", "scenarios"]);
+    run(cmd).context("building the scenarios program")?;
+    stamp("built; running `scenarios all` (fueling, uav, boom)");
+    // Where the index is: `reports/`, or the `--out` given among `args`.
+    let out = args
+        .iter()
+        .position(|a| a == "--out")
+        .and_then(|i| args.get(i + 1))
+        .map_or_else(|| root().join("reports"), PathBuf::from);
     let mut cmd = cargo();
     cmd.args([
         "run",
@@ -222,9 +240,11 @@ fn reproduce(args: &[String]) -> Result<()> {
         "all",
         "--out",
     ])
-    .arg(root().join("reports"))
+    .arg(&out)
     .args(args);
-    run(cmd).context("reproducing the papers' results (`scenarios all`)")
+    run(cmd).context("reproducing the papers' results (`scenarios all`)")?;
+    stamp(&format!("done: {}", out.join("README.md").display()));
+    Ok(())
 }
 
 fn ci(args: &[String]) -> Result<()> {

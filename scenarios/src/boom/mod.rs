@@ -21,6 +21,7 @@
 //! every shard; the noise Monte Carlo's runs are split between shards, and `merge`
 //! recomputes everything from their records.
 
+mod findings;
 pub mod parameters;
 pub mod records;
 pub mod report;

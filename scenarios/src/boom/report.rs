@@ -4,10 +4,11 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use wls::boom::{AngleRecovery, AngleUnit, AxWeightLaw, BoomConfig, RateWeight, Sign};
+use wls::boom::Sign;
 
-use super::parameters::{EstimatorParams, Method};
-use super::summary::{AlternativeVerdict, BoomSummary, CaseSummary, Computed, TurnErrors};
+use super::findings::{self, case, fmt_num, fmt_opt, turn_cells, wls0_comment};
+use super::parameters::Method;
+use super::summary::{Addition, BoomSummary, CaseSummary, Computed};
 use crate::error::Result;
 use crate::output;
 use crate::plot::{Figure, Scale, Series, line_plot};
@@ -66,42 +67,105 @@ pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result
             &rows,
         )?;
         let name = method.name();
+        let t_at = |alpha_deg: f64| {
+            rows.iter()
+                .find(|r| r[1] >= alpha_deg)
+                .map_or(f64::NAN, |r| r[0])
+        };
         for (what, limit, unit, col_p, col_m) in [
             ("alpha", lim.alpha_deg, "°", 2, 3),
             ("eps", lim.eps_deg_s2, "°/s²", 4, 5),
         ] {
-            // Plot errors clipped at 3× the limit (an undefined cycle shows at the clip), as
-            // the paper clips its Fig. 4 "to keep the scale".
+            // Errors above 3× the limit are drawn at it, as the paper clips its Fig. 4 "to
+            // keep the scale"; an undefined cycle (no solution) is a gap, never a value.
             let clip = 3.0 * limit;
             let curve = |col: usize| -> Vec<(f64, f64)> {
                 decimate(&rows, col, 4)
                     .into_iter()
-                    .map(|(t, y)| (t, if y.is_finite() { y.min(clip) } else { clip }))
+                    .map(|(t, y)| (t, if y.is_finite() { y.min(clip) } else { f64::NAN }))
                     .collect()
             };
+            let clipped = [col_p, col_m]
+                .iter()
+                .any(|&k| rows.iter().any(|r| r[k].is_finite() && r[k] > clip));
             let sym = if what == "alpha" { "δα" } else { "δε" };
             let t_end = rows.last().map_or(1.0, |r| r[0]);
-            let series = vec![
+            let mut series = vec![
                 Series::line(format!("{sym}⁺ (variant +)"), curve(col_p)),
                 Series::line(format!("{sym}⁻ (variant −)"), curve(col_m)),
-                Series::line(
-                    format!("limit {limit} {unit}"),
+                Series::dashed(
+                    format!(
+                        "limit {} = {limit} {unit} (paper)",
+                        if what == "alpha" { "Δα" } else { "Δε" }
+                    ),
                     vec![(0.0, limit), (t_end, limit)],
-                ),
+                )
+                .with_color(7),
             ];
+            let marks = paper_marks(*method, *gamma, what, &t_at);
+            let marked = !marks.is_empty();
+            series.extend(marks);
+            if *method == Method::Wls && (*gamma - 10.0).abs() < 1e-9 {
+                // The finding beyond the paper, on its headline plot: the worst error over
+                // the turn once the centripetal term is in the readings.
+                let worst = s
+                    .beyond_paper
+                    .iter()
+                    .filter(|b| {
+                        b.label == Addition::Centripetal
+                            && b.method == Method::Wls
+                            && (b.gamma_deg - 10.0).abs() < 1e-9
+                    })
+                    .map(|b| {
+                        let v = if what == "alpha" {
+                            b.max_alpha_err_deg
+                        } else {
+                            b.max_eps_err_deg_s2
+                        };
+                        (v, b.bias)
+                    })
+                    .max_by(|a, b| a.0.total_cmp(&b.0));
+                if let Some((v, bias)) = worst {
+                    series.push(
+                        Series::dashed(
+                            format!(
+                                "ours with ω²r (ignored by the paper): worst {sym}, variant {}, {v:.2} {unit}",
+                                bias.label()
+                            ),
+                            vec![(0.0, v), (t_end, v)],
+                        )
+                        .with_color(3),
+                    );
+                }
+            }
             let file = format!("{stem}_{what}.svg");
-            let title = format!(
-                "{name}, γ = {}°: {sym} (clipped at 3× limit)",
-                fmt_num(*gamma)
-            );
-            let y_label = format!("{sym}, {unit}");
+            let title = format!("{name}, γ = {}°: {sym} over the turn", fmt_num(*gamma));
+            let y_label = format!("{sym} [{unit}]");
+            let mut notes = Vec::new();
+            notes.extend(marked.then(|| {
+                format!(
+                    "Dashed verticals: the paper's angles, placed at the time our nominal turn \
+                 reaches them (our turn lasts {:.1} s to 90°).",
+                    s.turn_duration_s
+                )
+            }));
+            if clipped {
+                notes.insert(
+                    0,
+                    format!(
+                        "Values above 3× the limit ({clip} {unit}) are drawn at it, as in the \
+                         paper's Fig. 4; the CSV has them all."
+                    ),
+                );
+            }
             line_plot(
                 &dir.join(&file),
                 &Figure {
                     title: &title,
-                    x_label: "t, s",
+                    x_label: "t [s]",
                     y_label: &y_label,
                     y_scale: Scale::Linear,
+                    notes: &notes,
                 },
                 &series,
             )?;
@@ -133,18 +197,24 @@ pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result
         &dir.join("nominal.svg"),
         &Figure {
             title: "Nominal turn (paper Fig. 2): α/100, ε and dε of eq. (4) at Δa",
-            x_label: "t, s",
-            y_label: "α/100 °, ε and dε °/s² (dε clipped at 2)",
+            x_label: "t [s]",
+            y_label: "α/100 [°]; ε, dε [°/s²]",
             y_scale: Scale::Linear,
+            notes: &[
+                "dε of eq. (4) is drawn at 2 °/s² where it is larger (it grows without \
+                      bound as α → 90°)."
+                    .to_string(),
+            ],
         },
         &[
             Series::line("α_n / 100, °", col(1, 0.01, f64::INFINITY)),
             Series::line("ε_n, °/s²", col(3, 1.0, f64::INFINITY)),
             Series::line("dε (4), °/s²", col(5, 1.0, 2.0)),
-            Series::line(
-                format!("Δε = {} °/s²", lim.eps_deg_s2),
+            Series::dashed(
+                format!("limit Δε = {} °/s² (paper)", lim.eps_deg_s2),
                 vec![(0.0, lim.eps_deg_s2), (s.turn_duration_s, lim.eps_deg_s2)],
-            ),
+            )
+            .with_color(7),
         ],
     )?;
 
@@ -173,43 +243,100 @@ pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result
     )?;
     let g_end = s.gamma_sweep.last().map_or(1.0, |r| r.gamma_deg);
     let g0 = s.gamma_sweep.first().map_or(0.0, |r| r.gamma_deg);
+    let mut sweep_series = vec![
+        Series::line(
+            "max δα [°]",
+            s.gamma_sweep
+                .iter()
+                .map(|r| (r.gamma_deg, r.max_alpha_err_deg))
+                .collect(),
+        ),
+        Series::line(
+            "max δε [°/s²]",
+            s.gamma_sweep
+                .iter()
+                .map(|r| (r.gamma_deg, r.max_eps_err_deg_s2))
+                .collect(),
+        ),
+        Series::dashed(
+            format!("limit Δα = {}° (paper)", lim.alpha_deg),
+            vec![(g0, lim.alpha_deg), (g_end, lim.alpha_deg)],
+        )
+        .with_color(0),
+        Series::dashed(
+            format!("limit Δε = {} °/s² (paper)", lim.eps_deg_s2),
+            vec![(g0, lim.eps_deg_s2), (g_end, lim.eps_deg_s2)],
+        )
+        .with_color(1),
+        Series::vertical("paper: γ = 10° chosen", 10.0).with_color(7),
+        Series::vertical("paper's prototype window ≈ 5°–12° (each end)", 5.0).with_color(4),
+        Series::vertical("", 12.0).with_color(4),
+    ];
+    if let Some([a, _]) = s.feasible_gamma_deg_centripetal {
+        sweep_series.push(
+            Series::vertical(format!("ours with ω²r: feasible only from {a}°"), a).with_color(3),
+        );
+    }
+    let sweep_note = [format!(
+        "Feasible window here (both curves under their limits): {}; with the centripetal \
+         term ω²r, which the paper ignores: {}.",
+        s.feasible_gamma_deg
+            .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°")),
+        s.feasible_gamma_deg_centripetal
+            .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°"))
+    )];
     line_plot(
         &dir.join("gamma_sweep.svg"),
         &Figure {
             title: "WLS: worst errors over the turn (both variants) against γ",
-            x_label: "γ, degrees",
-            y_label: "max δα, ° / max δε, °/s²",
+            x_label: "sensor offset angle γ [°]",
+            y_label: "max δα [°], max δε [°/s²]",
             y_scale: Scale::Linear,
+            notes: &sweep_note,
         },
-        &[
-            Series::line(
-                "max δα, °",
-                s.gamma_sweep
-                    .iter()
-                    .map(|r| (r.gamma_deg, r.max_alpha_err_deg))
-                    .collect(),
-            ),
-            Series::line(
-                "max δε, °/s²",
-                s.gamma_sweep
-                    .iter()
-                    .map(|r| (r.gamma_deg, r.max_eps_err_deg_s2))
-                    .collect(),
-            ),
-            Series::line(
-                format!("Δα = {}°", lim.alpha_deg),
-                vec![(g0, lim.alpha_deg), (g_end, lim.alpha_deg)],
-            ),
-            Series::line(
-                format!("Δε = {} °/s²", lim.eps_deg_s2),
-                vec![(g0, lim.eps_deg_s2), (g_end, lim.eps_deg_s2)],
-            ),
-        ],
+        &sweep_series,
     )?;
 
+    output::write_atomic(&dir.join("options.md"), findings::options_md(s).as_bytes())?;
     let mut text = report(s, &figures);
     text.push_str(tracking_section);
     output::write_atomic(&dir.join("report.md"), text.as_bytes())
+}
+
+/// The paper's angles for `method` at `gamma` on the `what` ("alpha" or "eps") plot, as
+/// dashed verticals at the time `t_at(α)` our nominal turn reaches them.
+fn paper_marks(method: Method, gamma: f64, what: &str, t_at: &dyn Fn(f64) -> f64) -> Vec<Series> {
+    let at = |label: String, alpha: f64, slot: usize| {
+        Series::vertical(
+            format!("{label} (t = {:.1} s here)", t_at(alpha)),
+            t_at(alpha),
+        )
+        .with_color(slot)
+    };
+    if gamma.abs() > 1e-9 {
+        return Vec::new();
+    }
+    match method {
+        Method::Direct | Method::Linear3 => {
+            let who = if method == Method::Direct {
+                "paper"
+            } else {
+                "paper, direct (linearised \"no better\")"
+            };
+            vec![
+                at(format!("{who}: over the limits from α ≈ 86°"), 86.0, 3),
+                at(format!("{who}: undefined past α ≈ 88°"), 88.0, 4),
+            ]
+        }
+        Method::Wls if what == "eps" => {
+            vec![at(
+                "paper: δε⁺ over Δε past α ≈ 81°, \"slightly\"".into(),
+                81.0,
+                3,
+            )]
+        }
+        _ => Vec::new(),
+    }
 }
 
 /// Every `step`-th bin of `rows[.][col]` against `rows[.][0]`, keeping each bin's largest
@@ -224,188 +351,6 @@ pub(super) fn decimate(rows: &[Vec<f64>], col: usize, step: usize) -> Vec<(f64, 
         .collect()
 }
 
-/// A number without trailing zeros ("10", "0.5").
-pub(super) fn fmt_num(x: f64) -> String {
-    let s = format!("{x:.3}");
-    s.trim_end_matches('0').trim_end_matches('.').to_string()
-}
-
-fn fmt_opt(x: Option<f64>) -> String {
-    x.map_or_else(|| "—".to_string(), |v| format!("{v:.2}°"))
-}
-
-/// The cells `γ | variant | max δα | max δε | over the limits from | undefined from` of a
-/// turn in the cases and alternatives tables, the over-the-limits cell given.
-fn turn_cells(t: &TurnErrors, over_from: &str) -> String {
-    format!(
-        "{}° | {} | {:.4} | {:.4} | {over_from} | {}",
-        fmt_num(t.gamma_deg),
-        t.bias.label(),
-        t.max_alpha_err_deg,
-        t.max_eps_err_deg_s2,
-        fmt_opt(t.undefined_from_alpha_deg)
-    )
-}
-
-fn unit(u: AngleUnit) -> &'static str {
-    match u {
-        AngleUnit::Radian => "rad",
-        AngleUnit::Degree => "deg",
-    }
-}
-
-fn options_label(o: &EstimatorParams) -> String {
-    format!(
-        "ε in {}, ε̇ in {}, v₆ {}, v₁ {}, α by {}",
-        unit(o.epsilon_unit),
-        unit(o.epsilon_rate_unit),
-        if o.fixed_point {
-            "fixed point"
-        } else {
-            "previous cycle"
-        },
-        if o.ax_weight_cos { "cos α₀" } else { "1" },
-        match o.angle_recovery {
-            AngleRecovery::Arcsin => "arcsin",
-            AngleRecovery::Atan2 => "atan2",
-        }
-    )
-}
-
-/// How the main options' WLS at γ = 0 compares with the paper's Fig. 5.
-fn wls0_comment(s: &BoomSummary) -> String {
-    let lim = s.limits;
-    let over = |c: &&&CaseSummary| {
-        c.turn.undefined_from_alpha_deg.is_some()
-            || c.turn.max_alpha_err_deg > lim.alpha_deg
-            || c.turn.max_eps_err_deg_s2 > lim.eps_deg_s2
-    };
-    let cases: Vec<&CaseSummary> = BOTH
-        .into_iter()
-        .filter_map(|b| case(s, Method::Wls, 0.0, b))
-        .collect();
-    let departing: Vec<&&CaseSummary> = cases.iter().filter(over).collect();
-    let mut t = String::new();
-    if cases
-        .iter()
-        .all(|c| c.turn.undefined_from_alpha_deg.is_none())
-    {
-        t.push_str("defined over the whole turn, as the paper says; ");
-    } else {
-        t.push_str("NOT defined over the whole turn; ");
-    }
-    match departing.as_slice() {
-        [] => t.push_str("no excess at all (the paper has δε⁺ slightly over)"),
-        [c] if c.turn.bias == Sign::Plus => {
-            let _ = write!(
-                t,
-                "only the \"+\" variant departs, as in the paper (δε⁺ = {:.2} °/s² vs Δε = {}: \
-                 \"slightly\"); {}",
-                c.turn.max_eps_err_deg_s2,
-                lim.eps_deg_s2,
-                if c.turn.max_alpha_err_deg > lim.alpha_deg {
-                    format!(
-                        "but δα⁺ = {:.2}° also exceeds Δα, which the paper does not show; no \
-                         unit/weight choice avoids that (alternatives table)",
-                        c.turn.max_alpha_err_deg
-                    )
-                } else {
-                    "δα⁺ stays within Δα".to_string()
-                }
-            );
-        }
-        [c] => {
-            let _ = write!(
-                t,
-                "the \"{}\" variant departs where the paper has \"+\" (alternatives table)",
-                c.turn.bias.label()
-            );
-        }
-        _ => t.push_str("both variants depart; the paper has only δε⁺"),
-    }
-    t
-}
-
-/// The verdict of the alternatives table in words.
-fn alternatives_conclusion(s: &BoomSummary) -> String {
-    let v = &s.alternative_verdicts;
-    let names = |f: &dyn Fn(&AlternativeVerdict) -> bool| -> String {
-        let list: Vec<String> = v
-            .iter()
-            .filter(|x| f(x))
-            .map(|x| format!("({})", options_label(&x.options)))
-            .collect();
-        if list.is_empty() {
-            "none".into()
-        } else {
-            list.join(", ")
-        }
-    };
-    let mut t = String::new();
-    let _ = write!(
-        t,
-        "**Verdict.** Option sets that reproduce every claim: {}. ",
-        names(&|x| x.reproduces_paper)
-    );
-    let _ = write!(
-        t,
-        "Sets that keep WLS defined at γ = 0 and hold both limits at γ = 10° (the \
-         scenario's main options are among them): {}. ",
-        names(&|x| x.defined_at_0 && x.within_at_10)
-    );
-    let _ = write!(
-        t,
-        "Sets whose only γ = 0 excess is δε in one variant past 75° (the paper's Fig. 5 \
-         pattern, setting aside definedness and δα): {}. ",
-        names(&|x| x.eps_pattern_at_0
-            && !x.departures_at_0.is_empty()
-            && x.departures_at_0.iter().all(|d| d.contains(": δε")))
-    );
-    let lib = BoomConfig::default();
-    let lib_options = EstimatorParams {
-        epsilon_unit: lib.epsilon_unit,
-        epsilon_rate_unit: lib.epsilon_rate_unit,
-        fixed_point: matches!(lib.rate_weight, RateWeight::FixedPoint { .. }),
-        ax_weight_cos: lib.weights.ax_law == AxWeightLaw::CosPrevious,
-        angle_recovery: lib.angle_recovery,
-    };
-    if let Some(d) = v.iter().find(|x| x.options == lib_options) {
-        let _ = write!(
-            t,
-            "The `wls` crate's default options ({}), which SPEC B reports as the prototype's \
-             choice, give at γ = 0: {}; feasible γ window {} (prototype: ≈ 5°–12°). ",
-            options_label(&d.options),
-            if d.departures_at_0.is_empty() {
-                "no departure".to_string()
-            } else {
-                d.departures_at_0.join("; ")
-            },
-            d.feasible_gamma_deg
-                .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°"))
-        );
-    }
-    if v.iter().all(|x| x.within_at_10) {
-        let _ = write!(
-            t,
-            "Every set holds the limits at γ = 10°, which is the paper's conclusion; the γ = 0 \
-             behaviour near 90° is what depends on the unstated units and weight timing."
-        );
-    } else {
-        let _ = write!(
-            t,
-            "Sets that fail the limits at γ = 10°: {}.",
-            names(&|x| !x.within_at_10)
-        );
-    }
-    t
-}
-
-fn case(s: &BoomSummary, method: Method, gamma: f64, bias: Sign) -> Option<&CaseSummary> {
-    s.cases.iter().find(|c| {
-        c.method == method && (c.turn.gamma_deg - gamma).abs() < 1e-9 && c.turn.bias == bias
-    })
-}
-
 /// The text of report.md.
 fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
     let lim = s.limits;
@@ -413,7 +358,13 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
     let _ = writeln!(
         r,
         "# B — erector-boom angle and angular acceleration (WLS, offset angle γ)\n\n\
-         Generated by `scenarios boom`; do not edit by hand. One accelerometer at r = {} m, \
+         Generated by `scenarios boom`; do not edit by hand.\n\n{}",
+        findings::findings(s)
+    );
+    let mut setup = String::from("## Set-up\n\n");
+    let _ = writeln!(
+        setup,
+        "One accelerometer at r = {} m, \
          constant errors ±Δa = {} m/s² on a_x and a_y, limits Δα = {}°, Δε = {} °/s². \
          Nominal turn: ε_d = {:.4} °/s² (solved so that ω = 0 at 90°), {:.2} s, cruise \
          {:.4} rad/s.\n\n\
@@ -430,7 +381,7 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
     );
     if let Some(a) = s.saturated_until_alpha_deg {
         let _ = writeln!(
-            r,
+            setup,
             "The sensor's ±{} m/s² range clips the \"+\" variant's a_y = g·cos α + ε·r + Δa by \
              up to Δa while α < {a:.2}° (the paper ignores the range); the effect on ε is at \
              most Δa/r = {:.3} °/s².\n",
@@ -439,9 +390,9 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         );
     }
     let _ = writeln!(
-        r,
+        setup,
         "WLS options of the main cases: {}.\n",
-        options_label(&s.params.estimator)
+        findings::options_label(&s.params.estimator)
     );
 
     // Paper vs ours.
@@ -578,13 +529,22 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         s.params.sweep.step_deg,
         match s.feasible_gamma_deg {
             Some([a, b]) if a <= 10.0 && 10.0 <= b && b >= s.params.sweep.to_deg =>
-                "10° is feasible, as the paper chose; the errors keep falling as γ grows, so the window runs to the end of the sweep (the prototype's upper bound 12° is not reproduced); the lower end depends on the WLS options (alternatives table)",
+                "10° is feasible, as the paper chose; the errors keep falling as γ grows, so the window runs to the end of the sweep (the prototype's upper bound 12° is not reproduced); the lower end depends on the WLS options ([options.md](options.md))",
             Some([a, b]) if a <= 10.0 && 10.0 <= b =>
-                "10° is feasible, as the paper chose; the lower end depends on the WLS options (alternatives table)",
+                "10° is feasible, as the paper chose; the lower end depends on the WLS options ([options.md](options.md))",
             Some(_) => "10° is NOT in the window",
             None => "no feasible γ",
         }
     );
+
+    let _ = writeln!(
+        r,
+        "The verdict at a glance — the γ sweep with the paper's choice, its prototype's window \
+         and the window left by the centripetal term, then WLS at γ = 10° (paper Fig. 7):\n\n\
+         ![gamma sweep](gamma_sweep.svg)\n\n![wls γ=10 alpha](wls_gamma10_alpha.svg)\n\n\
+         ![wls γ=10 eps](wls_gamma10_eps.svg)\n"
+    );
+    r.push_str(&setup);
 
     // Cases table.
     let _ = writeln!(r, "## All cases\n");
@@ -602,64 +562,17 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
         );
     }
 
-    // Alternatives.
+    // Units and weights: the verdict here, every set in the appendix.
     let _ = writeln!(
         r,
-        "\n## Which units and weights reproduce the paper\n\n\
-         The paper does not say in which unit ε sits in the WLS state (H₂₃ = r or r·π/180, \
-         and the ε₀ row), in which unit ε̇ enters v₆ = 0.5/(1 + 2|ε̇|)², when v₆ is evaluated \
-         (from the previous cycles, or re-evaluated to a fixed point within the cycle), and \
-         v₁ = cos α₀ could be read as a constant; the paper takes α = arcsin s, which is \
-         undefined once the solved s passes 1, whereas atan2(s, c) never is. All {} \
-         combinations, γ = 0 and 10°: a set \
-         *reproduces the paper* if at γ = 0 both variants stay defined, δα stays within Δα, \
-         at most one variant exceeds Δε and only past α = 75°, and at γ = 10° everything is \
-         within the limits.\n",
-        s.alternative_verdicts.len()
+        "\n## Which units and weights reproduce the paper\n\n{}\n\n{}\n\nEvery set's \
+         verdict and errors: [options.md](options.md).",
+        findings::options_intro(s),
+        findings::alternatives_conclusion(s)
     );
-    let _ = writeln!(
-        r,
-        "| options | defined at γ=0 | δα within at γ=0 | δε pattern at γ=0 | within at γ=10° | reproduces | departures at γ=0 | feasible γ window |\n|---|---|---|---|---|---|---|---|"
-    );
-    let yes = |b: bool| if b { "yes" } else { "no" };
-    for v in &s.alternative_verdicts {
-        let _ = writeln!(
-            r,
-            "| {} | {} | {} | {} | {} | **{}** | {} | {} |",
-            options_label(&v.options),
-            yes(v.defined_at_0),
-            yes(v.alpha_within_at_0),
-            yes(v.eps_pattern_at_0),
-            yes(v.within_at_10),
-            yes(v.reproduces_paper),
-            if v.departures_at_0.is_empty() {
-                "none".to_string()
-            } else {
-                v.departures_at_0.join("; ")
-            },
-            v.feasible_gamma_deg
-                .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°"))
-        );
-    }
-    let _ = writeln!(r, "\n{}", alternatives_conclusion(s));
-    let _ = writeln!(
-        r,
-        "\n| options | γ | variant | max δα, ° | max δε, °/s² | over from α (t) | undefined from α |\n|---|---|---|---|---|---|---|"
-    );
-    for a in &s.alternatives {
-        let over_from = match (a.turn.first_violation_alpha_deg, a.first_violation_t_s) {
-            (Some(al), Some(t)) => format!("{al:.2}° ({t:.2} s)"),
-            _ => "—".to_string(),
-        };
-        let _ = writeln!(
-            r,
-            "| {} | {} |",
-            options_label(&a.options),
-            turn_cells(&a.turn, &over_from)
-        );
-    }
 
     // Beyond the paper.
+    let yes = |b: bool| if b { "yes" } else { "no" };
     if !s.beyond_paper.is_empty() {
         let _ = writeln!(
             r,
@@ -697,12 +610,13 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
     let _ = writeln!(
         r,
         "\n## Figures\n\nNominal turn (paper Fig. 2):\n\n![nominal](nominal.svg)\n\n\
-         γ sweep (the feasible window is where both curves are under their limits):\n\n\
-         ![gamma sweep](gamma_sweep.svg)\n\n\
          Error curves (paper Figs. 3, 4, 5, 7 for direct / linear3 / WLS at γ = 0 / WLS at \
          γ = 10°); data in the CSV of the same name:\n"
     );
     for (name, gamma, what, file) in figures {
+        if file.starts_with("wls_gamma10_") {
+            continue; // shown with the verdict above
+        }
         let _ = writeln!(r, "![{name} γ={} {what}]({file})\n", fmt_num(*gamma));
     }
     r

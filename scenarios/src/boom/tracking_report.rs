@@ -8,8 +8,9 @@ use std::path::Path;
 
 use wls::boom::TurnRun;
 
+use super::findings::fmt_num;
 use super::parameters::Method;
-use super::report::{decimate, deg, fmt_num};
+use super::report::{decimate, deg};
 use super::summary::{BoomSummary, Computed};
 use crate::error::Result;
 use crate::output;
@@ -100,23 +101,27 @@ fn tracking_outputs(c: &Computed, dir: &Path) -> Result<Vec<String>> {
                     decimate(&rows, col, 4).into_iter().skip(1).collect(),
                 ));
             }
-            series.push(Series::line(
-                format!("limit {limit} {unit}"),
-                vec![(0.0, limit), (t_end, limit)],
-            ));
+            series.push(
+                Series::dashed(
+                    format!("limit {limit} {unit} (paper)"),
+                    vec![(0.0, limit), (t_end, limit)],
+                )
+                .with_color(7),
+            );
             let file = format!("tracking_gamma{}_{what}.svg", fmt_num(gamma));
             let title = format!(
                 "WLS, UKF and unscented RTS at γ = {}°, variant +: {sym} (log scale)",
                 fmt_num(gamma)
             );
-            let y_label = format!("{sym}, {unit}");
+            let y_label = format!("{sym} [{unit}] (log)");
             line_plot(
                 &dir.join(&file),
                 &Figure {
                     title: &title,
-                    x_label: "t, s",
+                    x_label: "t [s]",
                     y_label: &y_label,
                     y_scale: Scale::Log,
+                    notes: &[],
                 },
                 &series,
             )?;

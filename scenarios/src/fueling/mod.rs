@@ -17,6 +17,7 @@ pub mod calibration;
 pub mod calibration_report;
 pub mod learned;
 pub mod parameters;
+mod plots;
 pub mod records;
 pub mod report;
 pub mod search;
