@@ -172,6 +172,28 @@ class KalmanFilter:
         or one matrix per step (len(Xs)). inv: only numpy.linalg.inv (or None). Each Ps[k]
         must be symmetric PSD (ValueError naming Ps[k])."""
 
+class ExtendedKalmanFilter(KalmanFilter):
+    """FilterPy's ``ExtendedKalmanFilter``: a KalmanFilter (the same attributes, predict,
+    copies and pickles) whose update linearises h with the user's Jacobian. The callables
+    are called as FilterPy calls them, with the filter's x and then the extra arguments; a
+    value of the wrong shape raises ValueError naming the callable, and an exception they
+    raise propagates."""
+    def update(  # type: ignore[override]
+        self, z: _Measurement, HJacobian: Callable[..., Any], Hx: Callable[..., Any],
+        R: Optional[MatrixLike] = None, args: Any = (), hx_args: Any = (),
+        residual: Callable[[Any, Any], Any] = np.subtract,
+    ) -> None:
+        """H = HJacobian(x, *args), y = residual(z, Hx(x, *hx_args)), K = P H^T S^-1,
+        x <- x + K y, P <- (I - K H) P (I - K H)^T + K R K^T. z = None skips."""
+    def predict_x(self, u: Optional[MatrixLike] = None) -> None:
+        """x <- F x + B u (P unchanged)."""
+    def predict_update(
+        self, z: _Measurement, HJacobian: Callable[..., Any], Hx: Callable[..., Any],
+        args: Any = (), hx_args: Any = (), u: Optional[MatrixLike] = None,
+    ) -> None:
+        """FilterPy's one-call step: H at the current x, the prediction, then the update
+        with that H and y = z - Hx(x_pred); x_prior, P_prior hold the state before the
+        prediction, as in FilterPy."""
 FilterResult = dict[str, Array]
 # filter/smooth and their continuous forms: the arrays below, plus, when a gate is given,
 # "rejected": a dict of 1-d arrays "step" and "channel" (int64: the row of zs and the

@@ -10,8 +10,7 @@ use crate::batch::PerStepArgs;
 use crate::convert::{scalar, type_error, type_name, value_error};
 use crate::guard;
 pub(crate) use crate::kf_attrs::KalmanFilter;
-use crate::kf_attrs::{A, PREDICTED, UPDATED, dim};
-use crate::kf_core::Core;
+use crate::kf_attrs::{A, PREDICTED, UPDATED};
 
 #[pymethods]
 impl KalmanFilter {
@@ -170,20 +169,7 @@ impl KalmanFilter {
         dim_z: &Bound<'_, PyAny>,
         dim_u: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        guard(|| {
-            let n = dim(dim_x, "dim_x", true)?;
-            let m = dim(dim_z, "dim_z", true)?;
-            let p = match dim_u {
-                Some(u) => dim(u, "dim_u", false)?,
-                None => 0,
-            };
-            Ok(Self {
-                core: Core::new(n, m, p)?,
-                dim_u: p,
-                x_col: true,
-                cache: Default::default(),
-            })
-        })
+        guard(|| Self::build(dim_x, dim_z, dim_u))
     }
 
     /// Number of states n.
@@ -351,14 +337,17 @@ impl KalmanFilter {
         guard(|| self.dict_view(py))
     }
 
-    /// An independent copy (the arrays are copied too).
-    fn __copy__(&mut self, py: Python<'_>) -> PyResult<Self> {
-        guard(|| self.duplicate(py))
+    /// An independent copy of the same class (the arrays are copied too).
+    fn __copy__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        guard(|| crate::kf_compat::copy_of(slf))
     }
 
-    /// An independent copy.
-    fn __deepcopy__(&mut self, py: Python<'_>, _memo: &Bound<'_, PyAny>) -> PyResult<Self> {
-        guard(|| self.duplicate(py))
+    /// An independent copy of the same class.
+    fn __deepcopy__<'py>(
+        slf: &Bound<'py, Self>,
+        _memo: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        guard(|| crate::kf_compat::copy_of(slf))
     }
 
     /// Pickle support: KalmanFilter(dim_x, dim_z, dim_u) then __setstate__(state).

@@ -63,7 +63,7 @@ pub(crate) const UPDATED: [A; 9] = [
 
 /// A linear Kalman filter with FilterPy's `KalmanFilter` interface (n = dim_x states,
 /// m = dim_z measurements, p = dim_u controls).
-#[pyclass(module = "launch_estimation")]
+#[pyclass(module = "launch_estimation", subclass)]
 #[derive(Debug)]
 pub struct KalmanFilter {
     pub(crate) core: Core,
@@ -103,6 +103,26 @@ pub(crate) fn dim(obj: &Bound<'_, PyAny>, name: &str, positive: bool) -> PyResul
 }
 
 impl KalmanFilter {
+    /// A filter with FilterPy's defaults, from the constructor's arguments.
+    pub(crate) fn build(
+        dim_x: &Bound<'_, PyAny>,
+        dim_z: &Bound<'_, PyAny>,
+        dim_u: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let n = dim(dim_x, "dim_x", true)?;
+        let m = dim(dim_z, "dim_z", true)?;
+        let p = match dim_u {
+            Some(u) => dim(u, "dim_u", false)?,
+            None => 0,
+        };
+        Ok(Self {
+            core: Core::new(n, m, p)?,
+            dim_u: p,
+            x_col: true,
+            cache: Default::default(),
+        })
+    }
+
     pub(crate) fn shape(&self, a: A) -> (usize, usize) {
         let (n, m) = (self.core.n, self.core.m);
         match a {

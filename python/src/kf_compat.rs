@@ -34,19 +34,27 @@ const STATE: [A; 16] = [
     A::PPost,
 ];
 
-impl KalmanFilter {
-    /// An independent copy (in-place edits of handed-out arrays adopted first): what
-    /// `copy.copy`, `copy.deepcopy` and a pickle round trip all give.
-    pub(crate) fn duplicate(&mut self, py: Python<'_>) -> PyResult<Self> {
-        self.sync(py)?;
-        Ok(Self {
-            core: self.core.clone(),
-            dim_u: self.dim_u,
-            x_col: self.x_col,
-            cache: Default::default(),
-        })
+/// An independent copy of `kf`, of its class (a subclass such as ExtendedKalmanFilter
+/// included), in-place edits of handed-out arrays adopted first: what `copy.copy`,
+/// `copy.deepcopy` and a pickle round trip all give.
+pub(crate) fn copy_of<'py>(kf: &Bound<'py, KalmanFilter>) -> PyResult<Bound<'py, PyAny>> {
+    let py = kf.py();
+    let (core, dim_u, x_col) = {
+        let mut me = kf.try_borrow_mut()?;
+        me.sync(py)?;
+        (me.core.clone(), me.dim_u, me.x_col)
+    };
+    let new = kf.get_type().call1((core.n, core.m, dim_u))?;
+    {
+        let mut other = new.cast::<KalmanFilter>()?.try_borrow_mut()?;
+        other.core = core;
+        other.x_col = x_col;
+        other.cache = Default::default();
     }
+    Ok(new)
+}
 
+impl KalmanFilter {
     /// The pickled state: a dict of every buffer (row-major lists) and the flags.
     pub(crate) fn state<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         self.sync(py)?;

@@ -176,6 +176,30 @@ impl Core {
         H: Option<&[f64]>,
         correlated: bool,
     ) -> Result<(), UpdateError> {
+        self.update_with(z, None, R, H, correlated)
+    }
+
+    /// FilterPy's EKF update: the Joseph-form update with the innovation `y` given (the
+    /// user's residual of z and h(x)) instead of z − H x, H the Jacobian; z is stored.
+    pub(crate) fn update_innovation(
+        &mut self,
+        z: &[f64],
+        y: &[f64],
+        R: Option<&[f64]>,
+        H: &[f64],
+    ) -> Result<(), UpdateError> {
+        self.update_with(z, Some(y), R, Some(H), false)
+    }
+
+    /// [`Core::update`], with the innovation of each row `y` when given.
+    fn update_with(
+        &mut self,
+        z: &[f64],
+        y: Option<&[f64]>,
+        R: Option<&[f64]>,
+        H: Option<&[f64]>,
+        correlated: bool,
+    ) -> Result<(), UpdateError> {
         let (n, m) = (self.n, self.m);
         self.z.copy_from_slice(z);
         self.rows.clear();
@@ -210,7 +234,7 @@ impl Core {
                 .zip(&self.x)
                 .map(|(h, x)| h * x)
                 .sum();
-            self.yr[a] = z[i] - hx;
+            self.yr[a] = y.map_or(z[i] - hx, |y| y[i]);
         }
         // PHT = P Hᵀ (n×r); S = H PHT + R (+ H M + Mᵀ Hᵀ).
         let pht = &mut self.pht[..n * r];
@@ -309,6 +333,15 @@ impl Core {
         self.x_post.copy_from_slice(&self.x);
         self.P_post.copy_from_slice(&self.P);
         Ok(())
+    }
+
+    /// x = F x + B u (FilterPy's EKF `predict_x`; P unchanged).
+    pub(crate) fn predict_x(&mut self, u: Option<&[f64]>) {
+        mul_vec(&self.F, &self.x, self.n, self.n, &mut self.tx);
+        if let (Some(B), Some(u)) = (self.B.as_deref(), u) {
+            add_mul_vec(B, u, &mut self.tx);
+        }
+        self.x.copy_from_slice(&self.tx);
     }
 
     /// FilterPy's `update_sequential`: the Joseph-form update with the r rows of the

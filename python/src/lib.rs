@@ -60,6 +60,7 @@ macro_rules! py_function {
 
 mod batch;
 mod convert;
+mod ekf;
 mod engine;
 mod fit_fns;
 mod kf;
@@ -105,6 +106,7 @@ fn _panic_for_test() -> PyResult<()> {
 #[pymodule]
 fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<kf::KalmanFilter>()?;
+    m.add_class::<ekf::ExtendedKalmanFilter>()?;
     m.add_function(wrap_pyfunction!(engine::filter, m)?)?;
     m.add_function(wrap_pyfunction!(engine::smooth, m)?)?;
     m.add_function(wrap_pyfunction!(engine::filter_continuous, m)?)?;
