@@ -224,8 +224,16 @@ impl BatchFilter {
         // P0 is symmetric: its column-major copy is its row-major one.
         let prior = (&x[..], &p[..]);
         let groups = series.div_ceil(LANES);
-        let run_group =
-            |g: usize, slot: GroupOut<'_>| self.group(g, series, steps, zs, prior, slot);
+        // Each group runs with the widest vector instructions the processor has (pulp detects
+        // them at run time; mul and add stay separate, so every instruction set gives the same
+        // bits).
+        let arch = pulp::Arch::new();
+        let run_group = |g: usize, slot: GroupOut<'_>| {
+            arch.dispatch(
+                #[inline(always)]
+                || self.group(g, series, steps, zs, prior, slot),
+            )
+        };
         let slots = GroupOut::split(&mut out, n, steps, self.covariances);
         debug_assert_eq!(slots.len(), groups);
         // The error reported is the first series' in order, whatever the threads did.
@@ -247,6 +255,7 @@ impl BatchFilter {
     }
 
     /// Filters group `g` (series `g·LANES ..`) into its slot of the output.
+    #[inline(always)]
     fn group(
         &self,
         g: usize,
@@ -303,35 +312,14 @@ impl BatchFilter {
                     },
                 ));
             }
+            if let Some((l, what, value)) = non_finite(&w, n, lanes, "x_{k|k}", "P_{k|k}") {
+                let step = k;
+                return Err(in_series(first + l, Error::Diverged { step, what, value }));
+            }
             for l in 0..lanes {
-                let s = first + l;
                 let at = (l * steps + k) * n;
                 for i in 0..n {
-                    let v = w.x[i][l];
-                    if !v.is_finite() {
-                        let what = "x_{k|k}";
-                        return Err(in_series(
-                            s,
-                            Error::Diverged {
-                                step: k,
-                                what,
-                                value: v,
-                            },
-                        ));
-                    }
-                    slot.means[at + i] = v;
-                    let d = w.p[i * n + i][l];
-                    if !d.is_finite() {
-                        let what = "P_{k|k}";
-                        return Err(in_series(
-                            s,
-                            Error::Diverged {
-                                step: k,
-                                what,
-                                value: d,
-                            },
-                        ));
-                    }
+                    slot.means[at + i] = w.x[i][l];
                 }
                 if let Some(cov) = slot.covariances.as_deref_mut() {
                     let at = (l * steps + k) * n * n;
@@ -346,32 +334,10 @@ impl BatchFilter {
                 }
             }
             self.predict(&mut w);
-            for l in 0..lanes {
-                let what = "P_{k+1|k}";
-                for i in 0..n {
-                    let (v, d) = (w.x[i][l], w.p[i * n + i][l]);
-                    if !v.is_finite() {
-                        let what = "x_{k+1|k}";
-                        return Err(in_series(
-                            first + l,
-                            Error::Diverged {
-                                step: k,
-                                what,
-                                value: v,
-                            },
-                        ));
-                    }
-                    if !d.is_finite() {
-                        return Err(in_series(
-                            first + l,
-                            Error::Diverged {
-                                step: k,
-                                what,
-                                value: d,
-                            },
-                        ));
-                    }
-                }
+            let (x, p) = ("x_{k+1|k}", "P_{k+1|k}");
+            if let Some((l, what, value)) = non_finite(&w, n, lanes, x, p) {
+                let step = k;
+                return Err(in_series(first + l, Error::Diverged { step, what, value }));
             }
         }
         slot.loglik[..lanes].copy_from_slice(&loglik[..lanes]);
@@ -380,6 +346,7 @@ impl BatchFilter {
 
     /// The measurement update of every lane; the lane, pivot and tolerance of a singular
     /// innovation covariance if one is.
+    #[inline(always)]
     fn update(&self, w: &mut Work, loglik: &mut [f64; LANES]) -> Option<(usize, f64, f64)> {
         let (n, m) = (self.n, self.m);
         // Masked innovation e and H x.
@@ -430,7 +397,9 @@ impl BatchFilter {
                 }
             }
         }
-        // Cholesky Σ = L Lᵀ, lane by lane in lockstep (L in the lower triangle of `sigma`).
+        // Σ kept for the Joseph form; Cholesky Σ = L Lᵀ, lane by lane in lockstep (L in the
+        // lower triangle of `sigma`).
+        w.s.copy_from_slice(&w.sigma);
         let mut largest = [0.0f64; LANES];
         for j in 0..m {
             for l in 0..LANES {
@@ -455,18 +424,24 @@ impl BatchFilter {
                     d[l] -= w.sigma[j * m + t][l] * w.sigma[j * m + t][l];
                 }
             }
+            let mut bad = false;
             for l in 0..LANES {
-                let tol = RANK_TOL * largest[l];
-                if d[l].is_nan() || d[l] <= tol {
-                    return Some((l, d[l], tol));
-                }
+                bad |= d[l].is_nan() | (d[l] <= RANK_TOL * largest[l]);
+            }
+            if bad {
+                let l = (0..LANES)
+                    .find(|&l| d[l].is_nan() | (d[l] <= RANK_TOL * largest[l]))
+                    .unwrap_or(0);
+                return Some((l, d[l], RANK_TOL * largest[l]));
+            }
+            for l in 0..LANES {
                 w.sigma[j * m + j][l] = d[l].sqrt();
             }
         }
         // Kᵀ = Σ⁻¹ (P Hᵀ)ᵀ by two triangular solves per row of P Hᵀ; v = L⁻¹ e alongside.
         for i in 0..=n {
             // Row i of P Hᵀ (i < n), or the innovation (i = n).
-            let mut y: [[f64; LANES]; MAX_M] = [[0.0; LANES]; MAX_M];
+            let y = &mut w.y;
             for j in 0..m {
                 y[j] = if i < n { w.pht[i * m + j] } else { w.e[j] };
                 for t in 0..j {
@@ -523,6 +498,7 @@ impl BatchFilter {
     }
 
     /// `P⁺ = P − K (P Hᵀ)ᵀ`, the upper triangle computed and mirrored.
+    #[inline(always)]
     fn standard(&self, w: &mut Work) {
         let (n, m) = (self.n, self.m);
         for i in 0..n {
@@ -539,41 +515,21 @@ impl BatchFilter {
         }
     }
 
-    /// `P⁺ = A P Aᵀ + K R Kᵀ` with `A = I − K H` (a missing entry's gain column is zero, so R
-    /// enters unmasked).
+    /// Joseph's `P⁺ = (I − K H) P (I − K H)ᵀ + K R Kᵀ`, expanded as
+    /// `P − K (P Hᵀ)ᵀ − (P Hᵀ) Kᵀ + K Σ Kᵀ` (the same matrix for any K, at O(n² m) instead
+    /// of O(n³)) and computed by its upper triangle; Σ is the masked one, so a missing
+    /// entry's zero gain column drops out.
+    #[inline(always)]
     fn joseph(&self, w: &mut Work) {
         let (n, m) = (self.n, self.m);
-        for i in 0..n {
-            for c in 0..n {
-                let mut acc = [if i == c { 1.0 } else { 0.0 }; LANES];
-                for j in 0..m {
-                    let h = self.h[j * n + c];
-                    for l in 0..LANES {
-                        acc[l] -= w.k[i * m + j][l] * h;
-                    }
-                }
-                w.a[i * n + c] = acc;
-            }
-        }
-        // T = A P, then P⁺ = T Aᵀ + K R Kᵀ by its upper triangle.
-        for i in 0..n {
-            for c in 0..n {
-                let mut acc = [0.0; LANES];
-                for t in 0..n {
-                    for l in 0..LANES {
-                        acc[l] += w.a[i * n + t][l] * w.p[t * n + c][l];
-                    }
-                }
-                w.t[i * n + c] = acc;
-            }
-        }
+        // K Σ (n×m), Σ from its lower triangle.
         for i in 0..n {
             for c in 0..m {
                 let mut acc = [0.0; LANES];
                 for j in 0..m {
-                    let r = self.r[j * m + c];
+                    let at = if j >= c { j * m + c } else { c * m + j };
                     for l in 0..LANES {
-                        acc[l] += w.k[i * m + j][l] * r;
+                        acc[l] += w.k[i * m + j][l] * w.s[at][l];
                     }
                 }
                 w.kr[i * m + c] = acc;
@@ -581,15 +537,12 @@ impl BatchFilter {
         }
         for i in 0..n {
             for c in i..n {
-                let mut acc = [0.0; LANES];
-                for t in 0..n {
-                    for l in 0..LANES {
-                        acc[l] += w.t[i * n + t][l] * w.a[c * n + t][l];
-                    }
-                }
+                let mut acc = w.p[i * n + c];
                 for j in 0..m {
                     for l in 0..LANES {
-                        acc[l] += w.kr[i * m + j][l] * w.k[c * m + j][l];
+                        acc[l] += w.kr[i * m + j][l] * w.k[c * m + j][l]
+                            - w.k[i * m + j][l] * w.pht[c * m + j][l]
+                            - w.pht[i * m + j][l] * w.k[c * m + j][l];
                     }
                 }
                 w.p[i * n + c] = acc;
@@ -599,6 +552,7 @@ impl BatchFilter {
     }
 
     /// `x⁻ = F x⁺`, `P⁻ = F P⁺ Fᵀ + Q` (by its upper triangle).
+    #[inline(always)]
     fn predict(&self, w: &mut Work) {
         let n = self.n;
         for i in 0..n {
@@ -647,6 +601,40 @@ const MAX_M: usize = 16;
 
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
+/// The first of the `lanes` series whose state (named `x`) or a diagonal entry of whose
+/// covariance (named `p`) is not finite, with the name and the value: one vector pass that
+/// sums `0·v` (NaN if any v is not), and a search only when it is.
+#[inline(always)]
+fn non_finite(
+    w: &Work,
+    n: usize,
+    lanes: usize,
+    x: &'static str,
+    p: &'static str,
+) -> Option<(usize, &'static str, f64)> {
+    let mut probe = [0.0; LANES];
+    for i in 0..n {
+        for l in 0..LANES {
+            probe[l] += 0.0 * w.x[i][l] + 0.0 * w.p[i * n + i][l];
+        }
+    }
+    if probe[..lanes].iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    (0..lanes).find_map(|l| {
+        (0..n).find_map(|i| {
+            let (v, d) = (w.x[i][l], w.p[i * n + i][l]);
+            if !v.is_finite() {
+                Some((l, x, v))
+            } else if !d.is_finite() {
+                Some((l, p, d))
+            } else {
+                None
+            }
+        })
+    })
+}
+
 fn in_series(series: usize, error: Error) -> Error {
     Error::InSeries {
         series,
@@ -667,6 +655,8 @@ struct Work {
     kr: Vec<[f64; LANES]>,
     a: Vec<[f64; LANES]>,
     t: Vec<[f64; LANES]>,
+    y: Vec<[f64; LANES]>,
+    s: Vec<[f64; LANES]>,
 }
 
 impl Work {
@@ -684,6 +674,8 @@ impl Work {
             kr: rows(n * m),
             a: rows(n * n),
             t: rows(n * n),
+            y: rows(m),
+            s: rows(m * m),
         }
     }
 }
