@@ -101,6 +101,10 @@ pub struct StepInfo {
     /// 0 on a predict-only step (the log-likelihood of no data, so sums over steps stay
     /// right).
     pub log_likelihood: f64,
+    /// Measurement linearisations done: 1 for an update of the linear filter, the EKF and
+    /// the UKF, up to the cap for the iterated EKF (whose `nis` and `log_likelihood` are
+    /// those of its last linearisation), 0 on a predict-only step.
+    pub iterations: usize,
 }
 
 /// Everything that changes in a step: estimates and preallocated workspaces.

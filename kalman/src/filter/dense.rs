@@ -83,6 +83,7 @@ fn update<D: Dims>(model: &Model<D>, st: &mut State<D>, z: &[f64], observed: usi
         rank,
         nis: Some(nis),
         log_likelihood: -0.5 * (nis + logdet + rank as f64 * LN_2PI),
+        iterations: 1,
         ..StepInfo::default()
     }
 }

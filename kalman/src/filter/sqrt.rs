@@ -164,6 +164,7 @@ fn estimates<D: Dims>(
         } else {
             0.0
         },
+        iterations: 1,
         ..StepInfo::default()
     }
 }

@@ -150,6 +150,7 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
         let mut info = StepInfo {
             step: k,
             observed: mo,
+            rank: mo,
             ..StepInfo::default()
         };
         let xp = &self.c.xp.as_slice()[..n];

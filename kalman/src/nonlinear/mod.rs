@@ -153,24 +153,10 @@ pub use ukf::{SigmaPoints, Ukf};
 use crate::storage::sealed::Arr;
 use crate::storage::{Buf, Dims, DynDims, FixedDims};
 
-/// What one nonlinear step produced.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct StepInfo {
-    /// Index `k` of the step (0 for the first measurement).
-    pub step: usize,
-    /// Number of measurement entries used (entries that were not NaN).
-    pub observed: usize,
-    /// Normalised innovation squared `eᵀ Σ⁻¹ e` (χ² with `observed` degrees of freedom for
-    /// a consistent filter); `None` on a predict-only step. For the iterated EKF, e and Σ are
-    /// those of the last linearisation (`e = z − h(x_i) + H_i (x_i ⊖ x⁻)`).
-    pub nis: Option<f64>,
-    /// Gaussian log-likelihood of the innovation, `−½(eᵀΣ⁻¹e + log det Σ + observed·log 2π)`;
-    /// 0 on a predict-only step.
-    pub log_likelihood: f64,
-    /// Measurement linearisations done (1 for the EKF and the UKF, up to the cap for the
-    /// iterated EKF, 0 on a predict-only step).
-    pub iterations: usize,
-}
+/// What one nonlinear step produced: the linear filter's [`crate::StepInfo`], with `rank`
+/// equal to `observed` (the nonlinear updates have no pseudo-inverse path) and `iterations`
+/// the measurement linearisations done.
+pub use crate::StepInfo;
 
 /// Storage of the nonlinear filters: the linear engine's buffers plus the sigma-point
 /// arrays. Implemented for [`DynDims`] and [`FixedDims`] (where the sigma arrays are sized for the

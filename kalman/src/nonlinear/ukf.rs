@@ -435,6 +435,7 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
         let info = StepInfo {
             step: k,
             observed: mo,
+            rank: mo,
             ..StepInfo::default()
         };
         if mo == 0 {
