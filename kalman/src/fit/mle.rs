@@ -215,6 +215,54 @@ fn newton_polish<M: ParamMap + ?Sized>(
     Ok((theta, steps))
 }
 
+/// Steps toward the optimum from a start orders of magnitude off, before L-BFGS.
+///
+/// Why: from variances four orders of magnitude off (Q = R = 1 on data of variance 10⁴),
+/// `ln L` is so steep and so curved in θ that L-BFGS's first step — the gradient itself, of
+/// size 10⁵ — lands where the line search finds no decrease it can certify, and L-BFGS stops
+/// after one iteration. While the gradient per observation exceeds 1 in some entry (a unit
+/// change of that θ would move `ln L` by more than one per observation: far from any
+/// optimum, whose gradient is 0), this takes steps along the gradient scaled to a largest
+/// entry of 1 (a factor e on a variance), halving a step until `ln L` rises (at most 8
+/// halvings; at most [`WARM_STEPS`] steps). A good start has a small gradient and takes no
+/// step. Returns θ and the number of steps.
+fn warm_up<M: ParamMap + ?Sized>(
+    memo: &Memo<'_, M>,
+    mut theta: Vec<f64>,
+    n_obs: f64,
+) -> Result<(Vec<f64>, usize), FitError> {
+    let (mut ll, mut g) = memo.eval(&theta)?;
+    let mut steps = 0;
+    while steps < WARM_STEPS && max_abs(&g) > n_obs {
+        let big = max_abs(&g);
+        let mut t = 1.0;
+        let mut accepted = None;
+        for _ in 0..9 {
+            let trial: Vec<f64> = theta.iter().zip(&g).map(|(a, d)| a + t * d / big).collect();
+            if let Ok((lt, gt)) = memo.eval(&trial)
+                && lt.is_finite()
+                && lt > ll
+            {
+                accepted = Some((trial, lt, gt));
+                break;
+            }
+            t *= 0.5;
+        }
+        let Some((trial, lt, gt)) = accepted else {
+            break;
+        };
+        theta = trial;
+        ll = lt;
+        g = gt;
+        steps += 1;
+    }
+    Ok((theta, steps))
+}
+
+/// Cap on [`warm_up`]'s steps (each moves a log-variance by at most 1: 50 cover a start
+/// e⁵⁰ ≈ 10²¹ off).
+const WARM_STEPS: usize = 50;
+
 /// Cap on the Newton steps after L-BFGS (quadratic convergence needs two or three).
 const NEWTON_STEPS: usize = 8;
 
@@ -267,7 +315,13 @@ pub fn mle<M: ParamMap + ?Sized>(
     let scale = 1.0 / data.observed() as f64;
     let mk = || Problem::new(&memo, scale);
     let mut notes = Vec::new();
-    let mut iterations = 0;
+    let (theta0, warm) = warm_up(&memo, theta0, data.observed() as f64)?;
+    let mut iterations = warm;
+    if warm > 0 {
+        notes.push(format!(
+            "{warm} normalised gradient step(s) from a start far from the optimum before L-BFGS"
+        ));
+    }
     let theta = match lbfgs(mk(), theta0.clone(), opts.max_iter, opts.grad_tol) {
         Ok((t, it, _)) => {
             iterations += it as usize;

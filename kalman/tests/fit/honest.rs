@@ -82,3 +82,49 @@ fn an_em_stop_short_of_the_optimum_is_not_called_converged() {
     assert!(d <= EM_DECREMENT, "decrement {d}");
     assert!(tight.loglik > loose.loglik);
 }
+
+#[test]
+fn the_mle_reaches_the_nile_optimum_from_a_start_four_orders_off() {
+    // Durbin & Koopman's local level on the Nile (σ²_ε = 15099, σ²_η = 1469.1 under the
+    // exact diffuse prior; P0 = 1e10 is diffuse to far below their four digits). From
+    // Q = R = 1 the gradient is 2.6e5; the fit must get there as from a good start.
+    let g: serde_json::Value =
+        serde_json::from_str(include_str!("../golden/nile.json")).expect("nile JSON");
+    let y: Vec<f64> = g["y"]
+        .as_array()
+        .expect("y")
+        .iter()
+        .map(|v| v.as_f64().expect("number"))
+        .collect();
+    let data = Series::new(&y, 1).expect("series");
+    let dk = &g["durbin_koopman"];
+    let (eps, eta) = (
+        dk["sigma2_eps"].as_f64().expect("eps"),
+        dk["sigma2_eta"].as_f64().expect("eta"),
+    );
+    let mut ll = Vec::new();
+    for (q0, r0) in [(1.0, 1.0), (1500.0, 15000.0)] {
+        let base =
+            System::new(&[[1.0]], &[[1.0]], &[[q0]], &[[r0]], &[0.0], &[[1e10]]).expect("system");
+        let free = Free {
+            q: Structure::Diag,
+            r: Structure::Diag,
+            ..Free::default()
+        };
+        let map = StandardMap::new(base.clone(), free).expect("map");
+        let fit = kalman::fit::mle(
+            &map,
+            map.theta_of(&base, Some(&data)),
+            &data,
+            &kalman::fit::MleOptions::default(),
+        )
+        .expect("mle");
+        assert!(fit.converged, "from Q = {q0}, R = {r0}: {}", fit.message);
+        // D&K's table has five significant digits: 5e-5 relative, asserted at 1e-4.
+        let (r, q) = (fit.system.r[(0, 0)], fit.system.q[(0, 0)]);
+        assert!((r - eps).abs() <= 1e-4 * eps, "σ²_ε {r} vs {eps}");
+        assert!((q - eta).abs() <= 1e-4 * eta, "σ²_η {q} vs {eta}");
+        ll.push(fit.loglik);
+    }
+    assert!((ll[0] - ll[1]).abs() <= 1e-6, "{ll:?}");
+}
