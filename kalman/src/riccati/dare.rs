@@ -76,15 +76,29 @@ pub(super) fn discrete_lqr(inputs: &Inputs, solved: Solved) -> Result<Lqr, Error
 /// The filter-form DARE's relative residual
 /// ([`Riccati::residual`](super::Riccati::residual)) on faer views (the solvers' own check).
 pub(super) fn discrete_residual(form: &FilterForm<'_>, P: MatRef<'_, f64>) -> f64 {
+    discrete_parts(form, P).0
+}
+
+/// The relative residual and its round-off floor
+/// ε·(‖F‖²‖P‖ + ‖P‖ + ‖Q‖ + 2(‖F‖‖P‖‖H‖ + ‖S‖)‖K_p‖ + ‖K_p‖²‖Σ‖)/‖P‖ with
+/// K_p = (F P Hᵀ + S) Σ⁻¹ (see
+/// [`RiccatiOptions::residual_floor_factor`]); (+∞, 0) when Σ is not positive definite.
+fn discrete_parts(form: &FilterForm<'_>, P: MatRef<'_, f64>) -> (f64, f64) {
     match dare_residual_matrix(form, P) {
-        Some(res) => relative(res.norm_l2(), P.norm_l2()),
-        None => f64::INFINITY,
+        Some((res, corr)) => {
+            let p = P.norm_l2();
+            let f = form.F.norm_l2();
+            let floor = f64::EPSILON * (f * f * p + p + form.Q.norm_l2() + corr)
+                / if p > 0.0 { p } else { 1.0 };
+            (relative(res.norm_l2(), p), floor)
+        }
+        None => (f64::INFINITY, 0.0),
     }
 }
 
-/// The DARE residual matrix F P Fᵀ + Q − (F P Hᵀ + S) Σ⁻¹ (⋯)ᵀ − P (`None` if Σ is not
-/// positive definite).
-fn dare_residual_matrix(form: &FilterForm<'_>, P: MatRef<'_, f64>) -> Option<Mat<f64>> {
+/// The DARE residual matrix F P Fᵀ + Q − (F P Hᵀ + S) Σ⁻¹ (⋯)ᵀ − P and the size of its
+/// correction term for the floor (`None` if Σ is not positive definite).
+fn dare_residual_matrix(form: &FilterForm<'_>, P: MatRef<'_, f64>) -> Option<(Mat<f64>, f64)> {
     let FilterForm { F, H, Q, R, S } = *form;
     let mut Sigma = H * P * H.transpose() + R;
     symmetrise(&mut Sigma);
@@ -93,10 +107,16 @@ fn dare_residual_matrix(form: &FilterForm<'_>, P: MatRef<'_, f64>) -> Option<Mat
         C += S;
     }
     let llt = Sigma.llt(Side::Lower).ok()?;
-    let corr = &C * llt.solve(C.transpose());
-    let mut res = F * P * F.transpose() + Q - corr - P;
+    let KpT = llt.solve(C.transpose());
+    let corr = &C * &KpT;
+    let mut res = F * P * F.transpose() + Q - &corr - P;
     symmetrise(&mut res);
-    Some(res)
+    // The correction's sensitivity to roundings of C = F P Hᵀ + S and of Σ, as norm
+    // products (like the other terms): 2(‖F‖‖P‖‖H‖ + ‖S‖)‖K_p‖ + ‖K_p‖²‖Σ‖ with
+    // K_p = C Σ⁻¹; large beside ‖C Σ⁻¹ Cᵀ‖ when Σ is ill-conditioned.
+    let k = KpT.norm_l2();
+    let c = F.norm_l2() * P.norm_l2() * H.norm_l2() + S.map_or(0.0, |S| S.norm_l2());
+    Some((res, 2.0 * c * k + k * k * Sigma.norm_l2()))
 }
 
 /// One Newton (Hewer) correction of a DARE solution: with the closed loop
@@ -104,7 +124,7 @@ fn dare_residual_matrix(form: &FilterForm<'_>, P: MatRef<'_, f64>) -> Option<Mat
 /// here by Smith's doubling E = Σ_k A_cl^k Res (A_clᵀ)^k (squaring A_cl each step). Returns
 /// `None` if the closed loop is not contractive enough for the doubling to converge.
 pub(super) fn newton_polish(form: &FilterForm<'_>, P: &Mat<f64>) -> Option<Mat<f64>> {
-    let res = dare_residual_matrix(form, P.as_ref())?;
+    let (res, _) = dare_residual_matrix(form, P.as_ref())?;
     let FilterForm { F, H, R, S, .. } = *form;
     let mut Sigma = H * P * H.transpose() + R;
     symmetrise(&mut Sigma);
@@ -139,20 +159,73 @@ pub(super) fn newton_polish(form: &FilterForm<'_>, P: &Mat<f64>) -> Option<Mat<f
 pub(super) struct DoublingStart {
     pub(super) X: Mat<f64>,
     pub(super) iterations: usize,
+    #[cfg_attr(not(test), allow(dead_code))] // read by the unit tests
     pub(super) Ft: Mat<f64>,
 }
 
-/// Decorrelates (F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ), runs the PBH tests, and doubles from
-/// Q̃, or from Q̃ + δI when the answer from Q̃ would not stabilise (see inside): a stabilising
-/// start for Newton's polish, accurate to the doubling's tolerance on a well-conditioned
-/// problem and within O(δ) of the solution on the δ path.
+/// The doubling's start for any R with H P Hᵀ + R positive definite at the solution. A
+/// positive definite R goes straight to [`doubling_pd`]. A singular R (an exact channel) is
+/// handled by shifting the unknown: for any symmetric Z, P = Y + Z turns the DARE into one
+/// in Y of the same form with Q̂ = F Z Fᵀ + Q − Z, R̂ = R + H Z Hᵀ, Ŝ = S + F Z Hᵀ (and
+/// the same closed loop, so the stabilising Y gives the stabilising P). With the k-step
+/// noise Gramian Z = Σ_{i<k} Fⁱ Q (Fⁱ)ᵀ the new noise is Q̂ = Fᵏ Q (Fᵏ)ᵀ ⪰ 0, and k is the
+/// first (k ≤ n) with R̂ positive definite: the noise reaching the exact channels within k
+/// steps. No k ≤ n works exactly when H P Hᵀ + R is singular for every reachable P; then
+/// [`Error::NotPositiveDefinite`] names it.
 pub(super) fn doubling_start(
     form: &FilterForm<'_>,
     opts: &RiccatiOptions,
     names: &Names,
 ) -> Result<DoublingStart, Error> {
     let FilterForm { F, H, Q, R, S } = *form;
-    let llt = factor_pd("R", R, "the Riccati solvers need R^-1")?;
+    if let Ok(llt) = R.llt(Side::Lower) {
+        return doubling_pd(form, llt, opts, names);
+    }
+    let n = F.nrows();
+    let mut Z = Mat::<f64>::zeros(n, n);
+    let mut term = symmetrised(Q);
+    for _ in 0..n.max(1) {
+        Z += &term;
+        let Rh = symmetrised((R + H * &Z * H.transpose()).as_ref());
+        if let Ok(llt) = Rh.llt(Side::Lower) {
+            let mut Sh = F * &Z * H.transpose();
+            if let Some(S) = S {
+                Sh += S;
+            }
+            let Qh = symmetrised((F * &term * F.transpose()).as_ref());
+            let shifted = FilterForm {
+                F,
+                H,
+                Q: Qh.as_ref(),
+                R: Rh.as_ref(),
+                S: Some(Sh.as_ref()),
+            };
+            let mut start = doubling_pd(&shifted, llt, opts, names)?;
+            start.X += &Z;
+            symmetrise(&mut start.X);
+            return Ok(start);
+        }
+        term = symmetrised((F * &term * F.transpose()).as_ref());
+    }
+    Err(Error::NotPositiveDefinite {
+        name: "H P H^T + R",
+        n: R.nrows(),
+        rule: "R is singular and the noise reaches no exact channel within n steps, so the steady-state innovation covariance is singular",
+    })
+}
+
+/// Decorrelates (F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ, with `llt` the factor of R), runs the
+/// PBH tests, and doubles from Q̃, or from Q̃ + δI when the answer from Q̃ would not
+/// stabilise (see inside): a stabilising start for Newton's polish, accurate to the
+/// doubling's tolerance on a well-conditioned problem and within O(δ) of the solution on
+/// the δ path.
+fn doubling_pd(
+    form: &FilterForm<'_>,
+    llt: faer::linalg::solvers::Llt<f64>,
+    opts: &RiccatiOptions,
+    names: &Names,
+) -> Result<DoublingStart, Error> {
+    let FilterForm { F, H, Q, R: _, S } = *form;
     // F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ.
     let (Ft, Qt) = match S {
         Some(S) => {
@@ -188,7 +261,7 @@ pub(super) fn doubling_start(
         opts,
         names.equation,
     )?;
-    let rho0 = closed_loop_radius(Ft.as_ref(), H, R, &X);
+    let rho0 = closed_loop_radius(form, &X);
     if rho0.is_nan() || rho0 >= 1.0 {
         // Q̃ leaves an unstable mode unexcited: the doubling from Q̃ then converges to a
         // solution that does not stabilise it (X = 0 for Q̃ = 0). The doubling from
@@ -216,11 +289,8 @@ pub(super) fn discrete_dual(
     names: &Names,
 ) -> Result<Solved, Error> {
     let DoublingStart {
-        mut X,
-        iterations,
-        Ft,
+        mut X, iterations, ..
     } = doubling_start(form, opts, names)?;
-    let FilterForm { H, R, .. } = *form;
     // Ill-conditioned problems leave the doubling short of full accuracy (an unstable mode
     // the noise does not reach, with the closed loop near the unit circle, costs several
     // digits): Newton corrections, each kept only if it lowers the residual, until the
@@ -231,51 +301,53 @@ pub(super) fn discrete_dual(
     // monotonically (in the PSD order) onto the stabilising solution, but the residual norm
     // need not fall at every step: follow the iteration while the closed loop stays stable
     // and keep the iterate with the smallest residual.
-    let mut relative_residual = discrete_residual(form, X.as_ref());
+    let (mut relative_residual, mut floor) = discrete_parts(form, X.as_ref());
     let mut current = X.clone();
     for _ in 0..newton_steps {
-        if relative_residual <= 1e-3 * opts.residual_tolerance {
+        if relative_residual <= 4.0 * f64::EPSILON {
             break;
         }
         let Some(next) = newton_polish(form, &current) else {
             break;
         };
-        let r = discrete_residual(form, next.as_ref());
+        let (r, next_floor) = discrete_parts(form, next.as_ref());
         // Written so that a NaN residual or radius stops the iteration. The radius test guards
         // against rounding carrying an iterate out of the stabilising set, which Newton's
         // iterates from a stabilising start never leave in exact arithmetic.
-        if !(r.is_finite() && closed_loop_radius(Ft.as_ref(), H, R, &next) < 1.0) {
+        if !(r.is_finite() && closed_loop_radius(form, &next) < 1.0) {
             break;
         }
         if r < relative_residual {
             X = next.clone();
             relative_residual = r;
+            floor = next_floor;
         }
         current = next;
     }
-    let rho = closed_loop_radius(Ft.as_ref(), H, R, &X);
+    let rho = closed_loop_radius(form, &X);
     Solved {
         x: X,
         iterations,
         relative_residual,
+        floor,
     }
     .checked(rho, Time::Discrete, opts, names.equation)
 }
 
-/// Spectral radius of the predictor's closed loop F̃ − F̃ X Hᵀ Σ⁻¹ H (= F − K_p H) for a
-/// candidate DARE solution X (+∞ if Σ = H X Hᵀ + R is not positive definite).
-fn closed_loop_radius(
-    Ft: MatRef<'_, f64>,
-    H: MatRef<'_, f64>,
-    R: MatRef<'_, f64>,
-    X: &Mat<f64>,
-) -> f64 {
+/// Spectral radius of the predictor's closed loop F − K_p H, K_p = (F X Hᵀ + S) Σ⁻¹, for a
+/// candidate DARE solution X (+∞ if Σ = H X Hᵀ + R is not positive definite). Needs no R⁻¹.
+fn closed_loop_radius(form: &FilterForm<'_>, X: &Mat<f64>) -> f64 {
+    let FilterForm { F, H, R, S, .. } = *form;
     let mut Sigma = H * X * H.transpose() + R;
     symmetrise(&mut Sigma);
     match Sigma.llt(Side::Lower) {
         Ok(l) => {
-            let Kt = l.solve(H * X * Ft.transpose());
-            let cl = Ft - Kt.transpose() * H;
+            let mut C = F * (X * H.transpose());
+            if let Some(S) = S {
+                C += S;
+            }
+            let Kt = l.solve(C.transpose());
+            let cl = F - Kt.transpose() * H;
             spectral(cl.as_ref(), false)
         }
         Err(_) => f64::INFINITY,

@@ -46,17 +46,19 @@ pub struct FilterForm<'a> {
     pub(super) S: Option<MatRef<'a, f64>>,
 }
 
-/// The solved unknown (P or X) with the doubling steps used and its relative residual.
+/// The solved unknown (P or X) with the doubling steps used, its relative residual and the
+/// round-off floor of that residual (see [`RiccatiOptions::residual_floor_factor`]).
 #[derive(Debug)]
 pub struct Solved {
     pub(super) x: Mat<f64>,
     pub(super) iterations: usize,
     pub(super) relative_residual: f64,
+    pub(super) floor: f64,
 }
 
 impl Solved {
-    /// The solvers' last check: the relative residual within `residual_tolerance` and the
-    /// closed loop stable (`closed_loop` its spectral radius below 1 in discrete time, its
+    /// The solvers' last check: the relative residual within `residual_floor_factor` times
+    /// its round-off floor (and within `residual_tolerance`) and the closed loop stable (`closed_loop` its spectral radius below 1 in discrete time, its
     /// spectral abscissa below 0 in continuous time), written so that a NaN residual or
     /// `closed_loop` fails it; [`Error::RiccatiCheck`] otherwise.
     pub(super) fn checked(
@@ -70,13 +72,14 @@ impl Solved {
             Time::Discrete => closed_loop < 1.0,
             Time::Continuous => closed_loop < 0.0,
         };
-        if self.relative_residual <= opts.residual_tolerance && stable {
+        let gate = (opts.residual_floor_factor * self.floor).min(opts.residual_tolerance);
+        if self.relative_residual <= gate && stable {
             Ok(self)
         } else {
             Err(Error::RiccatiCheck {
                 equation,
                 residual: self.relative_residual,
-                tolerance: opts.residual_tolerance,
+                tolerance: gate,
                 closed_loop,
             })
         }

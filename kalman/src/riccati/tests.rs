@@ -135,7 +135,28 @@ fn shape_and_pd_errors_name_the_matrix() {
         .and_then(|p| p.solve())
         .expect_err("must be an error");
     assert!(matches!(e, Error::Shape { name: "H", .. }), "{e}");
-    let e = Dare::new(mat![[1.0]], mat![[1.0]], mat![[1.0]], mat![[0.0]])
+    // R = 0 is an exact channel: z = x, so the posterior is exact and the prior is Q = 1.
+    let ss = Dare::new(mat![[1.0]], mat![[1.0]], mat![[1.0]], mat![[0.0]])
+        .and_then(|p| p.solve())
+        .expect("H P Hᵀ + R = P > 0 at the solution");
+    assert!((ss.prior[(0, 0)] - 1.0).abs() < 1e-15 && ss.posterior[(0, 0)].abs() < 1e-15);
+    // With Q = 0 too no noise reaches the channel: H P Hᵀ + R is singular at every P the
+    // equation can reach, and the error names it.
+    let e = Dare::new(mat![[0.5]], mat![[1.0]], mat![[0.0]], mat![[0.0]])
+        .and_then(|p| p.solve())
+        .expect_err("must be an error");
+    assert!(
+        matches!(
+            e,
+            Error::NotPositiveDefinite {
+                name: "H P H^T + R",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // The CARE needs R⁻¹ itself.
+    let e = Care::new(mat![[-1.0]], mat![[1.0]], mat![[1.0]], mat![[0.0]])
         .and_then(|p| p.solve())
         .expect_err("must be an error");
     assert!(
@@ -296,6 +317,7 @@ fn the_last_check_wants_a_closed_loop_strictly_inside() {
         x: Mat::<f64>::identity(1, 1),
         iterations: 1,
         relative_residual: 0.0,
+        floor: f64::EPSILON,
     };
     for (time, boundary, inside) in [
         (problem::Time::Discrete, 1.0, 1.0 - 1e-12),

@@ -74,6 +74,18 @@ fn discrete_gain_over_dt_tends_to_continuous_gain_at_first_order() {
     assert!(errs[2] < 0.05 * Kc.norm_l2());
 }
 
+/// The CARE's acceptance bound on the relative residual, recomputed from its definition
+/// (see `RiccatiOptions::residual_floor_factor`): 100 ε (2‖A‖‖P‖ + ‖Hᵀ R⁻¹ H‖‖P‖² + ‖Q‖)/‖P‖,
+/// the normwise backward error allowed. Well-conditioned draws sit far below 1e-10; an
+/// ill-conditioned one may be returned above it, within this bound.
+fn care_bound(A: &Mat<f64>, H: &Mat<f64>, Q: &Mat<f64>, R: &Mat<f64>, P: &Mat<f64>) -> f64 {
+    use faer::Side;
+    use faer::linalg::solvers::Solve;
+    let G = H.transpose() * R.llt(Side::Lower).expect("R > 0").solve(H);
+    let p = P.norm_l2();
+    100.0 * f64::EPSILON * (2.0 * A.norm_l2() * p + G.norm_l2() * p * p + Q.norm_l2()) / p
+}
+
 proptest! {
 
     /// Random continuous models: CARE residual small, and the continuous LQR gain solves its
@@ -92,13 +104,16 @@ proptest! {
         let care = Care::new(&A, &H, &Q, &R).expect("valid shapes");
         if let Ok(ss) = care.solve() {
             let res = care.residual(&ss.covariance).expect("n×n");
-            prop_assert!(res < 1e-10, "CARE residual {res:e}");
+            let bound = care_bound(&A, &H, &Q, &R, &ss.covariance);
+            prop_assert!(res < 1e-10 || res <= bound, "CARE residual {res:e}, bound {bound:e}");
         }
         let B = H.transpose().to_owned();
         let clqr = Clqr::new(&A, &B, &Q, &R).expect("valid shapes");
         if let Ok(l) = clqr.solve() {
             let res = clqr.residual(&l.cost).expect("n×n");
-            prop_assert!(res < 1e-10, "CLQR residual {res:e}");
+            let At = A.transpose().to_owned();
+            let bound = care_bound(&At, &H, &Q, &R, &l.cost);
+            prop_assert!(res < 1e-10 || res <= bound, "CLQR residual {res:e}, bound {bound:e}");
         }
     }
 }
