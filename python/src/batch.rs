@@ -329,9 +329,14 @@ fn run_dim<D: Dim, E: Dim>(d: D, e: E, b: Batch<'_>) -> Result<(), Stop> {
         .rev()
         .find(|&k| z[k * m..(k + 1) * m].iter().any(|v| !v.is_nan()));
     let every = signal_interval(n, m);
+    let mut until_check = every; // a countdown: no division in the loop
     for k in 0..steps {
-        if k % every == every - 1 && interrupted() {
-            return Err(Stop::Interrupted);
+        until_check -= 1;
+        if until_check == 0 {
+            until_check = every;
+            if interrupted() {
+                return Err(Stop::Interrupted);
+            }
         }
         w.load(k, n, m, &model);
         let general = k + 1 == steps || last_update == Some(k);
