@@ -367,12 +367,27 @@ pub(super) fn findings(s: &BoomSummary) -> String {
     );
     let _ = writeln!(r, "1. WLS at γ = 0: {}.", wls0_comment(s));
     let v = &s.alternative_verdicts;
+    let reproducing = v.iter().filter(|x| x.reproduces_paper).count();
+    let usable = v
+        .iter()
+        .filter(|x| x.defined_at_0 && x.within_at_10)
+        .count();
     let _ = writeln!(
         r,
-        "1. {} of the {} unit and weight option sets the paper leaves open reproduce every \
-         claim ([options.md](options.md) lists them all).",
-        v.iter().filter(|x| x.reproduces_paper).count(),
-        v.len()
+        "1. {} of the {} unit and weight option sets the paper leaves open {} every claim; \
+         {usable} keep WLS defined at γ = 0 and within both limits at γ = 10° \
+         ([options.md](options.md) lists them all).",
+        if reproducing == 0 {
+            "None".to_string()
+        } else {
+            reproducing.to_string()
+        },
+        v.len(),
+        if reproducing == 1 {
+            "reproduces"
+        } else {
+            "reproduce"
+        }
     );
     let tv = &s.tracking_verdict;
     if let Some(u) = tv

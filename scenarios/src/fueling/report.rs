@@ -277,8 +277,9 @@ pub fn report_md(sm: &Summary) -> String {
             "**This is shard {shard} only** — combine all shards with `scenarios merge`.\n"
         );
     }
+    let mut setup = String::from("## Set-up\n\n");
     let _ = writeln!(
-        s,
+        setup,
         "Each run fills the tank at V_c = {} mm/s from {} s below the target H* = {} m{} and stops when the strategy's decision signal first reaches H*: the raw \
          sensor reading for relay logic, the filtered tank level at the axis (y2) for the \
          filters. Fuelling error = true level {}− H*. Truth: level integrates V_c + ΔV (exact \
@@ -558,6 +559,7 @@ pub fn report_md(sm: &Summary) -> String {
         f2(amp.first().map_or(f64::NAN, |e| e.stats.kf2.std_mm)),
         amp.first().map_or(f64::NAN, |e| e.at["amplitude_deg"]),
     );
+    s.push_str(&setup);
     if let Some(note) = nyquist_note(p, r.amplitude_deg, top.as_ref(), sm.nyquist_null) {
         let _ = writeln!(s, "{note}");
     }
