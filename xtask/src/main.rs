@@ -6,6 +6,7 @@
 mod bench;
 mod examples;
 mod guide;
+mod homes;
 mod mutants;
 mod notation;
 mod python;

@@ -125,6 +125,7 @@ pub(crate) fn check(root: &Path) -> Result<Vec<String>> {
             ));
         }
     }
+    problems.extend(crate::homes::check(root, &files));
     let items = crate::examples::scan(root)?;
     let share = crate::examples::share(&items);
     if share < crate::examples::REQUIRED {

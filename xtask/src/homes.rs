@@ -1,0 +1,159 @@
+//! One home per numerical concept: each kernel, the PSD rule and the matrix exponential is
+//! defined once in the library code, and every other place calls that definition.
+//!
+//! The check counts the definitions (`fn name(` / `fn name<`, `const NAME:`) of each concept
+//! in the `src/` trees of the library crates, the program and the Python extension, and
+//! reports every definition that is neither the concept's home nor a copy still listed in
+//! [`KNOWN_COPIES`]. That list only shrinks: a listed copy that is gone is itself reported.
+
+use std::path::{Path, PathBuf};
+
+/// Each concept by the names its definitions go by, with the file that is its home.
+const HOMES: &[(&str, &[&str], &str)] = &[
+    (
+        "symmetrisation (A + Aᵀ)/2",
+        &["symmetrise", "symmetrize"],
+        "kalman/src/kernels.rs",
+    ),
+    (
+        "dense Cholesky factorisation",
+        &["cholesky", "llt"],
+        "kalman/src/kernels.rs",
+    ),
+    (
+        "dense matrix product",
+        &["gemm", "matmul"],
+        "kalman/src/kernels.rs",
+    ),
+    (
+        "the PSD rule",
+        &["psd_factor", "check_psd", "is_psd"],
+        "kalman/src/model.rs",
+    ),
+    ("the PSD tolerance", &["PSD_TOL"], "kalman/src/model.rs"),
+    (
+        "the symmetry tolerance",
+        &["SYMMETRY_TOL"],
+        "kalman/src/model.rs",
+    ),
+    (
+        "the matrix exponential",
+        &["expm"],
+        "kalman/src/continuous.rs",
+    ),
+    (
+        "Van Loan's integral",
+        &["van_loan"],
+        "kalman/src/continuous.rs",
+    ),
+];
+
+/// Definitions beyond the home still present (`file: name`), each waiting for the change
+/// that makes it call the home instead.
+const KNOWN_COPIES: &[&str] = &[
+    "kalman/src/model.rs: symmetrise",
+    "model/src/validate.rs: symmetrize",
+    "kalman/src/fit/dense.rs: cholesky",
+    "python/src/linalg.rs: cholesky",
+    "kalman/src/fit/dense.rs: gemm",
+    "model/src/analysis.rs: psd_factor",
+    "python/src/convert.rs: check_psd",
+    "model/src/validate.rs: PSD_TOL",
+    "model/src/validate.rs: SYMMETRY_TOL",
+    "wls/src/lib.rs: SYMMETRY_TOL",
+    "model/src/discretize.rs: expm",
+    "model/src/discretize.rs: van_loan",
+];
+
+/// The source trees searched.
+const TREES: &[&str] = &[
+    "model/src",
+    "kalman/src",
+    "wls/src",
+    "sensors/src",
+    "scenarios/src",
+    "python/src",
+];
+
+/// The names `line` defines, of those in [`HOMES`].
+fn defined(line: &str) -> Vec<&'static str> {
+    let code = line.split("//").next().unwrap_or("").trim_start();
+    let mut found = Vec::new();
+    for (_, names, _) in HOMES {
+        for &name in *names {
+            let fn_def = ["(", "<"]
+                .iter()
+                .any(|end| code.contains(&format!("fn {name}{end}")));
+            let const_def = code.contains(&format!("const {name}:"));
+            if fn_def || const_def {
+                found.push(name);
+            }
+        }
+    }
+    found
+}
+
+/// One line per definition that is neither a home nor a listed copy, and per listed copy
+/// that is gone.
+pub(crate) fn check(root: &Path, files: &[PathBuf]) -> Vec<String> {
+    let mut problems = Vec::new();
+    let mut seen = Vec::new();
+    for path in files {
+        let rel = path
+            .strip_prefix(root)
+            .unwrap_or(path)
+            .to_string_lossy()
+            .replace('\\', "/");
+        if !TREES.iter().any(|t| rel.starts_with(t)) || !rel.ends_with(".rs") {
+            continue;
+        }
+        let Ok(text) = std::fs::read_to_string(path) else {
+            continue;
+        };
+        // The library code only: a file's unit tests may define helpers of their own.
+        let code = text.split("#[cfg(test)]").next().unwrap_or("");
+        for (i, line) in code.lines().enumerate() {
+            for name in defined(line) {
+                let (what, _, home) = HOMES
+                    .iter()
+                    .find(|(_, names, _)| names.contains(&name))
+                    .copied()
+                    .unwrap_or(("", &[], ""));
+                let entry = format!("{rel}: {name}");
+                seen.push(entry.clone());
+                if rel != home && !KNOWN_COPIES.contains(&entry.as_str()) {
+                    problems.push(format!(
+                        "{rel}:{}: a second definition of {what} (`{name}`): call the one in {home}",
+                        i + 1
+                    ));
+                }
+            }
+        }
+    }
+    for copy in KNOWN_COPIES {
+        if !seen.iter().any(|s| s == copy) {
+            problems.push(format!(
+                "`{copy}` is gone: remove it from KNOWN_COPIES in xtask/src/homes.rs"
+            ));
+        }
+    }
+    problems
+}
+
+#[cfg(test)]
+mod tests {
+    use super::defined;
+
+    #[test]
+    fn a_definition_is_found_and_a_call_is_not() {
+        assert_eq!(
+            defined("pub(crate) fn symmetrise(a: &mut [f64], n: usize) {"),
+            ["symmetrise"]
+        );
+        assert_eq!(defined("pub fn expm<T>(a: T) -> Mat<f64> {"), ["expm"]);
+        assert_eq!(defined("pub const PSD_TOL: f64 = 1e-10;"), ["PSD_TOL"]);
+        assert!(defined("    kernels::symmetrise(&mut p, n);").is_empty());
+        assert!(defined("// fn expm( in a comment").is_empty());
+        assert!(defined("let tol = PSD_TOL * lmax;").is_empty());
+    }
+}
