@@ -324,7 +324,11 @@ impl<E: Equation> Riccati<E> {
 /// [`SteadyState`], [`.residual(P)`](Riccati::residual) the relative residual of a
 /// candidate P.
 ///
-/// Errors of `solve`: [`Error::NotPositiveDefinite`] for R; [`Error::NotDetectable`]
+/// R may be singular (an exact channel) as long as H P Hᵀ + R is positive definite at the
+/// solution (see the shift in the crate's `riccati` module docs).
+///
+/// Errors of `solve`: [`Error::NotPositiveDefinite`] for H P Hᵀ + R when no noise reaches
+/// an exact channel; [`Error::NotDetectable`]
 /// for (F, H); [`Error::NotStabilisable`] for a mode of (F̃, Q̃^{1/2}) on the unit circle
 /// that the noise does not reach (F̃ = F − S R⁻¹ H, Q̃ = Q − S R⁻¹ Sᵀ; plain (F, Q^{1/2})
 /// when S = 0); [`Error::RiccatiNoConvergence`] / [`Error::RiccatiCheck`] if the result
