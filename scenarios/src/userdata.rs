@@ -36,7 +36,7 @@ mod filtering;
 pub mod model_file;
 pub mod timing;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use faer::Mat;
 use nalgebra::DMatrix;
@@ -126,10 +126,13 @@ fn parse_method(s: &str) -> std::result::Result<MethodArg, ValueError> {
 /// Options of `scenarios steady-state`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SteadyStateArgs {
-    /// Discrete model (.json or .toml): F, H, Q, R and optional S are used.
+    /// Model file (.json or .toml). Discrete (F, H, Q, R and optional S): the filter's
+    /// steady state. Continuous (A, G, Qc, C, R): the Kalman–Bucy steady state, with R
+    /// read as the measurement noise intensity.
     #[arg(long, value_name = "MODEL")]
     pub model: PathBuf,
-    /// JSON file to write: {"P", "P_post", "K", "residual", …} (`-`: standard output).
+    /// JSON file to write: {"P", "P_post", "K", "residual", …}, or {"P", "K", "residual",
+    /// …} for a continuous model (`-`: standard output).
     #[arg(long, value_name = "SS.json")]
     pub out: PathBuf,
 }
@@ -267,8 +270,43 @@ fn faer_rows(m: faer::MatRef<'_, f64>) -> model_file::Rows {
         .collect()
 }
 
+/// The Kalman–Bucy steady state of a continuous model (the filter CARE
+/// A P + P Aᵀ − P Cᵀ R⁻¹ C P + G Qc Gᵀ = 0, R the measurement noise intensity) as the
+/// JSON text `steady-state` writes: {"P", "K": P Cᵀ R⁻¹, "residual", "iterations",
+/// "time": "continuous"}.
+fn continuous_steady_state(path: &Path, model: &model_file::ContinuousModel) -> Result<String> {
+    let R = model.R.as_ref().ok_or_else(|| Error::Invalid {
+        path: path.to_path_buf(),
+        message: "the continuous steady state needs R, the measurement noise intensity (m×m)"
+            .to_owned(),
+    })?;
+    let W = &model.G * &model.Qc * model.G.transpose();
+    let ss = kalman::riccati::Care::new(&model.A, &model.C, &W, R)
+        .and_then(|c| c.solve())
+        .map_err(|e| match e {
+            kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
+                Error::KalmanOnFile {
+                    path: path.to_path_buf(),
+                    context: "steady state",
+                    source: e,
+                }
+            }
+            e => model_error(path, e),
+        })?;
+    let m = |a: &Mat<f64>| Some(serde_json::json!(faer_rows(a.as_ref())));
+    Ok(json_object(&[
+        ("P", m(&ss.covariance)),
+        ("K", m(&ss.gain)),
+        ("residual", Some(serde_json::json!(ss.relative_residual))),
+        ("iterations", Some(serde_json::json!(ss.iterations))),
+        ("time", Some(serde_json::json!("continuous"))),
+    ]))
+}
+
 /// `scenarios steady-state`: the steady state of a discrete model's filter, from `kalman`'s
-/// DARE solver (structured doubling with PBH detectability / stabilisability checks).
+/// DARE solver (structured doubling with PBH detectability / stabilisability checks), or
+/// of a continuous model's Kalman–Bucy filter from its CARE solver (see
+/// `continuous_steady_state`).
 ///
 /// Writes `{"P": prior covariance (the DARE solution), "P_post": posterior covariance,
 /// "K": gain P Hᵀ Σ⁻¹, "residual": ‖DARE residual‖_F / ‖P‖_F, "predictor_gain":
@@ -281,7 +319,13 @@ fn faer_rows(m: faer::MatRef<'_, f64>) -> model_file::Rows {
 pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
     let path = args.model.as_path();
     let dest = crate::output::destination(&args.out, &[("--model", path)])?;
-    let model = model_file::load_discrete(path)?;
+    let model = match model_file::load_any(path)? {
+        model_file::AnyModel::Discrete(model) => model,
+        model_file::AnyModel::Continuous(model) => {
+            let text = continuous_steady_state(path, &model)?;
+            return crate::output::write_bytes_to(&dest, text.as_bytes());
+        }
+    };
     // The engine's model checks symmetry and PSD of Q, R and the joint noise covariance.
     engine_model(path, &model)?;
     let dare = kalman::riccati::Dare::new(&model.F, &model.H, &model.Q, &model.R);

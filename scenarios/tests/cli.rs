@@ -24,6 +24,8 @@ mod irregular;
 mod output_safety;
 #[path = "cli/plots.rs"]
 mod plots;
+#[path = "cli/steady.rs"]
+mod steady;
 #[path = "cli/transcripts.rs"]
 mod transcripts;
 #[path = "cli/uav.rs"]
