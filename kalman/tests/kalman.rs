@@ -47,6 +47,7 @@ mod fit {
     pub mod golden;
     pub mod honest;
     pub mod likelihood;
+    pub mod records;
 }
 
 mod steady {

@@ -106,15 +106,42 @@ pub fn observed_information<M: ParamMap + ?Sized>(
     theta: &[f64],
     data: &Series<'_>,
 ) -> Result<Mat<f64>, FitError> {
+    information_of(map, theta, std::slice::from_ref(data))
+}
+
+/// `ln L` and its gradient summed over independent records sharing θ.
+pub(crate) fn gradient_sum<M: ParamMap + ?Sized>(
+    map: &M,
+    theta: &[f64],
+    records: &[Series<'_>],
+) -> Result<(f64, Vec<f64>), FitError> {
+    let mut ll = 0.0;
+    let mut g = vec![0.0; theta.len()];
+    for data in records {
+        let (l, gi) = log_likelihood_gradient(map, theta, data)?;
+        ll += l;
+        for (a, b) in g.iter_mut().zip(gi) {
+            *a += b;
+        }
+    }
+    Ok((ll, g))
+}
+
+/// [`observed_information`] of independent records sharing θ (the sum of theirs).
+pub(crate) fn information_of<M: ParamMap + ?Sized>(
+    map: &M,
+    theta: &[f64],
+    records: &[Series<'_>],
+) -> Result<Mat<f64>, FitError> {
     let k = theta.len();
     let mut h = Mat::zeros(k, k);
     let mut t = theta.to_vec();
     for j in 0..k {
         let step = 1e-4 * theta[j].abs().max(1.0);
         t[j] = theta[j] + step;
-        let (_, gp) = log_likelihood_gradient(map, &t, data)?;
+        let (_, gp) = gradient_sum(map, &t, records)?;
         t[j] = theta[j] - step;
-        let (_, gm) = log_likelihood_gradient(map, &t, data)?;
+        let (_, gm) = gradient_sum(map, &t, records)?;
         t[j] = theta[j];
         for i in 0..k {
             h[(i, j)] = -(gp[i] - gm[i]) / (2.0 * step);
@@ -221,11 +248,25 @@ pub(crate) fn finish<M: ParamMap + ?Sized>(
     method: Method,
     iterations: usize,
     converged: bool,
+    message: String,
+) -> Result<Fit, FitError> {
+    let records = std::slice::from_ref(data);
+    finish_records(map, theta, records, method, iterations, converged, message)
+}
+
+/// [`finish`] over independent records sharing θ.
+pub(crate) fn finish_records<M: ParamMap + ?Sized>(
+    map: &M,
+    theta: Vec<f64>,
+    records: &[Series<'_>],
+    method: Method,
+    iterations: usize,
+    converged: bool,
     mut message: String,
 ) -> Result<Fit, FitError> {
-    let (loglik, _) = log_likelihood_gradient(map, &theta, data)?;
+    let (loglik, _) = gradient_sum(map, &theta, records)?;
     let system = map.system(&theta)?;
-    let information = observed_information(map, &theta, data)?;
+    let information = information_of(map, &theta, records)?;
     let covariance = spd_inverse(&information);
     let std_errors = covariance.as_ref().map(|c| {
         (0..theta.len())
@@ -233,7 +274,8 @@ pub(crate) fn finish<M: ParamMap + ?Sized>(
             .collect()
     });
     // A variance below 1e-8 of the data's variance is numerically zero: the boundary.
-    let floor = (1e-8 * data_scale(data)).ln();
+    let scale = records.iter().map(data_scale).sum::<f64>() / records.len().max(1) as f64;
+    let floor = (1e-8 * scale).ln();
     let names = map.names();
     let boundary: Vec<String> = map
         .log_variances()
@@ -265,7 +307,7 @@ pub(crate) fn finish<M: ParamMap + ?Sized>(
         Vec::new()
     };
     let correlation = covariance.as_ref().and_then(correlation);
-    let n_obs = data.observed();
+    let n_obs = records.iter().map(Series::observed).sum();
     let k = theta.len();
     Ok(Fit {
         method,

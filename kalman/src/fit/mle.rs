@@ -9,8 +9,7 @@ use argmin::solver::neldermead::NelderMead;
 use argmin::solver::quasinewton::LBFGS;
 
 use super::dense::{chol_solve, cholesky};
-use super::info::{Fit, Method, finish, observed_information};
-use super::score::log_likelihood_gradient;
+use super::info::{Fit, Method, finish_records, gradient_sum, information_of};
 use super::{FitError, ParamMap, Series};
 
 /// Options of [`mle`].
@@ -39,7 +38,7 @@ impl Default for MleOptions {
 /// for its verdict.
 struct Memo<'a, M: ParamMap + ?Sized> {
     map: &'a M,
-    data: &'a Series<'a>,
+    records: &'a [Series<'a>],
     kept: RefCell<Vec<Evaluation>>,
 }
 
@@ -50,10 +49,10 @@ type Evaluation = (Vec<f64>, f64, Vec<f64>);
 const MEMO: usize = 4;
 
 impl<'a, M: ParamMap + ?Sized> Memo<'a, M> {
-    fn new(map: &'a M, data: &'a Series<'a>) -> Self {
+    fn new(map: &'a M, records: &'a [Series<'a>]) -> Self {
         Self {
             map,
-            data,
+            records,
             kept: RefCell::new(Vec::with_capacity(MEMO)),
         }
     }
@@ -63,7 +62,7 @@ impl<'a, M: ParamMap + ?Sized> Memo<'a, M> {
         if let Some((_, ll, g)) = self.kept.borrow().iter().find(|(t, _, _)| t == p) {
             return Ok((*ll, g.clone()));
         }
-        let (ll, g) = log_likelihood_gradient(self.map, p, self.data)?;
+        let (ll, g) = gradient_sum(self.map, p, self.records)?;
         let mut kept = self.kept.borrow_mut();
         if kept.len() == MEMO {
             kept.remove(0);
@@ -179,12 +178,12 @@ fn newton_polish<M: ParamMap + ?Sized>(
     mut theta: Vec<f64>,
     grad_tol: f64,
 ) -> Result<(Vec<f64>, usize), FitError> {
-    let (map, data) = (memo.map, memo.data);
+    let (map, records) = (memo.map, memo.records);
     let k = theta.len();
     let (_, mut g) = memo.eval(&theta)?;
     let mut steps = 0;
     while steps < NEWTON_STEPS && max_abs(&g) > grad_tol {
-        let mut l = super::flat(&observed_information(map, &theta, data)?);
+        let mut l = super::flat(&information_of(map, &theta, records)?);
         if !cholesky(&mut l, k) {
             break;
         }
@@ -267,7 +266,7 @@ const WARM_STEPS: usize = 50;
 const NEWTON_STEPS: usize = 8;
 
 /// Maximum-likelihood estimate of θ from `theta0`: L-BFGS (memory 10, Moré–Thuente line
-/// search) on `−ln L/n_obs` with the exact gradient of [`log_likelihood_gradient`]. If
+/// search) on `−ln L/n_obs` with the exact gradient of [`super::log_likelihood_gradient`]. If
 /// L-BFGS fails (e.g. a trial point makes an innovation covariance singular), Nelder–Mead
 /// restarts from the best point so far and L-BFGS polishes its result. Newton steps on the
 /// observed information finish the job when L-BFGS stops on its cost's round-off with the
@@ -298,6 +297,40 @@ pub fn mle<M: ParamMap + ?Sized>(
     data: &Series<'_>,
     opts: &MleOptions,
 ) -> Result<Fit, FitError> {
+    mle_records(map, theta0, std::slice::from_ref(data), opts)
+}
+
+/// [`mle`] over several independent records sharing θ (manoeuvres, runs, days): the
+/// log-likelihood, its gradient and the observed information are the sums of the
+/// records', every record starting from the map's prior `(x0, P0)`. With one record it is
+/// [`mle`].
+///
+/// # Errors
+/// As [`mle`]; [`FitError::Data`] for an empty list or a record whose dimensions do not
+/// match the map.
+///
+/// # Example
+/// ```
+/// use kalman::fit::{Free, MleOptions, Series, StandardMap, Structure, System, mle_records};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// let base = System::new(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[10.0]])?;
+/// let map = StandardMap::new(base.clone(), Free { q: Structure::Scalar, r: Structure::Scalar, ..Free::default() })?;
+/// let (a, b) = ([0.3, 0.1, 0.9, 1.4, 1.2, 2.0, 1.7], [5.0, 5.4, 4.9, 5.8, 6.1, 5.7, 6.6]);
+/// let records = [Series::new(&a, 1)?, Series::new(&b, 1)?];
+/// let fit = mle_records(&map, map.theta_of(&base, Some(&records[0])), &records, &MleOptions::default())?;
+/// assert_eq!(fit.n_obs, 14);
+/// # Ok(())
+/// # }
+/// ```
+pub fn mle_records<M: ParamMap + ?Sized>(
+    map: &M,
+    theta0: Vec<f64>,
+    records: &[Series<'_>],
+    opts: &MleOptions,
+) -> Result<Fit, FitError> {
+    if records.is_empty() {
+        return Err(FitError::Data("no record to fit".into()));
+    }
     if map.n_params() == 0 {
         return Err(FitError::NothingFree);
     }
@@ -308,14 +341,18 @@ pub fn mle<M: ParamMap + ?Sized>(
             map.n_params()
         )));
     }
-    data.check(&map.system(&theta0)?)?;
+    let sys0 = map.system(&theta0)?;
+    for data in records {
+        data.check(&sys0)?;
+    }
     // The likelihood must be defined at the start.
-    let memo = Memo::new(map, data);
+    let memo = Memo::new(map, records);
     memo.eval(&theta0)?;
-    let scale = 1.0 / data.observed() as f64;
+    let n_obs: usize = records.iter().map(Series::observed).sum();
+    let scale = 1.0 / n_obs as f64;
     let mk = || Problem::new(&memo, scale);
     let mut notes = Vec::new();
-    let (theta0, warm) = warm_up(&memo, theta0, data.observed() as f64)?;
+    let (theta0, warm) = warm_up(&memo, theta0, n_obs as f64)?;
     let mut iterations = warm;
     if warm > 0 {
         notes.push(format!(
@@ -380,10 +417,10 @@ pub fn mle<M: ParamMap + ?Sized>(
         message.push_str("; ");
         message.push_str(&n);
     }
-    finish(
+    finish_records(
         map,
         theta,
-        data,
+        records,
         Method::Mle,
         iterations,
         converged,
@@ -394,7 +431,7 @@ pub fn mle<M: ParamMap + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fit::{Free, StandardMap, Structure, System};
+    use crate::fit::{Free, StandardMap, Structure, System, log_likelihood_gradient};
     use rand::{RngExt, SeedableRng};
     use rand_distr::StandardNormal;
 
@@ -430,7 +467,9 @@ mod tests {
         assert!(fit.converged, "{}", fit.message);
         let start: Vec<f64> = fit.theta.iter().map(|t| t + 0.3).collect();
         let (ll0, _) = log_likelihood_gradient(&map, &start, &data).expect("start");
-        let (theta, steps) = newton_polish(&Memo::new(&map, &data), start, 1e-7).expect("polish");
+        let (theta, steps) =
+            newton_polish(&Memo::new(&map, std::slice::from_ref(&data)), start, 1e-7)
+                .expect("polish");
         let (ll, g) = log_likelihood_gradient(&map, &theta, &data).expect("end");
         assert!(max_abs(&g) <= 1e-7, "{g:?} after {steps} steps");
         assert!((1..=6).contains(&steps), "{steps} steps");

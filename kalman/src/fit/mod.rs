@@ -101,7 +101,7 @@ pub use entries::{Entry, Matrix, Param, Transform};
 pub use error::FitError;
 pub use info::{Fit, Method, NULL_EIGENVALUE, aic, bic, observed_information};
 #[cfg(feature = "argmin")]
-pub use mle::{MleOptions, mle};
+pub use mle::{MleOptions, mle, mle_records};
 pub use params::{Derivative, FnMap, Free, MatrixStdErrors, ParamMap, StandardMap, Structure};
 pub use score::log_likelihood_gradient;
 

@@ -1,0 +1,85 @@
+//! One fit over several records sharing θ: the pooled likelihood is the sum of the records',
+//! its optimum is where the summed gradient vanishes, and pooling sharpens the bounds.
+
+use kalman::CovarianceForm;
+use kalman::fit::{
+    Free, Matrix, MleOptions, Param, Series, StandardMap, System, log_likelihood,
+    log_likelihood_gradient, mle, mle_records,
+};
+
+use super::common::{rng, simulate_diag};
+
+#[test]
+fn a_pooled_fit_sums_the_records_and_beats_each_alone() {
+    let truth =
+        System::new(&[[0.8]], &[[1.0]], &[[0.5]], &[[1.0]], &[0.0], &[[1.0]]).expect("truth");
+    let start =
+        System::new(&[[0.3]], &[[1.0]], &[[2.0]], &[[2.0]], &[0.0], &[[1.0]]).expect("start");
+    let params = vec![
+        Param::entry(Matrix::F, 0, 0),
+        Param::entry(Matrix::Q, 0, 0),
+        Param::entry(Matrix::R, 0, 0),
+    ];
+    let map = StandardMap::with_params(start.clone(), Free::default(), params).expect("map");
+    let mut g = rng(12);
+    let zs: Vec<Vec<f64>> = [150, 220, 180]
+        .iter()
+        .map(|&n| simulate_diag(&truth, n, &mut g))
+        .collect();
+    let records: Vec<Series> = zs
+        .iter()
+        .map(|z| Series::new(z, 1).expect("series"))
+        .collect();
+    let opts = MleOptions::default();
+    let pooled = mle_records(&map, map.theta_of(&start, None), &records, &opts).expect("mle");
+    assert!(pooled.converged, "{}", pooled.message);
+    assert_eq!(pooled.n_obs, 550);
+    // ln L is the sum of each record's filter likelihood (from the same prior), to the
+    // round-off of 550 terms.
+    let sys = &pooled.system;
+    let sum: f64 = records
+        .iter()
+        .map(|d| log_likelihood(sys, d, CovarianceForm::Joseph).expect("ll"))
+        .sum();
+    assert!(
+        (pooled.loglik - sum).abs() <= 1e-9 * sum.abs(),
+        "{} vs {sum}",
+        pooled.loglik
+    );
+    // At the optimum the summed gradient vanishes while each record's does not.
+    let mut total = [0.0; 3];
+    let mut largest_single: f64 = 0.0;
+    for d in &records {
+        let (_, gi) = log_likelihood_gradient(&map, &pooled.theta, d).expect("gradient");
+        for (t, v) in total.iter_mut().zip(&gi) {
+            *t += v;
+        }
+        largest_single = largest_single.max(gi.iter().fold(0.0, |a, v| a.max(v.abs())));
+    }
+    assert!(total.iter().all(|v| v.abs() <= opts.grad_tol), "{total:?}");
+    assert!(largest_single > 100.0 * opts.grad_tol, "{largest_single}");
+    // Pooling 550 samples sharpens each bound below every single record's.
+    let se = pooled.std_errors.as_ref().expect("se");
+    for d in &records {
+        let alone = mle(&map, map.theta_of(&start, None), d, &opts).expect("mle");
+        let se1 = alone.std_errors.as_ref().expect("se");
+        for i in 0..3 {
+            assert!(se[i] < se1[i], "θ{i}: pooled {} vs alone {}", se[i], se1[i]);
+        }
+    }
+    // The truth within three standard errors (seeded: deterministic).
+    let values = map.param_values(&pooled.theta).expect("values");
+    let ses = map
+        .matrix_std_errors(&pooled.theta, pooled.covariance.as_ref().expect("cov"))
+        .expect("se")
+        .params;
+    for (i, want) in [0.8, 0.5, 1.0].iter().enumerate() {
+        assert!(
+            (values[i].1 - want).abs() <= 3.0 * ses[i].1,
+            "{}: {} ± {} vs {want}",
+            values[i].0,
+            values[i].1,
+            ses[i].1
+        );
+    }
+}
