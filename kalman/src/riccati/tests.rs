@@ -475,3 +475,39 @@ fn newton_polish_converges_quadratically_in_any_unit() {
         assert!(e1 < 1e-6, "unit {unit:e}: e0 {e0:e} → e1 {e1:e}");
     }
 }
+
+#[test]
+fn the_bounded_eigenvalue_routine_is_exact_on_a_companion_matrix_and_refuses_nan() {
+    // Companion matrix of (λ − 1)(λ − 2)(λ − 3) = λ³ − 6λ² + 11λ − 6, and a rotation block
+    // with eigenvalues ±2i: simple, well-separated roots come out to a few ε of 3.
+    let C = mat![
+        [6.0, -11.0, 6.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0, 2.0],
+        [0.0, 0.0, 0.0, -2.0, 0.0],
+    ];
+    let mut eig = checks::eigenvalues(C.as_ref(), "test").expect("converges");
+    eig.sort_by(|a, b| (a.0, a.1).partial_cmp(&(b.0, b.1)).expect("finite"));
+    let want = [(0.0, -2.0), (0.0, 2.0), (1.0, 0.0), (2.0, 0.0), (3.0, 0.0)];
+    for (got, want) in eig.iter().zip(want) {
+        // The companion matrix's roots have condition numbers of order 10: 1e-12 is ample.
+        assert!(
+            (got.0 - want.0).abs() < 1e-12 && (got.1 - want.1).abs() < 1e-12,
+            "{got:?}"
+        );
+    }
+    let mut bad = C.clone();
+    bad[(2, 1)] = f64::NAN;
+    let e = checks::eigenvalues(bad.as_ref(), "test").expect_err("not finite");
+    assert!(
+        matches!(
+            e,
+            Error::RiccatiNoConvergence {
+                equation: "test",
+                ..
+            }
+        ),
+        "{e}"
+    );
+}
