@@ -476,6 +476,35 @@ fn to_mat(v: &[f64], n: usize) -> Mat<f64> {
 /// # }
 /// ```
 pub fn em(map: &StandardMap, data: &Series<'_>, opts: &EmOptions) -> Result<Fit, FitError> {
+    em_with_progress(map, data, opts, &mut |_, _| {})
+}
+
+/// [`em`], calling `progress(iteration, ln L)` after every E-step (a long fit can show
+/// where it is; the call must be cheap, e.g. print only every few seconds).
+///
+/// # Errors
+/// As [`em`].
+///
+/// # Example
+/// ```
+/// use kalman::fit::{EmOptions, Free, Series, StandardMap, Structure, System, em_with_progress};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// let base = System::new(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[10.0]])?;
+/// let map = StandardMap::new(base, Free { q: Structure::Scalar, r: Structure::Scalar, ..Free::default() })?;
+/// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2];
+/// let mut seen = Vec::new();
+/// let fit = em_with_progress(&map, &Series::new(&z, 1)?, &EmOptions::default(), &mut |k, ll| seen.push((k, ll)))?;
+/// assert!(seen.windows(2).all(|w| w[1].1 >= w[0].1 - 1e-9)); // EM never lowers ln L
+/// assert_eq!(seen.len(), fit.iterations + 1); // the last E-step is the stop's
+/// # Ok(())
+/// # }
+/// ```
+pub fn em_with_progress(
+    map: &StandardMap,
+    data: &Series<'_>,
+    opts: &EmOptions,
+    progress: &mut dyn FnMut(usize, f64),
+) -> Result<Fit, FitError> {
     data.check(map.base())?;
     check_identifiable(map, data)?;
     let free = map.free();
@@ -499,6 +528,7 @@ pub fn em(map: &StandardMap, data: &Series<'_>, opts: &EmOptions) -> Result<Fit,
     let mut converged = false;
     while iterations < opts.max_iter {
         let (ll, next) = em_step(map, &theta, data)?;
+        progress(iterations, ll);
         if ll - prev <= opts.tol * (1.0 + ll.abs()) {
             converged = true;
             break;

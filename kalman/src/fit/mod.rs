@@ -96,7 +96,7 @@ mod score;
 
 use faer::Mat;
 
-pub use em::{EM_DECREMENT, EmOptions, check_identifiable, em, em_step};
+pub use em::{EM_DECREMENT, EmOptions, check_identifiable, em, em_step, em_with_progress};
 pub use entries::{Entry, Matrix, Param, Transform};
 pub use error::FitError;
 pub use info::{Fit, Method, NULL_EIGENVALUE, aic, bic, observed_information};

@@ -609,7 +609,18 @@ pub fn fit(args: &FitArgs) -> Result<()> {
             if let Some(k) = args.max_iter {
                 opts.max_iter = k;
             }
-            kalman::fit::em(&map, &series, &opts)
+            // A long fit shows where it is, every 2 s on standard error.
+            let mut last = std::time::Instant::now();
+            let mut report = |k: usize, ll: f64| {
+                if last.elapsed() >= std::time::Duration::from_secs(2) {
+                    eprintln!(
+                        "fit: EM iteration {k} of at most {}, ln L = {ll:.6}",
+                        opts.max_iter
+                    );
+                    last = std::time::Instant::now();
+                }
+            };
+            kalman::fit::em_with_progress(&map, &series, &opts, &mut report)
         }
     }
     .map_err(|e| fit_error(args, e))?;
