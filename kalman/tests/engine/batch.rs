@@ -72,7 +72,7 @@ fn equals_the_scalar_filter_on_every_series_with_random_gaps_in_both_forms() {
     // missing entry, the scalar one drops its row), so they agree to round-off, a few
     // hundred ulps; 1e-12 leaves room for that and catches any real difference.
     // Eleven series: one full group of LANES and a partial one.
-    assert!(LANES < 11);
+    const { assert!(LANES < 11) };
     for form in [CovarianceForm::Joseph, CovarianceForm::Standard] {
         for (n, m) in [(1, 1), (2, 1), (4, 1), (3, 2), (6, 3), (2, 4)] {
             for seed in 0..4 {
@@ -101,7 +101,7 @@ const P0: [[f64; 2]; 2] = [[1.0, 0.0], [0.0, 1.0]];
 
 #[test]
 fn refuses_what_it_does_not_do_by_name() {
-    let e = BatchFilter::new(&cv(), CovarianceForm::SquareRoot).unwrap_err();
+    let e = BatchFilter::new(&cv(), CovarianceForm::SquareRoot).expect_err("refused");
     assert!(
         matches!(e, Error::InvalidOption { name: "form", .. }),
         "{e}"
@@ -109,7 +109,7 @@ fn refuses_what_it_does_not_do_by_name() {
     let with_s = cv()
         .with_cross_covariance(&[[1e-3], [0.0]])
         .expect("valid S");
-    let e = BatchFilter::new(&with_s, CovarianceForm::Joseph).unwrap_err();
+    let e = BatchFilter::new(&with_s, CovarianceForm::Joseph).expect_err("refused");
     assert!(matches!(e, Error::InvalidOption { name: "S", .. }), "{e}");
 }
 
@@ -117,12 +117,14 @@ fn refuses_what_it_does_not_do_by_name() {
 fn bad_data_is_an_error_naming_the_series() {
     let batch = BatchFilter::new(&cv(), CovarianceForm::Joseph).expect("batch");
     // Seven values are not three series of whole steps.
-    let e = batch.run(&[0.0, 0.0], &P0, &[0.0; 7], 3).unwrap_err();
+    let e = batch
+        .run(&[0.0, 0.0], &P0, &[0.0; 7], 3)
+        .expect_err("refused");
     assert!(matches!(e, Error::Shape { name: "z", .. }), "{e}");
     // An infinite measurement in series 3, step 1.
     let mut zs = vec![0.5; 5 * 4];
     zs[3 * 4 + 1] = f64::INFINITY;
-    match batch.run(&[0.0, 0.0], &P0, &zs, 5).unwrap_err() {
+    match batch.run(&[0.0, 0.0], &P0, &zs, 5).expect_err("refused") {
         Error::InSeries { series: 3, error } => {
             assert!(
                 matches!(
@@ -141,7 +143,7 @@ fn bad_data_is_an_error_naming_the_series() {
     // A prior that is not a covariance.
     let e = batch
         .run(&[0.0, 0.0], &[[1.0, 2.0], [2.0, 1.0]], &zs, 5)
-        .unwrap_err();
+        .expect_err("refused");
     assert!(
         matches!(e, Error::NotPositiveSemidefinite { name: "P0", .. }),
         "{e}"
@@ -169,7 +171,7 @@ fn a_singular_innovation_covariance_is_an_error_at_its_series_and_step() {
         }
     }
     zs[(2 * 4 + 2) * 2 + 1] = 1.0;
-    match batch.run(&[0.0], &[[1.0]], &zs, 3).unwrap_err() {
+    match batch.run(&[0.0], &[[1.0]], &zs, 3).expect_err("refused") {
         Error::InSeries { series: 2, error } => {
             assert!(
                 matches!(*error, Error::SingularInnovation { step: 2, .. }),
@@ -194,7 +196,7 @@ fn a_diverging_series_is_an_error_at_the_step_where_it_diverges() {
     .expect("model");
     let batch = BatchFilter::new(&model, CovarianceForm::Standard).expect("batch");
     let zs = vec![0.0; 10];
-    match batch.run(&[0.0, 0.0], &P0, &zs, 1).unwrap_err() {
+    match batch.run(&[0.0, 0.0], &P0, &zs, 1).expect_err("refused") {
         Error::InSeries { series: 0, error } => {
             assert!(
                 matches!(
