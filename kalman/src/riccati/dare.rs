@@ -181,6 +181,11 @@ pub(super) fn doubling_start(
     if let Ok(llt) = R.llt(Side::Lower) {
         return doubling_pd(form, llt, opts, names);
     }
+    // A singular R is a covariance (or weight) with an exact channel; an indefinite one is
+    // neither, and is refused by the workspace's one PSD rule.
+    let m = R.nrows();
+    let r: Vec<f64> = (0..m * m).map(|e| R[(e % m, e / m)]).collect();
+    crate::model::psd_factor("R", &r, m, &mut vec![0.0; m * m])?;
     let n = F.nrows();
     let mut Z = Mat::<f64>::zeros(n, n);
     let mut term = symmetrised(Q);

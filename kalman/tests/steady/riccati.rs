@@ -292,3 +292,26 @@ fn one_overflowing_doubling_iterate_is_an_error_at_once() {
         "{result:?}"
     );
 }
+
+#[test]
+fn an_indefinite_r_is_refused_by_name_while_a_singular_one_solves() {
+    // R is a covariance: a singular one (an exact channel) has a steady state, an indefinite
+    // one is no covariance and is refused by the PSD rule, naming R.
+    let (F, H, Q) = (
+        mat![[0.5, 0.0], [0.0, 0.9]],
+        mat![[1.0, 1.0]],
+        mat![[1.0, 0.0], [0.0, 1.0]],
+    );
+    let e = Dare::new(&F, &H, &Q, &mat![[-1.0]])
+        .expect("shapes are valid")
+        .solve()
+        .expect_err("an indefinite R");
+    assert!(
+        matches!(e, Error::NotPositiveSemidefinite { name: "R", .. }),
+        "{e}"
+    );
+    Dare::new(&F, &H, &Q, &mat![[0.0]])
+        .expect("shapes are valid")
+        .solve()
+        .expect("a singular R with noise reaching the channel");
+}
