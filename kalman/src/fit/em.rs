@@ -584,7 +584,9 @@ pub const EM_DECREMENT: f64 = 1e-3;
 ///
 /// # Errors
 /// As [`em`], without the identifiability check; [`FitError::Unsupported`] for a map with
-/// free entry parameters ([`StandardMap::with_params`]), which have no closed-form M-step.
+/// free entry parameters ([`StandardMap::with_params`]), which have no closed-form M-step —
+/// except one log-transformed intensity of all of Q (`Q = q·Q₁`, Q₁ positive definite:
+/// `q = tr(Q₁⁻¹ S)/(n(N−1))`, e.g. a constant-velocity model's white acceleration).
 ///
 /// # Example
 /// ```
@@ -606,10 +608,11 @@ pub fn em_step(
     theta: &[f64],
     data: &Series<'_>,
 ) -> Result<(f64, Vec<f64>), FitError> {
-    if !map.params().is_empty() {
+    let intensity = super::entries::q_intensity(map.params(), map.base());
+    if !map.params().is_empty() && intensity.is_none() {
         let names: Vec<&str> = map.params().iter().map(|p| p.name()).collect();
         return Err(FitError::Unsupported(format!(
-            "EM's M-step updates Q, R, x0 and P0 as whole blocks; the free entries {} need the MLE",
+            "EM's M-step updates Q, R, x0 and P0 as whole blocks (or one intensity of all of Q); the free entries {} need the MLE",
             names.join(", ")
         )));
     }
@@ -624,6 +627,22 @@ pub fn em_step(
             &es.sq.iter().map(|v| v / (N - 1) as f64).collect::<Vec<_>>(),
             n,
         );
+    }
+    if let Some(q1) = &intensity
+        && N > 1
+    {
+        // Q = q·Q₁: the M-step maximises −½(N−1) ln det(q Q₁) − ½ tr((q Q₁)⁻¹ S) at
+        // q = tr(Q₁⁻¹ S) / (n (N−1)), S = Σ E[w wᵀ] (a Q₁ that is not PD has no such step).
+        let mut l = super::flat(q1);
+        if !cholesky(&mut l, n) {
+            return Err(FitError::Unsupported(
+                "EM updates an intensity q of Q = q·Q₁ only for a positive definite Q₁; use the MLE".into(),
+            ));
+        }
+        let mut x = es.sq.clone();
+        chol_solve(&l, n, &mut x, n);
+        let q = (0..n).map(|i| x[i + i * n]).sum::<f64>() / (n * (N - 1)) as f64;
+        next.q = Mat::from_fn(n, n, |i, j| q * q1[(i, j)]);
     }
     if free.r != Structure::Fixed {
         next.r = to_mat(&es.sr.iter().map(|v| v / N as f64).collect::<Vec<_>>(), m);

@@ -346,3 +346,24 @@ pub(crate) fn derivative(p: &Param, theta: f64, sys: &System) -> super::Derivati
     }
     d
 }
+
+/// The pattern `Q₁` when `params` is one log-transformed intensity setting Q (`Q = q·Q₁`,
+/// every other cell of the base Q zero): the one entry structure EM updates in closed
+/// form. `None` otherwise.
+pub(crate) fn q_intensity(params: &[Param], base: &System) -> Option<Mat<f64>> {
+    let [p] = params else { return None };
+    if p.transform != Transform::Log || p.entries.iter().any(|e| e.matrix != Matrix::Q) {
+        return None;
+    }
+    let n = base.n();
+    let mut q1 = Mat::zeros(n, n);
+    let mut set = vec![false; n * n];
+    for e in &p.entries {
+        for (_, i, j) in cells(e) {
+            q1[(i, j)] = e.coefficient;
+            set[i + j * n] = true;
+        }
+    }
+    let rest_zero = (0..n).all(|j| (0..n).all(|i| set[i + j * n] || base.q[(i, j)] == 0.0));
+    rest_zero.then_some(q1)
+}

@@ -182,6 +182,23 @@ fn white_acceleration_intensity_and_r_are_recovered_within_their_bounds() {
     }
     assert_eq!(f["Q"][0][2], serde_json::json!(0.0));
     assert_eq!(f["Q"][1][3], serde_json::json!(0.0));
+    // EM updates the intensity in closed form (q = tr(Q₁⁻¹ S)/(n(N−1))): the same optimum,
+    // ln L to 1e-3 (EM's checked stop leaves at most 5e-4 of gain).
+    ok(
+        &dir,
+        &argv(
+            "fit --model m.json --data z.csv --free Q:white-acceleration,R:diag --method em --out fe.json --summary se.json",
+        ),
+    );
+    let e = json(&dir.join("se.json"));
+    assert_eq!(e["converged"], serde_json::Value::Bool(true), "{e}");
+    let (ll_mle, ll_em) = (num(&s["loglik"]), num(&e["loglik"]));
+    assert!((ll_mle - ll_em).abs() <= 1e-3, "MLE {ll_mle} vs EM {ll_em}");
+    let q_em = num(&e["estimates"]["Q:white-acceleration"]);
+    assert!(
+        (q_em - est).abs() <= 0.05 * se,
+        "EM q {q_em} vs MLE {est} (se {se})"
+    );
 }
 
 #[test]
