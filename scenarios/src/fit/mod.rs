@@ -60,11 +60,19 @@ pub struct FitArgs {
     /// Data CSV: header t,z1,…,zm[,u1,…,up]; an empty or NaN z cell is a missing value.
     #[arg(long, value_name = "Z.csv")]
     pub data: PathBuf,
-    /// What to fit, comma-separated and repeatable: Q:scalar|diag|full, R:scalar|diag|full
-    /// (scalar is σ²·I), x0, P0:diag; single entries, 0-based: F[i,j], B[i,j], H[i,j],
-    /// Q[i,j], R[i,j], P0[i,j], x0[i] (the rest keeps its value exactly);
-    /// Q:white-acceleration (the one intensity of a constant-velocity or -acceleration Q).
-    #[arg(long, value_name = "LIST", value_parser = parse_free, allow_hyphen_values = true, required = true)]
+    /// What to fit (`fit --help` lists the items): the matrices freed whole, the single
+    /// entries and the white-acceleration intensity, one [`FreeSpec`] per `--free`.
+    #[arg(
+        long,
+        value_name = "LIST",
+        value_parser = parse_free,
+        allow_hyphen_values = true,
+        required = true,
+        help = "What to fit, comma-separated and repeatable: Q:scalar|diag|full, R:scalar|diag|full \
+                (scalar is σ²·I), x0, P0:diag; single entries, 0-based: F[i,j], B[i,j], H[i,j], \
+                Q[i,j], R[i,j], P0[i,j], x0[i] (the rest keeps its value exactly); \
+                Q:white-acceleration (the one intensity of a constant-velocity or -acceleration Q)"
+    )]
     pub free: Vec<FreeSpec>,
     /// Estimator.
     #[arg(long, value_enum, default_value_t = FitMethod::Mle)]
