@@ -26,8 +26,15 @@ fn mdbook() -> Result<PathBuf> {
     if !bin.exists() {
         println!("xtask: installing mdbook {MDBOOK} into {}", tools.display());
         let mut cmd = cargo();
-        cmd.args(["install", "mdbook", "--locked", "--version", MDBOOK, "--root"])
-            .arg(&tools);
+        cmd.args([
+            "install",
+            "mdbook",
+            "--locked",
+            "--version",
+            MDBOOK,
+            "--root",
+        ])
+        .arg(&tools);
         run(cmd).context("installing mdbook with cargo")?;
     }
     Ok(bin)
