@@ -38,6 +38,29 @@ fn iterate_filter(
     (prev, 20_000)
 }
 
+/// The DARE's acceptance bound on the relative residual, recomputed from its definition
+/// (see `RiccatiOptions::residual_floor_factor`): 100 ε (‖F‖²‖P‖ + ‖P‖ + ‖Q‖ +
+/// 2(‖F‖‖P‖‖H‖ + ‖S‖)‖K_p‖ + ‖K_p‖²‖Σ‖)/‖P‖ with Σ = H P Hᵀ + R and K_p the predictor gain:
+/// the normwise backward error allowed. Well-conditioned draws sit far below 1e-10; an
+/// ill-conditioned one (an unstable mode the noise does not reach, a closed loop near the
+/// unit circle) may be returned above it, within this bound.
+fn dare_bound(
+    F: &Mat<f64>,
+    H: &Mat<f64>,
+    Q: &Mat<f64>,
+    R: &Mat<f64>,
+    S: Option<&Mat<f64>>,
+    P: &Mat<f64>,
+    Kp: &Mat<f64>,
+) -> f64 {
+    let p = P.norm_l2();
+    let f = F.norm_l2();
+    let sigma = (H * P * H.transpose() + R).norm_l2();
+    let k = Kp.norm_l2();
+    let c = f * p * H.norm_l2() + S.map_or(0.0, |S| S.norm_l2());
+    100.0 * f64::EPSILON * (f * f * p + p + Q.norm_l2() + 2.0 * c * k + k * k * sigma) / p
+}
+
 proptest! {
 
     /// Random detectable, stabilisable models (Q > 0, generic H, spectral radius up to 1.3,
@@ -62,8 +85,9 @@ proptest! {
             Err(e) => return Err(TestCaseError::fail(format!("{e}"))),
         };
         let res = dare.residual(&ss.prior).expect("n×n");
-        prop_assert!(res < 1e-10, "residual {res:e}");
-        prop_assert!(ss.relative_residual < 1e-10);
+        let bound = dare_bound(&F, &H, &Q, &R, S.as_ref(), &ss.prior, &ss.predictor_gain);
+        prop_assert!(res < 1e-10 || res <= bound, "residual {res:e}, bound {bound:e}");
+        prop_assert!(ss.relative_residual < 1e-10 || ss.relative_residual <= bound);
         let (P, _) = iterate_filter(&F, &H, &Q, &R, S.as_ref());
         // Tolerance: the iterated filter stops at a relative change of 1e-14; its distance to
         // the fixed point is that times 1/(1 − ρ_cl), and ρ_cl can be ~0.999 here.
@@ -166,7 +190,8 @@ proptest! {
         } else {
             let ss = e.map_err(|e| TestCaseError::fail(format!("{e}")))?;
             let res = dare.residual(&ss.prior).expect("n×n");
-            prop_assert!(res < 1e-10, "DARE residual {res:e}");
+            let bound = dare_bound(&F, &H, &Q, &R, None, &ss.prior, &ss.predictor_gain);
+            prop_assert!(res < 1e-10 || res <= bound, "DARE residual {res:e}, bound {bound:e}");
             let cl = &F - &ss.predictor_gain * &H;
             prop_assert!(rho(&cl) < 1.0);
         }
