@@ -51,6 +51,7 @@
 //! # }
 //! ```
 
+use crate::kernels::LN_2PI;
 use crate::kernels::RANK_TOL;
 use crate::model::{MatrixInput, load, load_vec, psd_factor, symmetrise};
 use crate::{CovarianceForm, Dims, Error, Model};
@@ -532,7 +533,7 @@ impl BatchFilter {
                         acc[l] += w.k[i * m + j][l] * w.s[at][l];
                     }
                 }
-                w.kr[i * m + c] = acc;
+                w.ks[i * m + c] = acc;
             }
         }
         for i in 0..n {
@@ -540,7 +541,7 @@ impl BatchFilter {
                 let mut acc = w.p[i * n + c];
                 for j in 0..m {
                     for l in 0..LANES {
-                        acc[l] += w.kr[i * m + j][l] * w.k[c * m + j][l]
+                        acc[l] += w.ks[i * m + j][l] * w.k[c * m + j][l]
                             - w.k[i * m + j][l] * w.pht[c * m + j][l]
                             - w.pht[i * m + j][l] * w.k[c * m + j][l];
                     }
@@ -599,8 +600,6 @@ impl BatchFilter {
 /// The largest m the batch step's fixed buffers take.
 const MAX_M: usize = 16;
 
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
-
 /// The first of the `lanes` series whose state (named `x`) or a diagonal entry of whose
 /// covariance (named `p`) is not finite, with the name and the value: one vector pass that
 /// sums `0·v` (NaN if any v is not), and a search only when it is.
@@ -652,7 +651,7 @@ struct Work {
     pht: Vec<[f64; LANES]>,
     sigma: Vec<[f64; LANES]>,
     k: Vec<[f64; LANES]>,
-    kr: Vec<[f64; LANES]>,
+    ks: Vec<[f64; LANES]>,
     a: Vec<[f64; LANES]>,
     t: Vec<[f64; LANES]>,
     y: Vec<[f64; LANES]>,
@@ -671,7 +670,7 @@ impl Work {
             pht: rows(n * m),
             sigma: rows(m * m),
             k: rows(n * m),
-            kr: rows(n * m),
+            ks: rows(n * m),
             a: rows(n * n),
             t: rows(n * n),
             y: rows(m),

@@ -3,6 +3,7 @@
 //! a prediction stage), the square-root form in `sqrt` (one pre-array triangularised).
 #![allow(non_snake_case)]
 
+use crate::kernels::LN_2PI;
 use faer::MatRef;
 
 use crate::Error;
@@ -13,9 +14,6 @@ use crate::storage::{Buf, Dims, DynDims};
 
 mod dense;
 mod sqrt;
-
-/// ln(2π), for the Gaussian log-likelihood.
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// The first entry of `values` that is NaN or infinite.
 #[inline(always)]

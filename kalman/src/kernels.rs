@@ -209,6 +209,9 @@ pub(crate) fn mirror_lower(a: &mut [f64], n: usize) {
     }
 }
 
+/// ln 2π, the constant of every Gaussian log-likelihood in the crate.
+pub(crate) const LN_2PI: f64 = 1.837_877_066_409_345_5;
+
 /// Relative pivot tolerance of the innovation-covariance factorisation: a Cholesky pivot
 /// `d_j ≤ RANK_TOL·max_i Σ_ii` (a channel predicted to within 1e-6 of its scale) or an
 /// eigenvalue `λ ≤ RANK_TOL·λ_max` is treated as an exact linear dependence.

@@ -283,16 +283,7 @@ fn continuous_steady_state(path: &Path, model: &model_file::ContinuousModel) -> 
     let W = &model.G * &model.Qc * model.G.transpose();
     let ss = kalman::riccati::Care::new(&model.A, &model.C, &W, R)
         .and_then(|c| c.solve())
-        .map_err(|e| match e {
-            kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
-                Error::KalmanOnFile {
-                    path: path.to_path_buf(),
-                    context: "steady state",
-                    source: e,
-                }
-            }
-            e => model_error(path, e),
-        })?;
+        .map_err(|e| solver_error(path, e))?;
     let m = |a: &Mat<f64>| Some(serde_json::json!(faer_rows(a.as_ref())));
     Ok(json_object(&[
         ("P", m(&ss.covariance)),
@@ -301,6 +292,22 @@ fn continuous_steady_state(path: &Path, model: &model_file::ContinuousModel) -> 
         ("iterations", Some(serde_json::json!(ss.iterations))),
         ("time", Some(serde_json::json!("continuous"))),
     ]))
+}
+
+/// A Riccati solver's error on the model file at `path`: a solve that did not converge or
+/// failed its check is a computation failure ([`Error::KalmanOnFile`], exit 1), anything
+/// else a problem with the model ([`model_error`]).
+fn solver_error(path: &Path, e: kalman::Error) -> Error {
+    match e {
+        kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
+            Error::KalmanOnFile {
+                path: path.to_path_buf(),
+                context: "steady state",
+                source: e,
+            }
+        }
+        e => model_error(path, e),
+    }
 }
 
 /// `scenarios steady-state`: the steady state of a discrete model's filter, from `kalman`'s
@@ -333,16 +340,9 @@ pub fn steady_state(args: &SteadyStateArgs) -> Result<()> {
         Some(S) => dare.and_then(|d| d.cross_covariance(S)),
         None => dare,
     };
-    let ss = dare.and_then(|d| d.solve()).map_err(|e| match e {
-        kalman::Error::RiccatiNoConvergence { .. } | kalman::Error::RiccatiCheck { .. } => {
-            Error::KalmanOnFile {
-                path: path.to_path_buf(),
-                context: "steady state",
-                source: e,
-            }
-        }
-        e => model_error(path, e),
-    })?;
+    let ss = dare
+        .and_then(|d| d.solve())
+        .map_err(|e| solver_error(path, e))?;
     let m = |a: &Mat<f64>| Some(serde_json::json!(faer_rows(a.as_ref())));
     let text = json_object(&[
         ("P", m(&ss.prior)),

@@ -94,6 +94,7 @@ mod mle;
 mod params;
 mod score;
 
+pub(crate) use crate::kernels::LN_2PI;
 use faer::Mat;
 
 pub use em::{EM_DECREMENT, EmOptions, check_identifiable, em, em_step, em_with_progress};
@@ -106,9 +107,6 @@ pub use params::{Derivative, FnMap, Free, MatrixStdErrors, ParamMap, StandardMap
 pub use score::log_likelihood_gradient;
 
 use crate::{CovarianceForm, DynDims, Filter, MatrixInput, Model};
-
-/// ln(2π).
-pub(crate) const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// A complete linear Gaussian model with its prior: `x_{k+1} = F x_k + B u_k + w_k`,
 /// `z_k = H x_k + v_k`, `w ~ N(0, Q)`, `v ~ N(0, R)`, `x_0 ~ N(x0, P0)`.

@@ -150,6 +150,7 @@ pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
 pub use smoother::{ForwardPass, NonlinearRts};
 pub use ukf::{SigmaPoints, Ukf};
 
+use crate::kernels::LN_2PI;
 use crate::storage::sealed::Arr;
 use crate::storage::{Buf, Dims, DynDims, FixedDims};
 
@@ -181,9 +182,6 @@ impl<const N: usize, const M: usize, const P: usize> NlDims for FixedDims<N, M, 
     type ZSig = Arr<f64, M, 33>;
     type W = Arr<f64, 33, 1>;
 }
-
-/// ln(2π), for the Gaussian log-likelihood.
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// [`crate::Error::ModelNonFinite`] for the first non-finite entry of `v`.
 #[inline(always)]
