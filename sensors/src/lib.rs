@@ -73,6 +73,7 @@
 
 mod accel;
 mod error;
+pub mod flight;
 mod gyro;
 mod lag;
 mod level;
