@@ -36,6 +36,7 @@ mod nonlinear {
     pub mod linear;
     pub mod models;
     pub mod nis;
+    pub mod sigma_sets;
     pub mod symmetry;
 }
 

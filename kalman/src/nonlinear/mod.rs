@@ -141,6 +141,7 @@ mod ekf;
 mod linalg;
 mod models;
 mod smoother;
+mod sigma;
 mod ukf;
 
 #[cfg(feature = "autodiff")]
@@ -148,6 +149,7 @@ pub use autodiff::{AutoDiff, GenericModel, Scalar};
 pub use ekf::{Ekf, EkfUpdate};
 pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
 pub use smoother::{ForwardPass, NonlinearRts};
+pub use sigma::SigmaPoints;
 pub use ukf::{SigmaPoints, Ukf};
 
 use crate::kernels::LN_2PI;

@@ -1,143 +1,19 @@
-//! The unscented Kalman filter with Merwe's scaled and the cubature sigma-point sets.
+//! The unscented Kalman filter over any of the sigma-point sets of [`super::SigmaPoints`].
 #![allow(non_snake_case)]
 
-use faer::{Mat, MatRef};
+use faer::MatRef;
 
 use super::linalg::{
     factored_joseph, forward, mirror_lower, mul, mul_tn, nis_logdet, pd_cholesky, psd_cholesky,
     rank1, rank1_lower, right_solve,
 };
+use super::sigma::{SigmaPoints, SigmaSet};
 use super::{
     Core, LN_2PI, NlDims, NonlinearModel, Stages, StepInfo, UpdateWork, compact_square,
     compact_vec, finite,
 };
 use crate::storage::Buf;
 use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
-
-/// A sigma-point set: 2n + 1 points `χ_0 = x`, `χ_i = x ⊕ c·L_i`, `χ_{n+i} = x ⊕ (−c·L_i)`
-/// (L the lower Cholesky factor of P, `L_i` its column i; FilterPy's order), with mean
-/// weights `Wm` and covariance weights `Wc`.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub enum SigmaPoints {
-    /// Van der Merwe's scaled set: `λ = α²(n + κ) − n`, `c = √(n + λ)`,
-    /// `Wm_0 = λ/(n + λ)`, `Wc_0 = Wm_0 + 1 − α² + β`, `Wm_i = Wc_i = 1/(2(n + λ))`
-    /// (FilterPy's `MerweScaledSigmaPoints`). β = 2 is optimal for Gaussian priors.
-    Merwe {
-        /// Spread α (0 < α ≤ 1 usually; small keeps the points close to the mean).
-        alpha: f64,
-        /// Prior-knowledge weight β.
-        beta: f64,
-        /// Secondary scaling κ (0 or 3 − n usually).
-        kappa: f64,
-    },
-    /// The third-degree spherical-radial cubature set (Arasaratnam and Haykin, "Cubature
-    /// Kalman filters"): `c = √n`, weights 1/(2n), and a zero-weight centre point (the same
-    /// as Merwe with α = 1, β = 0, κ = 0).
-    Cubature,
-}
-
-impl SigmaPoints {
-    /// Merwe's scaled set.
-    ///
-    /// ```
-    /// use kalman::nonlinear::SigmaPoints;
-    /// let s = SigmaPoints::merwe(0.1, 2.0, 1.0);
-    /// let (mut wm, mut wc) = ([0.0; 5], [0.0; 5]);
-    /// let c = s.weights(2, &mut wm, &mut wc).expect("valid");
-    /// // λ = 0.01·3 − 2: the mean weights sum to one.
-    /// assert!((wm.iter().sum::<f64>() - 1.0).abs() < 1e-12);
-    /// assert!((c * c - 0.03).abs() < 1e-15);
-    /// ```
-    pub const fn merwe(alpha: f64, beta: f64, kappa: f64) -> Self {
-        SigmaPoints::Merwe { alpha, beta, kappa }
-    }
-
-    /// Number of points for n states, 2n + 1.
-    pub const fn count(n: usize) -> usize {
-        2 * n + 1
-    }
-
-    /// Writes the 2n + 1 weights and returns the spread `c` (χ_i = x ± c·L_i).
-    ///
-    /// # Errors
-    /// [`Error::InvalidOption`] if a parameter is not finite, α ≤ 0, or n + κ ≤ 0.
-    pub fn weights(&self, n: usize, wm: &mut [f64], wc: &mut [f64]) -> Result<f64, Error> {
-        let nf = n as f64;
-        let (alpha, beta, kappa) = match *self {
-            SigmaPoints::Merwe { alpha, beta, kappa } => (alpha, beta, kappa),
-            SigmaPoints::Cubature => (1.0, 0.0, 0.0),
-        };
-        for (name, v) in [("alpha", alpha), ("beta", beta), ("kappa", kappa)] {
-            if !v.is_finite() {
-                return Err(Error::InvalidOption {
-                    name,
-                    value: v,
-                    rule: "must be finite",
-                });
-            }
-        }
-        if alpha <= 0.0 {
-            return Err(Error::InvalidOption {
-                name: "alpha",
-                value: alpha,
-                rule: "must be positive",
-            });
-        }
-        if nf + kappa <= 0.0 {
-            return Err(Error::InvalidOption {
-                name: "kappa",
-                value: kappa,
-                rule: "n + kappa must be positive",
-            });
-        }
-        let lambda = alpha * alpha * (nf + kappa) - nf;
-        let w = 0.5 / (nf + lambda);
-        for i in 1..=2 * n {
-            wm[i] = w;
-            wc[i] = w;
-        }
-        wm[0] = lambda / (nf + lambda);
-        wc[0] = wm[0] + 1.0 - alpha * alpha + beta;
-        Ok((nf + lambda).sqrt())
-    }
-
-    /// The 2n + 1 sigma points of `(x, P)` as the columns of an n×(2n+1) matrix (plain
-    /// addition; for inspection and tests — the filters draw theirs without allocating).
-    ///
-    /// ```
-    /// use kalman::nonlinear::SigmaPoints;
-    /// let pts = SigmaPoints::Cubature.points(&[1.0, 2.0], &[[4.0, 0.0], [0.0, 9.0]]).expect("PSD");
-    /// assert!((pts[(0, 1)] - (1.0 + 2.0 * 2f64.sqrt())).abs() < 1e-14);
-    /// assert!((pts[(1, 4)] - (2.0 - 3.0 * 2f64.sqrt())).abs() < 1e-14);
-    /// ```
-    ///
-    /// # Errors
-    /// [`Error::Shape`]/[`Error::NonFinite`] naming `x` or `P`; [`Error::SigmaCovariance`]
-    /// if P is not PSD; as [`SigmaPoints::weights`].
-    pub fn points(&self, x: &[f64], P: &impl MatrixInput) -> Result<Mat<f64>, Error> {
-        let n = x.len();
-        crate::model::check_vec("x", x, n)?;
-        let mut p = vec![0.0; n * n];
-        crate::model::load("P", P, n, n, &mut p)?;
-        let (mut wm, mut wc) = (vec![0.0; 2 * n + 1], vec![0.0; 2 * n + 1]);
-        let c = self.weights(n, &mut wm, &mut wc)?;
-        let (mut L, mut inv) = (vec![0.0; n * n], vec![0.0; n]);
-        psd_cholesky(&p, n, &mut L, &mut inv, RANK_TOL, PSD_TOL).map_err(|pivot| {
-            Error::SigmaCovariance {
-                name: "P",
-                step: 0,
-                n,
-                pivot,
-                tol: PSD_TOL,
-            }
-        })?;
-        Ok(Mat::from_fn(n, 2 * n + 1, |i, j| match j {
-            0 => x[i],
-            j if j <= n => x[i] + c * L[i + (j - 1) * n],
-            j => x[i] - c * L[i + (j - 1 - n) * n],
-        }))
-    }
-}
 
 /// The unscented Kalman filter (additive noise) on the storage path `D`.
 ///
@@ -178,11 +54,8 @@ impl SigmaPoints {
 #[derive(Clone, Debug)]
 pub struct Ukf<D: NlDims, M> {
     model: M,
-    points: SigmaPoints,
-    spread: f64,
+    set: SigmaSet<D>,
     c: Core<D>,
-    wm: D::W,
-    wc: D::W,
     /// Sigma points (n × 2n+1), their images under f, and deviations.
     chi: D::Sig,
     y: D::Sig,
@@ -216,18 +89,13 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
     ) -> Result<Self, Error> {
         let c = Core::new(dims, x0, P0)?;
         let (n, m) = (dims.n(), dims.m());
-        let s = 2 * n + 1;
-        let mut wm = D::W::zeros(s);
-        let mut wc = D::W::zeros(s);
-        let spread = points.weights(n, wm.as_mut_slice(), wc.as_mut_slice())?;
+        let set = SigmaSet::new(points, n)?;
+        let s = set.count;
         Ok(Self {
             w: UpdateWork::new(n, m),
             model,
-            points,
-            spread,
+            set,
             c,
-            wm,
-            wc,
             chi: D::Sig::zeros(n * s),
             y: D::Sig::zeros(n * s),
             dchi: D::Sig::zeros(n * s),
@@ -274,18 +142,8 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             tol: PSD_TOL,
         })?;
         let chi = self.chi.as_mut_slice();
-        chi[..n].copy_from_slice(x);
         let dx = &mut self.w.dx.as_mut_slice()[..n];
-        for j in 0..n {
-            for (sign, col) in [(1.0, 1 + j), (-1.0, 1 + n + j)] {
-                let f = sign * self.spread;
-                for i in 0..n {
-                    dx[i] = f * L[i + j * n];
-                }
-                self.model
-                    .state_add(x, dx, &mut chi[col * n..(col + 1) * n]);
-            }
-        }
+        self.set.draw(&self.model, x, L, n, dx, chi);
         Ok(())
     }
 
@@ -298,10 +156,10 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         mut info: StepInfo,
     ) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
-        let s = 2 * n + 1;
+        let s = self.set.count;
         self.draw(true)?;
-        let wm = &self.wm.as_slice()[..s];
-        let wc = &self.wc.as_slice()[..s];
+        let wm = &self.set.wm.as_slice()[..s];
+        let wc = &self.set.wc.as_slice()[..s];
         let chi = &self.chi.as_slice()[..n * s];
         let zs = &mut self.zs.as_mut_slice()[..m * s];
         for i in 0..s {
@@ -454,11 +312,11 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
 
     fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
         let (n, k) = (self.c.dims.n(), self.c.k);
-        let s = 2 * n + 1;
+        let s = self.set.count;
         self.c.load_q(&mut self.model)?;
         self.draw(false)?;
-        let wm = &self.wm.as_slice()[..s];
-        let wc = &self.wc.as_slice()[..s];
+        let wm = &self.set.wm.as_slice()[..s];
+        let wc = &self.set.wc.as_slice()[..s];
         let chi = &self.chi.as_slice()[..n * s];
         let y = &mut self.y.as_mut_slice()[..n * s];
         for i in 0..s {
@@ -507,7 +365,7 @@ impl<D: NlDims, M> Ukf<D, M> {
     }
     /// The sigma-point set.
     pub fn sigma_points(&self) -> SigmaPoints {
-        self.points
+        self.set.points
     }
     filter_accessors!();
 }
@@ -517,9 +375,9 @@ impl<D: NlDims, M> super::ForwardPass for Ukf<D, M> {
     /// `C_k = Σ Wc_i (χ_i ⊖ x_{k|k})(f(χ_i) ⊖ x_{k+1|k})ᵀ` of the last prediction.
     fn cross_covariance(&self, out: &mut [f64]) {
         let n = self.c.dims.n();
-        let s = 2 * n + 1;
+        let s = self.set.count;
         let (wc, dchi, dy) = (
-            &self.wc.as_slice()[..s],
+            &self.set.wc.as_slice()[..s],
             &self.dchi.as_slice()[..n * s],
             &self.dy.as_slice()[..n * s],
         );

@@ -1,4 +1,4 @@
-//! Zero heap allocations per nonlinear step (EKF, iterated EKF, UKF with both sigma-point
+//! Zero heap allocations per nonlinear step (EKF, iterated EKF, UKF with every sigma-point
 //! sets; hand, AD and central-difference Jacobians), on the fixed and dynamic paths, with
 //! the counting global allocator (`common/counting.rs`).
 
@@ -60,7 +60,12 @@ fn linear_case<D: NlDims>(p: &FilterProblem, d: D) {
             "EKF {u:?} central differences"
         );
     }
-    for s in [SigmaPoints::merwe(0.5, 2.0, 0.0), SigmaPoints::Cubature] {
+    for s in [
+        SigmaPoints::merwe(0.5, 2.0, 0.0),
+        SigmaPoints::Cubature,
+        SigmaPoints::julier(1.0),
+        SigmaPoints::Simplex,
+    ] {
         let mut f = Ukf::new(d, Linear::new(p), &p.x0, &p.p0, s).expect("ukf");
         assert_eq!(count(&mut f, &p.z, &p.u), 0, "UKF {s:?}");
     }

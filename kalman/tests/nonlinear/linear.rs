@@ -173,6 +173,8 @@ fn all(n: usize) -> Vec<Which> {
         Which::Ukf(SigmaPoints::merwe(0.5, 2.0, 3.0 - n as f64)),
         Which::Ukf(SigmaPoints::merwe(1.0, 2.0, 0.0)),
         Which::Ukf(SigmaPoints::Cubature),
+        Which::Ukf(SigmaPoints::julier(1.0)),
+        Which::Ukf(SigmaPoints::Simplex),
     ]
 }
 
