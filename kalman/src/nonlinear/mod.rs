@@ -150,7 +150,8 @@ pub use ekf::{Ekf, EkfUpdate};
 pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
 pub use smoother::{ForwardPass, NonlinearRts};
 pub use sigma::SigmaPoints;
-pub use ukf::{SigmaPoints, Ukf};
+pub use smoother::{ForwardPass, NonlinearRts};
+pub use ukf::Ukf;
 
 use crate::kernels::LN_2PI;
 use crate::storage::sealed::Arr;
