@@ -140,15 +140,14 @@ mod autodiff;
 mod ekf;
 mod linalg;
 mod models;
-mod smoother;
 mod sigma;
+mod smoother;
 mod ukf;
 
 #[cfg(feature = "autodiff")]
 pub use autodiff::{AutoDiff, GenericModel, Scalar};
 pub use ekf::{Ekf, EkfUpdate};
 pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
-pub use smoother::{ForwardPass, NonlinearRts};
 pub use sigma::SigmaPoints;
 pub use smoother::{ForwardPass, NonlinearRts};
 pub use ukf::Ukf;
