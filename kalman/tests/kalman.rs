@@ -48,6 +48,7 @@ mod fit {
     pub mod golden;
     pub mod honest;
     pub mod likelihood;
+    pub mod output_error;
     pub mod records;
 }
 

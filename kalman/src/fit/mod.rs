@@ -91,6 +91,8 @@ mod error;
 mod info;
 #[cfg(feature = "argmin")]
 mod mle;
+#[cfg(feature = "autodiff")]
+mod output_error;
 mod params;
 mod score;
 
@@ -103,6 +105,10 @@ pub use error::FitError;
 pub use info::{Fit, Method, NULL_EIGENVALUE, aic, bic, observed_information};
 #[cfg(feature = "argmin")]
 pub use mle::{MleOptions, mle, mle_records};
+#[cfg(feature = "autodiff")]
+pub use output_error::{
+    OutputErrorCost, OutputErrorFit, OutputErrorOptions, output_error, output_error_cost,
+};
 pub use params::{Derivative, FnMap, Free, MatrixStdErrors, ParamMap, StandardMap, Structure};
 pub use score::log_likelihood_gradient;
 
