@@ -34,6 +34,14 @@ pub enum FitError {
         /// The step.
         step: usize,
     },
+    /// A quantity of the filter stopped being finite: the computation diverged at that step.
+    #[error("the filter diverged at step {step}: {what} is not finite")]
+    Diverged {
+        /// What stopped being finite, e.g. `"the predicted state"`.
+        what: &'static str,
+        /// The step.
+        step: usize,
+    },
     /// A parameter vector has the wrong length or a non-finite entry.
     #[error("parameter vector: {0}")]
     Parameters(String),

@@ -240,6 +240,39 @@ pub(crate) fn correlation(cov: &Mat<f64>) -> Option<Mat<f64>> {
     }))
 }
 
+/// The square roots of a covariance's diagonal.
+pub(crate) fn std_errors_of(cov: &Mat<f64>) -> Vec<f64> {
+    (0..cov.nrows())
+        .map(|i| cov[(i, i)].max(0.0).sqrt())
+        .collect()
+}
+
+/// When `covariance` is `None` (the information is not positive definite): the directions
+/// the data do not identify, named, and said in `message`; empty otherwise.
+pub(crate) fn explain_unidentified(
+    information: &Mat<f64>,
+    covariance: Option<&Mat<f64>>,
+    names: &[String],
+    message: &mut String,
+) -> Vec<Vec<(String, f64)>> {
+    if covariance.is_some() {
+        return Vec::new();
+    }
+    let dirs = unidentified(information, names);
+    let text: Vec<String> = dirs
+        .iter()
+        .map(|d| {
+            let parts: Vec<String> = d.iter().map(|(n, w)| format!("{w:+.2}·{n}")).collect();
+            format!("[{}]", parts.join(" "))
+        })
+        .collect();
+    message.push_str(&format!(
+        "; the observed information is not positive definite: the data do not identify the direction(s) {} of θ; no standard errors",
+        text.join(", ")
+    ));
+    dirs
+}
+
 /// Builds the [`Fit`] at θ: log-likelihood, information, standard errors, boundary flags.
 pub(crate) fn finish<M: ParamMap + ?Sized>(
     map: &M,
@@ -268,11 +301,7 @@ pub(crate) fn finish_records<M: ParamMap + ?Sized>(
     let system = map.system(&theta)?;
     let information = information_of(map, &theta, records)?;
     let covariance = spd_inverse(&information);
-    let std_errors = covariance.as_ref().map(|c| {
-        (0..theta.len())
-            .map(|i| c[(i, i)].max(0.0).sqrt())
-            .collect()
-    });
+    let std_errors = covariance.as_ref().map(std_errors_of);
     // A variance below 1e-8 of the data's variance is numerically zero: the boundary.
     let scale = records.iter().map(data_scale).sum::<f64>() / records.len().max(1) as f64;
     let floor = (1e-8 * scale).ln();
@@ -289,23 +318,8 @@ pub(crate) fn finish_records<M: ParamMap + ?Sized>(
             boundary.join(", ")
         ));
     }
-    let unidentified = if covariance.is_none() {
-        let dirs = unidentified(&information, &names);
-        let text: Vec<String> = dirs
-            .iter()
-            .map(|d| {
-                let parts: Vec<String> = d.iter().map(|(n, w)| format!("{w:+.2}·{n}")).collect();
-                format!("[{}]", parts.join(" "))
-            })
-            .collect();
-        message.push_str(&format!(
-            "; the observed information is not positive definite: the data do not identify the direction(s) {} of θ; no standard errors",
-            text.join(", ")
-        ));
-        dirs
-    } else {
-        Vec::new()
-    };
+    let unidentified =
+        explain_unidentified(&information, covariance.as_ref(), &names, &mut message);
     let correlation = covariance.as_ref().and_then(correlation);
     let n_obs = records.iter().map(Series::observed).sum();
     let k = theta.len();

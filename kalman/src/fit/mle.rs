@@ -11,6 +11,7 @@ use argmin::solver::quasinewton::LBFGS;
 use super::dense::{chol_solve, cholesky};
 use super::info::{Fit, Method, finish_records, gradient_sum, information_of};
 use super::{FitError, ParamMap, Series};
+use faer::Mat;
 
 /// Options of [`mle`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -31,14 +32,45 @@ impl Default for MleOptions {
     }
 }
 
+/// A log-likelihood to maximise over θ: `ln L` with its exact gradient, and the observed
+/// information at a point. [`mle_records`] maximises a [`ParamMap`]'s over its records, the
+/// nonlinear filter-error fit an EKF's; both through [`optimise`].
+pub(crate) trait Objective {
+    /// `(ln L, ∇ ln L)` at θ.
+    fn loglik_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>), FitError>;
+    /// The observed information `−∇² ln L` at θ.
+    fn information(&self, theta: &[f64]) -> Result<Mat<f64>, FitError>;
+    /// What to try when the fit does not converge (completes "try …").
+    fn hint(&self) -> &'static str {
+        "another starting point or fewer free parameters"
+    }
+}
+
+/// A [`ParamMap`]'s likelihood over independent records sharing θ.
+pub(crate) struct Records<'a, M: ParamMap + ?Sized> {
+    pub(crate) map: &'a M,
+    pub(crate) records: &'a [Series<'a>],
+}
+
+impl<M: ParamMap + ?Sized> Objective for Records<'_, M> {
+    fn loglik_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>), FitError> {
+        gradient_sum(self.map, theta, self.records)
+    }
+    fn information(&self, theta: &[f64]) -> Result<Mat<f64>, FitError> {
+        information_of(self.map, theta, self.records)
+    }
+    fn hint(&self) -> &'static str {
+        "another starting point (the model file's Q, R), the EM method, or fewer free entries"
+    }
+}
+
 /// The last few evaluations of `(ln L, ∇ ln L)`, so that a repeated θ costs nothing. One
-/// score recursion gives both, and argmin asks for them separately — the line search for
-/// the cost and then the gradient at each trial point, L-BFGS for the gradient at the
-/// accepted point again — and [`mle`] asks again at the start, before the Newton polish and
-/// for its verdict.
-struct Memo<'a, M: ParamMap + ?Sized> {
-    map: &'a M,
-    records: &'a [Series<'a>],
+/// pass gives both, and argmin asks for them separately — the line search for the cost and
+/// then the gradient at each trial point, L-BFGS for the gradient at the accepted point
+/// again — and [`optimise`] asks again at the start, before the Newton polish and for its
+/// verdict.
+struct Memo<'o, O: Objective + ?Sized> {
+    objective: &'o O,
     kept: RefCell<Vec<Evaluation>>,
 }
 
@@ -48,11 +80,10 @@ type Evaluation = (Vec<f64>, f64, Vec<f64>);
 /// Evaluations kept by [`Memo`] (the line search's last trials and L-BFGS's point).
 const MEMO: usize = 4;
 
-impl<'a, M: ParamMap + ?Sized> Memo<'a, M> {
-    fn new(map: &'a M, records: &'a [Series<'a>]) -> Self {
+impl<'o, O: Objective + ?Sized> Memo<'o, O> {
+    fn new(objective: &'o O) -> Self {
         Self {
-            map,
-            records,
+            objective,
             kept: RefCell::new(Vec::with_capacity(MEMO)),
         }
     }
@@ -62,7 +93,7 @@ impl<'a, M: ParamMap + ?Sized> Memo<'a, M> {
         if let Some((_, ll, g)) = self.kept.borrow().iter().find(|(t, _, _)| t == p) {
             return Ok((*ll, g.clone()));
         }
-        let (ll, g) = gradient_sum(self.map, p, self.records)?;
+        let (ll, g) = self.objective.loglik_gradient(p)?;
         let mut kept = self.kept.borrow_mut();
         if kept.len() == MEMO {
             kept.remove(0);
@@ -74,13 +105,13 @@ impl<'a, M: ParamMap + ?Sized> Memo<'a, M> {
 
 /// `−ln L / n_obs` and its gradient (scaled so that the optimiser's tolerances do not depend
 /// on the series length), evaluated through the fit's [`Memo`].
-struct Problem<'a, 'm, M: ParamMap + ?Sized> {
-    memo: &'m Memo<'a, M>,
+struct Problem<'o, 'm, O: Objective + ?Sized> {
+    memo: &'m Memo<'o, O>,
     scale: f64,
 }
 
-impl<'a, 'm, M: ParamMap + ?Sized> Problem<'a, 'm, M> {
-    fn new(memo: &'m Memo<'a, M>, scale: f64) -> Self {
+impl<'o, 'm, O: Objective + ?Sized> Problem<'o, 'm, O> {
+    fn new(memo: &'m Memo<'o, O>, scale: f64) -> Self {
         Self { memo, scale }
     }
 
@@ -89,7 +120,7 @@ impl<'a, 'm, M: ParamMap + ?Sized> Problem<'a, 'm, M> {
     }
 }
 
-impl<M: ParamMap + ?Sized> CostFunction for Problem<'_, '_, M> {
+impl<O: Objective + ?Sized> CostFunction for Problem<'_, '_, O> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, argmin::core::Error> {
@@ -101,7 +132,7 @@ impl<M: ParamMap + ?Sized> CostFunction for Problem<'_, '_, M> {
     }
 }
 
-impl<M: ParamMap + ?Sized> Gradient for Problem<'_, '_, M> {
+impl<O: Objective + ?Sized> Gradient for Problem<'_, '_, O> {
     type Param = Vec<f64>;
     type Gradient = Vec<f64>;
     fn gradient(&self, p: &Vec<f64>) -> Result<Vec<f64>, argmin::core::Error> {
@@ -113,9 +144,9 @@ impl<M: ParamMap + ?Sized> Gradient for Problem<'_, '_, M> {
 }
 
 /// Nelder–Mead's cost: failures become +∞ (the simplex steps away from them).
-struct Robust<'a, 'm, M: ParamMap + ?Sized>(Problem<'a, 'm, M>);
+struct Robust<'o, 'm, O: Objective + ?Sized>(Problem<'o, 'm, O>);
 
-impl<M: ParamMap + ?Sized> CostFunction for Robust<'_, '_, M> {
+impl<O: Objective + ?Sized> CostFunction for Robust<'_, '_, O> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, argmin::core::Error> {
@@ -128,8 +159,8 @@ impl<M: ParamMap + ?Sized> CostFunction for Robust<'_, '_, M> {
 /// rule in the verdict's units, not a second, stricter one), or when the scaled cost moves
 /// by less than 1e-14 between iterations — the round-off of `−ln L/n_obs`, where the line
 /// search can no longer tell a better point from a worse one (see [`newton_polish`]).
-fn lbfgs<M: ParamMap + ?Sized>(
-    problem: Problem<'_, '_, M>,
+fn lbfgs<O: Objective + ?Sized>(
+    problem: Problem<'_, '_, O>,
     theta0: Vec<f64>,
     max_iter: u64,
     grad_tol: f64,
@@ -173,17 +204,16 @@ fn max_abs(v: &[f64]) -> f64 {
 /// optimum in standard errors), halving it up to four times; it stops when the information
 /// is not positive definite (no Newton direction) or no halving helps. Returns θ and the
 /// number of steps taken.
-fn newton_polish<M: ParamMap + ?Sized>(
-    memo: &Memo<'_, M>,
+fn newton_polish<O: Objective + ?Sized>(
+    memo: &Memo<'_, O>,
     mut theta: Vec<f64>,
     grad_tol: f64,
 ) -> Result<(Vec<f64>, usize), FitError> {
-    let (map, records) = (memo.map, memo.records);
     let k = theta.len();
     let (_, mut g) = memo.eval(&theta)?;
     let mut steps = 0;
     while steps < NEWTON_STEPS && max_abs(&g) > grad_tol {
-        let mut l = super::flat(&information_of(map, &theta, records)?);
+        let mut l = super::flat(&memo.objective.information(&theta)?);
         if !cholesky(&mut l, k) {
             break;
         }
@@ -225,8 +255,8 @@ fn newton_polish<M: ParamMap + ?Sized>(
 /// entry of 1 (a factor e on a variance), halving a step until `ln L` rises (at most 8
 /// halvings; at most [`WARM_STEPS`] steps). A good start has a small gradient and takes no
 /// step. Returns θ and the number of steps.
-fn warm_up<M: ParamMap + ?Sized>(
-    memo: &Memo<'_, M>,
+fn warm_up<O: Objective + ?Sized>(
+    memo: &Memo<'_, O>,
     mut theta: Vec<f64>,
     n_obs: f64,
 ) -> Result<(Vec<f64>, usize), FitError> {
@@ -345,10 +375,34 @@ pub fn mle_records<M: ParamMap + ?Sized>(
     for data in records {
         data.check(&sys0)?;
     }
-    // The likelihood must be defined at the start.
-    let memo = Memo::new(map, records);
-    memo.eval(&theta0)?;
     let n_obs: usize = records.iter().map(Series::observed).sum();
+    let (theta, iterations, converged, message) =
+        optimise(&Records { map, records }, theta0, n_obs, opts)?;
+    finish_records(
+        map,
+        theta,
+        records,
+        Method::Mle,
+        iterations,
+        converged,
+        message,
+    )
+}
+
+/// Maximises `objective` from `theta0`: [`warm_up`] from a start far off, L-BFGS (memory
+/// 10, Moré–Thuente line search) on `−ln L/n_obs` with the exact gradient, Nelder–Mead
+/// restarted from the best point when L-BFGS fails, and [`newton_polish`] on the observed
+/// information. Returns θ, the iterations, the verdict (the largest entry of `∇ ln L` within
+/// [`MleOptions::grad_tol`]) and its message.
+pub(crate) fn optimise<O: Objective + ?Sized>(
+    objective: &O,
+    theta0: Vec<f64>,
+    n_obs: usize,
+    opts: &MleOptions,
+) -> Result<(Vec<f64>, usize, bool, String), FitError> {
+    // The likelihood must be defined at the start.
+    let memo = Memo::new(objective);
+    memo.eval(&theta0)?;
     let scale = 1.0 / n_obs as f64;
     let mk = || Problem::new(&memo, scale);
     let mut notes = Vec::new();
@@ -409,23 +463,16 @@ pub fn mle_records<M: ParamMap + ?Sized>(
         format!("converged after {iterations} iterations (max |∇ ln L| = {gmax:.2e})")
     } else {
         format!(
-            "not converged after {iterations} iterations: max |∇ ln L| = {gmax:.2e} > {:.0e}; try another starting point (the model file's Q, R), the EM method, or fewer free entries",
-            opts.grad_tol
+            "not converged after {iterations} iterations: max |∇ ln L| = {gmax:.2e} > {:.0e}; try {}",
+            opts.grad_tol,
+            objective.hint()
         )
     };
     for n in notes {
         message.push_str("; ");
         message.push_str(&n);
     }
-    finish_records(
-        map,
-        theta,
-        records,
-        Method::Mle,
-        iterations,
-        converged,
-        message,
-    )
+    Ok((theta, iterations, converged, message))
 }
 
 #[cfg(test)]
@@ -467,9 +514,15 @@ mod tests {
         assert!(fit.converged, "{}", fit.message);
         let start: Vec<f64> = fit.theta.iter().map(|t| t + 0.3).collect();
         let (ll0, _) = log_likelihood_gradient(&map, &start, &data).expect("start");
-        let (theta, steps) =
-            newton_polish(&Memo::new(&map, std::slice::from_ref(&data)), start, 1e-7)
-                .expect("polish");
+        let (theta, steps) = newton_polish(
+            &Memo::new(&Records {
+                map: &map,
+                records: std::slice::from_ref(&data),
+            }),
+            start,
+            1e-7,
+        )
+        .expect("polish");
         let (ll, g) = log_likelihood_gradient(&map, &theta, &data).expect("end");
         assert!(max_abs(&g) <= 1e-7, "{g:?} after {steps} steps");
         assert!((1..=6).contains(&steps), "{steps} steps");
