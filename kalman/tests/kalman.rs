@@ -45,6 +45,7 @@ mod fit {
     pub mod coverage;
     pub mod entries;
     pub mod estimators;
+    pub mod filter_error;
     pub mod golden;
     pub mod honest;
     pub mod likelihood;

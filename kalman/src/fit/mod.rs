@@ -88,6 +88,8 @@ mod dense;
 mod em;
 mod entries;
 mod error;
+#[cfg(all(feature = "autodiff", feature = "argmin"))]
+mod filter_error;
 mod info;
 #[cfg(feature = "argmin")]
 mod mle;
@@ -102,6 +104,11 @@ use faer::Mat;
 pub use em::{EM_DECREMENT, EmOptions, check_identifiable, em, em_step, em_with_progress};
 pub use entries::{Entry, Matrix, Param, Transform};
 pub use error::FitError;
+#[cfg(all(feature = "autodiff", feature = "argmin"))]
+pub use filter_error::{
+    AtTheta, MAX_FIXED_PARAMS, ParametricFit, ParametricModel, ekf_log_likelihood,
+    ekf_log_likelihood_gradient, filter_error,
+};
 pub use info::{Fit, Method, NULL_EIGENVALUE, aic, bic, observed_information};
 #[cfg(feature = "argmin")]
 pub use mle::{MleOptions, mle, mle_records};
