@@ -13,6 +13,7 @@ use crate::model::{
 use crate::storage::{Buf, Dims, DynDims};
 
 mod dense;
+mod imm_mode;
 mod sqrt;
 
 /// The first entry of `values` that is NaN or infinite.

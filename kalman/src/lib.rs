@@ -169,6 +169,7 @@ mod expm;
 mod filter;
 pub mod fit;
 pub mod gate;
+pub mod imm;
 mod kernels;
 mod model;
 pub mod nonlinear;

@@ -61,3 +61,9 @@ mod steady {
     pub mod schedule;
     pub mod smoother;
 }
+
+mod imm {
+    pub mod golden;
+    pub mod manoeuvre;
+    pub mod smoother;
+}

@@ -34,7 +34,7 @@ pub(super) fn step<D: Dims>(
 
 /// A predict-only step: `x_{k|k} = x_{k|k−1}`, `P_{k|k} = P_{k|k−1}`, no innovation.
 #[inline(always)]
-fn no_update<D: Dims>(d: D, st: &mut State<D>) {
+pub(super) fn no_update<D: Dims>(d: D, st: &mut State<D>) {
     let (n, m) = (d.n(), d.m());
     st.xf.as_mut_slice()[..n].copy_from_slice(&st.xp.as_slice()[..n]);
     st.pf.as_mut_slice()[..n * n].copy_from_slice(&st.pp.as_slice()[..n * n]);
@@ -48,7 +48,12 @@ fn no_update<D: Dims>(d: D, st: &mut State<D>) {
 /// `e = z − H x⁻`, `Σ = H P⁻ Hᵀ + R`, `K = P⁻ Hᵀ Σ⁺`, `x⁺ = x⁻ + K e`, and `P⁺` in the
 /// Joseph or standard form.
 #[inline(always)]
-fn update<D: Dims>(model: &Model<D>, st: &mut State<D>, z: &[f64], observed: usize) -> StepInfo {
+pub(super) fn update<D: Dims>(
+    model: &Model<D>,
+    st: &mut State<D>,
+    z: &[f64],
+    observed: usize,
+) -> StepInfo {
     let d = model.dims;
     let (n, m) = (d.n(), d.m());
     let H = model.H.as_slice();
@@ -262,7 +267,12 @@ fn joseph_update<D: Dims>(model: &Model<D>, st: &mut State<D>) {
 /// The prediction `x_{k+1|k} = F x_{k|k} + B u_k`, `P_{k+1|k} = F P_{k|k} Fᵀ + Q`, plus the
 /// cross-covariance terms when the model has S and the step had a measurement.
 #[inline(always)]
-fn predict<D: Dims>(model: &Model<D>, st: &mut State<D>, u: Option<&[f64]>, updated: bool) {
+pub(super) fn predict<D: Dims>(
+    model: &Model<D>,
+    st: &mut State<D>,
+    u: Option<&[f64]>,
+    updated: bool,
+) {
     let d = model.dims;
     let (n, p) = (d.n(), d.p());
     let (F, Q) = (model.F.as_slice(), model.Q.as_slice());

@@ -138,6 +138,7 @@ macro_rules! forward_pass_moments {
 #[cfg(feature = "autodiff")]
 mod autodiff;
 mod ekf;
+mod imm_mode;
 mod linalg;
 mod models;
 mod sigma;
