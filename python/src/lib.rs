@@ -72,6 +72,10 @@ mod model_fns;
 mod nonlinear;
 mod pass;
 mod series;
+mod sigma;
+mod ukf;
+mod ukf_batch;
+mod ukf_core;
 mod wls_fns;
 
 use pyo3::exceptions::PyRuntimeError;
@@ -107,6 +111,10 @@ fn _panic_for_test() -> PyResult<()> {
 fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<kf::KalmanFilter>()?;
     m.add_class::<ekf::ExtendedKalmanFilter>()?;
+    m.add_class::<ukf::UnscentedKalmanFilter>()?;
+    m.add_class::<sigma::MerweScaledSigmaPoints>()?;
+    m.add_class::<sigma::JulierSigmaPoints>()?;
+    m.add_class::<sigma::SimplexSigmaPoints>()?;
     m.add_function(wrap_pyfunction!(engine::filter, m)?)?;
     m.add_function(wrap_pyfunction!(engine::smooth, m)?)?;
     m.add_function(wrap_pyfunction!(engine::filter_continuous, m)?)?;

@@ -1,0 +1,484 @@
+//! `launch_estimation.UnscentedKalmanFilter`: FilterPy 2.0.0's `UnscentedKalmanFilter` with
+//! its constructor, attributes and methods. The attributes live in an ordinary instance
+//! `__dict__` (x, P, Q, R, K, y, S, SI, z, x_prior, P_prior, x_post, P_post, sigmas_f,
+//! sigmas_h, Wm, Wc, points_fn, fx, hx, x_mean, z_mean, residual_x, residual_z, state_add,
+//! msqrt, …), as FilterPy's do, so assigning, editing in place, copying, pickling and
+//! FilterPy's `Saver` behave as with FilterPy; each method reads them, runs the filter's
+//! arithmetic and loops in Rust (`ukf_core.rs`) and writes the results back only when the
+//! whole call succeeded. `vectorized=True` calls fx, hx and the residual functions once
+//! with all sigma points (rows of a 2-D array) instead of once per point.
+#![allow(non_snake_case)]
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyTuple};
+
+use crate::convert::{memory_error, scalar, type_error, value_error, zeros};
+use crate::guard;
+use crate::linalg::Factor;
+use crate::sigma::{dict_of, item};
+use crate::ukf_core::{Ctx, arr1, arr2, read_mat, read_noise, read_z};
+
+/// FilterPy's `UnscentedKalmanFilter(dim_x, dim_z, dt, hx, fx, points, sqrt_fn=None,
+/// x_mean_fn=None, z_mean_fn=None, residual_x=None, residual_z=None, state_add=None)`, plus
+/// `vectorized=False`.
+#[pyclass(module = "launch_estimation", dict, subclass)]
+#[derive(Debug)]
+pub struct UnscentedKalmanFilter {}
+
+/// The positive dimension `name`.
+fn dim(v: &Bound<'_, PyAny>, name: &str) -> PyResult<usize> {
+    match v.extract::<usize>() {
+        Ok(n) if n > 0 => Ok(n),
+        _ => Err(value_error(format!(
+            "{name} must be a positive integer, not {}",
+            v.repr().map(|r| r.to_string()).unwrap_or_default()
+        ))),
+    }
+}
+
+/// `numpy.<f>(*args)`.
+fn np_call<'py>(
+    py: Python<'py>,
+    f: &str,
+    args: impl pyo3::call::PyCallArgs<'py>,
+) -> PyResult<Bound<'py, PyAny>> {
+    py.import("numpy")?.getattr(f)?.call1(args)
+}
+
+/// The filter's x (n) and P (n × n), read from the dict.
+pub(crate) fn state(c: &Ctx<'_>) -> PyResult<(Vec<f64>, Vec<f64>)> {
+    let mut x = zeros(c.n, "x")?;
+    crate::convert::read_vector(&item(&c.d, "x")?, "x", c.n, true, false, &mut x)?;
+    let P = read_mat(&item(&c.d, "P")?, "P", c.n, c.n)?;
+    Ok((x, P))
+}
+
+/// The keyword arguments for fx/hx (None when there are none).
+fn kw<'a, 'py>(k: Option<&'a Bound<'py, PyDict>>) -> Option<&'a Bound<'py, PyDict>> {
+    k.filter(|d| !d.is_empty())
+}
+
+/// Writes a prediction into the dict.
+pub(crate) fn write_predicted(c: &Ctx<'_>, p: &crate::ukf_core::Predicted) -> PyResult<()> {
+    let (py, n) = (c.py, c.n);
+    c.d.set_item("x", arr1(py, &p.x))?;
+    c.d.set_item("P", arr2(py, p.P.clone(), n, n)?)?;
+    c.d.set_item("sigmas_f", arr2(py, p.sigmas_f.clone(), c.N, n)?)?;
+    c.d.set_item("x_prior", arr1(py, &p.x))?;
+    c.d.set_item("P_prior", arr2(py, p.P.clone(), n, n)?)?;
+    Ok(())
+}
+
+/// Writes an update into the dict (FilterPy's likelihoods then recomputed on demand).
+pub(crate) fn write_updated(c: &Ctx<'_>, u: &crate::ukf_core::Updated) -> PyResult<()> {
+    let (py, n, m) = (c.py, c.n, c.m);
+    let d = &c.d;
+    d.set_item("sigmas_h", arr2(py, u.sigmas_h.clone(), c.N, m)?)?;
+    d.set_item("S", arr2(py, u.S.clone(), m, m)?)?;
+    d.set_item("SI", arr2(py, u.SI.clone(), m, m)?)?;
+    d.set_item("K", arr2(py, u.K.clone(), n, m)?)?;
+    d.set_item("y", arr1(py, &u.y))?;
+    d.set_item("x", arr1(py, &u.x))?;
+    d.set_item("P", arr2(py, u.P.clone(), n, n)?)?;
+    d.set_item("z", arr1(py, &u.z))?;
+    d.set_item("x_post", arr1(py, &u.x))?;
+    d.set_item("P_post", arr2(py, u.P.clone(), n, n)?)?;
+    for k in ["_log_likelihood", "_likelihood", "_mahalanobis"] {
+        d.set_item(k, py.None())?;
+    }
+    Ok(())
+}
+
+/// `update(None)`: no measurement; z becomes a column of None, the posterior the prior.
+pub(crate) fn write_no_update(c: &Ctx<'_>) -> PyResult<()> {
+    write_no_update_z(c.py, &c.d, c.m)?;
+    for (to, from) in [("x_post", "x"), ("P_post", "P")] {
+        c.d.set_item(to, item(&c.d, from)?.call_method0("copy")?)?;
+    }
+    Ok(())
+}
+
+/// R for an update: the argument (a scalar r meaning r·I) or the filter's R.
+pub(crate) fn update_noise<'py>(
+    c: &Ctx<'py>,
+    R: Option<&Bound<'py, PyAny>>,
+) -> PyResult<(Vec<f64>, Bound<'py, PyAny>)> {
+    let m = c.m;
+    let obj = match R.filter(|r| !r.is_none()) {
+        Some(r) if scalar(r).is_some() => {
+            let eye = np_call(c.py, "eye", (m,))?;
+            eye.call_method1("__mul__", (r,))?
+        }
+        Some(r) => r.clone(),
+        None => item(&c.d, "R")?,
+    };
+    Ok((read_noise(&obj, "R", m)?, obj))
+}
+
+/// Runs `f`; if it fails, puts the dict back as it was before (a snapshot taken first).
+fn atomically<'py, T>(d: &Bound<'py, PyDict>, f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    let snapshot = d.copy()?;
+    f().inspect_err(|_| {
+        d.clear();
+        let _ = d.update(snapshot.as_mapping());
+    })
+}
+
+#[pymethods]
+impl UnscentedKalmanFilter {
+    /// The object; `__init__` fills its dict.
+    #[new]
+    #[pyo3(signature = (*_args, **_kwargs))]
+    fn new(_args: &Bound<'_, PyTuple>, _kwargs: Option<&Bound<'_, PyDict>>) -> Self {
+        Self {}
+    }
+
+    /// FilterPy's defaults: x = 0 (a (dim_x,) array), P = Q = I, R = I, the weights of
+    /// `points`; `vectorized` makes fx, hx and the residual functions take all sigma points
+    /// at once.
+    #[pyo3(signature = (
+        dim_x, dim_z, dt, hx, fx, points, sqrt_fn = None, x_mean_fn = None, z_mean_fn = None,
+        residual_x = None, residual_z = None, state_add = None, vectorized = false
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn __init__(
+        slf: &Bound<'_, Self>,
+        dim_x: &Bound<'_, PyAny>,
+        dim_z: &Bound<'_, PyAny>,
+        dt: &Bound<'_, PyAny>,
+        hx: &Bound<'_, PyAny>,
+        fx: &Bound<'_, PyAny>,
+        points: &Bound<'_, PyAny>,
+        sqrt_fn: Option<&Bound<'_, PyAny>>,
+        x_mean_fn: Option<&Bound<'_, PyAny>>,
+        z_mean_fn: Option<&Bound<'_, PyAny>>,
+        residual_x: Option<&Bound<'_, PyAny>>,
+        residual_z: Option<&Bound<'_, PyAny>>,
+        state_add: Option<&Bound<'_, PyAny>>,
+        vectorized: bool,
+    ) -> PyResult<()> {
+        guard(|| {
+            let py = slf.py();
+            let d = dict_of(slf.as_any())?;
+            let (n, m) = (dim(dim_x, "dim_x")?, dim(dim_z, "dim_z")?);
+            for (name, f) in [("hx", hx), ("fx", fx)] {
+                if !f.is_callable() {
+                    return Err(type_error(format!(
+                        "{name} must be callable, not {}",
+                        crate::convert::type_name(f)
+                    )));
+                }
+            }
+            let N: usize = points.call_method0("num_sigmas")?.extract()?;
+            let none = py.None().into_bound(py);
+            let or = |v: Option<&Bound<'_, PyAny>>, np_default: &str| -> PyResult<Py<PyAny>> {
+                match v.filter(|v| !v.is_none()) {
+                    Some(v) => Ok(v.clone().unbind()),
+                    None if np_default.is_empty() => Ok(py.None()),
+                    None => Ok(crate::sigma::np_attr(py, np_default)?.unbind()),
+                }
+            };
+            let zeros_of = |shape: (usize, usize)| np_call(py, "zeros", (shape,));
+            d.set_item("x", np_call(py, "zeros", (n,))?)?;
+            d.set_item("P", np_call(py, "eye", (n,))?)?;
+            d.set_item("x_prior", np_call(py, "zeros", (n,))?)?;
+            d.set_item("P_prior", np_call(py, "eye", (n,))?)?;
+            d.set_item("Q", np_call(py, "eye", (n,))?)?;
+            d.set_item("R", np_call(py, "eye", (m,))?)?;
+            d.set_item("_dim_x", n)?;
+            d.set_item("_dim_z", m)?;
+            d.set_item("points_fn", points)?;
+            d.set_item("_dt", dt)?;
+            d.set_item("_num_sigmas", N)?;
+            d.set_item("hx", hx)?;
+            d.set_item("fx", fx)?;
+            d.set_item("x_mean", or(x_mean_fn, "")?)?;
+            d.set_item("z_mean", or(z_mean_fn, "")?)?;
+            d.set_item("_log_likelihood", f64::MIN_POSITIVE.ln())?;
+            d.set_item("_likelihood", f64::MIN_POSITIVE)?;
+            d.set_item("_mahalanobis", &none)?;
+            d.set_item("msqrt", or(sqrt_fn, "")?)?;
+            d.set_item("Wm", points.getattr("Wm")?)?;
+            d.set_item("Wc", points.getattr("Wc")?)?;
+            d.set_item("residual_x", or(residual_x, "subtract")?)?;
+            d.set_item("residual_z", or(residual_z, "subtract")?)?;
+            d.set_item("state_add", or(state_add, "add")?)?;
+            d.set_item("sigmas_f", zeros_of((N, n))?)?;
+            d.set_item("sigmas_h", zeros_of((N, m))?)?;
+            d.set_item("K", zeros_of((n, m))?)?;
+            d.set_item("y", np_call(py, "zeros", (m,))?)?;
+            write_no_update_z(py, &d, m)?;
+            d.set_item("S", zeros_of((m, m))?)?;
+            d.set_item("SI", zeros_of((m, m))?)?;
+            d.set_item("x_post", np_call(py, "zeros", (n,))?)?;
+            d.set_item("P_post", np_call(py, "eye", (n,))?)?;
+            d.set_item("vectorized", vectorized)?;
+            Ok(())
+        })
+    }
+
+    /// predict(dt=None, UT=None, fx=None, **fx_args): sigma points at (x, P), fx(χ, dt,
+    /// **fx_args) for each, their unscented transform with Q; sigmas_f then holds the points
+    /// redrawn at the prior (FilterPy 2.0.0), x_prior and P_prior the prior.
+    #[pyo3(signature = (dt = None, UT = None, fx = None, **fx_args))]
+    fn predict<'py>(
+        slf: &Bound<'py, Self>,
+        dt: Option<&Bound<'py, PyAny>>,
+        UT: Option<&Bound<'py, PyAny>>,
+        fx: Option<&Bound<'py, PyAny>>,
+        fx_args: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<()> {
+        guard(|| {
+            let c = Ctx::new(slf.as_any(), UT)?;
+            let (x, P) = state(&c)?;
+            let Qo = item(&c.d, "Q")?;
+            let Q = read_noise(&Qo, "Q", c.n)?;
+            let dt = match dt.filter(|v| !v.is_none()) {
+                Some(v) => v.clone(),
+                None => item(&c.d, "_dt")?,
+            };
+            let fx = match fx.filter(|v| !v.is_none()) {
+                Some(f) => f.clone(),
+                None => item(&c.d, "fx")?,
+            };
+            let p = crate::ukf_core::predict(&c, &x, &P, (&Q, &Qo), &fx, &dt, kw(fx_args))?;
+            write_predicted(&c, &p)
+        })
+    }
+
+    /// update(z, R=None, UT=None, hx=None, **hx_args): hx(χ, **hx_args) for each point of
+    /// sigmas_f, their transform with R (a scalar r: r·I), the cross-covariance, K = P_xz S⁻¹
+    /// (solved), y = residual_z(z, ẑ), x = state_add(x, K y), P = P − K S Kᵀ. z = None
+    /// skips the update (x_post, P_post = x, P).
+    #[pyo3(signature = (z, R = None, UT = None, hx = None, **hx_args))]
+    fn update<'py>(
+        slf: &Bound<'py, Self>,
+        z: &Bound<'py, PyAny>,
+        R: Option<&Bound<'py, PyAny>>,
+        UT: Option<&Bound<'py, PyAny>>,
+        hx: Option<&Bound<'py, PyAny>>,
+        hx_args: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<()> {
+        guard(|| {
+            let c = Ctx::new(slf.as_any(), UT)?;
+            if z.is_none() {
+                return write_no_update(&c);
+            }
+            let (x, P) = state(&c)?;
+            let sf = read_mat(&item(&c.d, "sigmas_f")?, "sigmas_f", c.N, c.n)?;
+            let (Rv, Ro) = update_noise(&c, R)?;
+            let hx = match hx.filter(|v| !v.is_none()) {
+                Some(f) => f.clone(),
+                None => item(&c.d, "hx")?,
+            };
+            let zv = read_z(z, c.m)?;
+            let u = crate::ukf_core::update(&c, &x, &P, &sf, zv, (&Rv, &Ro), &hx, kw(hx_args))?;
+            write_updated(&c, &u)
+        })
+    }
+
+    /// compute_process_sigmas(dt, fx=None, **fx_args): sigmas_f = fx(χ, dt) at the points
+    /// of (x, P).
+    #[pyo3(signature = (dt, fx = None, **fx_args))]
+    fn compute_process_sigmas<'py>(
+        slf: &Bound<'py, Self>,
+        dt: &Bound<'py, PyAny>,
+        fx: Option<&Bound<'py, PyAny>>,
+        fx_args: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<()> {
+        guard(|| {
+            let c = Ctx::new(slf.as_any(), None)?;
+            let (x, P) = state(&c)?;
+            let fx = match fx.filter(|v| !v.is_none()) {
+                Some(f) => f.clone(),
+                None => item(&c.d, "fx")?,
+            };
+            let sig = c.sigmas(&x, &P)?;
+            let sf = c.apply(
+                &fx,
+                "fx",
+                &sig,
+                c.n,
+                c.n,
+                std::slice::from_ref(dt),
+                kw(fx_args),
+            )?;
+            c.d.set_item("sigmas_f", arr2(c.py, sf, c.N, c.n)?)
+        })
+    }
+
+    /// cross_variance(x, z, sigmas_f, sigmas_h) → P_xz = Σ Wc_i residual_x(χ_i, x)
+    /// residual_z(h_i, z)ᵀ, (dim_x, dim_z).
+    fn cross_variance<'py>(
+        slf: &Bound<'py, Self>,
+        x: &Bound<'py, PyAny>,
+        z: &Bound<'py, PyAny>,
+        sigmas_f: &Bound<'py, PyAny>,
+        sigmas_h: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        guard(|| {
+            let c = Ctx::new(slf.as_any(), None)?;
+            let mut xv = zeros(c.n, "x")?;
+            crate::convert::read_vector(x, "x", c.n, true, false, &mut xv)?;
+            let zv = read_z(z, c.m)?;
+            let sf = read_mat(sigmas_f, "sigmas_f", c.N, c.n)?;
+            let sh = read_mat(sigmas_h, "sigmas_h", c.N, c.m)?;
+            arr2(c.py, c.cross(&xv, &zv, &sf, &sh)?, c.n, c.m)
+        })
+    }
+
+    /// batch_filter(zs, Rs=None, dts=None, UT=None, saver=None) → (means, covariances):
+    /// predict then update for each z (None: no update), Rs[i] and dts[i] per step; the
+    /// loop runs in Rust and writes the filter's attributes once at the end (every step when
+    /// a saver is given, which is then saved). Interrupted or failed, the filter is left as
+    /// it was before the call.
+    #[pyo3(signature = (zs, Rs = None, dts = None, UT = None, saver = None))]
+    fn batch_filter<'py>(
+        slf: &Bound<'py, Self>,
+        zs: &Bound<'py, PyAny>,
+        Rs: Option<&Bound<'py, PyAny>>,
+        dts: Option<&Bound<'py, PyAny>>,
+        UT: Option<&Bound<'py, PyAny>>,
+        saver: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        guard(|| {
+            let c = Ctx::new(slf.as_any(), UT)?;
+            atomically(&c.d, || {
+                crate::ukf_batch::batch_filter(&c, zs, Rs, dts, saver)
+            })
+        })
+    }
+
+    /// rts_smoother(Xs, Ps, Qs=None, dts=None, UT=None) → (xs, ps, Ks): the unscented RTS
+    /// smoother over batch_filter's output, with fx and the filter's points, Qs[k] (default
+    /// the filter's Q) and dts[k] (a scalar: every step). K is solved, not formed by inv.
+    #[pyo3(signature = (Xs, Ps, Qs = None, dts = None, UT = None))]
+    fn rts_smoother<'py>(
+        slf: &Bound<'py, Self>,
+        Xs: &Bound<'py, PyAny>,
+        Ps: &Bound<'py, PyAny>,
+        Qs: Option<&Bound<'py, PyAny>>,
+        dts: Option<&Bound<'py, PyAny>>,
+        UT: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        guard(|| {
+            let c = Ctx::new(slf.as_any(), UT)?;
+            crate::ukf_batch::rts_smoother(&c, Xs, Ps, Qs, dts)
+        })
+    }
+
+    /// ln N(y; 0, S) of the last update (computed on first use, as FilterPy's).
+    #[getter]
+    fn log_likelihood(slf: &Bound<'_, Self>) -> PyResult<f64> {
+        guard(|| {
+            let d = dict_of(slf.as_any())?;
+            if let Some(v) = d.get_item("_log_likelihood")?.filter(|v| !v.is_none()) {
+                return v.extract();
+            }
+            let m: usize = item(&d, "_dim_z")?.extract()?;
+            let mut y = zeros(m, "y")?;
+            crate::convert::read_vector(&item(&d, "y")?, "y", m, true, false, &mut y)?;
+            let S = read_mat(&item(&d, "S")?, "S", m, m)?;
+            let mut f = Factor::try_new(m).ok_or_else(|| memory_error(m * m, "S"))?;
+            let ll = if f.factor(&S, m) {
+                let mut work = zeros(m, "y")?;
+                let q = f.quad(&y, &mut work);
+                -0.5 * (m as f64 * (2.0 * std::f64::consts::PI).ln() + f.log_abs_det() + q)
+            } else {
+                f64::NEG_INFINITY
+            };
+            d.set_item("_log_likelihood", ll)?;
+            Ok(ll)
+        })
+    }
+
+    /// exp(log_likelihood), floored at the smallest positive float (FilterPy's rule).
+    #[getter]
+    fn likelihood(slf: &Bound<'_, Self>) -> PyResult<f64> {
+        let d = guard(|| dict_of(slf.as_any()))?;
+        if let Some(v) = d.get_item("_likelihood")?.filter(|v| !v.is_none()) {
+            return v.extract();
+        }
+        let l = Self::log_likelihood(slf)?.exp();
+        let l = if l > 0.0 { l } else { f64::MIN_POSITIVE };
+        d.set_item("_likelihood", l)?;
+        Ok(l)
+    }
+
+    /// √(yᵀ SI y) of the last update.
+    #[getter]
+    fn mahalanobis(slf: &Bound<'_, Self>) -> PyResult<f64> {
+        guard(|| {
+            let d = dict_of(slf.as_any())?;
+            if let Some(v) = d.get_item("_mahalanobis")?.filter(|v| !v.is_none()) {
+                return v.extract();
+            }
+            let m: usize = item(&d, "_dim_z")?.extract()?;
+            let mut y = zeros(m, "y")?;
+            crate::convert::read_vector(&item(&d, "y")?, "y", m, true, false, &mut y)?;
+            let SI = read_mat(&item(&d, "SI")?, "SI", m, m)?;
+            let q: f64 = (0..m)
+                .map(|i| y[i] * (0..m).map(|j| SI[i * m + j] * y[j]).sum::<f64>())
+                .sum();
+            let v = q.sqrt();
+            d.set_item("_mahalanobis", v)?;
+            Ok(v)
+        })
+    }
+
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        let d = dict_of(slf.as_any())?;
+        let mut out = vec!["UnscentedKalmanFilter object".to_string()];
+        for k in [
+            "x",
+            "P",
+            "x_prior",
+            "P_prior",
+            "Q",
+            "R",
+            "S",
+            "K",
+            "y",
+            "sigmas_f",
+            "sigmas_h",
+            "Wm",
+            "Wc",
+            "residual_x",
+            "residual_z",
+            "msqrt",
+            "hx",
+            "fx",
+            "x_mean",
+            "z_mean",
+            "vectorized",
+        ] {
+            if let Some(v) = d.get_item(k)? {
+                out.push(format!("{k} = {}", v.repr()?));
+            }
+        }
+        Ok(out.join("\n"))
+    }
+
+    /// Pickle and copy support: the constructor's arguments, then the dict.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+        guard(|| {
+            let py = slf.py();
+            let d = dict_of(slf.as_any())?;
+            let args = PyTuple::new(
+                py,
+                ["_dim_x", "_dim_z", "_dt", "hx", "fx", "points_fn"]
+                    .iter()
+                    .map(|k| item(&d, k))
+                    .collect::<PyResult<Vec<_>>>()?,
+            )?;
+            (slf.get_type(), args, d.copy()?).into_pyobject(py)
+        })
+    }
+}
+
+/// The initial z: a (dim_z, 1) column of None, as FilterPy's.
+fn write_no_update_z(py: Python<'_>, d: &Bound<'_, PyDict>, m: usize) -> PyResult<()> {
+    let nones = PyList::new(py, (0..m).map(|_| py.None()).collect::<Vec<_>>())?;
+    let z = np_call(py, "array", (PyList::new(py, [nones])?,))?.getattr("T")?;
+    d.set_item("z", z)
+}
