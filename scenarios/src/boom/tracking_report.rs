@@ -159,6 +159,9 @@ fn tracking_section(s: &BoomSummary, figures: &[String]) -> String {
             kalman::nonlinear::SigmaPoints::Cubature => "cubature points".to_string(),
             kalman::nonlinear::SigmaPoints::Merwe { alpha, beta, kappa } =>
                 format!("Merwe points α = {alpha}, β = {beta}, κ = {kappa}"),
+            kalman::nonlinear::SigmaPoints::Julier { kappa } =>
+                format!("Julier points κ = {kappa}"),
+            kalman::nonlinear::SigmaPoints::Simplex => "simplex points".to_string(),
         }
     );
     let _ = writeln!(
