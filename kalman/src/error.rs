@@ -247,4 +247,32 @@ pub enum Error {
         /// The rule broken.
         rule: &'static str,
     },
+    // ---- particle filters ----
+    /// An argument of a particle filter, its resampling or its smoother is invalid (a
+    /// length, a weight, a uniform outside [0, 1)).
+    #[error("{name}: {rule}")]
+    ParticleInput {
+        /// The argument (`"weights"`, `"uniforms"`, `"particles"`, …).
+        name: &'static str,
+        /// The rule broken, with the offending value.
+        rule: String,
+    },
+    /// Every particle has zero weight: the measurement at step `step` is impossible under
+    /// every particle (all log-weights −∞), or no particle of the smoother's step can reach
+    /// the state drawn at the next one.
+    #[error("step {step}: {what} is zero for every particle")]
+    ParticleCollapse {
+        /// The step index k.
+        step: usize,
+        /// What vanished (`"the likelihood"`, `"the look-ahead likelihood"`, `"the transition density"`).
+        what: &'static str,
+    },
+    /// The algorithm asked for needs a function the particle model does not provide.
+    #[error("{algorithm} needs the model's {function}, which it does not provide")]
+    MissingFunction {
+        /// The algorithm (`"the auxiliary particle filter"`, `"FFBSi"`).
+        algorithm: &'static str,
+        /// The trait method (`"lookahead"`, `"log_transition_density"`).
+        function: &'static str,
+    },
 }

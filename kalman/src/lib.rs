@@ -41,6 +41,8 @@
 //! - [`schedule`]: the Monte Carlo mode — the data-independent gain sequence computed once
 //!   ([`schedule::GainSchedule`]) and many measurement streams run at the cost of the state
 //!   update alone; also the fixed-gain filter.
+//! - `particle` (feature `particle`): bootstrap and auxiliary particle filters over any
+//!   transition and likelihood, four resampling schemes, the FFBSi particle smoother.
 //! - [`prelude`]: `use kalman::prelude::*;` gives a program the model, the filter, the
 //!   Riccati solvers and, with the feature `nalgebra`, `ToNalgebra` and the nalgebra types and
 //!   macros of the version this crate is built against.
@@ -153,6 +155,7 @@ assert_eq!(k.shape(), (2, 1));
 //! | `argmin` | maximum-likelihood fitting by L-BFGS and Nelder–Mead ([`fit`]) |
 //! | `proptest` | `kalman::strategies`: random consistent filter problems for property tests |
 //! | `parallel` | Rayon in faer's products above [`PARALLEL_THRESHOLD`] |
+//! | `particle` | bootstrap and auxiliary particle filters, resampling, the FFBSi smoother (`kalman::particle`) |
 #![deny(missing_docs)]
 // Links to the items of feature `nalgebra` resolve in the all-features build (docs.rs, CI),
 // which checks every link; without the feature they have no target.
@@ -173,6 +176,8 @@ pub mod imm;
 mod kernels;
 mod model;
 pub mod nonlinear;
+#[cfg(feature = "particle")]
+pub mod particle;
 pub mod prelude;
 pub mod riccati;
 pub mod sampling;

@@ -67,3 +67,10 @@ mod imm {
     pub mod manoeuvre;
     pub mod smoother;
 }
+
+mod particle {
+    pub mod common;
+    pub mod determinism;
+    pub mod linear;
+    pub mod resampling;
+}
