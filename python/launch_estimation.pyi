@@ -194,6 +194,113 @@ class ExtendedKalmanFilter(KalmanFilter):
         """FilterPy's one-call step: H at the current x, the prediction, then the update
         with that H and y = z - Hx(x_pred); x_prior, P_prior hold the state before the
         prediction, as in FilterPy."""
+class _SigmaPoints:
+    """The attributes (n, the rule's parameters, sqrt, subtract, Wm, Wc) live in the
+    instance ``__dict__``, as FilterPy's. ``sqrt`` is None for the built-in Cholesky factor
+    (upper triangular, as SciPy's ``cholesky``)."""
+    n: int
+    Wm: Array
+    Wc: Array
+    sqrt: Optional[Callable[[Array], Any]]
+    subtract: Callable[[Any, Any], Any]
+    def num_sigmas(self) -> int: ...
+    def sigma_points(self, x: Any, P: Any) -> Array:
+        """The (num_sigmas, n) sigma points of mean x and covariance P (a scalar: P I)."""
+    def _compute_weights(self) -> None: ...
+
+class MerweScaledSigmaPoints(_SigmaPoints):
+    """FilterPy's Van der Merwe scaled sigma points (2n + 1)."""
+    alpha: float
+    beta: float
+    kappa: float
+    def __init__(self, n: int, alpha: float, beta: float, kappa: float,
+                 sqrt_method: Optional[Callable[[Array], Any]] = None,
+                 subtract: Optional[Callable[[Any, Any], Any]] = None) -> None: ...
+
+class JulierSigmaPoints(_SigmaPoints):
+    """FilterPy's Julier and Uhlmann sigma points (2n + 1)."""
+    kappa: float
+    def __init__(self, n: int, kappa: float = 0.0,
+                 sqrt_method: Optional[Callable[[Array], Any]] = None,
+                 subtract: Optional[Callable[[Any, Any], Any]] = None) -> None: ...
+
+class SimplexSigmaPoints(_SigmaPoints):
+    """FilterPy's simplex sigma points (n + 1); alpha is kept and, as in FilterPy, unused."""
+    alpha: float
+    def __init__(self, n: int, alpha: float = 1,
+                 sqrt_method: Optional[Callable[[Array], Any]] = None,
+                 subtract: Optional[Callable[[Any, Any], Any]] = None) -> None: ...
+
+class UnscentedKalmanFilter:
+    """FilterPy 2.0.0's ``UnscentedKalmanFilter``; the attributes live in the instance
+    ``__dict__`` (so assignment, in-place edits, copies, pickles and ``Saver`` behave as with
+    FilterPy) and each method runs its arithmetic and loops in Rust. ``vectorized=True``
+    calls fx(sigmas, dt, **fx_args) and hx(sigmas, **hx_args) once with all sigma points as
+    the rows of a (num_sigmas, dim) array (returning (num_sigmas, dim_x) and (num_sigmas,
+    dim_z), or (num_sigmas,) when dim_z = 1), and the residual functions with such rows and
+    the mean. A failed or interrupted call leaves the filter as it was; an exception raised
+    by a callable propagates unchanged."""
+    x: Array
+    P: Array
+    Q: Any
+    R: Any
+    K: Array
+    y: Array
+    S: Array
+    SI: Array
+    z: Array
+    x_prior: Array
+    P_prior: Array
+    x_post: Array
+    P_post: Array
+    sigmas_f: Array
+    sigmas_h: Array
+    Wm: Array
+    Wc: Array
+    points_fn: Any
+    fx: Callable[..., Any]
+    hx: Callable[..., Any]
+    x_mean: Optional[Callable[[Array, Array], Any]]
+    z_mean: Optional[Callable[[Array, Array], Any]]
+    residual_x: Callable[[Any, Any], Any]
+    residual_z: Callable[[Any, Any], Any]
+    state_add: Callable[[Any, Any], Any]
+    msqrt: Optional[Callable[[Array], Any]]
+    vectorized: bool
+    def __init__(
+        self, dim_x: int, dim_z: int, dt: Any, hx: Callable[..., Any], fx: Callable[..., Any],
+        points: Any, sqrt_fn: Optional[Callable[[Array], Any]] = None,
+        x_mean_fn: Optional[Callable[[Array, Array], Any]] = None,
+        z_mean_fn: Optional[Callable[[Array, Array], Any]] = None,
+        residual_x: Optional[Callable[[Any, Any], Any]] = None,
+        residual_z: Optional[Callable[[Any, Any], Any]] = None,
+        state_add: Optional[Callable[[Any, Any], Any]] = None, vectorized: bool = False,
+    ) -> None: ...
+    @property
+    def log_likelihood(self) -> float: ...
+    @property
+    def likelihood(self) -> float: ...
+    @property
+    def mahalanobis(self) -> float: ...
+    def predict(self, dt: Any = None, UT: Optional[Callable[..., Any]] = None,
+                fx: Optional[Callable[..., Any]] = None, **fx_args: Any) -> None:
+        """Sigma points at (x, P), fx over them, their unscented transform with Q; sigmas_f
+        then holds the points redrawn at the prior (FilterPy 2.0.0)."""
+    def update(self, z: Any, R: Any = None, UT: Optional[Callable[..., Any]] = None,
+               hx: Optional[Callable[..., Any]] = None, **hx_args: Any) -> None:
+        """hx over sigmas_f, the transform with R (a scalar r: r I), K = Pxz S^-1 (solved),
+        x = state_add(x, K y), P = P - K S K^T. z = None skips."""
+    def compute_process_sigmas(self, dt: Any, fx: Optional[Callable[..., Any]] = None,
+                               **fx_args: Any) -> None: ...
+    def cross_variance(self, x: Any, z: Any, sigmas_f: Any, sigmas_h: Any) -> Array: ...
+    def batch_filter(self, zs: Any, Rs: Any = None, dts: Any = None,
+                     UT: Optional[Callable[..., Any]] = None,
+                     saver: Any = None) -> tuple[Array, Array]:
+        """(means, covariances) of predict + update per z (None: no update), in Rust."""
+    def rts_smoother(self, Xs: Any, Ps: Any, Qs: Any = None, dts: Any = None,
+                     UT: Optional[Callable[..., Any]] = None) -> tuple[Array, Array, Array]:
+        """(xs, ps, Ks): the unscented RTS smoother; Qs[k] (default Q) is used at step k."""
+
 FilterResult = dict[str, Array]
 # filter/smooth and their continuous forms: the arrays below, plus, when a gate is given,
 # "rejected": a dict of 1-d arrays "step" and "channel" (int64: the row of zs and the

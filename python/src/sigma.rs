@@ -33,22 +33,35 @@ pub(crate) fn dict_of<'py>(obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDic
         .cast_into::<PyDict>()?)
 }
 
-/// `d[key]`, or an `AttributeError` naming it.
-pub(crate) fn item<'py>(d: &Bound<'py, PyDict>, key: &str) -> PyResult<Bound<'py, PyAny>> {
+/// `d[key]`, or an `AttributeError` naming it (keys are interned strings on hot paths).
+pub(crate) fn item<'py, K>(d: &Bound<'py, PyDict>, key: K) -> PyResult<Bound<'py, PyAny>>
+where
+    K: IntoPyObject<'py> + std::fmt::Display + Copy,
+{
     d.get_item(key)?.ok_or_else(|| {
         pyo3::exceptions::PyAttributeError::new_err(format!("the attribute {key} was deleted"))
     })
 }
 
 /// A real number attribute.
-fn number(d: &Bound<'_, PyDict>, key: &str) -> PyResult<f64> {
+fn number<'py, K>(d: &Bound<'py, PyDict>, key: K) -> PyResult<f64>
+where
+    K: IntoPyObject<'py> + std::fmt::Display + Copy,
+{
     let v = item(d, key)?;
     scalar(&v).ok_or_else(|| type_error(format!("{key} must be a real number")))
 }
 
 /// `numpy.subtract` (the default `subtract`/residual; the Rust paths are taken for it).
 pub(crate) fn np_attr<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
-    py.import("numpy")?.getattr(name)
+    numpy(py)?.getattr(name)
+}
+
+/// The `numpy` module, imported once (an import per call costs microseconds).
+pub(crate) fn numpy(py: Python<'_>) -> PyResult<&Bound<'_, pyo3::types::PyModule>> {
+    static NP: pyo3::sync::PyOnceLock<Py<pyo3::types::PyModule>> = pyo3::sync::PyOnceLock::new();
+    NP.get_or_try_init(py, || py.import("numpy").map(Bound::unbind))
+        .map(|m| m.bind(py))
 }
 
 /// The dimension n: a positive integer (NumPy integers too).
@@ -74,8 +87,11 @@ fn weights(rule: Rule, n: usize, d: &Bound<'_, PyDict>) -> PyResult<(Vec<f64>, V
     let mut wc = zeros(count, "Wc")?;
     match rule {
         Rule::Merwe => {
-            let (alpha, beta, kappa) =
-                (number(d, "alpha")?, number(d, "beta")?, number(d, "kappa")?);
+            let (alpha, beta, kappa) = (
+                number(d, pyo3::intern!(d.py(), "alpha"))?,
+                number(d, pyo3::intern!(d.py(), "beta"))?,
+                number(d, pyo3::intern!(d.py(), "kappa"))?,
+            );
             let lambda = alpha * alpha * (nf + kappa) - nf;
             let c = 0.5 / (nf + lambda);
             wm.fill(c);
@@ -84,7 +100,7 @@ fn weights(rule: Rule, n: usize, d: &Bound<'_, PyDict>) -> PyResult<(Vec<f64>, V
             wc[0] = lambda / (nf + lambda) + (1.0 - alpha * alpha + beta);
         }
         Rule::Julier => {
-            let kappa = number(d, "kappa")?;
+            let kappa = number(d, pyo3::intern!(d.py(), "kappa"))?;
             wm.fill(0.5 / (nf + kappa));
             wm[0] = kappa / (nf + kappa);
             wc.copy_from_slice(&wm);
@@ -99,14 +115,14 @@ fn weights(rule: Rule, n: usize, d: &Bound<'_, PyDict>) -> PyResult<(Vec<f64>, V
 
 /// Sets `Wm` and `Wc` in `d` (Julier and simplex: one array for both, as FilterPy).
 fn compute_weights(py: Python<'_>, rule: Rule, d: &Bound<'_, PyDict>) -> PyResult<()> {
-    let n = dimension(&item(d, "n")?)?;
+    let n = dimension(&item(d, pyo3::intern!(d.py(), "n"))?)?;
     let (wm, wc) = weights(rule, n, d)?;
     let wm = PyArray1::from_vec(py, wm);
-    d.set_item("Wm", &wm)?;
+    d.set_item(pyo3::intern!(d.py(), "Wm"), &wm)?;
     if rule == Rule::Merwe {
-        d.set_item("Wc", PyArray1::from_vec(py, wc))?;
+        d.set_item(pyo3::intern!(d.py(), "Wc"), PyArray1::from_vec(py, wc))?;
     } else {
-        d.set_item("Wc", &wm)?;
+        d.set_item(pyo3::intern!(d.py(), "Wc"), &wm)?;
     }
     Ok(())
 }
@@ -122,19 +138,22 @@ fn init(
     subtract: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<()> {
     dimension(n)?;
-    d.set_item("n", n)?;
+    d.set_item(pyo3::intern!(d.py(), "n"), n)?;
     for (k, v) in params {
         if scalar(v).is_none() {
             return Err(type_error(format!("{k} must be a real number")));
         }
         d.set_item(*k, v)?;
     }
-    d.set_item("sqrt", sqrt_method.filter(|s| !s.is_none()))?;
+    d.set_item(
+        pyo3::intern!(d.py(), "sqrt"),
+        sqrt_method.filter(|s| !s.is_none()),
+    )?;
     let subtract = match subtract.filter(|s| !s.is_none()) {
         Some(s) => s.clone(),
         None => np_attr(py, "subtract")?,
     };
-    d.set_item("subtract", subtract)?;
+    d.set_item(pyo3::intern!(d.py(), "subtract"), subtract)?;
     compute_weights(py, rule, d)
 }
 
@@ -221,16 +240,19 @@ pub(crate) fn draw(
     P: &[f64],
 ) -> PyResult<Vec<f64>> {
     let n = x.len();
-    let sqrt = item(d, "sqrt")?;
+    let sqrt = item(d, pyo3::intern!(d.py(), "sqrt"))?;
     let sqrt = (!sqrt.is_none()).then_some(sqrt);
-    let subtract = item(d, "subtract")?;
+    let subtract = item(d, pyo3::intern!(d.py(), "subtract"))?;
     let plain = subtract.is(&np_attr(py, "subtract")?);
     let c = match rule {
         Rule::Merwe => {
-            let (alpha, kappa) = (number(d, "alpha")?, number(d, "kappa")?);
+            let (alpha, kappa) = (
+                number(d, pyo3::intern!(d.py(), "alpha"))?,
+                number(d, pyo3::intern!(d.py(), "kappa"))?,
+            );
             alpha * alpha * (n as f64 + kappa)
         }
-        Rule::Julier => n as f64 + number(d, "kappa")?,
+        Rule::Julier => n as f64 + number(d, pyo3::intern!(d.py(), "kappa"))?,
         Rule::Simplex => 1.0,
     };
     let scaled: Vec<f64> = P.iter().map(|v| c * v).collect();
@@ -318,20 +340,14 @@ pub(crate) fn draw(
 /// Reads `sigma_points`' (x, P): x of n entries (a scalar when n = 1), P an n×n matrix or
 /// a scalar s meaning s·I.
 fn read_xp(n: usize, x: &Bound<'_, PyAny>, P: &Bound<'_, PyAny>) -> PyResult<(Vec<f64>, Vec<f64>)> {
-    let size: usize = x
-        .py()
-        .import("numpy")?
-        .call_method1("size", (x,))?
-        .extract()?;
+    let size: usize = numpy(x.py())?.call_method1("size", (x,))?.extract()?;
     if size != n {
         return Err(value_error(format!(
             "expected size(x) {n}, but size is {size}"
         )));
     }
     let mut xv = zeros(n, "x")?;
-    let flat = x
-        .py()
-        .import("numpy")?
+    let flat = numpy(x.py())?
         .call_method1("asarray", (x, "float64"))?
         .call_method0("ravel")?;
     read_vector(&flat, "x", n, true, false, &mut xv)?;
@@ -339,7 +355,7 @@ fn read_xp(n: usize, x: &Bound<'_, PyAny>, P: &Bound<'_, PyAny>) -> PyResult<(Ve
     let P2 = if scalar(P).is_some() {
         P.clone()
     } else {
-        P.py().import("numpy")?.call_method1("atleast_2d", (P,))?
+        numpy(P.py())?.call_method1("atleast_2d", (P,))?
     };
     read_matrix(&P2, "P", n, n, true, &mut Pv)?;
     Ok((xv, Pv))
@@ -354,7 +370,7 @@ fn sigma_points_of<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let py = slf.py();
     let d = dict_of(slf)?;
-    let n = dimension(&item(&d, "n")?)?;
+    let n = dimension(&item(&d, pyo3::intern!(d.py(), "n"))?)?;
     let (xv, Pv) = read_xp(n, x, P)?;
     let pts = draw(py, rule, &d, &xv, &Pv)?;
     let count = pts.len() / n;

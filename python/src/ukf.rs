@@ -42,14 +42,21 @@ fn np_call<'py>(
     f: &str,
     args: impl pyo3::call::PyCallArgs<'py>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    py.import("numpy")?.getattr(f)?.call1(args)
+    crate::sigma::numpy(py)?.getattr(f)?.call1(args)
 }
 
 /// The filter's x (n) and P (n × n), read from the dict.
 pub(crate) fn state(c: &Ctx<'_>) -> PyResult<(Vec<f64>, Vec<f64>)> {
     let mut x = zeros(c.n, "x")?;
-    crate::convert::read_vector(&item(&c.d, "x")?, "x", c.n, true, false, &mut x)?;
-    let P = read_mat(&item(&c.d, "P")?, "P", c.n, c.n)?;
+    crate::convert::read_vector(
+        &item(&c.d, pyo3::intern!(c.d.py(), "x"))?,
+        "x",
+        c.n,
+        true,
+        false,
+        &mut x,
+    )?;
+    let P = read_mat(&item(&c.d, pyo3::intern!(c.d.py(), "P"))?, "P", c.n, c.n)?;
     Ok((x, P))
 }
 
@@ -61,11 +68,17 @@ fn kw<'a, 'py>(k: Option<&'a Bound<'py, PyDict>>) -> Option<&'a Bound<'py, PyDic
 /// Writes a prediction into the dict.
 pub(crate) fn write_predicted(c: &Ctx<'_>, p: &crate::ukf_core::Predicted) -> PyResult<()> {
     let (py, n) = (c.py, c.n);
-    c.d.set_item("x", arr1(py, &p.x))?;
-    c.d.set_item("P", arr2(py, p.P.clone(), n, n)?)?;
-    c.d.set_item("sigmas_f", arr2(py, p.sigmas_f.clone(), c.N, n)?)?;
-    c.d.set_item("x_prior", arr1(py, &p.x))?;
-    c.d.set_item("P_prior", arr2(py, p.P.clone(), n, n)?)?;
+    c.d.set_item(pyo3::intern!(c.d.py(), "x"), arr1(py, &p.x))?;
+    c.d.set_item(pyo3::intern!(c.d.py(), "P"), arr2(py, p.P.clone(), n, n)?)?;
+    c.d.set_item(
+        pyo3::intern!(c.d.py(), "sigmas_f"),
+        arr2(py, p.sigmas_f.clone(), c.N, n)?,
+    )?;
+    c.d.set_item(pyo3::intern!(c.d.py(), "x_prior"), arr1(py, &p.x))?;
+    c.d.set_item(
+        pyo3::intern!(c.d.py(), "P_prior"),
+        arr2(py, p.P.clone(), n, n)?,
+    )?;
     Ok(())
 }
 
@@ -73,16 +86,22 @@ pub(crate) fn write_predicted(c: &Ctx<'_>, p: &crate::ukf_core::Predicted) -> Py
 pub(crate) fn write_updated(c: &Ctx<'_>, u: &crate::ukf_core::Updated) -> PyResult<()> {
     let (py, n, m) = (c.py, c.n, c.m);
     let d = &c.d;
-    d.set_item("sigmas_h", arr2(py, u.sigmas_h.clone(), c.N, m)?)?;
-    d.set_item("S", arr2(py, u.S.clone(), m, m)?)?;
-    d.set_item("SI", arr2(py, u.SI.clone(), m, m)?)?;
-    d.set_item("K", arr2(py, u.K.clone(), n, m)?)?;
-    d.set_item("y", arr1(py, &u.y))?;
-    d.set_item("x", arr1(py, &u.x))?;
-    d.set_item("P", arr2(py, u.P.clone(), n, n)?)?;
-    d.set_item("z", arr1(py, &u.z))?;
-    d.set_item("x_post", arr1(py, &u.x))?;
-    d.set_item("P_post", arr2(py, u.P.clone(), n, n)?)?;
+    d.set_item(
+        pyo3::intern!(d.py(), "sigmas_h"),
+        arr2(py, u.sigmas_h.clone(), c.N, m)?,
+    )?;
+    d.set_item(pyo3::intern!(d.py(), "S"), arr2(py, u.S.clone(), m, m)?)?;
+    d.set_item(pyo3::intern!(d.py(), "SI"), arr2(py, u.SI.clone(), m, m)?)?;
+    d.set_item(pyo3::intern!(d.py(), "K"), arr2(py, u.K.clone(), n, m)?)?;
+    d.set_item(pyo3::intern!(d.py(), "y"), arr1(py, &u.y))?;
+    d.set_item(pyo3::intern!(d.py(), "x"), arr1(py, &u.x))?;
+    d.set_item(pyo3::intern!(d.py(), "P"), arr2(py, u.P.clone(), n, n)?)?;
+    d.set_item(pyo3::intern!(d.py(), "z"), arr1(py, &u.z))?;
+    d.set_item(pyo3::intern!(d.py(), "x_post"), arr1(py, &u.x))?;
+    d.set_item(
+        pyo3::intern!(d.py(), "P_post"),
+        arr2(py, u.P.clone(), n, n)?,
+    )?;
     for k in ["_log_likelihood", "_likelihood", "_mahalanobis"] {
         d.set_item(k, py.None())?;
     }
@@ -110,7 +129,7 @@ pub(crate) fn update_noise<'py>(
             eye.call_method1("__mul__", (r,))?
         }
         Some(r) => r.clone(),
-        None => item(&c.d, "R")?,
+        None => item(&c.d, pyo3::intern!(c.d.py(), "R"))?,
     };
     Ok((read_noise(&obj, "R", m)?, obj))
 }
@@ -179,40 +198,52 @@ impl UnscentedKalmanFilter {
                 }
             };
             let zeros_of = |shape: (usize, usize)| np_call(py, "zeros", (shape,));
-            d.set_item("x", np_call(py, "zeros", (n,))?)?;
-            d.set_item("P", np_call(py, "eye", (n,))?)?;
-            d.set_item("x_prior", np_call(py, "zeros", (n,))?)?;
-            d.set_item("P_prior", np_call(py, "eye", (n,))?)?;
-            d.set_item("Q", np_call(py, "eye", (n,))?)?;
-            d.set_item("R", np_call(py, "eye", (m,))?)?;
-            d.set_item("_dim_x", n)?;
-            d.set_item("_dim_z", m)?;
-            d.set_item("points_fn", points)?;
-            d.set_item("_dt", dt)?;
-            d.set_item("_num_sigmas", N)?;
-            d.set_item("hx", hx)?;
-            d.set_item("fx", fx)?;
-            d.set_item("x_mean", or(x_mean_fn, "")?)?;
-            d.set_item("z_mean", or(z_mean_fn, "")?)?;
-            d.set_item("_log_likelihood", f64::MIN_POSITIVE.ln())?;
-            d.set_item("_likelihood", f64::MIN_POSITIVE)?;
-            d.set_item("_mahalanobis", &none)?;
-            d.set_item("msqrt", or(sqrt_fn, "")?)?;
-            d.set_item("Wm", points.getattr("Wm")?)?;
-            d.set_item("Wc", points.getattr("Wc")?)?;
-            d.set_item("residual_x", or(residual_x, "subtract")?)?;
-            d.set_item("residual_z", or(residual_z, "subtract")?)?;
-            d.set_item("state_add", or(state_add, "add")?)?;
-            d.set_item("sigmas_f", zeros_of((N, n))?)?;
-            d.set_item("sigmas_h", zeros_of((N, m))?)?;
-            d.set_item("K", zeros_of((n, m))?)?;
-            d.set_item("y", np_call(py, "zeros", (m,))?)?;
+            d.set_item(pyo3::intern!(d.py(), "x"), np_call(py, "zeros", (n,))?)?;
+            d.set_item(pyo3::intern!(d.py(), "P"), np_call(py, "eye", (n,))?)?;
+            d.set_item(
+                pyo3::intern!(d.py(), "x_prior"),
+                np_call(py, "zeros", (n,))?,
+            )?;
+            d.set_item(pyo3::intern!(d.py(), "P_prior"), np_call(py, "eye", (n,))?)?;
+            d.set_item(pyo3::intern!(d.py(), "Q"), np_call(py, "eye", (n,))?)?;
+            d.set_item(pyo3::intern!(d.py(), "R"), np_call(py, "eye", (m,))?)?;
+            d.set_item(pyo3::intern!(d.py(), "_dim_x"), n)?;
+            d.set_item(pyo3::intern!(d.py(), "_dim_z"), m)?;
+            d.set_item(pyo3::intern!(d.py(), "points_fn"), points)?;
+            d.set_item(pyo3::intern!(d.py(), "_dt"), dt)?;
+            d.set_item(pyo3::intern!(d.py(), "_num_sigmas"), N)?;
+            d.set_item(pyo3::intern!(d.py(), "hx"), hx)?;
+            d.set_item(pyo3::intern!(d.py(), "fx"), fx)?;
+            d.set_item(pyo3::intern!(d.py(), "x_mean"), or(x_mean_fn, "")?)?;
+            d.set_item(pyo3::intern!(d.py(), "z_mean"), or(z_mean_fn, "")?)?;
+            d.set_item(
+                pyo3::intern!(d.py(), "_log_likelihood"),
+                f64::MIN_POSITIVE.ln(),
+            )?;
+            d.set_item(pyo3::intern!(d.py(), "_likelihood"), f64::MIN_POSITIVE)?;
+            d.set_item(pyo3::intern!(d.py(), "_mahalanobis"), &none)?;
+            d.set_item(pyo3::intern!(d.py(), "msqrt"), or(sqrt_fn, "")?)?;
+            d.set_item(pyo3::intern!(d.py(), "Wm"), points.getattr("Wm")?)?;
+            d.set_item(pyo3::intern!(d.py(), "Wc"), points.getattr("Wc")?)?;
+            d.set_item(
+                pyo3::intern!(d.py(), "residual_x"),
+                or(residual_x, "subtract")?,
+            )?;
+            d.set_item(
+                pyo3::intern!(d.py(), "residual_z"),
+                or(residual_z, "subtract")?,
+            )?;
+            d.set_item(pyo3::intern!(d.py(), "state_add"), or(state_add, "add")?)?;
+            d.set_item(pyo3::intern!(d.py(), "sigmas_f"), zeros_of((N, n))?)?;
+            d.set_item(pyo3::intern!(d.py(), "sigmas_h"), zeros_of((N, m))?)?;
+            d.set_item(pyo3::intern!(d.py(), "K"), zeros_of((n, m))?)?;
+            d.set_item(pyo3::intern!(d.py(), "y"), np_call(py, "zeros", (m,))?)?;
             write_no_update_z(py, &d, m)?;
-            d.set_item("S", zeros_of((m, m))?)?;
-            d.set_item("SI", zeros_of((m, m))?)?;
-            d.set_item("x_post", np_call(py, "zeros", (n,))?)?;
-            d.set_item("P_post", np_call(py, "eye", (n,))?)?;
-            d.set_item("vectorized", vectorized)?;
+            d.set_item(pyo3::intern!(d.py(), "S"), zeros_of((m, m))?)?;
+            d.set_item(pyo3::intern!(d.py(), "SI"), zeros_of((m, m))?)?;
+            d.set_item(pyo3::intern!(d.py(), "x_post"), np_call(py, "zeros", (n,))?)?;
+            d.set_item(pyo3::intern!(d.py(), "P_post"), np_call(py, "eye", (n,))?)?;
+            d.set_item(pyo3::intern!(d.py(), "vectorized"), vectorized)?;
             Ok(())
         })
     }
@@ -231,15 +262,15 @@ impl UnscentedKalmanFilter {
         guard(|| {
             let c = Ctx::new(slf.as_any(), UT)?;
             let (x, P) = state(&c)?;
-            let Qo = item(&c.d, "Q")?;
+            let Qo = item(&c.d, pyo3::intern!(c.d.py(), "Q"))?;
             let Q = read_noise(&Qo, "Q", c.n)?;
             let dt = match dt.filter(|v| !v.is_none()) {
                 Some(v) => v.clone(),
-                None => item(&c.d, "_dt")?,
+                None => item(&c.d, pyo3::intern!(c.d.py(), "_dt"))?,
             };
             let fx = match fx.filter(|v| !v.is_none()) {
                 Some(f) => f.clone(),
-                None => item(&c.d, "fx")?,
+                None => item(&c.d, pyo3::intern!(c.d.py(), "fx"))?,
             };
             let p = crate::ukf_core::predict(&c, &x, &P, (&Q, &Qo), &fx, &dt, kw(fx_args))?;
             write_predicted(&c, &p)
@@ -265,11 +296,16 @@ impl UnscentedKalmanFilter {
                 return write_no_update(&c);
             }
             let (x, P) = state(&c)?;
-            let sf = read_mat(&item(&c.d, "sigmas_f")?, "sigmas_f", c.N, c.n)?;
+            let sf = read_mat(
+                &item(&c.d, pyo3::intern!(c.d.py(), "sigmas_f"))?,
+                "sigmas_f",
+                c.N,
+                c.n,
+            )?;
             let (Rv, Ro) = update_noise(&c, R)?;
             let hx = match hx.filter(|v| !v.is_none()) {
                 Some(f) => f.clone(),
-                None => item(&c.d, "hx")?,
+                None => item(&c.d, pyo3::intern!(c.d.py(), "hx"))?,
             };
             let zv = read_z(z, c.m)?;
             let u = crate::ukf_core::update(&c, &x, &P, &sf, zv, (&Rv, &Ro), &hx, kw(hx_args))?;
@@ -291,7 +327,7 @@ impl UnscentedKalmanFilter {
             let (x, P) = state(&c)?;
             let fx = match fx.filter(|v| !v.is_none()) {
                 Some(f) => f.clone(),
-                None => item(&c.d, "fx")?,
+                None => item(&c.d, pyo3::intern!(c.d.py(), "fx"))?,
             };
             let sig = c.sigmas(&x, &P)?;
             let sf = c.apply(
@@ -303,7 +339,10 @@ impl UnscentedKalmanFilter {
                 std::slice::from_ref(dt),
                 kw(fx_args),
             )?;
-            c.d.set_item("sigmas_f", arr2(c.py, sf, c.N, c.n)?)
+            c.d.set_item(
+                pyo3::intern!(c.d.py(), "sigmas_f"),
+                arr2(c.py, sf, c.N, c.n)?,
+            )
         })
     }
 
@@ -372,13 +411,23 @@ impl UnscentedKalmanFilter {
     fn log_likelihood(slf: &Bound<'_, Self>) -> PyResult<f64> {
         guard(|| {
             let d = dict_of(slf.as_any())?;
-            if let Some(v) = d.get_item("_log_likelihood")?.filter(|v| !v.is_none()) {
+            if let Some(v) = d
+                .get_item(pyo3::intern!(d.py(), "_log_likelihood"))?
+                .filter(|v| !v.is_none())
+            {
                 return v.extract();
             }
-            let m: usize = item(&d, "_dim_z")?.extract()?;
+            let m: usize = item(&d, pyo3::intern!(d.py(), "_dim_z"))?.extract()?;
             let mut y = zeros(m, "y")?;
-            crate::convert::read_vector(&item(&d, "y")?, "y", m, true, false, &mut y)?;
-            let S = read_mat(&item(&d, "S")?, "S", m, m)?;
+            crate::convert::read_vector(
+                &item(&d, pyo3::intern!(d.py(), "y"))?,
+                "y",
+                m,
+                true,
+                false,
+                &mut y,
+            )?;
+            let S = read_mat(&item(&d, pyo3::intern!(d.py(), "S"))?, "S", m, m)?;
             let mut f = Factor::try_new(m).ok_or_else(|| memory_error(m * m, "S"))?;
             let ll = if f.factor(&S, m) {
                 let mut work = zeros(m, "y")?;
@@ -387,7 +436,7 @@ impl UnscentedKalmanFilter {
             } else {
                 f64::NEG_INFINITY
             };
-            d.set_item("_log_likelihood", ll)?;
+            d.set_item(pyo3::intern!(d.py(), "_log_likelihood"), ll)?;
             Ok(ll)
         })
     }
@@ -396,12 +445,15 @@ impl UnscentedKalmanFilter {
     #[getter]
     fn likelihood(slf: &Bound<'_, Self>) -> PyResult<f64> {
         let d = guard(|| dict_of(slf.as_any()))?;
-        if let Some(v) = d.get_item("_likelihood")?.filter(|v| !v.is_none()) {
+        if let Some(v) = d
+            .get_item(pyo3::intern!(d.py(), "_likelihood"))?
+            .filter(|v| !v.is_none())
+        {
             return v.extract();
         }
         let l = Self::log_likelihood(slf)?.exp();
         let l = if l > 0.0 { l } else { f64::MIN_POSITIVE };
-        d.set_item("_likelihood", l)?;
+        d.set_item(pyo3::intern!(d.py(), "_likelihood"), l)?;
         Ok(l)
     }
 
@@ -410,18 +462,28 @@ impl UnscentedKalmanFilter {
     fn mahalanobis(slf: &Bound<'_, Self>) -> PyResult<f64> {
         guard(|| {
             let d = dict_of(slf.as_any())?;
-            if let Some(v) = d.get_item("_mahalanobis")?.filter(|v| !v.is_none()) {
+            if let Some(v) = d
+                .get_item(pyo3::intern!(d.py(), "_mahalanobis"))?
+                .filter(|v| !v.is_none())
+            {
                 return v.extract();
             }
-            let m: usize = item(&d, "_dim_z")?.extract()?;
+            let m: usize = item(&d, pyo3::intern!(d.py(), "_dim_z"))?.extract()?;
             let mut y = zeros(m, "y")?;
-            crate::convert::read_vector(&item(&d, "y")?, "y", m, true, false, &mut y)?;
-            let SI = read_mat(&item(&d, "SI")?, "SI", m, m)?;
+            crate::convert::read_vector(
+                &item(&d, pyo3::intern!(d.py(), "y"))?,
+                "y",
+                m,
+                true,
+                false,
+                &mut y,
+            )?;
+            let SI = read_mat(&item(&d, pyo3::intern!(d.py(), "SI"))?, "SI", m, m)?;
             let q: f64 = (0..m)
                 .map(|i| y[i] * (0..m).map(|j| SI[i * m + j] * y[j]).sum::<f64>())
                 .sum();
             let v = q.sqrt();
-            d.set_item("_mahalanobis", v)?;
+            d.set_item(pyo3::intern!(d.py(), "_mahalanobis"), v)?;
             Ok(v)
         })
     }
@@ -480,5 +542,5 @@ impl UnscentedKalmanFilter {
 fn write_no_update_z(py: Python<'_>, d: &Bound<'_, PyDict>, m: usize) -> PyResult<()> {
     let nones = PyList::new(py, (0..m).map(|_| py.None()).collect::<Vec<_>>())?;
     let z = np_call(py, "array", (PyList::new(py, [nones])?,))?.getattr("T")?;
-    d.set_item("z", z)
+    d.set_item(pyo3::intern!(d.py(), "z"), z)
 }

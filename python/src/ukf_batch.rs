@@ -51,7 +51,7 @@ pub(crate) fn batch_filter<'py>(
     check_len(Rs, "Rs", steps)?;
     check_len(dts, "dts", steps)?;
     let saver = saver.filter(|s| !s.is_none());
-    let column = item(&c.d, "x")?
+    let column = item(&c.d, pyo3::intern!(c.d.py(), "x"))?
         .getattr("ndim")
         .and_then(|v| v.extract::<usize>())
         .unwrap_or(1)
@@ -59,14 +59,18 @@ pub(crate) fn batch_filter<'py>(
     let mut means = zeros(entries(steps, n, "the means")?, "the means")?;
     let mut covs = zeros(entries(steps, n * n, "the covariances")?, "the covariances")?;
     let (mut x, mut P) = state(c)?;
-    let Qo = item(&c.d, "Q")?;
+    let Qo = item(&c.d, pyo3::intern!(c.d.py(), "Q"))?;
     let Q = read_noise(&Qo, "Q", n)?;
     let own_R = if Rs.is_none_or(|r| r.is_none()) {
         Some(update_noise(c, None)?)
     } else {
         None
     };
-    let (fx, hx, dt0) = (item(&c.d, "fx")?, item(&c.d, "hx")?, item(&c.d, "_dt")?);
+    let (fx, hx, dt0) = (
+        item(&c.d, pyo3::intern!(c.d.py(), "fx"))?,
+        item(&c.d, pyo3::intern!(c.d.py(), "hx"))?,
+        item(&c.d, pyo3::intern!(c.d.py(), "_dt"))?,
+    );
     let mut last_p: Option<Predicted> = None;
     let mut last_u: Option<Updated> = None;
     let mut updated_last = false;
@@ -137,7 +141,7 @@ fn read_stack(
     Ps: &Bound<'_, PyAny>,
 ) -> PyResult<(usize, Vec<f64>, Vec<f64>)> {
     let n = c.n;
-    let np = c.py.import("numpy")?;
+    let np = crate::sigma::numpy(c.py)?;
     let xa = np
         .call_method1("asarray", (Xs, "float64"))
         .map_err(|_| type_error("Xs must be an array of real numbers"))?;
@@ -186,7 +190,7 @@ pub(crate) fn rts_smoother<'py>(
     let xs0 = xs.clone();
     let dts = dts.filter(|d| !d.is_none());
     let dt_all = match dts {
-        None => Some(item(&c.d, "_dt")?),
+        None => Some(item(&c.d, pyo3::intern!(c.d.py(), "_dt"))?),
         Some(d) if scalar(d).is_some() => Some(d.clone()),
         Some(_) => None,
     };
@@ -194,9 +198,9 @@ pub(crate) fn rts_smoother<'py>(
         check_len(dts, "dts", N)?;
     }
     check_len(Qs, "Qs", N)?;
-    let Qo = item(&c.d, "Q")?;
+    let Qo = item(&c.d, pyo3::intern!(c.d.py(), "Q"))?;
     let own_Q = read_noise(&Qo, "Q", n)?;
-    let fx = item(&c.d, "fx")?;
+    let fx = item(&c.d, pyo3::intern!(c.d.py(), "fx"))?;
     let mut Ks = zeros(entries(N, n * n, "Ks")?, "Ks")?;
     let mut f = Factor::try_new(n).ok_or_else(|| crate::convert::memory_error(n * n, "Pb"))?;
     for k in (0..N.saturating_sub(1)).rev() {

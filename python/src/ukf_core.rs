@@ -56,14 +56,25 @@ pub(crate) fn read_mat(
     rows: usize,
     cols: usize,
 ) -> PyResult<Vec<f64>> {
-    let np = obj.py().import("numpy")?;
+    let mut out = zeros(entries(rows, cols, name)?, name)?;
+    if exact_shape(obj, &[rows, cols]) {
+        read_matrix(obj, name, rows, cols, false, &mut out)?;
+        return Ok(out);
+    }
+    let np = crate::sigma::numpy(obj.py())?;
     let a = np.call_method1("asarray", (obj, "float64")).map_err(|_| {
         crate::convert::type_error(format!("{name} must be an array of real numbers"))
     })?;
     let a = np.call_method1("atleast_2d", (a,))?;
-    let mut out = zeros(entries(rows, cols, name)?, name)?;
     read_matrix(&a, name, rows, cols, false, &mut out)?;
     Ok(out)
+}
+
+/// Whether `obj` is a real NumPy array of exactly `shape` (read without NumPy's help).
+fn exact_shape(obj: &Bound<'_, PyAny>, shape: &[usize]) -> bool {
+    use numpy::{PyArrayDescrMethods, PyUntypedArrayMethods};
+    obj.cast::<numpy::PyUntypedArray>()
+        .is_ok_and(|a| a.shape() == shape && matches!(a.dtype().kind(), b'f' | b'i' | b'u'))
 }
 
 /// `rows × cols`, or a `MemoryError` naming `name`.
@@ -74,7 +85,21 @@ fn entries(rows: usize, cols: usize, name: &str) -> PyResult<usize> {
 /// A noise covariance as FilterPy adds it (`P += noise`): broadcast to dim × dim (a scalar s
 /// adds s to every entry), then checked symmetric PSD.
 pub(crate) fn read_noise(obj: &Bound<'_, PyAny>, name: &str, dim: usize) -> PyResult<Vec<f64>> {
-    let np = obj.py().import("numpy")?;
+    if let Some(v) = scalar(obj) {
+        if !v.is_finite() {
+            return Err(value_error(format!("{name} is {v}; it must be finite")));
+        }
+        let out = crate::convert::filled(entries(dim, dim, name)?, v, name)?;
+        check_psd(name, &out, dim)?;
+        return Ok(out);
+    }
+    if exact_shape(obj, &[dim, dim]) {
+        let mut out = zeros(entries(dim, dim, name)?, name)?;
+        read_matrix(obj, name, dim, dim, false, &mut out)?;
+        check_psd(name, &out, dim)?;
+        return Ok(out);
+    }
+    let np = crate::sigma::numpy(obj.py())?;
     let a = np.call_method1("asarray", (obj, "float64")).map_err(|_| {
         crate::convert::type_error(format!("{name} must be an array of real numbers"))
     })?;
@@ -128,11 +153,14 @@ impl<'py> Ctx<'py> {
     pub(crate) fn new(slf: &Bound<'py, PyAny>, ut: Option<&Bound<'py, PyAny>>) -> PyResult<Self> {
         let py = slf.py();
         let d = dict_of(slf)?;
-        let n: usize = item(&d, "_dim_x")?.extract()?;
-        let m: usize = item(&d, "_dim_z")?.extract()?;
-        let points = item(&d, "points_fn")?;
-        let N: usize = points.call_method0("num_sigmas")?.extract()?;
-        let (wm_obj, wc_obj) = (item(&d, "Wm")?, item(&d, "Wc")?);
+        let n: usize = item(&d, pyo3::intern!(d.py(), "_dim_x"))?.extract()?;
+        let m: usize = item(&d, pyo3::intern!(d.py(), "_dim_z"))?.extract()?;
+        let points = item(&d, pyo3::intern!(d.py(), "points_fn"))?;
+        let N: usize = item(&d, pyo3::intern!(py, "_num_sigmas"))?.extract()?;
+        let (wm_obj, wc_obj) = (
+            item(&d, pyo3::intern!(d.py(), "Wm"))?,
+            item(&d, pyo3::intern!(d.py(), "Wc"))?,
+        );
         let mut wm = zeros(N, "Wm")?;
         read_vector(&wm_obj, "Wm", N, true, false, &mut wm)?;
         let mut wc = zeros(N, "Wc")?;
@@ -153,12 +181,18 @@ impl<'py> Ctx<'py> {
             wc_obj,
             rule,
             points,
-            vectorized: item(&d, "vectorized")?.is_truthy()?,
-            residual_x: custom(item(&d, "residual_x")?, &sub),
-            residual_z: custom(item(&d, "residual_z")?, &sub),
-            state_add: custom(item(&d, "state_add")?, &add),
-            x_mean: custom(item(&d, "x_mean")?, &py.None().into_bound(py)),
-            z_mean: custom(item(&d, "z_mean")?, &py.None().into_bound(py)),
+            vectorized: item(&d, pyo3::intern!(d.py(), "vectorized"))?.is_truthy()?,
+            residual_x: custom(item(&d, pyo3::intern!(d.py(), "residual_x"))?, &sub),
+            residual_z: custom(item(&d, pyo3::intern!(d.py(), "residual_z"))?, &sub),
+            state_add: custom(item(&d, pyo3::intern!(d.py(), "state_add"))?, &add),
+            x_mean: custom(
+                item(&d, pyo3::intern!(d.py(), "x_mean"))?,
+                &py.None().into_bound(py),
+            ),
+            z_mean: custom(
+                item(&d, pyo3::intern!(d.py(), "z_mean"))?,
+                &py.None().into_bound(py),
+            ),
             ut: ut.filter(|u| !u.is_none()).cloned(),
             d,
         })
@@ -209,12 +243,20 @@ impl<'py> Ctx<'py> {
         if self.vectorized {
             let r = call(arr2(py, rows.to_vec(), N, dim_in)?)?;
             let label = format!("the value of {name} (vectorised: an ({N}, {dim_out}) array)");
-            let np = py.import("numpy")?;
-            let a = np.call_method1("asarray", (&r, "float64"))?;
-            let a = if dim_out == 1 && a.getattr("ndim")?.extract::<usize>()? == 1 {
-                a.call_method1("reshape", (N, 1))?
+            if dim_out == 1 && exact_shape(&r, &[N]) {
+                read_vector(&r, &label, N, false, false, &mut out)?;
+                return Ok(out);
+            }
+            let a = if exact_shape(&r, &[N, dim_out]) {
+                r
             } else {
-                a
+                let np = crate::sigma::numpy(py)?;
+                let a = np.call_method1("asarray", (&r, "float64"))?;
+                if dim_out == 1 && a.getattr("ndim")?.extract::<usize>()? == 1 {
+                    a.call_method1("reshape", (N, 1))?
+                } else {
+                    a
+                }
             };
             read_matrix(&a, &label, N, dim_out, false, &mut out)?;
         } else {
@@ -502,7 +544,11 @@ pub(crate) fn read_z(z: &Bound<'_, PyAny>, m: usize) -> PyResult<Vec<f64>> {
         out[0] = s;
         return Ok(out);
     }
-    let np = z.py().import("numpy")?;
+    if exact_shape(z, &[m]) || exact_shape(z, &[m, 1]) {
+        read_vector(z, "z", m, true, false, &mut out)?;
+        return Ok(out);
+    }
+    let np = crate::sigma::numpy(z.py())?;
     let a = np.call_method1("asarray", (z, "float64")).map_err(|_| {
         crate::convert::type_error("z must be a number or an array of real numbers")
     })?;
