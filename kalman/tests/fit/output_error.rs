@@ -260,7 +260,7 @@ fn pendulum_monte_carlo(records: usize) -> (Vec<Vec<f64>>, Vec<usize>) {
     };
     let u = torque(STEPS, model.dt);
     let y = outputs(&model, &TRUTH, &u, 2);
-    let mut normalised = vec![Vec::with_capacity(records); 4];
+    let mut normalised: Vec<Vec<f64>> = (0..4).map(|_| Vec::with_capacity(records)).collect();
     let mut covered = vec![0; 4];
     for run in 0..records {
         let z = noisy(&y, &[0.02, 0.05], 1000 + run as u64);
@@ -392,7 +392,7 @@ fn output_error_errors_name_what_is_wrong() {
         output_error(m, dims, x0, free, z.as_ref(), u.map(|u| u.as_ref()), &o)
     };
     // Shapes of x0, z and u against the dimensions.
-    let e = fit(&ok, &[1.0, 0.0], &[0], &z, None).unwrap_err();
+    let e = fit(&ok, &[1.0, 0.0], &[0], &z, None).expect_err("refused");
     assert!(
         matches!(
             e,
@@ -404,7 +404,7 @@ fn output_error_errors_name_what_is_wrong() {
         ),
         "{e}"
     );
-    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0], &Mat::zeros(6, 3), None).unwrap_err();
+    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0], &Mat::zeros(6, 3), None).expect_err("refused");
     assert!(
         matches!(
             e,
@@ -416,7 +416,7 @@ fn output_error_errors_name_what_is_wrong() {
         ),
         "{e}"
     );
-    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0], &z, Some(&Mat::zeros(6, 1))).unwrap_err();
+    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0], &z, Some(&Mat::zeros(6, 1))).expect_err("refused");
     assert!(
         matches!(e, FitError::Model(kalman::Error::Shape { name: "u", .. })),
         "{e}"
@@ -430,7 +430,7 @@ fn output_error_errors_name_what_is_wrong() {
         None,
         &o,
     )
-    .unwrap_err();
+    .expect_err("refused");
     assert!(
         matches!(
             e,
@@ -442,7 +442,7 @@ fn output_error_errors_name_what_is_wrong() {
         ),
         "{e}"
     );
-    let e = fit(&ok, &[1.0, f64::NAN, 0.0], &[0], &z, None).unwrap_err();
+    let e = fit(&ok, &[1.0, f64::NAN, 0.0], &[0], &z, None).expect_err("refused");
     assert!(
         matches!(
             e,
@@ -455,18 +455,18 @@ fn output_error_errors_name_what_is_wrong() {
         "{e}"
     );
     // Free indices out of range, repeated, none.
-    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0, 3], &z, None).unwrap_err();
+    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0, 3], &z, None).expect_err("refused");
     assert!(
         matches!(&e, FitError::Parameters(s) if s.contains("free index 3") && s.contains("n = 3")),
         "{e}"
     );
-    let e = fit(&ok, &[1.0, 0.0, 0.0], &[1, 0, 1], &z, None).unwrap_err();
+    let e = fit(&ok, &[1.0, 0.0, 0.0], &[1, 0, 1], &z, None).expect_err("refused");
     assert!(
         matches!(&e, FitError::Parameters(s) if s.contains("free index 1 is repeated")),
         "{e}"
     );
     assert_eq!(
-        fit(&ok, &[1.0, 0.0, 0.0], &[], &z, None).unwrap_err(),
+        fit(&ok, &[1.0, 0.0, 0.0], &[], &z, None).expect_err("refused"),
         FitError::NothingFree
     );
     // A record with no finite measurement; an infinite one.
@@ -477,18 +477,18 @@ fn output_error_errors_name_what_is_wrong() {
         &Mat::from_fn(6, 2, |_, _| f64::NAN),
         None,
     )
-    .unwrap_err();
+    .expect_err("refused");
     assert_eq!(e, FitError::NoMeasurements);
     let mut zi = z.clone();
     zi[(4, 1)] = f64::INFINITY;
-    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0], &zi, None).unwrap_err();
+    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0], &zi, None).expect_err("refused");
     assert!(
         matches!(&e, FitError::Data(s) if s.contains("step 4, row 1")),
         "{e}"
     );
     // R_3 indefinite on the rows observed at step 3.
     let bad_r = Scaled { r01: 2.0, ..ok };
-    let e = fit(&bad_r, &[1.0, 0.0, 0.0], &[0], &z, None).unwrap_err();
+    let e = fit(&bad_r, &[1.0, 0.0, 0.0], &[0], &z, None).expect_err("refused");
     assert_eq!(e, FitError::NotPositiveDefinite { name: "R", step: 3 });
     // With channel 1 missing at step 3 the block is [1]: no error.
     let mut zm = z.clone();
@@ -497,7 +497,7 @@ fn output_error_errors_name_what_is_wrong() {
     // A diverging integration: x_{k+1} = 1e100 x_k from 1 overflows at the prediction of
     // step 3 (x_3 = 1e300 is finite, x_4 = 1e300 · 1e100 is not).
     let wild = Scaled { a: 1e100, ..ok };
-    let e = fit(&wild, &[1.0, 1.0, 0.0], &[0], &z, None).unwrap_err();
+    let e = fit(&wild, &[1.0, 1.0, 0.0], &[0], &z, None).expect_err("refused");
     assert!(
         matches!(
             e,
@@ -511,7 +511,7 @@ fn output_error_errors_name_what_is_wrong() {
     );
     // Not identified: y depends on x0[0] + 2·x0[1] only (channel 1 is blind), and x0[2] on
     // nothing at all.
-    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0, 1], &z, None).unwrap_err();
+    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0, 1], &z, None).expect_err("refused");
     match &e {
         FitError::NotIdentifiable { what, why } => {
             assert_eq!(what, "x0[0], x0[1]", "{e}");
@@ -519,7 +519,7 @@ fn output_error_errors_name_what_is_wrong() {
         }
         other => panic!("expected NotIdentifiable, got {other}"),
     }
-    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0, 2], &z, None).unwrap_err();
+    let e = fit(&ok, &[1.0, 0.0, 0.0], &[0, 2], &z, None).expect_err("refused");
     assert!(
         matches!(&e, FitError::NotIdentifiable { what, .. } if what == "x0[2]"),
         "{e}"
@@ -527,4 +527,94 @@ fn output_error_errors_name_what_is_wrong() {
     // With only x0[0] free the same model fits.
     let f = fit(&ok, &[1.0, 0.0, 0.0], &[0], &z, None).expect("identified");
     assert!(f.converged && f.std[0] > 0.0);
+}
+
+#[test]
+fn pendulum_agrees_with_scipy_least_squares() {
+    // SciPy's MINPACK LM with a complex-step Jacobian on the same model and record
+    // (`kalman/tests/golden/make_output_error.py`).
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/golden/output_error_pendulum.json"
+    );
+    let text = std::fs::read_to_string(path).expect("golden file");
+    let g: serde_json::Value = serde_json::from_str(&text).expect("json");
+    let vec = |key: &str| -> Vec<f64> {
+        g[key]
+            .as_array()
+            .expect(key)
+            .iter()
+            .map(|v| v.as_f64().expect("number"))
+            .collect()
+    };
+    let rows = |key: &str| -> Vec<Vec<f64>> {
+        g[key]
+            .as_array()
+            .expect(key)
+            .iter()
+            .map(|r| {
+                r.as_array()
+                    .expect("row")
+                    .iter()
+                    .map(|v| v.as_f64().expect("number"))
+                    .collect()
+            })
+            .collect()
+    };
+    let r = vec("r");
+    let model = Pendulum {
+        dt: g["dt"].as_f64().expect("dt"),
+        r: [r[0], r[1]],
+    };
+    let uv = vec("u");
+    let zr = rows("z");
+    let u = Mat::from_fn(uv.len(), 1, |k, _| uv[k]);
+    let z = Mat::from_fn(zr.len(), 2, |k, i| zr[k][i]);
+    let start = vec("start");
+    let options = OutputErrorOptions {
+        tolerance: 1e-10,
+        ..OutputErrorOptions::default()
+    };
+    let fit = output_error(
+        &model,
+        dims4(),
+        &start,
+        &[0, 1, 2, 3],
+        z.as_ref(),
+        Some(u.as_ref()),
+        &options,
+    )
+    .expect("fit");
+    assert!(fit.converged);
+    let est = vec("estimate");
+    let cov = rows("covariance");
+    for j in 0..4 {
+        // Both optimisers stop within ~1e-8 standard deviations of the optimum (SciPy's
+        // ftol = 1e-15 on a cost of ≈ 200, ours a last step below 1e-10 σ or the cost's
+        // round-off), so 1e-6 σ bounds their difference with room.
+        let se = cov[j][j].sqrt();
+        assert!(
+            (fit.estimate[j] - est[j]).abs() <= 1e-6 * se,
+            "θ_{j}: {} vs SciPy {} (σ {se})",
+            fit.estimate[j],
+            est[j]
+        );
+        for i in 0..4 {
+            // The information at two points 1e-6 σ apart, from AD and from the complex
+            // step (both exact to round-off): relative 1e-6 of the diagonal scale.
+            let scale = (cov[i][i] * cov[j][j]).sqrt();
+            assert!(
+                (fit.covariance[(i, j)] - cov[i][j]).abs() <= 1e-6 * scale,
+                "cov ({i}, {j}): {} vs SciPy {}",
+                fit.covariance[(i, j)],
+                cov[i][j]
+            );
+        }
+    }
+    let cost = g["cost"].as_f64().expect("cost");
+    assert!(
+        (fit.cost - cost).abs() <= 1e-9 * cost,
+        "J {} vs SciPy {cost}",
+        fit.cost
+    );
 }
