@@ -3,7 +3,8 @@ example (its test_ukf.py: position, velocity, altitude; one range; Merwe's point
 
     python bench/bench_filterpy_ukf.py [--steps N]
 
-Prints, for predict + update called from a Python loop and for batch_filter, the time per
+Prints the time the callables alone take per step (the floor of any implementation), then,
+for predict + update called from a Python loop and for batch_filter, the time per
 step of FilterPy and of launch_estimation with ordinary callables (called once per sigma
 point, as FilterPy calls them) and with vectorised ones (vectorized=True: called once with all
 sigma points), and the ratios (FilterPy time / ours) on wall-clock and on CPU time (the
@@ -105,11 +106,28 @@ def main():
         assert np.allclose(got, ref, rtol=1e-9, atol=1e-9 * np.abs(ref).max()), "results differ"
 
     n = len(zs)
+    # The callables alone, as often as a step calls them (7 points: fx and hx 7 times each,
+    # or once each vectorised): the time no implementation of the filter can go below.
+    pts = FpMerwe(3, 0.1, 2.0, 0.0).sigma_points(np.array([0.0, 90.0, 1100.0]), np.eye(3))
+
+    def alone(fx, hx, vectorised):
+        for _ in range(n):
+            if vectorised:
+                hx(fx(pts, DT))
+            else:
+                for p in pts:
+                    hx(fx(p, DT))
+
+    for cname, fx, hx, vec in (("FilterPy's callables", fx_filterpy, hx_filterpy, False),
+                               ("plain callables", fx_plain, hx_plain, False),
+                               ("vectorised callables", fx_vec, hx_vec, True)):
+        t, _ = timed(lambda: alone(fx, hx, vec), args.repeats)
+        print(f"{cname} alone: {1e6 * t / n:.2f} µs/step")
     for label, run in (("predict + update loop", lambda kf: loop(kf, zs)),
                        ("batch_filter", lambda kf: kf.batch_filter(zs))):
         for cname, fx, hx in (("FilterPy's callables", fx_filterpy, hx_filterpy),
                               ("plain callables", fx_plain, hx_plain)):
-            t_fp, c_fp = timed(lambda: run(fp(fx, hx)), 1)
+            t_fp, c_fp = timed(lambda: run(fp(fx, hx)), args.repeats)
             t_o, c_o = timed(lambda: run(ours(fx, hx)), args.repeats)
             t_v, c_v = timed(lambda: run(ours(fx_vec, hx_vec, vectorized=True)), args.repeats)
             print(f"{label}, {cname}, {n} steps: FilterPy {1e6 * t_fp / n:.1f} µs/step; "
