@@ -66,6 +66,8 @@ def run_file(workdir, name):
 def test_the_suite_is_there():
     # KalmanFilter's own file and the ones built on it (IMM, MMAE, RTS, fusion, FLS, …).
     assert {"test_kf.py", "test_imm.py", "test_rts.py", "test_sensor_fusion.py"} <= set(FILES)
+    # The unscented filter's file and the cubature filter's, which compares against it.
+    assert {"test_ukf.py", "test_ckf.py"} <= set(FILES)
 
 
 def test_artefacts_name_real_tests():
