@@ -76,6 +76,7 @@ mod sigma;
 mod ukf;
 mod ukf_batch;
 mod ukf_core;
+mod ukf_state;
 mod wls_fns;
 
 use pyo3::exceptions::PyRuntimeError;

@@ -10,13 +10,17 @@
 #![allow(non_snake_case)]
 
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyTuple};
+use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{memory_error, scalar, type_error, value_error, zeros};
+use crate::convert::{memory_error, type_error, value_error, zeros};
 use crate::guard;
 use crate::linalg::Factor;
 use crate::sigma::{dict_of, item};
-use crate::ukf_core::{Ctx, arr1, arr2, read_mat, read_noise, read_z};
+use crate::ukf_core::{Ctx, arr2, read_mat, read_noise, read_z};
+use crate::ukf_state::{
+    np_call, state, update_noise, write_no_update, write_no_update_z, write_predicted,
+    write_updated,
+};
 
 /// FilterPy's `UnscentedKalmanFilter(dim_x, dim_z, dt, hx, fx, points, sqrt_fn=None,
 /// x_mean_fn=None, z_mean_fn=None, residual_x=None, residual_z=None, state_add=None)`, plus
@@ -36,102 +40,9 @@ fn dim(v: &Bound<'_, PyAny>, name: &str) -> PyResult<usize> {
     }
 }
 
-/// `numpy.<f>(*args)`.
-fn np_call<'py>(
-    py: Python<'py>,
-    f: &str,
-    args: impl pyo3::call::PyCallArgs<'py>,
-) -> PyResult<Bound<'py, PyAny>> {
-    crate::sigma::numpy(py)?.getattr(f)?.call1(args)
-}
-
-/// The filter's x (n) and P (n × n), read from the dict.
-pub(crate) fn state(c: &Ctx<'_>) -> PyResult<(Vec<f64>, Vec<f64>)> {
-    let mut x = zeros(c.n, "x")?;
-    crate::convert::read_vector(
-        &item(&c.d, pyo3::intern!(c.d.py(), "x"))?,
-        "x",
-        c.n,
-        true,
-        false,
-        &mut x,
-    )?;
-    let P = read_mat(&item(&c.d, pyo3::intern!(c.d.py(), "P"))?, "P", c.n, c.n)?;
-    Ok((x, P))
-}
-
 /// The keyword arguments for fx/hx (None when there are none).
 fn kw<'a, 'py>(k: Option<&'a Bound<'py, PyDict>>) -> Option<&'a Bound<'py, PyDict>> {
     k.filter(|d| !d.is_empty())
-}
-
-/// Writes a prediction into the dict.
-pub(crate) fn write_predicted(c: &Ctx<'_>, p: &crate::ukf_core::Predicted) -> PyResult<()> {
-    let (py, n) = (c.py, c.n);
-    c.d.set_item(pyo3::intern!(c.d.py(), "x"), arr1(py, &p.x))?;
-    c.d.set_item(pyo3::intern!(c.d.py(), "P"), arr2(py, p.P.clone(), n, n)?)?;
-    c.d.set_item(
-        pyo3::intern!(c.d.py(), "sigmas_f"),
-        arr2(py, p.sigmas_f.clone(), c.N, n)?,
-    )?;
-    c.d.set_item(pyo3::intern!(c.d.py(), "x_prior"), arr1(py, &p.x))?;
-    c.d.set_item(
-        pyo3::intern!(c.d.py(), "P_prior"),
-        arr2(py, p.P.clone(), n, n)?,
-    )?;
-    Ok(())
-}
-
-/// Writes an update into the dict (FilterPy's likelihoods then recomputed on demand).
-pub(crate) fn write_updated(c: &Ctx<'_>, u: &crate::ukf_core::Updated) -> PyResult<()> {
-    let (py, n, m) = (c.py, c.n, c.m);
-    let d = &c.d;
-    d.set_item(
-        pyo3::intern!(d.py(), "sigmas_h"),
-        arr2(py, u.sigmas_h.clone(), c.N, m)?,
-    )?;
-    d.set_item(pyo3::intern!(d.py(), "S"), arr2(py, u.S.clone(), m, m)?)?;
-    d.set_item(pyo3::intern!(d.py(), "SI"), arr2(py, u.SI.clone(), m, m)?)?;
-    d.set_item(pyo3::intern!(d.py(), "K"), arr2(py, u.K.clone(), n, m)?)?;
-    d.set_item(pyo3::intern!(d.py(), "y"), arr1(py, &u.y))?;
-    d.set_item(pyo3::intern!(d.py(), "x"), arr1(py, &u.x))?;
-    d.set_item(pyo3::intern!(d.py(), "P"), arr2(py, u.P.clone(), n, n)?)?;
-    d.set_item(pyo3::intern!(d.py(), "z"), arr1(py, &u.z))?;
-    d.set_item(pyo3::intern!(d.py(), "x_post"), arr1(py, &u.x))?;
-    d.set_item(
-        pyo3::intern!(d.py(), "P_post"),
-        arr2(py, u.P.clone(), n, n)?,
-    )?;
-    for k in ["_log_likelihood", "_likelihood", "_mahalanobis"] {
-        d.set_item(k, py.None())?;
-    }
-    Ok(())
-}
-
-/// `update(None)`: no measurement; z becomes a column of None, the posterior the prior.
-pub(crate) fn write_no_update(c: &Ctx<'_>) -> PyResult<()> {
-    write_no_update_z(c.py, &c.d, c.m)?;
-    for (to, from) in [("x_post", "x"), ("P_post", "P")] {
-        c.d.set_item(to, item(&c.d, from)?.call_method0("copy")?)?;
-    }
-    Ok(())
-}
-
-/// R for an update: the argument (a scalar r meaning r·I) or the filter's R.
-pub(crate) fn update_noise<'py>(
-    c: &Ctx<'py>,
-    R: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(Vec<f64>, Bound<'py, PyAny>)> {
-    let m = c.m;
-    let obj = match R.filter(|r| !r.is_none()) {
-        Some(r) if scalar(r).is_some() => {
-            let eye = np_call(c.py, "eye", (m,))?;
-            eye.call_method1("__mul__", (r,))?
-        }
-        Some(r) => r.clone(),
-        None => item(&c.d, pyo3::intern!(c.d.py(), "R"))?,
-    };
-    Ok((read_noise(&obj, "R", m)?, obj))
 }
 
 /// Runs `f`; if it fails, puts the dict back as it was before (a snapshot taken first).
@@ -536,11 +447,4 @@ impl UnscentedKalmanFilter {
             (slf.get_type(), args, d.copy()?).into_pyobject(py)
         })
     }
-}
-
-/// The initial z: a (dim_z, 1) column of None, as FilterPy's.
-fn write_no_update_z(py: Python<'_>, d: &Bound<'_, PyDict>, m: usize) -> PyResult<()> {
-    let nones = PyList::new(py, (0..m).map(|_| py.None()).collect::<Vec<_>>())?;
-    let z = np_call(py, "array", (PyList::new(py, [nones])?,))?.getattr("T")?;
-    d.set_item(pyo3::intern!(d.py(), "z"), z)
 }

@@ -14,8 +14,8 @@ use pyo3::types::PyTuple;
 use crate::convert::{array3_out, entries, scalar, type_error, value_error, zeros};
 use crate::linalg::Factor;
 use crate::sigma::item;
-use crate::ukf::{state, update_noise, write_no_update, write_predicted, write_updated};
 use crate::ukf_core::{Ctx, Predicted, Updated, arr1, arr2, linalg_error, read_noise, read_z};
+use crate::ukf_state::{state, update_noise, write_no_update, write_predicted, write_updated};
 
 /// `seq[i]`, or None when `seq` is None.
 fn nth<'py>(seq: Option<&Bound<'py, PyAny>>, i: usize) -> PyResult<Option<Bound<'py, PyAny>>> {
