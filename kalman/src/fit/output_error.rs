@@ -35,9 +35,11 @@
 //! except the covariance itself, which is the factorisation solved against the identity.
 //!
 //! **Convergence.** The Gauss–Newton step's length in Cramér–Rao standard deviations,
-//! `√(δᵀ M δ)`, is at most [`OutputErrorOptions::tolerance`] — or the decrease it predicts,
-//! `½ δᵀ M δ`, is below `10⁻¹²·J`, the round-off of `J` itself (the cost then cannot tell a
-//! step from none). The fit is also stopped, unconverged, when no damping decreases `J`.
+//! `√(δᵀ M δ)`, is at most [`OutputErrorOptions::tolerance`]. Near the optimum the decrease
+//! a step predicts, `½ δᵀ M δ`, falls below the round-off of `J` itself (`10⁻¹²·J`), and
+//! comparing costs can no longer judge it: such a step is taken as it is, so the iteration
+//! goes on to the tolerance rather than stopping where the cost stops resolving. The fit is
+//! stopped, unconverged, at the iteration cap or when no damping decreases `J`.
 //!
 //! **Estimating R** ([`OutputErrorOptions::estimate_r`]): the relaxation of Maine & Iliff and
 //! of SIDPAC's `oe.m`: before every Gauss–Newton step `R` is set to the diagonal of the
@@ -392,16 +394,21 @@ pub fn output_error<G: GenericModel>(
             break;
         };
         let decrement: f64 = gn.iter().zip(&g).map(|(a, b)| a * b).sum::<f64>().max(0.0);
-        if decrement.sqrt() <= options.tolerance || 0.5 * decrement <= 1e-12 * cost {
+        if decrement.sqrt() <= options.tolerance {
             converged = true;
             break;
         }
         if iterations >= options.max_iterations {
             break;
         }
-        // Damped trials until one lowers J under the current weights.
+        // Damped trials until one lowers J under the current weights; a step whose
+        // predicted decrease J cannot resolve is taken as it is.
         let mut accepted = None;
-        while lambda <= MAX_DAMPING {
+        if 0.5 * decrement <= UNRESOLVED * cost {
+            lambda = 0.0;
+            accepted = Some(theta.iter().zip(&gn).map(|(t, s)| t + s).collect());
+        }
+        while accepted.is_none() && lambda <= MAX_DAMPING {
             let delta = if lambda > 0.0 {
                 step(&ms, &d, &g, lambda)
             } else {
@@ -468,6 +475,10 @@ pub fn output_error<G: GenericModel>(
     })
 }
 
+/// A predicted decrease below this fraction of J is below what J's round-off resolves
+/// (sums of thousands of squares carry errors of ~10⁻¹³ of J): such a step is taken without
+/// comparing costs. In standard deviations it is at most `√(2·10⁻¹²·J)`, 2·10⁻⁵ at J = 200.
+const UNRESOLVED: f64 = 1e-12;
 /// The first Levenberg–Marquardt damping tried after a Gauss–Newton step fails.
 const MIN_DAMPING: f64 = 1e-3;
 /// The damping beyond which the fit stops as stalled (the step is then ~10⁻¹⁰ of the
