@@ -4,7 +4,7 @@
 use faer::Mat;
 use rand::RngExt;
 
-use super::resample::{deterministic_copies, log_sum_exp};
+use super::resample::{deterministic_copies, normalise};
 use super::{
     BLOCK, History, ParticleModel, ParticleOptions, Proposal, Purpose, Resampling, Trigger, stream,
 };
@@ -16,6 +16,35 @@ use crate::Error;
 ///
 /// The particles are stored row by row (`particles()[j·n + i]` is entry i of particle j),
 /// with normalised log-weights. A step that fails leaves the filter as it was.
+///
+/// ```
+/// use kalman::particle::{ParticleFilter, ParticleOptions};
+/// # use kalman::particle::{ParticleModel, ParticleRng};
+/// # use kalman::particle::rand::RngExt;
+/// # struct Walk;
+/// # impl ParticleModel for Walk {
+/// #     fn state_dim(&self) -> usize { 1 }
+/// #     fn sample_initial(&self, rng: &mut ParticleRng, x: &mut [f64]) { x[0] = rng.random::<f64>() - 0.5; }
+/// #     fn sample_transition(&self, _k: usize, x: &[f64], rng: &mut ParticleRng, next: &mut [f64]) {
+/// #         next[0] = x[0] + 0.1 * (rng.random::<f64>() - 0.5);
+/// #     }
+/// #     fn log_likelihood(&self, _k: usize, x: &[f64], z: &[f64]) -> f64 { -50.0 * (z[0] - x[0]).powi(2) }
+/// #     fn log_transition_density(&self, _k: usize, x: &[f64], next: &[f64]) -> Option<f64> {
+/// #         Some(if (next[0] - x[0]).abs() < 0.05 { 0.0 } else { f64::NEG_INFINITY })
+/// #     }
+/// # }
+/// # fn main() -> Result<(), kalman::Error> {
+/// let mut pf = ParticleFilter::new(Walk, ParticleOptions { particles: 500, ..Default::default() })?;
+/// for z in [0.1, 0.12, f64::NAN, 0.15] {
+///     pf.step(&[z])?; // NaN: no measurement, the particles only move
+/// }
+/// let total: f64 = pf.log_weights().iter().map(|l| l.exp()).sum();
+/// assert!((total - 1.0).abs() < 1e-12);
+/// assert!((pf.mean()[0] - 0.13).abs() < 0.1 && pf.covariance()[(0, 0)] > 0.0);
+/// assert!(pf.ess() <= 500.0 && pf.log_likelihood().is_finite());
+/// # Ok(())
+/// # }
+/// ```
 pub struct ParticleFilter<M: ParticleModel> {
     model: M,
     options: ParticleOptions,
@@ -35,6 +64,9 @@ pub struct ParticleFilter<M: ParticleModel> {
     /// The look-ahead points, N × n.
     points: Vec<f64>,
     ancestors: Vec<usize>,
+    /// The normalised weights W_k = exp(ln W_k).
+    weights: Vec<f64>,
+    /// The first-stage weights V, then the new weights before they are accepted.
     linear: Vec<f64>,
     cumulative: Vec<f64>,
     uniforms: Vec<f64>,
@@ -60,6 +92,35 @@ impl<M: ParticleModel> std::fmt::Debug for ParticleFilter<M> {
 
 /// Every step's particles and normalised log-weights (after the step's update: the
 /// filtering distributions `p(x_k | z_{0:k})`), kept with [`History::Keep`] for [`super::ffbsi`].
+///
+/// ```
+/// use kalman::particle::{History, ParticleFilter, ParticleOptions};
+/// # use kalman::particle::{ParticleModel, ParticleRng};
+/// # use kalman::particle::rand::RngExt;
+/// # struct Walk;
+/// # impl ParticleModel for Walk {
+/// #     fn state_dim(&self) -> usize { 1 }
+/// #     fn sample_initial(&self, rng: &mut ParticleRng, x: &mut [f64]) { x[0] = rng.random::<f64>() - 0.5; }
+/// #     fn sample_transition(&self, _k: usize, x: &[f64], rng: &mut ParticleRng, next: &mut [f64]) {
+/// #         next[0] = x[0] + 0.1 * (rng.random::<f64>() - 0.5);
+/// #     }
+/// #     fn log_likelihood(&self, _k: usize, x: &[f64], z: &[f64]) -> f64 { -50.0 * (z[0] - x[0]).powi(2) }
+/// #     fn log_transition_density(&self, _k: usize, x: &[f64], next: &[f64]) -> Option<f64> {
+/// #         Some(if (next[0] - x[0]).abs() < 0.05 { 0.0 } else { f64::NEG_INFINITY })
+/// #     }
+/// # }
+/// # fn main() -> Result<(), kalman::Error> {
+/// let options = ParticleOptions { particles: 100, history: History::Keep, ..Default::default() };
+/// let mut pf = ParticleFilter::new(Walk, options)?;
+/// pf.step(&[0.1])?;
+/// pf.step(&[0.2])?;
+/// let h = pf.history().expect("kept");
+/// assert_eq!((h.steps(), h.count(), h.state_dim()), (2, 100, 1));
+/// assert_eq!(h.particles(1), Some(pf.particles()));
+/// assert!(h.log_weights(2).is_none());
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParticleHistory {
     pub(super) n: usize,
@@ -193,6 +254,7 @@ impl<M: ParticleModel> ParticleFilter<M> {
             base: vec![-ln_n; count],
             points: Vec::new(),
             ancestors: (0..count).collect(),
+            weights: vec![1.0 / count as f64; count],
             linear: vec![0.0; count],
             cumulative: vec![0.0; count],
             uniforms: vec![0.0; count],
@@ -242,6 +304,7 @@ impl<M: ParticleModel> ParticleFilter<M> {
             base,
             points,
             ancestors,
+            weights,
             linear,
             cumulative,
             uniforms,
@@ -286,31 +349,26 @@ impl<M: ParticleModel> ParticleFilter<M> {
                 for ((w, f), l) in work.iter_mut().zip(first.iter()).zip(log_w.iter()) {
                     *w = l + f;
                 }
-                log_c = log_sum_exp(work);
+                log_c = normalise(work, linear);
                 if log_c == f64::NEG_INFINITY {
                     return Err(Error::ParticleCollapse {
                         step: k,
                         what: "the look-ahead likelihood",
                     });
                 }
-                for w in work.iter_mut() {
-                    *w -= log_c;
-                }
             } else {
                 first.fill(0.0);
                 work.copy_from_slice(log_w);
+                linear.copy_from_slice(weights);
             }
             // Resampling.
-            let squares: f64 = work.iter().map(|v| (2.0 * v).exp()).sum();
+            let squares: f64 = linear.iter().map(|v| v * v).sum();
             resampled = match self.options.trigger {
                 Trigger::Always => true,
                 Trigger::Never => false,
                 Trigger::EssBelow(f) => 1.0 / squares < f * count as f64,
             };
             if resampled {
-                for (l, w) in linear.iter_mut().zip(work.iter()) {
-                    *l = w.exp();
-                }
                 let total: f64 = linear.iter().sum();
                 let scheme = self.options.resampling;
                 let needed = match scheme {
@@ -349,7 +407,7 @@ impl<M: ParticleModel> ParticleFilter<M> {
             check_states(next, n, "sample_transition", k)?;
             check_log(work, "log_likelihood", k)?;
         }
-        let log_s = log_sum_exp(work);
+        let log_s = normalise(work, linear);
         if log_s == f64::NEG_INFINITY {
             return Err(Error::ParticleCollapse {
                 step: k,
@@ -357,11 +415,10 @@ impl<M: ParticleModel> ParticleFilter<M> {
             });
         }
         std::mem::swap(particles, next);
-        for (l, w) in log_w.iter_mut().zip(work.iter()) {
-            *l = w - log_s;
-        }
+        std::mem::swap(log_w, work);
+        std::mem::swap(weights, linear);
         self.log_likelihood += log_c + log_s;
-        self.ess = 1.0 / self.log_w.iter().map(|v| (2.0 * v).exp()).sum::<f64>();
+        self.ess = 1.0 / self.weights.iter().map(|v| v * v).sum::<f64>();
         self.resampled = resampled;
         self.steps += 1;
         self.update_mean();
@@ -376,8 +433,7 @@ impl<M: ParticleModel> ParticleFilter<M> {
     fn update_mean(&mut self) {
         let n = self.n;
         self.mean.fill(0.0);
-        for (x, l) in self.particles.chunks(n).zip(&self.log_w) {
-            let w = l.exp();
+        for (x, &w) in self.particles.chunks(n).zip(&self.weights) {
             for (m, xi) in self.mean.iter_mut().zip(x) {
                 *m += w * xi;
             }
@@ -394,8 +450,7 @@ impl<M: ParticleModel> ParticleFilter<M> {
     pub fn covariance(&self) -> Mat<f64> {
         let n = self.n;
         let mut p = Mat::<f64>::zeros(n, n);
-        for (x, l) in self.particles.chunks(n).zip(&self.log_w) {
-            let w = l.exp();
+        for (x, &w) in self.particles.chunks(n).zip(&self.weights) {
             for c in 0..n {
                 let dc = x[c] - self.mean[c];
                 for r in c..n {

@@ -111,6 +111,34 @@ pub const BLOCK: usize = 64;
 /// [`ParticleFilter::log_likelihood`] to be the model's log-likelihood, `log_likelihood`
 /// must be the full log-density, constants included; the filter itself needs it only up to a
 /// constant.
+///
+/// ```
+/// use kalman::particle::{ParticleModel, ParticleRng};
+/// use kalman::particle::rand::RngExt;
+///
+/// /// x_{k+1} = 0.9 x_k + w, w uniform on [−0.5, 0.5); z = x + Laplace noise of scale 0.2.
+/// struct Ar1;
+/// impl ParticleModel for Ar1 {
+///     fn state_dim(&self) -> usize { 1 }
+///     fn sample_initial(&self, rng: &mut ParticleRng, x: &mut [f64]) {
+///         x[0] = 2.0 * rng.random::<f64>() - 1.0;
+///     }
+///     fn sample_transition(&self, _k: usize, x: &[f64], rng: &mut ParticleRng, next: &mut [f64]) {
+///         next[0] = 0.9 * x[0] + rng.random::<f64>() - 0.5;
+///     }
+///     fn log_likelihood(&self, _k: usize, x: &[f64], z: &[f64]) -> f64 {
+///         -(z[0] - x[0]).abs() / 0.2 - 0.4f64.ln()
+///     }
+///     fn log_transition_density(&self, _k: usize, x: &[f64], next: &[f64]) -> Option<f64> {
+///         Some(if (next[0] - 0.9 * x[0]).abs() <= 0.5 { 0.0 } else { f64::NEG_INFINITY })
+///     }
+///     fn lookahead(&self, _k: usize, x: &[f64], point: &mut [f64]) -> bool {
+///         point[0] = 0.9 * x[0]; // the transition's mean
+///         true
+///     }
+/// }
+/// assert!((Ar1.log_likelihood(0, &[1.0], &[1.0]) + 0.4f64.ln()).abs() < 1e-15);
+/// ```
 pub trait ParticleModel: Sync {
     /// n, the state dimension (at least 1).
     fn state_dim(&self) -> usize;
@@ -141,6 +169,33 @@ pub trait ParticleModel: Sync {
 }
 
 /// When a step resamples.
+///
+/// ```
+/// use kalman::particle::{ParticleFilter, ParticleOptions, Trigger};
+/// # use kalman::particle::{ParticleModel, ParticleRng};
+/// # use kalman::particle::rand::RngExt;
+/// # struct Walk;
+/// # impl ParticleModel for Walk {
+/// #     fn state_dim(&self) -> usize { 1 }
+/// #     fn sample_initial(&self, rng: &mut ParticleRng, x: &mut [f64]) { x[0] = rng.random::<f64>() - 0.5; }
+/// #     fn sample_transition(&self, _k: usize, x: &[f64], rng: &mut ParticleRng, next: &mut [f64]) {
+/// #         next[0] = x[0] + 0.1 * (rng.random::<f64>() - 0.5);
+/// #     }
+/// #     fn log_likelihood(&self, _k: usize, x: &[f64], z: &[f64]) -> f64 { -50.0 * (z[0] - x[0]).powi(2) }
+/// #     fn log_transition_density(&self, _k: usize, x: &[f64], next: &[f64]) -> Option<f64> {
+/// #         Some(if (next[0] - x[0]).abs() < 0.05 { 0.0 } else { f64::NEG_INFINITY })
+/// #     }
+/// # }
+/// # fn main() -> Result<(), kalman::Error> {
+/// for (trigger, resamples) in [(Trigger::Always, true), (Trigger::Never, false)] {
+///     let mut pf = ParticleFilter::new(Walk, ParticleOptions { particles: 100, trigger, ..Default::default() })?;
+///     pf.step(&[0.1])?;
+///     pf.step(&[0.2])?; // resampling happens before propagating, from the second step
+///     assert_eq!(pf.resampled(), resamples);
+/// }
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Trigger {
@@ -159,6 +214,32 @@ impl Default for Trigger {
 }
 
 /// The proposal of each step.
+///
+/// ```
+/// use kalman::particle::{ParticleFilter, ParticleOptions, Proposal};
+/// # use kalman::particle::{ParticleModel, ParticleRng};
+/// # use kalman::particle::rand::RngExt;
+/// # struct Walk;
+/// # impl ParticleModel for Walk {
+/// #     fn state_dim(&self) -> usize { 1 }
+/// #     fn sample_initial(&self, rng: &mut ParticleRng, x: &mut [f64]) { x[0] = rng.random::<f64>() - 0.5; }
+/// #     fn sample_transition(&self, _k: usize, x: &[f64], rng: &mut ParticleRng, next: &mut [f64]) {
+/// #         next[0] = x[0] + 0.1 * (rng.random::<f64>() - 0.5);
+/// #     }
+/// #     fn log_likelihood(&self, _k: usize, x: &[f64], z: &[f64]) -> f64 { -50.0 * (z[0] - x[0]).powi(2) }
+/// #     fn log_transition_density(&self, _k: usize, x: &[f64], next: &[f64]) -> Option<f64> {
+/// #         Some(if (next[0] - x[0]).abs() < 0.05 { 0.0 } else { f64::NEG_INFINITY })
+/// #     }
+/// # }
+/// # fn main() -> Result<(), kalman::Error> {
+/// // This model has no look-ahead point: the auxiliary filter says so at its first propagation.
+/// let options = ParticleOptions { particles: 100, proposal: Proposal::Auxiliary, ..Default::default() };
+/// let mut pf = ParticleFilter::new(Walk, options)?;
+/// pf.step(&[0.1])?;
+/// assert!(matches!(pf.step(&[0.2]), Err(kalman::Error::MissingFunction { function: "lookahead", .. })));
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Proposal {
@@ -171,6 +252,33 @@ pub enum Proposal {
 }
 
 /// Whether the filter keeps every step's particles and weights for [`ffbsi`].
+///
+/// ```
+/// use kalman::particle::{History, ParticleFilter, ParticleOptions};
+/// # use kalman::particle::{ParticleModel, ParticleRng};
+/// # use kalman::particle::rand::RngExt;
+/// # struct Walk;
+/// # impl ParticleModel for Walk {
+/// #     fn state_dim(&self) -> usize { 1 }
+/// #     fn sample_initial(&self, rng: &mut ParticleRng, x: &mut [f64]) { x[0] = rng.random::<f64>() - 0.5; }
+/// #     fn sample_transition(&self, _k: usize, x: &[f64], rng: &mut ParticleRng, next: &mut [f64]) {
+/// #         next[0] = x[0] + 0.1 * (rng.random::<f64>() - 0.5);
+/// #     }
+/// #     fn log_likelihood(&self, _k: usize, x: &[f64], z: &[f64]) -> f64 { -50.0 * (z[0] - x[0]).powi(2) }
+/// #     fn log_transition_density(&self, _k: usize, x: &[f64], next: &[f64]) -> Option<f64> {
+/// #         Some(if (next[0] - x[0]).abs() < 0.05 { 0.0 } else { f64::NEG_INFINITY })
+/// #     }
+/// # }
+/// # fn main() -> Result<(), kalman::Error> {
+/// let options = ParticleOptions { particles: 100, history: History::Keep, ..Default::default() };
+/// let mut pf = ParticleFilter::new(Walk, options)?;
+/// for z in [0.1, 0.2, 0.15] {
+///     pf.step(&[z])?;
+/// }
+/// assert_eq!(pf.history().map(|h| h.steps()), Some(3));
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum History {
@@ -182,6 +290,13 @@ pub enum History {
 }
 
 /// The options of a [`ParticleFilter`].
+///
+/// ```
+/// use kalman::particle::{ParticleOptions, Resampling, Trigger};
+/// let options = ParticleOptions { particles: 5000, seed: 3, ..ParticleOptions::default() };
+/// assert_eq!(options.resampling, Resampling::Systematic);
+/// assert_eq!(options.trigger, Trigger::EssBelow(0.5));
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ParticleOptions {
     /// N, the number of particles (at least 1).

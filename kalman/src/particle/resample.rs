@@ -276,14 +276,24 @@ pub fn effective_sample_size(weights: &[f64]) -> Result<f64, Error> {
     Ok(1.0 / squares)
 }
 
-/// `ln Σ exp(v_i)`, without overflow; −∞ when every entry is −∞.
-pub(crate) fn log_sum_exp(values: &[f64]) -> f64 {
-    let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+/// Normalises log-weights in place and writes their exponentials into `linear` (one `exp`
+/// per particle); returns `ln Σ exp(v_i)`, −∞ (and nothing written) when every entry is −∞.
+pub(crate) fn normalise(log: &mut [f64], linear: &mut [f64]) -> f64 {
+    let max = log.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if max == f64::NEG_INFINITY {
         return max;
     }
-    let s: f64 = values.iter().map(|v| (v - max).exp()).sum();
-    max + s.ln()
+    let mut s = 0.0;
+    for (l, v) in linear.iter_mut().zip(log.iter()) {
+        *l = (v - max).exp();
+        s += *l;
+    }
+    let log_sum = max + s.ln();
+    for (l, v) in linear.iter_mut().zip(log.iter_mut()) {
+        *l /= s;
+        *v -= log_sum;
+    }
+    log_sum
 }
 
 #[cfg(test)]
@@ -346,9 +356,15 @@ mod tests {
     }
 
     #[test]
-    fn log_sum_exp_is_exact_on_small_cases() {
-        assert!((log_sum_exp(&[0.0, 0.0]) - 2f64.ln()).abs() < 1e-15);
-        assert!((log_sum_exp(&[1000.0, 1000.0]) - (1000.0 + 2f64.ln())).abs() < 1e-12);
-        assert!(log_sum_exp(&[f64::NEG_INFINITY; 3]).is_infinite());
+    fn normalise_is_exact_on_small_cases() {
+        let mut linear = [0.0; 2];
+        let mut log = [0.0, 0.0];
+        assert!((normalise(&mut log, &mut linear) - 2f64.ln()).abs() < 1e-15);
+        assert!(linear.iter().all(|w| (w - 0.5).abs() < 1e-15));
+        let mut log = [1000.0, 1000.0 + 3f64.ln()];
+        assert!((normalise(&mut log, &mut linear) - (1000.0 + 4f64.ln())).abs() < 1e-12);
+        assert!((linear[0] - 0.25).abs() < 1e-15 && (log[0] - 0.25f64.ln()).abs() < 1e-12);
+        let mut log = [f64::NEG_INFINITY; 2];
+        assert!(normalise(&mut log, &mut linear).is_infinite());
     }
 }

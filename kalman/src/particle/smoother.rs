@@ -9,6 +9,35 @@ use crate::Error;
 
 /// Trajectories drawn from the joint smoothing distribution `p(x_{0:T−1} | z_{0:T−1})` by
 /// [`ffbsi`], and their means and covariances per step.
+///
+/// ```
+/// use kalman::particle::{History, ParticleFilter, ParticleOptions, ffbsi};
+/// # use kalman::particle::{ParticleModel, ParticleRng};
+/// # use kalman::particle::rand::RngExt;
+/// # struct Walk;
+/// # impl ParticleModel for Walk {
+/// #     fn state_dim(&self) -> usize { 1 }
+/// #     fn sample_initial(&self, rng: &mut ParticleRng, x: &mut [f64]) { x[0] = rng.random::<f64>() - 0.5; }
+/// #     fn sample_transition(&self, _k: usize, x: &[f64], rng: &mut ParticleRng, next: &mut [f64]) {
+/// #         next[0] = x[0] + 0.1 * (rng.random::<f64>() - 0.5);
+/// #     }
+/// #     fn log_likelihood(&self, _k: usize, x: &[f64], z: &[f64]) -> f64 { -50.0 * (z[0] - x[0]).powi(2) }
+/// #     fn log_transition_density(&self, _k: usize, x: &[f64], next: &[f64]) -> Option<f64> {
+/// #         Some(if (next[0] - x[0]).abs() < 0.05 { 0.0 } else { f64::NEG_INFINITY })
+/// #     }
+/// # }
+/// # fn main() -> Result<(), kalman::Error> {
+/// let options = ParticleOptions { particles: 200, history: History::Keep, ..Default::default() };
+/// let mut pf = ParticleFilter::new(Walk, options)?;
+/// for z in [0.1, 0.12, 0.15] {
+///     pf.step(&[z])?;
+/// }
+/// let s = ffbsi(pf.model(), pf.history().expect("kept"), 30, 0)?;
+/// assert_eq!((s.trajectories(), s.means.ncols(), s.covariances.len()), (30, 3, 3));
+/// assert_eq!(s.path(0).map(<[f64]>::len), Some(3));
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParticleSmoothed {
     n: usize,
