@@ -29,6 +29,7 @@ pub mod campaign;
 pub mod config;
 pub mod error;
 pub mod fit;
+pub mod flightpath;
 pub mod fueling;
 pub mod montecarlo;
 pub mod output;

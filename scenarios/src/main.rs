@@ -10,6 +10,7 @@ use std::process::ExitCode;
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{Args, Parser, Subcommand};
 use scenarios::boom::Boom;
+use scenarios::flightpath::FlightPath;
 use scenarios::fueling::Fueling;
 use scenarios::montecarlo::Shard;
 use scenarios::uav::Uav;
@@ -47,6 +48,18 @@ struct CampaignArgs {
     shard: Option<Shard>,
 }
 
+/// `flightpath`'s options: a campaign's, and a recorded flight instead of the simulation.
+#[derive(Debug, Args)]
+struct FlightpathArgs {
+    #[command(flatten)]
+    campaign: CampaignArgs,
+    /// A recorded flight: one CSV with a `t` column [s] and the channels ax, ay, az [m/s²],
+    /// p, q, r [rad/s], V [m/s], alpha, beta, phi, theta, psi [rad], north, east, alt [m];
+    /// an empty cell where a sensor did not sample. The same report without truth columns.
+    #[arg(long, value_name = "FLIGHT.csv")]
+    data: Option<PathBuf>,
+}
+
 fn parse_shard(s: &str) -> Result<Shard, Error> {
     s.parse::<Shard>()
 }
@@ -76,7 +89,10 @@ enum Command {
     Uav(CampaignArgs),
     /// Paper B: erector-boom angular acceleration by weighted least squares and offset angle.
     Boom(CampaignArgs),
-    /// All three papers, plus reports/README.md linking them.
+    /// Flight-path reconstruction: filter–smoother and output error of the instrument errors
+    /// on a simulated flight, or on a recorded one with --data.
+    Flightpath(FlightpathArgs),
+    /// All the scenarios (the three papers and flightpath), plus reports/README.md linking them.
     All(CampaignArgs),
     /// Combine shard directories (`--shard K/N` runs) into the summary of one whole run.
     Merge {
@@ -117,6 +133,7 @@ fn check_directory_out(command: &Command) -> Result<(), Error> {
         Command::Fueling(a) => ("fueling", a.out.as_ref()),
         Command::Uav(a) => ("uav", a.out.as_ref()),
         Command::Boom(a) => ("boom", a.out.as_ref()),
+        Command::Flightpath(a) => ("flightpath", a.campaign.out.as_ref()),
         Command::All(a) => ("all", a.out.as_ref()),
         Command::Merge { out, .. } => ("merge", Some(out)),
         Command::Filter(_) | Command::Discretize(_) | Command::SteadyState(_) | Command::Fit(_) => {
@@ -194,7 +211,8 @@ fn one_line(e: &clap::Error) -> String {
             format!(" (did you mean {}?)", either(&s))
         }
     };
-    let commands = "fueling, uav, boom, all, merge, filter, discretize, steady-state or fit";
+    let commands =
+        "fueling, uav, boom, flightpath, all, merge, filter, discretize, steady-state or fit";
     match e.kind() {
         ErrorKind::ValueValidation => {
             let why = std::error::Error::source(e).map_or_else(String::new, ToString::to_string);
@@ -247,6 +265,14 @@ fn main() -> ExitCode {
         Command::Fueling(a) => scenarios::campaign::run::<Fueling>(&a.campaign()),
         Command::Uav(a) => scenarios::campaign::run::<Uav>(&a.campaign()),
         Command::Boom(a) => scenarios::campaign::run::<Boom>(&a.campaign()),
+        Command::Flightpath(a) => match a.data {
+            Some(data) => scenarios::flightpath::userflight::run(
+                &data,
+                a.campaign.config.as_deref(),
+                a.campaign.out.as_deref(),
+            ),
+            None => scenarios::campaign::run::<FlightPath>(&a.campaign.campaign()),
+        },
         Command::All(a) => scenarios::papers::all(&a.campaign()),
         Command::Merge { dirs, out } => scenarios::papers::merge(&dirs, &out),
         Command::Filter(a) => scenarios::userdata::filter(&a),

@@ -7,11 +7,12 @@ use std::path::{Path, PathBuf};
 use crate::boom::Boom;
 use crate::campaign::{self, Campaign, Entry};
 use crate::error::{Error, Result};
+use crate::flightpath::FlightPath;
 use crate::fueling::Fueling;
 use crate::uav::Uav;
 
 /// Every scenario: name (subcommand and folder), title for `reports/README.md`, runner.
-pub const SCENARIOS: [Entry; 3] = [
+pub const SCENARIOS: [Entry; 4] = [
     (
         "fueling",
         "F — fuel level on a rocking sea platform",
@@ -26,6 +27,11 @@ pub const SCENARIOS: [Entry; 3] = [
         "boom",
         "B — erector-boom angular acceleration (WLS, offset angle)",
         campaign::run::<Boom>,
+    ),
+    (
+        "flightpath",
+        "Flight-path reconstruction: filter–smoother and output error on a simulated flight",
+        campaign::run::<FlightPath>,
     ),
 ];
 
@@ -51,9 +57,12 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<()> {
         "fueling" => campaign::merge::<Fueling>(dirs, out),
         "uav" => campaign::merge::<Uav>(dirs, out),
         "boom" => campaign::merge::<Boom>(dirs, out),
+        "flightpath" => campaign::merge::<FlightPath>(dirs, out),
         other => Err(Error::invalid(
             first.join("summary.json"),
-            format!("`scenario` is {other:?}, expected \"fueling\", \"uav\" or \"boom\""),
+            format!(
+                "`scenario` is {other:?}, expected \"fueling\", \"uav\", \"boom\" or \"flightpath\""
+            ),
         )),
     }
 }

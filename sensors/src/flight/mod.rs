@@ -131,17 +131,17 @@ pub struct FlightConfig {
     pub accel_noise_mps2: f64,
     /// Gyro white noise per sample, deg/s (0.002).
     pub gyro_noise_dps: f64,
-    /// Air-data timing (25 Hz, two 1 s dropouts, three wild points).
+    /// Air-data timing (25 Hz, two 0.5 s dropouts, three wild points).
     pub air_data: SensorTiming,
     /// Airspeed noise, m/s (0.2).
     pub airspeed_noise_mps: f64,
     /// Angle-of-attack and sideslip noise, deg (0.1).
     pub flow_angle_noise_deg: f64,
-    /// AHRS timing (25 Hz, two 1 s dropouts, three wild points).
+    /// AHRS timing (25 Hz, two 0.5 s dropouts, three wild points).
     pub ahrs: SensorTiming,
     /// AHRS angle noise, deg (0.2).
     pub attitude_noise_deg: f64,
-    /// GNSS timing (5 Hz, two 2 s dropouts, three wild points).
+    /// GNSS timing (5 Hz, two 1 s dropouts, three wild points).
     pub gnss: SensorTiming,
     /// GNSS horizontal noise, m (0.5).
     pub horizontal_noise_m: f64,
@@ -167,12 +167,12 @@ impl Default for FlightConfig {
             imu: timing(100.0, 1, 0.05, 0),
             accel_noise_mps2: 0.002,
             gyro_noise_dps: 0.002,
-            air_data: timing(25.0, 2, 1.0, 3),
+            air_data: timing(25.0, 2, 0.5, 3),
             airspeed_noise_mps: 0.2,
             flow_angle_noise_deg: 0.1,
-            ahrs: timing(25.0, 2, 1.0, 3),
+            ahrs: timing(25.0, 2, 0.5, 3),
             attitude_noise_deg: 0.2,
-            gnss: timing(5.0, 2, 2.0, 3),
+            gnss: timing(5.0, 2, 1.0, 3),
             horizontal_noise_m: 0.5,
             vertical_noise_m: 1.0,
         }
