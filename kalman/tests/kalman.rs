@@ -65,6 +65,7 @@ mod steady {
 mod imm {
     pub mod golden;
     pub mod manoeuvre;
+    pub mod modes;
     pub mod smoother;
 }
 

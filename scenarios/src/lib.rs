@@ -58,6 +58,8 @@ mod guide {
     struct Fitting;
     #[doc = include_str!("../../docs/nonlinear.md")]
     struct Nonlinear;
+    #[doc = include_str!("../../docs/imm.md")]
+    struct Imm;
     #[doc = include_str!("../../docs/particles.md")]
     struct Particles;
     #[doc = include_str!("../../docs/cli.md")]

@@ -112,6 +112,15 @@ pub(crate) mod ops {
 /// A filter that can be a mode of an [`Imm`]: the linear `Filter` (Joseph or standard
 /// form, both storage paths), the `nonlinear::Ekf` and the `nonlinear::Ukf`. Sealed: the
 /// IMM reads and overwrites the filters' estimates between their update and prediction.
+/// ```
+/// use kalman::imm::Mode;
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
+/// let m = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
+/// // Any of the crate's filters boxes into a mode.
+/// let mode: Box<dyn Mode> = Box::new(Filter::new(m, &[0.0], &[[1.0]], CovarianceForm::Joseph)?);
+/// # let _ = mode;
+/// # Ok::<(), kalman::Error>(())
+/// ```
 pub trait Mode: ops::ModeOps {}
 
 impl<T: ops::ModeOps + ?Sized> Mode for T {}
@@ -208,6 +217,19 @@ impl Embedding {
 }
 
 /// What one IMM step produced.
+///
+/// ```
+/// use kalman::imm::{Embedding, Imm, Mode};
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
+/// let m = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
+/// let f: Box<dyn Mode> = Box::new(Filter::new(m, &[0.0], &[[1.0]], CovarianceForm::Joseph)?);
+/// let mut imm = Imm::new(vec![(f, Embedding::identity(1))], &[[1.0]], &[1.0])?;
+/// // z = 0 against the prior N(0, 1 + 1): ln L = −½ ln(2π·2).
+/// let s = imm.step(&[0.0], None)?;
+/// assert!((s.log_likelihood + 0.5 * (4.0 * std::f64::consts::PI).ln()).abs() < 1e-12);
+/// assert_eq!((s.step, s.observed), (0, 1));
+/// # Ok::<(), kalman::Error>(())
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ImmStep {
     /// Index k of the step.
@@ -325,6 +347,35 @@ impl Moments {
 ///
 /// See the [module documentation](self) for the cycle and the embedding rules, and
 /// [`ImmRecord`] for the smoother.
+///
+/// ```
+/// use kalman::imm::{Embedding, Imm, Mode};
+/// use kalman::nonlinear::{FnModel, SigmaPoints, Ukf};
+/// use kalman::{CovarianceForm, FixedDims, Filter, Model};
+/// # fn main() -> Result<(), kalman::Error> {
+/// // A linear random walk and a UKF whose state decays, side by side.
+/// let lin = Model::new(FixedDims::<1, 1>::new(), &[[1.0]], &[[1.0]], &[[0.01]], &[[0.01]])?;
+/// let lin: Box<dyn Mode> = Box::new(Filter::new(lin, &[8.0], &[[1.0]], CovarianceForm::Joseph)?);
+/// let decay = FnModel::new(
+///     FixedDims::<1, 1>::new(),
+///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = 0.5 * x[0],
+///     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0],
+///     &[[0.01]],
+///     &[[0.01]],
+/// )?;
+/// let ukf: Box<dyn Mode> = Box::new(Ukf::new(FixedDims::<1, 1>::new(), decay, &[8.0], &[[1.0]],
+///     SigmaPoints::Cubature)?);
+/// let pi = [[0.9, 0.1], [0.1, 0.9]];
+/// let mut imm = Imm::new(vec![(lin, Embedding::identity(1)), (ukf, Embedding::identity(1))], &pi,
+///     &[0.5, 0.5])?;
+/// for z in [8.0, 4.0, 2.0, 1.0, 0.5] {
+///     imm.step(&[z], None)?;
+/// }
+/// // Halving each step is the decaying mode's.
+/// assert!(imm.mode_probabilities()[1] > 0.9);
+/// # Ok(())
+/// # }
+/// ```
 pub struct Imm {
     modes: Vec<Box<dyn Mode>>,
     s: Structure,

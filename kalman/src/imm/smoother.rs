@@ -3,11 +3,15 @@
 //! mode probabilities.
 //!
 //! # Form
-//! The backward recursion of R. Lopez and P. Danès, "Low-complexity IMM smoothing for jump
-//! Markov nonlinear systems", IEEE Trans. Aerospace and Electronic Systems 53(3), 2017: a
-//! backward mixing step (the dual of the forward one) and one Rauch–Tung–Striebel step per
-//! mode, so r RTS steps per time step (not the r² of Kim's or Helmick, Blair and Hoffman's
-//! pairwise forms). With μ^j_k the filtered mode probabilities and
+//! A low-complexity backward recursion in the spirit of R. Lopez and P. Danès,
+//! "Low-complexity IMM smoothing for jump Markov nonlinear systems", IEEE Trans. Aerospace
+//! and Electronic Systems 53(3), 2017: a backward mixing step (the dual of the forward one)
+//! and one Rauch–Tung–Striebel step per mode, so r RTS steps per time step (not the r² of
+//! C.-J. Kim's, "Dynamic linear models with Markov-switching", J. Econometrics 60, 1994, or
+//! of Helmick, Blair and Hoffman's pairwise forms). The backward mixing weighs the modes by
+//! Kim's backward transition probabilities alone; Lopez and Danès's full interaction step,
+//! which also weighs each pair of modes by the likelihood of its backward prediction, is not
+//! implemented. With μ^j_k the filtered mode probabilities and
 //! `c^l_{k+1} = Σ_i Π_il μ^i_k`:
 //! 1. backward transition probabilities `b_{jl} = Π_jl μ^j_k / c^l_{k+1}` and the smoothed
 //!    mode probabilities `μ^j_{k|N} = Σ_l b_{jl} μ^l_{k+1|N}`;
@@ -23,7 +27,10 @@
 //!    `P^j_{k|N} = P^j_{k|k} + G (P̃^j − P̂^j_{k+1|k}) Gᵀ`;
 //! 4. the combined smoothed estimate over the common state with `μ_{k|N}`, as the filter's.
 //!
-//! At the last step the smoothed estimates are the filtered ones.
+//! At the last step the smoothed estimates are the filtered ones. With one mode, or with
+//! identical modes, this is exactly the RTS smoother. Where a quiet mode's smoothed estimate
+//! inside a manoeuvre is mixed back along the leg before it, the smoother can be worse than
+//! the filter on that leg (the price of the probability-only weights above).
 #![allow(non_snake_case)]
 
 use faer::Mat;
@@ -69,6 +76,31 @@ pub struct ImmRecord {
 
 /// The smoothed estimates: column k of `means` is `x_{k|N}` in the common state,
 /// `covariances[k]` is `P_{k|N}`, column k of `mode_probabilities` is `μ_{k|N}`.
+///
+/// ```
+/// use kalman::imm::{Embedding, Imm, ImmRecord, Mode};
+/// use kalman::{CovarianceForm, DynDims, Filter, Model};
+/// # fn main() -> Result<(), kalman::Error> {
+/// let mode = || -> Result<Box<dyn Mode>, kalman::Error> {
+///     let m = Model::new(DynDims::new(1, 1, 0)?, &[[1.0]], &[[1.0]], &[[0.1]], &[[1.0]])?;
+///     Ok(Box::new(Filter::new(m, &[0.0], &[[1.0]], CovarianceForm::Joseph)?))
+/// };
+/// let pi = [[0.8, 0.2], [0.3, 0.7]];
+/// let modes = vec![(mode()?, Embedding::identity(1)), (mode()?, Embedding::identity(1))];
+/// let mut imm = Imm::new(modes, &pi, &[0.5, 0.5])?;
+/// let mut rec = ImmRecord::new();
+/// for z in [0.2, 0.4, 0.1] {
+///     imm.step_recorded(&[z], None, &mut rec)?;
+/// }
+/// let s = rec.smooth()?;
+/// // Each column of smoothed mode probabilities sums to one.
+/// for k in 0..3 {
+///     assert!((s.mode_probabilities[(0, k)] + s.mode_probabilities[(1, k)] - 1.0).abs() < 1e-12);
+/// }
+/// assert_eq!(s.covariances.len(), 3);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Debug)]
 pub struct ImmSmoothed {
     /// n_c × N.
@@ -279,7 +311,7 @@ impl ImmRecord {
                     &mut d[..n],
                     &mut T[..n * n],
                 );
-                cholesky(pp, n, L).map_err(|_| Error::NotPositiveDefinite {
+                factor_prediction(pp, n, L).map_err(|_| Error::NotPositiveDefinite {
                     name: "P_{k+1|k}",
                     n,
                     rule: "an IMM mode's one-step prediction covariance must be positive definite",
@@ -337,31 +369,17 @@ impl ImmRecord {
     }
 }
 
-/// Lower Cholesky factor of the n×n column-major `A` into `L`; `Err` at a pivot that is
-/// not positive relative to the diagonal's scale.
-fn cholesky(A: &[f64], n: usize, L: &mut [f64]) -> Result<(), usize> {
+/// Lower Cholesky factor of the n×n column-major `A` into `L` (the kernels' factorisation);
+/// `Err` at a pivot not above `RANK_TOL` times the largest diagonal entry.
+fn factor_prediction(A: &[f64], n: usize, L: &mut [f64]) -> Result<(), ()> {
     let scale = (0..n).fold(0.0_f64, |s, i| s.max(A[i + i * n].abs()));
-    L.fill(0.0);
-    for j in 0..n {
-        let mut djj = A[j + j * n];
-        for c in 0..j {
-            djj -= L[j + c * n] * L[j + c * n];
-        }
-        // A pivot below round-off of the diagonal's scale is a singular prediction.
-        if djj.is_nan() || djj <= crate::RANK_TOL * scale {
-            return Err(j);
-        }
-        let ljj = djj.sqrt();
-        L[j + j * n] = ljj;
-        for i in j + 1..n {
-            let mut v = A[i + j * n];
-            for c in 0..j {
-                v -= L[i + c * n] * L[j + c * n];
-            }
-            L[i + j * n] = v / ljj;
-        }
+    L.copy_from_slice(&A[..n * n]);
+    // A pivot below round-off of the diagonal's scale is a singular prediction.
+    if crate::kernels::cholesky(L, n, crate::RANK_TOL * scale) {
+        Ok(())
+    } else {
+        Err(())
     }
-    Ok(())
 }
 
 /// Solves `L Lᵀ y = b` in place.
