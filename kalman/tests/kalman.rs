@@ -37,6 +37,7 @@ mod nonlinear {
     pub mod models;
     pub mod nis;
     pub mod sigma_sets;
+    pub mod sqrt;
     pub mod symmetry;
 }
 

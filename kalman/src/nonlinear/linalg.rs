@@ -384,6 +384,76 @@ pub(crate) fn rank1_lower(C: &mut [f64], w: f64, a: &[f64], r: usize) {
     }
 }
 
+/// Makes the pivots of a triangularised row-major array positive: for each row
+/// `rows.start + r` with pivot column `piv[r] = Some(c)` whose pivot is negative, negates
+/// column c in rows `rows.start..end` (a column's sign does not change `A Aᵀ`). With every
+/// pivot positive, a lower-triangular factor of a positive definite matrix is its Cholesky
+/// factor.
+#[inline(always)]
+pub(crate) fn positive_pivots(
+    a: &mut [f64],
+    ld: usize,
+    rows: core::ops::Range<usize>,
+    end: usize,
+    piv: &[Option<usize>],
+) {
+    let first = rows.start;
+    for i in rows {
+        if let Some(c) = piv[i - first]
+            && a[i * ld + c] < 0.0
+        {
+            for r in i..end {
+                a[r * ld + c] = -a[r * ld + c];
+            }
+        }
+    }
+}
+
+/// Rank-one Cholesky downdate `L' L'ᵀ = L Lᵀ − v vᵀ` of the lower-triangular `N`×`N`
+/// factor held row-major in `a` (row r, column c at `a[r·ld + c]`) with nonnegative
+/// diagonal, by hyperbolic rotations (`v` is destroyed). A zero pivot with a zero `v`
+/// entry is skipped (the semidefinite case). Returns `Err(d)`, d = L_kk² − v_k², at the
+/// first pivot the downdate would make zero or negative: `L Lᵀ − v vᵀ` is not positive
+/// (semi)definite there.
+#[inline(always)]
+pub(crate) fn downdate_rows(a: &mut [f64], ld: usize, N: usize, v: &mut [f64]) -> Result<(), f64> {
+    for k in 0..N {
+        let (l, vk) = (a[k * ld + k], v[k]);
+        if vk.abs() <= 0.0 {
+            continue;
+        }
+        let d = (l - vk) * (l + vk);
+        if d.is_nan() || d <= 0.0 {
+            return Err(d);
+        }
+        let r = d.sqrt();
+        let (c, s) = (r / l, vk / l);
+        a[k * ld + k] = r;
+        for i in k + 1..N {
+            let lik = (a[i * ld + k] - s * v[i]) / c;
+            a[i * ld + k] = lik;
+            v[i] = c * v[i] - s * lik;
+        }
+    }
+    Ok(())
+}
+
+/// `P = S Sᵀ` for the lower-triangular `n`×`n` `S` (column-major), lower triangle summed
+/// and mirrored: exactly symmetric.
+#[inline(always)]
+pub(crate) fn gram_lower(S: &[f64], n: usize, P: &mut [f64]) {
+    for j in 0..n {
+        for i in j..n {
+            let mut s = 0.0;
+            for k in 0..=j {
+                s += S[i + k * n] * S[j + k * n];
+            }
+            P[i + j * n] = s;
+        }
+    }
+    mirror_lower(P, n);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -408,6 +478,51 @@ mod tests {
         }
         a[8] -= 1e-3;
         assert!(psd_cholesky(&a, 3, &mut L, &mut inv, 1e-12, 1e-10).is_err());
+    }
+
+    /// The downdate against the Cholesky factor of `L Lᵀ − v vᵀ` computed directly, and its
+    /// refusal when the difference is indefinite.
+    #[test]
+    fn downdate_equals_the_factor_of_the_difference() {
+        // A = M Mᵀ + 4 I (3×3), v small enough that A − v vᵀ stays PD. Entries O(1–10):
+        // 1e-13 is rounding.
+        let m = [1.0, 0.5, -0.3, 0.2, 2.0, 0.7, -1.0, 0.1, 1.5];
+        let mut a = [0.0; 9];
+        mul_nt(&mut a, &m, &m, 3, 3, 3, false);
+        for i in 0..3 {
+            a[i + 3 * i] += 4.0;
+        }
+        let v = [0.9, -0.4, 1.1];
+        let (mut L, mut inv) = ([0.0; 9], [0.0; 3]);
+        psd_cholesky(&a, 3, &mut L, &mut inv, 1e-12, 1e-10).expect("PD");
+        let mut diff = a;
+        for j in 0..3 {
+            for i in 0..3 {
+                diff[i + 3 * j] -= v[i] * v[j];
+            }
+        }
+        let mut want = [0.0; 9];
+        psd_cholesky(&diff, 3, &mut want, &mut inv, 1e-12, 1e-10).expect("PD");
+        // Row-major copy of L (the lower triangle, row r column c at r·3 + c).
+        let mut rows = [0.0; 9];
+        for r in 0..3 {
+            for c in 0..3 {
+                rows[r * 3 + c] = L[r + 3 * c];
+            }
+        }
+        let mut w = v;
+        downdate_rows(&mut rows, 3, 3, &mut w).expect("PD difference");
+        for r in 0..3 {
+            for c in 0..3 {
+                assert!(
+                    (rows[r * 3 + c] - want[r + 3 * c]).abs() < 1e-13,
+                    "({r}, {c})"
+                );
+            }
+        }
+        let mut w = [10.0, 0.0, 0.0];
+        let d = downdate_rows(&mut rows, 3, 3, &mut w).expect_err("indefinite");
+        assert!(d < 0.0);
     }
 
     #[test]

@@ -143,6 +143,7 @@ mod linalg;
 mod models;
 mod sigma;
 mod smoother;
+mod sqrt_ukf;
 mod ukf;
 
 #[cfg(feature = "autodiff")]
@@ -151,6 +152,7 @@ pub use ekf::{Ekf, EkfUpdate};
 pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
 pub use sigma::SigmaPoints;
 pub use smoother::{ForwardPass, NonlinearRts};
+pub use sqrt_ukf::SqrtUkf;
 pub use ukf::Ukf;
 
 use crate::kernels::LN_2PI;

@@ -248,7 +248,6 @@ impl<D: NlDims> SigmaSet<D> {
     }
 
     /// `ξ_i` (n entries) into `out`.
-    #[allow(dead_code)]
     #[inline(always)]
     pub(super) fn unit(&self, n: usize, i: usize, out: &mut [f64]) {
         let out = &mut out[..n];

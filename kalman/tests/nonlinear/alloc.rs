@@ -1,10 +1,10 @@
-//! Zero heap allocations per nonlinear step (EKF, iterated EKF, UKF with every sigma-point
-//! sets; hand, AD and central-difference Jacobians), on the fixed and dynamic paths, with
-//! the counting global allocator (`common/counting.rs`).
+//! Zero heap allocations per nonlinear step (EKF, iterated EKF, the plain and the square-root
+//! UKF with every sigma-point set; hand, AD and central-difference Jacobians), on the fixed
+//! and dynamic paths, with the counting global allocator (`common/counting.rs`).
 
 use kalman::nonlinear::{
     AutoDiff, CentralDiff, Ekf, EkfUpdate, FnModel, Jacobians, NlDims, NonlinearModel, SigmaPoints,
-    Ukf,
+    SqrtUkf, Ukf,
 };
 use kalman::strategies::{FilterProblem, ProblemOptions};
 use kalman::{DynDims, FixedDims};
@@ -23,6 +23,12 @@ impl<D: NlDims, M: Jacobians> Stepper for Ekf<D, M> {
 }
 
 impl<D: NlDims, M: NonlinearModel> Stepper for Ukf<D, M> {
+    fn go(&mut self, z: &[f64], u: Option<&[f64]>) {
+        assert!(self.step(z, u).is_ok());
+    }
+}
+
+impl<D: NlDims, M: NonlinearModel> Stepper for SqrtUkf<D, M> {
     fn go(&mut self, z: &[f64], u: Option<&[f64]>) {
         assert!(self.step(z, u).is_ok());
     }
@@ -68,6 +74,8 @@ fn linear_case<D: NlDims>(p: &FilterProblem, d: D) {
     ] {
         let mut f = Ukf::new(d, Linear::new(p), &p.x0, &p.p0, s).expect("ukf");
         assert_eq!(count(&mut f, &p.z, &p.u), 0, "UKF {s:?}");
+        let mut f = SqrtUkf::new(d, Linear::new(p), &p.x0, &p.p0, s).expect("sqrt");
+        assert_eq!(count(&mut f, &p.z, &p.u), 0, "square-root UKF {s:?}");
     }
 }
 
@@ -140,6 +148,9 @@ fn no_allocation_per_nonlinear_step() {
         &[[0.25, 0.0], [0.0, 1e-4]],
     )
     .expect("model");
-    let mut f = Ukf::new(fixed, closures, &x0, &p0, SigmaPoints::Cubature).expect("ukf");
+    let mut f = Ukf::new(fixed, closures.clone(), &x0, &p0, SigmaPoints::Cubature).expect("ukf");
     assert_eq!(count(&mut f, &zs, &[]), 0, "UKF closures fixed");
+    let set = SigmaPoints::merwe(0.5, 2.0, -1.0);
+    let mut f = SqrtUkf::new(fixed, closures, &x0, &p0, set).expect("sqrt");
+    assert_eq!(count(&mut f, &zs, &[]), 0, "square-root UKF closures fixed");
 }

@@ -1,10 +1,11 @@
 //! Against FilterPy (golden CSVs from `tests/golden/make_nonlinear.py`): Merwe's sigma
 //! points and weights for several (n, α, β, κ), and EKF and UKF runs on a range–bearing
-//! tracker and a pendulum, posterior means, covariances and NIS to 1e-9.
+//! tracker and a pendulum (the plain and the square-root UKF), posterior means, covariances
+//! and NIS to 1e-9.
 
 use std::collections::BTreeMap;
 
-use kalman::nonlinear::{AutoDiff, Ekf, EkfUpdate, ForwardPass, NlDims, SigmaPoints, Ukf};
+use kalman::nonlinear::{AutoDiff, Ekf, EkfUpdate, ForwardPass, NlDims, SigmaPoints, SqrtUkf, Ukf};
 use kalman::nonlinear::{Jacobians, NonlinearModel};
 use kalman::{FixedDims, MatrixInput};
 
@@ -117,6 +118,15 @@ impl<D: NlDims, M: NonlinearModel> Run for Ukf<D, M> {
     }
 }
 
+impl<D: NlDims, M: NonlinearModel> Run for SqrtUkf<D, M> {
+    fn run(&mut self, z: &[f64]) -> Option<f64> {
+        self.step(z, None).expect("square-root ukf step").nis
+    }
+    fn posterior(&self) -> (&[f64], &[f64]) {
+        self.filtered()
+    }
+}
+
 fn compare(f: &mut dyn Run, text: &str, n: usize, m: usize, what: &str) {
     let rows = read_run(text, n, m);
     assert!(rows.len() >= 60);
@@ -178,6 +188,14 @@ fn range_bearing_runs_equal_filterpy() {
     ] {
         let mut ukf = Ukf::new(d, RangeBearingHand::default(), &x0, &P0, set).expect("ukf");
         compare(&mut ukf, file, 4, 2, &format!("range-bearing UKF {set:?}"));
+        let mut sq = SqrtUkf::new(d, RangeBearingHand::default(), &x0, &P0, set).expect("sqrt");
+        compare(
+            &mut sq,
+            file,
+            4,
+            2,
+            &format!("range-bearing square-root UKF {set:?}"),
+        );
     }
 }
 
@@ -206,6 +224,15 @@ fn pendulum_runs_equal_filterpy() {
         let ad = AutoDiff::new(Pendulum::default(), d);
         let mut ukf = Ukf::new(d, ad, &x0, &P0, set).expect("ukf");
         compare(&mut ukf, file, 2, 1, &format!("pendulum UKF {set:?}"));
+        let ad = AutoDiff::new(Pendulum::default(), d);
+        let mut sq = SqrtUkf::new(d, ad, &x0, &P0, set).expect("sqrt");
+        compare(
+            &mut sq,
+            file,
+            2,
+            1,
+            &format!("pendulum square-root UKF {set:?}"),
+        );
     }
 }
 

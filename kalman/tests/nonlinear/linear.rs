@@ -3,7 +3,7 @@
 //! on both storage paths (missing entries and a control input included).
 
 use faer::MatRef;
-use kalman::nonlinear::{Ekf, EkfUpdate, NlDims, NonlinearRts, SigmaPoints, Ukf};
+use kalman::nonlinear::{Ekf, EkfUpdate, NlDims, NonlinearRts, SigmaPoints, SqrtUkf, Ukf};
 use kalman::smoother::RtsSmoother;
 use kalman::strategies::{FilterProblem, ProblemOptions};
 use kalman::{CovarianceForm, DynDims, Filter, FixedDims};
@@ -66,6 +66,7 @@ fn problem(n: usize, m: usize, seed: u64) -> FilterProblem {
 enum Which {
     Ekf(EkfUpdate),
     Ukf(SigmaPoints),
+    Sqrt(SigmaPoints),
 }
 
 fn check<D: NlDims>(p: &FilterProblem, dims: D, which: &Which) {
@@ -74,22 +75,26 @@ fn check<D: NlDims>(p: &FilterProblem, dims: D, which: &Which) {
     let mut lin_s = RtsSmoother::new();
     let mut nl_s = NonlinearRts::new();
     let nl = Linear::new(p);
-    let mut ekf;
-    let mut ukf;
+    let (mut ekf, mut ukf, mut sqrt) = (None, None, None);
     match which {
-        Which::Ekf(u) => {
-            ekf = Some(Ekf::new(dims, nl, &p.x0, &p.p0, *u).expect("ekf"));
-            ukf = None;
-        }
-        Which::Ukf(s) => {
-            ekf = None;
-            ukf = Some(Ukf::new(dims, nl, &p.x0, &p.p0, *s).expect("ukf"));
-        }
+        Which::Ekf(u) => ekf = Some(Ekf::new(dims, nl, &p.x0, &p.p0, *u).expect("ekf")),
+        Which::Ukf(s) => ukf = Some(Ukf::new(dims, nl, &p.x0, &p.p0, *s).expect("ukf")),
+        Which::Sqrt(s) => sqrt = Some(SqrtUkf::new(dims, nl, &p.x0, &p.p0, *s).expect("sqrt")),
     }
     for (k, (z, u)) in p.z.iter().zip(&p.u).enumerate() {
         let a = lin.step(z, Some(u)).expect("linear step");
         let (b, xf, pf, xp, pp) = if let Some(f) = ekf.as_mut() {
             let b = f.step(z, Some(u)).expect("ekf step");
+            nl_s.record(f).expect("record");
+            (
+                b,
+                f.state().to_vec(),
+                flat(f.covariance()),
+                f.predicted_state().to_vec(),
+                flat(f.predicted_covariance()),
+            )
+        } else if let Some(f) = sqrt.as_mut() {
+            let b = f.step(z, Some(u)).expect("square-root ukf step");
             nl_s.record(f).expect("record");
             (
                 b,
@@ -175,6 +180,10 @@ fn all(n: usize) -> Vec<Which> {
         Which::Ukf(SigmaPoints::Cubature),
         Which::Ukf(SigmaPoints::julier(1.0)),
         Which::Ukf(SigmaPoints::Simplex),
+        // The square-root form: a negative centre weight (downdates), none, and the simplex.
+        Which::Sqrt(SigmaPoints::merwe(0.5, 2.0, 3.0 - n as f64)),
+        Which::Sqrt(SigmaPoints::Cubature),
+        Which::Sqrt(SigmaPoints::Simplex),
     ]
 }
 
