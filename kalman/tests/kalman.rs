@@ -31,6 +31,7 @@ mod engine {
 mod nonlinear {
     pub mod alloc;
     pub mod errors;
+    pub mod fixed_lag;
     pub mod golden;
     pub mod jacobians;
     pub mod linear;

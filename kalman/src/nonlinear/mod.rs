@@ -138,6 +138,7 @@ macro_rules! forward_pass_moments {
 #[cfg(feature = "autodiff")]
 mod autodiff;
 mod ekf;
+mod fixed_lag;
 mod imm_mode;
 mod linalg;
 mod models;
@@ -149,6 +150,7 @@ mod ukf;
 #[cfg(feature = "autodiff")]
 pub use autodiff::{AutoDiff, GenericModel, Scalar};
 pub use ekf::{Ekf, EkfUpdate};
+pub use fixed_lag::FixedLag;
 pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
 pub use sigma::SigmaPoints;
 pub use smoother::{ForwardPass, NonlinearRts};

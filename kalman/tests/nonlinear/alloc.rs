@@ -3,8 +3,8 @@
 //! and dynamic paths, with the counting global allocator (`common/counting.rs`).
 
 use kalman::nonlinear::{
-    AutoDiff, CentralDiff, Ekf, EkfUpdate, FnModel, Jacobians, NlDims, NonlinearModel, SigmaPoints,
-    SqrtUkf, Ukf,
+    AutoDiff, CentralDiff, Ekf, EkfUpdate, FixedLag, FnModel, Jacobians, NlDims, NonlinearModel,
+    SigmaPoints, SqrtUkf, Ukf,
 };
 use kalman::strategies::{FilterProblem, ProblemOptions};
 use kalman::{DynDims, FixedDims};
@@ -153,4 +153,41 @@ fn no_allocation_per_nonlinear_step() {
     let set = SigmaPoints::merwe(0.5, 2.0, -1.0);
     let mut f = SqrtUkf::new(fixed, closures, &x0, &p0, set).expect("sqrt");
     assert_eq!(count(&mut f, &zs, &[]), 0, "square-root UKF closures fixed");
+}
+
+/// The fixed-lag smoother's record-and-smooth step allocates nothing either (a UKF and the
+/// linear filter, lag 4, with missing entries).
+#[test]
+fn no_allocation_per_fixed_lag_step() {
+    let opts = ProblemOptions {
+        steps: 12,
+        missing: 0.2,
+        p: 1,
+        ..ProblemOptions::default()
+    };
+    let p = FilterProblem::generate(5, 2, opts, 43);
+    let d = DynDims::new(5, 2, 1).expect("dims");
+    let mut ukf = Ukf::new(d, Linear::new(&p), &p.x0, &p.p0, SigmaPoints::Cubature).expect("ukf");
+    let mut lin = kalman::Filter::new(
+        p.model(d).expect("model"),
+        &p.x0,
+        &p.p0,
+        kalman::CovarianceForm::Joseph,
+    )
+    .expect("filter");
+    let (mut a, mut b) = (
+        FixedLag::new(5, 4).expect("lag"),
+        FixedLag::new(5, 4).expect("lag"),
+    );
+    let mut before = 0;
+    for (k, (z, u)) in p.z.iter().zip(&p.u).enumerate() {
+        if k == 1 {
+            before = allocations();
+        }
+        ukf.step(z, Some(u)).expect("ukf step");
+        a.record(&ukf).expect("record");
+        lin.step(z, Some(u)).expect("linear step");
+        b.record_linear(&lin).expect("record");
+    }
+    assert_eq!(allocations() - before, 0, "fixed-lag steps");
 }
