@@ -12,6 +12,8 @@ mod diagnostics;
 mod fit;
 #[path = "cli/fit_entries.rs"]
 mod fit_entries;
+#[path = "cli/flightpath.rs"]
+mod flightpath;
 #[path = "cli/fueling.rs"]
 mod fueling;
 #[path = "cli/hostile.rs"]

@@ -3,8 +3,10 @@
 //! built from them ([`Grid`]: the union of every stamp, the IMU input of each step, the
 //! measurements with NaN where a sensor did not sample).
 
-use super::model::M;
 use crate::error::{Error, Result};
+
+/// Measurements per step: air data (V, α, β), AHRS (φ, θ, ψ), GNSS (north, east, altitude).
+pub const M: usize = 9;
 
 /// One sensor's samples: (stamp, reading) in stamp order, SI units.
 pub type Channel<const K: usize> = Vec<(f64, [f64; K])>;

@@ -38,6 +38,7 @@
 use kalman::nonlinear::{GenericModel, Scalar};
 
 use super::data::Grid;
+pub use super::data::M;
 
 /// Gravity, m/s².
 pub const GRAVITY: f64 = 9.806_65;
@@ -45,8 +46,6 @@ pub const GRAVITY: f64 = 9.806_65;
 pub const N_KIN: usize = 9;
 /// Instrument-error states.
 pub const N_ERR: usize = 12;
-/// Measurements per step.
-pub const M: usize = 9;
 
 /// The noise model the filter assumes, SI standard deviations.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -34,6 +34,11 @@ pub use truth::{GRAVITY, Manoeuvres, TruthPoint};
 const D2R: f64 = std::f64::consts::PI / 180.0;
 
 /// The instrument errors of a flight (degrees in this struct; SI inside).
+///
+/// ```
+/// let e = sensors::flight::InstrumentErrors::default().si();
+/// assert!((e[3] - 0.2_f64.to_radians()).abs() < 1e-15); // gyro p bias, rad/s
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct InstrumentErrors {
@@ -95,6 +100,11 @@ impl InstrumentErrors {
 }
 
 /// One sensor's timing and record defects.
+///
+/// ```
+/// let gnss = sensors::flight::FlightConfig::default().gnss;
+/// assert_eq!((gnss.dropouts, gnss.wild_points), (2, 3));
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorTiming {
@@ -110,6 +120,11 @@ pub struct SensorTiming {
 
 /// The configuration of a simulated flight (defaults: a 120 s sequence, IMU at 100 Hz, air
 /// data and AHRS at 25 Hz, GNSS at 5 Hz).
+///
+/// ```
+/// let c = sensors::flight::FlightConfig { duration_s: 60.0, ..Default::default() };
+/// assert!((c.imu.rate_hz - 100.0).abs() < 1e-12);
+/// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FlightConfig {
@@ -253,6 +268,11 @@ impl FlightConfig {
 }
 
 /// Noise standard deviations per channel, SI.
+///
+/// ```
+/// let n = sensors::flight::FlightConfig::default().noise_si();
+/// assert!((n.gnss[2] - 1.0).abs() < 1e-12); // vertical, m
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NoiseLevels {
     /// a_x, a_y, a_z (m/s²), p, q, r (rad/s).
@@ -267,6 +287,14 @@ pub struct NoiseLevels {
 
 /// One recorded sample: its stamp, the reading, the truth at the stamp, and whether it was
 /// made a wild point.
+///
+/// ```
+/// use sensors::flight::{FlightConfig, simulate};
+/// let rec = simulate(&FlightConfig { duration_s: 10.0, ..Default::default() }, &mut sensors::seeded_rng(2))?;
+/// let s = rec.ahrs[0];
+/// assert!((s.value[1] - s.truth.euler[1]).abs() < 0.1); // θ within 0.1 rad of the truth
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample<const K: usize> {
     /// Time stamp, s.
@@ -280,6 +308,13 @@ pub struct Sample<const K: usize> {
 }
 
 /// A simulated flight's record, one list per sensor in stamp order.
+///
+/// ```
+/// use sensors::flight::{FlightConfig, simulate};
+/// let rec = simulate(&FlightConfig { duration_s: 10.0, ..Default::default() }, &mut sensors::seeded_rng(2))?;
+/// assert!(rec.air.len() > 200 && rec.gnss.len() > 30);
+/// # Ok::<(), sensors::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct FlightRecord {
     /// IMU: (a_x, a_y, a_z, p, q, r).
@@ -473,6 +508,10 @@ pub fn simulate<R: Rng + ?Sized>(
 }
 
 /// An angle wrapped to (−π, π].
+///
+/// ```
+/// assert!((sensors::flight::wrap(3.0 * std::f64::consts::PI) - std::f64::consts::PI).abs() < 1e-12);
+/// ```
 pub fn wrap(a: f64) -> f64 {
     let two_pi = 2.0 * std::f64::consts::PI;
     let w = a - two_pi * (a / two_pi).round();

@@ -65,6 +65,11 @@ fn doublet(t: f64, t0: f64, len: f64) -> Jet {
 /// The manoeuvre sequence, scaled to the configured duration: pitch doublets, roll doublets
 /// with a sideslip doublet, a level turn and a speed change (the sequence Klein & Morelli
 /// and Mulder et al. use to excite every instrument error).
+///
+/// ```
+/// let m = sensors::flight::Manoeuvres { turn_bank_deg: 20.0, ..Default::default() };
+/// assert!((m.airspeed_mps - 100.0).abs() < 1e-12);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Manoeuvres {
@@ -106,6 +111,11 @@ impl Default for Manoeuvres {
 
 /// The true state at one instant: air-relative body velocity, attitude, body rates,
 /// specific force, and (filled by the integration) position.
+///
+/// ```
+/// let p = sensors::flight::TruthPoint::default();
+/// assert_eq!(p.position, [0.0; 3]);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct TruthPoint {
     /// Time, s.
