@@ -14,6 +14,8 @@ mod fit;
 mod fit_entries;
 #[path = "cli/flightpath.rs"]
 mod flightpath;
+#[path = "cli/flightpath_output_error.rs"]
+mod flightpath_output_error;
 #[path = "cli/fueling.rs"]
 mod fueling;
 #[path = "cli/hostile.rs"]
