@@ -3,7 +3,8 @@
 //! a circular track cycled (no jump at the wrap, no RNG). The baseline in the same group is
 //! the EKF with hand-written Jacobians; the others are the EKF with forward-mode AD
 //! Jacobians (target: within 2× of the baseline), the iterated EKF, and the UKF with
-//! Merwe's scaled and the cubature sigma points. `benches/kalman/filterpy_ukf_step.py` builds the
+//! Merwe's scaled and the cubature sigma points, each beside the square-root UKF on the same
+//! set (target: within 1.5× of the plain step). `benches/kalman/filterpy_ukf_step.py` builds the
 //! same problem and times FilterPy's UKF on it.
 #![allow(non_snake_case, missing_docs, clippy::unwrap_used)]
 
@@ -12,7 +13,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use kalman::FixedDims;
-use kalman::nonlinear::{AutoDiff, Ekf, EkfUpdate, SigmaPoints, Ukf};
+use kalman::nonlinear::{AutoDiff, Ekf, EkfUpdate, SigmaPoints, SqrtUkf, Ukf};
 
 // The test models: the bench uses range and bearing only.
 #[allow(dead_code)]
@@ -98,6 +99,14 @@ fn nonlinear(c: &mut Criterion) {
             b.iter(|| {
                 k = (k + 1) % zs.len();
                 black_box(ukf.step(black_box(&zs[k]), None).unwrap());
+            })
+        });
+        // The square-root UKF on the same problem (target: within 1.5× the plain step).
+        let mut sq = SqrtUkf::new(d, Hand(MODEL), &X0, &P0, set).unwrap();
+        g.bench_function(BenchmarkId::new(format!("sqrt_{name}"), label), |b| {
+            b.iter(|| {
+                k = (k + 1) % zs.len();
+                black_box(sq.step(black_box(&zs[k]), None).unwrap());
             })
         });
     }
