@@ -2,7 +2,9 @@
 //! model, m = 1 with 10 % of the entries missing, at n = 2 (constant velocity) and n = 4 (two
 //! such axes, one measured), on one thread:
 //! - `baseline_scalar_fixed`: the scalar filter on the fixed-size path, series by series;
-//! - `batch`: `BatchFilter::run` over all of them (Joseph form, as the baseline).
+//! - `batch`: `BatchFilter::run` over all of them (Joseph form, as the baseline), on a rayon
+//!   pool of one thread (the benches build kalman with `parallel`);
+//! - `batch_2_threads`: the same on a pool of two.
 //!
 //! The ratio is the batch filter's cost per series step against the scalar filter's.
 #![allow(non_snake_case, missing_docs, clippy::unwrap_used)]
@@ -109,9 +111,17 @@ fn bench_batch(c: &mut Criterion) {
                 }
             })
         });
-        group.bench_with_input(BenchmarkId::new("batch", n), &n, |b, _| {
-            b.iter(|| black_box(batch.run(&x0, &p0, black_box(&zs), SERIES).unwrap()))
-        });
+        for (name, threads) in [("batch", 1), ("batch_2_threads", 2)] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            group.bench_with_input(BenchmarkId::new(name, n), &n, |b, _| {
+                b.iter(|| {
+                    pool.install(|| black_box(batch.run(&x0, &p0, black_box(&zs), SERIES).unwrap()))
+                })
+            });
+        }
     }
     group.finish();
 }

@@ -186,12 +186,54 @@ fn par_for(_work: usize) -> Par {
     Par::Seq
 }
 
+/// The scalars of [`symmetrise`] and [`cholesky`]: `f64`, and with the feature `autodiff`
+/// every dual number over it, so the fitting code differentiating through a filter pass
+/// (`fit::filter_error`) runs these same kernels.
+pub(crate) trait Real:
+    Copy
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + std::ops::SubAssign
+    + std::ops::Mul<f64, Output = Self>
+{
+    /// The square root.
+    fn sqrt(self) -> Self;
+    /// The value (the real part of a dual number).
+    fn value(self) -> f64;
+}
+
+#[cfg(not(feature = "autodiff"))]
+impl Real for f64 {
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn value(self) -> f64 {
+        self
+    }
+}
+
+#[cfg(feature = "autodiff")]
+impl<T: num_dual::DualNum<Primitive = f64> + Copy> Real for T {
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        num_dual::DualNum::sqrt(&self)
+    }
+    #[inline(always)]
+    fn value(self) -> f64 {
+        num_dual::DualStruct::re(&self)
+    }
+}
+
 /// Replaces the square `n`×`n` `a` by `(a + aᵀ)/2`.
 #[inline(always)]
-pub(crate) fn symmetrise(a: &mut [f64], n: usize) {
+pub(crate) fn symmetrise<T: Real>(a: &mut [T], n: usize) {
     for j in 0..n {
         for i in 0..j {
-            let s = 0.5 * (a[i + j * n] + a[j + i * n]);
+            let s = (a[i + j * n] + a[j + i * n]) * 0.5;
             a[i + j * n] = s;
             a[j + i * n] = s;
         }
@@ -220,13 +262,13 @@ pub const RANK_TOL: f64 = 1e-12;
 /// In-place lower Cholesky of the `n`×`n` matrix `a` (only the lower triangle is read and
 /// written). Returns `false` if a pivot is at or below `tol` (the caller falls back).
 #[inline(always)]
-pub(crate) fn cholesky(a: &mut [f64], n: usize, tol: f64) -> bool {
+pub(crate) fn cholesky<T: Real>(a: &mut [T], n: usize, tol: f64) -> bool {
     for j in 0..n {
         let mut d = a[j + j * n];
         for k in 0..j {
             d -= a[j + k * n] * a[j + k * n];
         }
-        if d.is_nan() || d <= tol {
+        if d.value().is_nan() || d.value() <= tol {
             return false;
         }
         let d = d.sqrt();

@@ -56,6 +56,10 @@ use crate::kernels::RANK_TOL;
 use crate::model::{MatrixInput, load, load_vec, psd_factor, symmetrise};
 use crate::{CovarianceForm, Dims, Error, Model};
 
+mod work;
+
+use work::{DET_RANGE, GroupOut, Loglik, Work, in_series, non_finite};
+
 /// Series filtered together in one group: every quantity of the step is a row of this many
 /// numbers (a multiple of the vector width of current x86 and ARM cores).
 pub const LANES: usize = 8;
@@ -230,10 +234,21 @@ impl BatchFilter {
         // bits).
         let arch = pulp::Arch::new();
         let run_group = |g: usize, slot: GroupOut<'_>| {
-            arch.dispatch(
-                #[inline(always)]
-                || self.group(g, series, steps, zs, prior, slot),
-            )
+            macro_rules! sized {
+                ($($nn:literal, $mm:literal);*) => {
+                    match (n, m) {
+                        $(($nn, $mm) => arch.dispatch(
+                            #[inline(always)]
+                            || self.group::<$nn, $mm>(g, series, steps, zs, prior, slot),
+                        ),)*
+                        _ => arch.dispatch(
+                            #[inline(always)]
+                            || self.group::<0, 0>(g, series, steps, zs, prior, slot),
+                        ),
+                    }
+                };
+            }
+            sized!(1, 1; 2, 1; 2, 2; 3, 1; 3, 2; 4, 1; 4, 2; 6, 1; 6, 2; 6, 3)
         };
         let slots = GroupOut::split(&mut out, n, steps, self.covariances);
         debug_assert_eq!(slots.len(), groups);
@@ -255,9 +270,20 @@ impl BatchFilter {
         Ok(out)
     }
 
-    /// Filters group `g` (series `g·LANES ..`) into its slot of the output.
+    /// `(n, m)`: the compile-time sizes `N`, `M` where they are not 0 (so the kernels'
+    /// loops unroll for the common small models), the model's own otherwise.
     #[inline(always)]
-    fn group(
+    fn sizes<const N: usize, const M: usize>(&self) -> (usize, usize) {
+        (
+            if N == 0 { self.n } else { N },
+            if M == 0 { self.m } else { M },
+        )
+    }
+
+    /// Filters group `g` (series `g·LANES ..`) into its slot of the output, with `N` and `M`
+    /// the model's sizes known at compile time (0: known at run time).
+    #[inline(always)]
+    fn group<const N: usize, const M: usize>(
         &self,
         g: usize,
         series: usize,
@@ -276,7 +302,7 @@ impl BatchFilter {
         for (e, &v) in p0.iter().enumerate() {
             w.p[e] = [v; LANES];
         }
-        let mut loglik = [0.0; LANES];
+        let mut loglik = Loglik::new();
         for k in 0..steps {
             // The step's measurements: lanes past the last series stay missing.
             for j in 0..m {
@@ -301,7 +327,7 @@ impl BatchFilter {
                     w.z[j][l] = v;
                 }
             }
-            if let Some((l, pivot, tol)) = self.update(&mut w, &mut loglik) {
+            if let Some((l, pivot, tol)) = self.update::<N, M>(&mut w, &mut loglik) {
                 return Err(in_series(
                     first + l,
                     Error::SingularInnovation {
@@ -334,35 +360,64 @@ impl BatchFilter {
                     }
                 }
             }
-            self.predict(&mut w);
+            self.predict::<N>(&mut w);
             let (x, p) = ("x_{k+1|k}", "P_{k+1|k}");
             if let Some((l, what, value)) = non_finite(&w, n, lanes, x, p) {
                 let step = k;
                 return Err(in_series(first + l, Error::Diverged { step, what, value }));
             }
         }
-        slot.loglik[..lanes].copy_from_slice(&loglik[..lanes]);
+        slot.loglik[..lanes].copy_from_slice(&loglik.total()[..lanes]);
         Ok(())
     }
 
     /// The measurement update of every lane; the lane, pivot and tolerance of a singular
     /// innovation covariance if one is.
     #[inline(always)]
-    fn update(&self, w: &mut Work, loglik: &mut [f64; LANES]) -> Option<(usize, f64, f64)> {
-        let (n, m) = (self.n, self.m);
+    fn update<const N: usize, const M: usize>(
+        &self,
+        w: &mut Work,
+        loglik: &mut Loglik,
+    ) -> Option<(usize, f64, f64)> {
+        let (n, m) = self.sizes::<N, M>();
+        let Work {
+            e,
+            inv,
+            k,
+            p,
+            pht,
+            present,
+            s,
+            sigma,
+            x,
+            y,
+            z,
+            ..
+        } = &mut *w;
+        let e = &mut e[..m];
+        let inv = &mut inv[..m];
+        let k = &mut k[..n * m];
+        let p = &mut p[..n * n];
+        let pht = &mut pht[..n * m];
+        let present = &mut present[..m];
+        let s = &mut s[..m * m];
+        let sigma = &mut sigma[..m * m];
+        let x = &mut x[..n];
+        let y = &mut y[..m];
+        let z = &mut z[..m];
         // Masked innovation e and H x.
         for j in 0..m {
             let mut hx = [0.0; LANES];
             for c in 0..n {
                 let h = self.h[j * n + c];
                 for l in 0..LANES {
-                    hx[l] += h * w.x[c][l];
+                    hx[l] += h * x[c][l];
                 }
             }
             for l in 0..LANES {
-                let present = !w.z[j][l].is_nan();
-                w.present[j][l] = if present { 1.0 } else { 0.0 };
-                w.e[j][l] = if present { w.z[j][l] - hx[l] } else { 0.0 };
+                let seen = !z[j][l].is_nan();
+                present[j][l] = if seen { 1.0 } else { 0.0 };
+                e[j][l] = if seen { z[j][l] - hx[l] } else { 0.0 };
             }
         }
         // P Hᵀ (n×m), its columns masked.
@@ -372,11 +427,11 @@ impl BatchFilter {
                 for c in 0..n {
                     let h = self.h[j * n + c];
                     for l in 0..LANES {
-                        acc[l] += w.p[i * n + c][l] * h;
+                        acc[l] += p[i * n + c][l] * h;
                     }
                 }
                 for l in 0..LANES {
-                    w.pht[i * m + j][l] = acc[l] * w.present[j][l];
+                    pht[i * m + j][l] = acc[l] * present[j][l];
                 }
             }
         }
@@ -387,42 +442,42 @@ impl BatchFilter {
                 for i in 0..n {
                     let h = self.h[j * n + i];
                     for l in 0..LANES {
-                        acc[l] += h * w.pht[i * m + c][l];
+                        acc[l] += h * pht[i * m + c][l];
                     }
                 }
                 let r = self.r[j * m + c];
                 for l in 0..LANES {
-                    let both = w.present[j][l] * w.present[c][l];
-                    let unit = if j == c { 1.0 - w.present[j][l] } else { 0.0 };
-                    w.sigma[j * m + c][l] = both * (acc[l] + r) + unit;
+                    let both = present[j][l] * present[c][l];
+                    let unit = if j == c { 1.0 - present[j][l] } else { 0.0 };
+                    sigma[j * m + c][l] = both * (acc[l] + r) + unit;
                 }
             }
         }
         // Σ kept for the Joseph form; Cholesky Σ = L Lᵀ, lane by lane in lockstep (L in the
         // lower triangle of `sigma`).
-        w.s.copy_from_slice(&w.sigma);
+        s.copy_from_slice(sigma);
         let mut largest = [0.0f64; LANES];
         for j in 0..m {
             for l in 0..LANES {
-                largest[l] = largest[l].max(w.sigma[j * m + j][l]);
+                largest[l] = largest[l].max(sigma[j * m + j][l]);
             }
         }
         for j in 0..m {
             for c in 0..j {
-                let mut acc = w.sigma[j * m + c];
+                let mut acc = sigma[j * m + c];
                 for t in 0..c {
                     for l in 0..LANES {
-                        acc[l] -= w.sigma[j * m + t][l] * w.sigma[c * m + t][l];
+                        acc[l] -= sigma[j * m + t][l] * sigma[c * m + t][l];
                     }
                 }
                 for l in 0..LANES {
-                    w.sigma[j * m + c][l] = acc[l] / w.sigma[c * m + c][l];
+                    sigma[j * m + c][l] = acc[l] * inv[c][l];
                 }
             }
-            let mut d = w.sigma[j * m + j];
+            let mut d = sigma[j * m + j];
             for t in 0..j {
                 for l in 0..LANES {
-                    d[l] -= w.sigma[j * m + t][l] * w.sigma[j * m + t][l];
+                    d[l] -= sigma[j * m + t][l] * sigma[j * m + t][l];
                 }
             }
             let mut bad = false;
@@ -436,82 +491,98 @@ impl BatchFilter {
                 return Some((l, d[l], RANK_TOL * largest[l]));
             }
             for l in 0..LANES {
-                w.sigma[j * m + j][l] = d[l].sqrt();
+                let root = d[l].sqrt();
+                sigma[j * m + j][l] = root;
+                inv[j][l] = 1.0 / root;
             }
         }
         // Kᵀ = Σ⁻¹ (P Hᵀ)ᵀ by two triangular solves per row of P Hᵀ; v = L⁻¹ e alongside.
         for i in 0..=n {
             // Row i of P Hᵀ (i < n), or the innovation (i = n).
-            let y = &mut w.y;
             for j in 0..m {
-                y[j] = if i < n { w.pht[i * m + j] } else { w.e[j] };
+                y[j] = if i < n { pht[i * m + j] } else { e[j] };
                 for t in 0..j {
                     for l in 0..LANES {
-                        y[j][l] -= w.sigma[j * m + t][l] * y[t][l];
+                        y[j][l] -= sigma[j * m + t][l] * y[t][l];
                     }
                 }
                 for l in 0..LANES {
-                    y[j][l] /= w.sigma[j * m + j][l];
+                    y[j][l] *= inv[j][l];
                 }
             }
             if i == n {
-                // ln L = −½ (|L⁻¹e|² + ln det Σ + present · ln 2π).
+                // ln L = −½ (|L⁻¹e|² + ln det Σ + present · ln 2π), det Σ = Π L_jj²
+                // (a missing entry's unit pivot adds nothing) into the running product.
                 for l in 0..LANES {
                     let mut quad = 0.0;
-                    let mut logdet = 0.0;
-                    let mut present = 0.0;
+                    let mut det = 1.0;
+                    let mut seen = 0.0;
                     for j in 0..m {
                         quad += y[j][l] * y[j][l];
-                        logdet += 2.0 * w.sigma[j * m + j][l].ln();
-                        present += w.present[j][l];
+                        det *= sigma[j * m + j][l] * sigma[j * m + j][l];
+                        seen += present[j][l];
                     }
-                    loglik[l] -= 0.5 * (quad + logdet + present * LN_2PI);
+                    loglik.sum[l] -= 0.5 * (quad + seen * LN_2PI);
+                    if det >= DET_RANGE.0 && det <= DET_RANGE.1 {
+                        loglik.det[l] *= det;
+                    } else {
+                        // A step's own det Σ beyond 2^±500 (or its product over- or
+                        // underflowing): its logarithm pivot by pivot.
+                        for j in 0..m {
+                            loglik.sum[l] -= sigma[j * m + j][l].ln();
+                        }
+                    }
                 }
+                loglik.keep_in_range();
                 break;
             }
             for j in (0..m).rev() {
                 for t in j + 1..m {
                     for l in 0..LANES {
-                        y[j][l] -= w.sigma[t * m + j][l] * y[t][l];
+                        y[j][l] -= sigma[t * m + j][l] * y[t][l];
                     }
                 }
                 for l in 0..LANES {
-                    y[j][l] /= w.sigma[j * m + j][l];
+                    y[j][l] *= inv[j][l];
                 }
             }
             for j in 0..m {
-                w.k[i * m + j] = y[j];
+                k[i * m + j] = y[j];
             }
         }
         // x⁺ = x + K e.
         for i in 0..n {
             for j in 0..m {
                 for l in 0..LANES {
-                    w.x[i][l] += w.k[i * m + j][l] * w.e[j][l];
+                    x[i][l] += k[i * m + j][l] * e[j][l];
                 }
             }
         }
         match self.form {
-            CovarianceForm::Standard => self.standard(w),
-            _ => self.joseph(w),
+            CovarianceForm::Standard => self.standard::<N, M>(w),
+            _ => self.joseph::<N, M>(w),
         }
         None
     }
 
     /// `P⁺ = P − K (P Hᵀ)ᵀ`, the upper triangle computed and mirrored.
     #[inline(always)]
-    fn standard(&self, w: &mut Work) {
-        let (n, m) = (self.n, self.m);
+    fn standard<const N: usize, const M: usize>(&self, w: &mut Work) {
+        let (n, m) = self.sizes::<N, M>();
+        let Work { k, p, pht, .. } = &mut *w;
+        let k = &mut k[..n * m];
+        let p = &mut p[..n * n];
+        let pht = &mut pht[..n * m];
         for i in 0..n {
             for c in i..n {
-                let mut acc = w.p[i * n + c];
+                let mut acc = p[i * n + c];
                 for j in 0..m {
                     for l in 0..LANES {
-                        acc[l] -= w.k[i * m + j][l] * w.pht[c * m + j][l];
+                        acc[l] -= k[i * m + j][l] * pht[c * m + j][l];
                     }
                 }
-                w.p[i * n + c] = acc;
-                w.p[c * n + i] = acc;
+                p[i * n + c] = acc;
+                p[c * n + i] = acc;
             }
         }
     }
@@ -521,8 +592,16 @@ impl BatchFilter {
     /// of O(n³)) and computed by its upper triangle; Σ is the masked one, so a missing
     /// entry's zero gain column drops out.
     #[inline(always)]
-    fn joseph(&self, w: &mut Work) {
-        let (n, m) = (self.n, self.m);
+    fn joseph<const N: usize, const M: usize>(&self, w: &mut Work) {
+        let (n, m) = self.sizes::<N, M>();
+        let Work {
+            k, ks, p, pht, s, ..
+        } = &mut *w;
+        let k = &mut k[..n * m];
+        let ks = &mut ks[..n * m];
+        let p = &mut p[..n * n];
+        let pht = &mut pht[..n * m];
+        let s = &mut s[..m * m];
         // K Σ (n×m), Σ from its lower triangle.
         for i in 0..n {
             for c in 0..m {
@@ -530,55 +609,58 @@ impl BatchFilter {
                 for j in 0..m {
                     let at = if j >= c { j * m + c } else { c * m + j };
                     for l in 0..LANES {
-                        acc[l] += w.k[i * m + j][l] * w.s[at][l];
+                        acc[l] += k[i * m + j][l] * s[at][l];
                     }
                 }
-                w.ks[i * m + c] = acc;
+                ks[i * m + c] = acc;
             }
         }
         for i in 0..n {
             for c in i..n {
-                let mut acc = w.p[i * n + c];
+                let mut acc = p[i * n + c];
                 for j in 0..m {
                     for l in 0..LANES {
-                        acc[l] += w.ks[i * m + j][l] * w.k[c * m + j][l]
-                            - w.k[i * m + j][l] * w.pht[c * m + j][l]
-                            - w.pht[i * m + j][l] * w.k[c * m + j][l];
+                        acc[l] += ks[i * m + j][l] * k[c * m + j][l]
+                            - k[i * m + j][l] * pht[c * m + j][l]
+                            - pht[i * m + j][l] * k[c * m + j][l];
                     }
                 }
-                w.p[i * n + c] = acc;
-                w.p[c * n + i] = acc;
+                p[i * n + c] = acc;
+                p[c * n + i] = acc;
             }
         }
     }
 
     /// `x⁻ = F x⁺`, `P⁻ = F P⁺ Fᵀ + Q` (by its upper triangle).
     #[inline(always)]
-    fn predict(&self, w: &mut Work) {
-        let n = self.n;
+    fn predict<const N: usize>(&self, w: &mut Work) {
+        let n = self.sizes::<N, 0>().0;
+        let Work { a, p, t, x, .. } = &mut *w;
+        let a = &mut a[..n * n];
+        let p = &mut p[..n * n];
+        let t = &mut t[..n];
+        let x = &mut x[..n];
         for i in 0..n {
             let mut acc = [0.0; LANES];
             for c in 0..n {
                 let f = self.f[i * n + c];
                 for l in 0..LANES {
-                    acc[l] += f * w.x[c][l];
+                    acc[l] += f * x[c][l];
                 }
             }
-            w.t[i] = acc;
+            t[i] = acc;
         }
-        for i in 0..n {
-            w.x[i] = w.t[i];
-        }
+        x.copy_from_slice(t);
         for i in 0..n {
             for c in 0..n {
                 let mut acc = [0.0; LANES];
                 for t in 0..n {
                     let f = self.f[i * n + t];
                     for l in 0..LANES {
-                        acc[l] += f * w.p[t * n + c][l];
+                        acc[l] += f * p[t * n + c][l];
                     }
                 }
-                w.a[i * n + c] = acc;
+                a[i * n + c] = acc;
             }
         }
         for i in 0..n {
@@ -587,11 +669,11 @@ impl BatchFilter {
                 for t in 0..n {
                     let f = self.f[c * n + t];
                     for l in 0..LANES {
-                        acc[l] += w.a[i * n + t][l] * f;
+                        acc[l] += a[i * n + t][l] * f;
                     }
                 }
-                w.p[i * n + c] = acc;
-                w.p[c * n + i] = acc;
+                p[i * n + c] = acc;
+                p[c * n + i] = acc;
             }
         }
     }
@@ -599,119 +681,3 @@ impl BatchFilter {
 
 /// The largest m the batch step's fixed buffers take.
 const MAX_M: usize = 16;
-
-/// The first of the `lanes` series whose state (named `x`) or a diagonal entry of whose
-/// covariance (named `p`) is not finite, with the name and the value: one vector pass that
-/// sums `0·v` (NaN if any v is not), and a search only when it is.
-#[inline(always)]
-fn non_finite(
-    w: &Work,
-    n: usize,
-    lanes: usize,
-    x: &'static str,
-    p: &'static str,
-) -> Option<(usize, &'static str, f64)> {
-    let mut probe = [0.0; LANES];
-    for i in 0..n {
-        for l in 0..LANES {
-            probe[l] += 0.0 * w.x[i][l] + 0.0 * w.p[i * n + i][l];
-        }
-    }
-    if probe[..lanes].iter().all(|v| v.is_finite()) {
-        return None;
-    }
-    (0..lanes).find_map(|l| {
-        (0..n).find_map(|i| {
-            let (v, d) = (w.x[i][l], w.p[i * n + i][l]);
-            if !v.is_finite() {
-                Some((l, x, v))
-            } else if !d.is_finite() {
-                Some((l, p, d))
-            } else {
-                None
-            }
-        })
-    })
-}
-
-fn in_series(series: usize, error: Error) -> Error {
-    Error::InSeries {
-        series,
-        error: Box::new(error),
-    }
-}
-
-/// One group's rows: every quantity a row of [`LANES`] numbers, matrices row-major.
-struct Work {
-    x: Vec<[f64; LANES]>,
-    p: Vec<[f64; LANES]>,
-    z: Vec<[f64; LANES]>,
-    e: Vec<[f64; LANES]>,
-    present: Vec<[f64; LANES]>,
-    pht: Vec<[f64; LANES]>,
-    sigma: Vec<[f64; LANES]>,
-    k: Vec<[f64; LANES]>,
-    ks: Vec<[f64; LANES]>,
-    a: Vec<[f64; LANES]>,
-    t: Vec<[f64; LANES]>,
-    y: Vec<[f64; LANES]>,
-    s: Vec<[f64; LANES]>,
-}
-
-impl Work {
-    fn new(n: usize, m: usize) -> Self {
-        let rows = |len: usize| vec![[0.0; LANES]; len];
-        Self {
-            x: rows(n),
-            p: rows(n * n),
-            z: rows(m),
-            e: rows(m),
-            present: rows(m),
-            pht: rows(n * m),
-            sigma: rows(m * m),
-            k: rows(n * m),
-            ks: rows(n * m),
-            a: rows(n * n),
-            t: rows(n * n),
-            y: rows(m),
-            s: rows(m * m),
-        }
-    }
-}
-
-/// The part of a [`BatchOutput`] one group writes.
-struct GroupOut<'a> {
-    means: &'a mut [f64],
-    covariances: Option<&'a mut [f64]>,
-    last: &'a mut [f64],
-    loglik: &'a mut [f64],
-}
-
-impl<'a> GroupOut<'a> {
-    fn split(out: &'a mut BatchOutput, n: usize, steps: usize, cov: bool) -> Vec<Self> {
-        let means = out.means.chunks_mut(LANES * steps * n);
-        let last = out.last_covariances.chunks_mut(LANES * n * n);
-        let loglik = out.log_likelihood.chunks_mut(LANES);
-        let mut covs: Vec<Option<&'a mut [f64]>> = if cov {
-            out.covariances
-                .chunks_mut(LANES * steps * n * n)
-                .map(Some)
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let groups = out.series.div_ceil(LANES);
-        covs.resize_with(groups, || None);
-        means
-            .zip(last)
-            .zip(loglik)
-            .zip(covs)
-            .map(|(((means, last), loglik), covariances)| GroupOut {
-                means,
-                covariances,
-                last,
-                loglik,
-            })
-            .collect()
-    }
-}

@@ -64,6 +64,7 @@ use num_dual::{Dual, Dual64};
 use super::info::{aic, bic, correlation, explain_unidentified, spd_inverse, std_errors_of};
 use super::mle::{MleOptions, Objective, optimise};
 use super::{FitError, LN_2PI, Series};
+use crate::kernels::{cholesky, symmetrise};
 use crate::nonlinear::{GenericModel, Scalar};
 
 /// A nonlinear model whose transition, measurement function, noise and prior depend on a
@@ -546,7 +547,7 @@ impl<T: Scalar> Pass<T> {
             }
         }
         symmetrise(&mut self.s[..mk * mk], mk);
-        if !cholesky(&mut self.s[..mk * mk], mk) {
+        if !cholesky(&mut self.s[..mk * mk], mk, 0.0) {
             return Err(FitError::NotPositiveDefinite {
                 name: "innovation covariance",
                 step: k,
@@ -669,41 +670,7 @@ fn mul_t<T: Scalar>(a: &[T], b: &[T], c: &mut [T], n: usize) {
     }
 }
 
-fn symmetrise<T: Scalar>(a: &mut [T], n: usize) {
-    for j in 0..n {
-        for i in j + 1..n {
-            let s = (a[i + j * n] + a[j + i * n]) * 0.5;
-            a[i + j * n] = s;
-            a[j + i * n] = s;
-        }
-    }
-}
-
-/// Lower Cholesky factor in place (the strict upper triangle is left as it was); false when
-/// a pivot is not positive.
-fn cholesky<T: Scalar>(a: &mut [T], n: usize) -> bool {
-    for j in 0..n {
-        let mut d = a[j + j * n];
-        for l in 0..j {
-            d -= a[j + l * n] * a[j + l * n];
-        }
-        if d.re().is_nan() || d.re() <= 0.0 {
-            return false;
-        }
-        let d = d.sqrt();
-        a[j + j * n] = d;
-        for i in j + 1..n {
-            let mut s = a[i + j * n];
-            for l in 0..j {
-                s -= a[i + l * n] * a[j + l * n];
-            }
-            a[i + j * n] = s / d;
-        }
-    }
-    true
-}
-
-/// Solves `L Lᵀ y = b` in place with the factor of [`cholesky`].
+/// Solves `L Lᵀ y = b` in place with the lower factor of `kernels::cholesky`.
 fn chol_solve<T: Scalar>(l: &[T], n: usize, b: &mut [T]) {
     for i in 0..n {
         let mut s = b[i];

@@ -71,10 +71,11 @@ fn equals_the_scalar_filter_on_every_series_with_random_gaps_in_both_forms() {
     // the two filters do the same arithmetic in different orders (the batch step masks a
     // missing entry, the scalar one drops its row), so they agree to round-off, a few
     // hundred ulps; 1e-12 leaves room for that and catches any real difference.
-    // Eleven series: one full group of LANES and a partial one.
+    // Eleven series: one full group of LANES and a partial one. The sizes include ones the
+    // batch step compiles for (n = 1, 2, 3, 4, 6) and ones it does not ((2, 4), (5, 2)).
     const { assert!(LANES < 11) };
     for form in [CovarianceForm::Joseph, CovarianceForm::Standard] {
-        for (n, m) in [(1, 1), (2, 1), (4, 1), (3, 2), (6, 3), (2, 4)] {
+        for (n, m) in [(1, 1), (2, 1), (4, 1), (3, 2), (6, 3), (2, 4), (5, 2)] {
             for seed in 0..4 {
                 let d = deviation(n, m, 11, seed, form);
                 assert!(
@@ -221,4 +222,55 @@ fn no_series_or_no_steps_is_an_empty_result() {
     assert!(out.means.is_empty() && out.log_likelihood.is_empty());
     let out = batch.run(&[0.0, 0.0], &P0, &[], 4).expect("no steps");
     assert_eq!(out.log_likelihood, vec![0.0; 4]);
+}
+
+#[test]
+fn the_log_likelihood_holds_at_extreme_noise_scales() {
+    // The batch filter multiplies the steps' det Σ and takes the logarithm when the product
+    // leaves 2^±500, and a step whose own det Σ is beyond that pivot by pivot. Scaled by
+    // 1e160 (every step beyond), 1e-100 (every step inside, the product out after two) and
+    // 1e-160 (every step beyond, below): the scalar filter's ln L to 1e-12 relative.
+    for scale in [1e160, 1e-100, 1e-160] {
+        let model = Model::new(
+            DynDims::new(2, 1, 0).expect("dims"),
+            &[[1.0, 0.1], [0.0, 1.0]],
+            &[[1.0, 0.0]],
+            &[[1e-4 * scale, 0.0], [0.0, 1e-3 * scale]],
+            &[[0.01 * scale]],
+        )
+        .expect("model");
+        let p0 = [[scale, 0.0], [0.0, scale]];
+        let steps = 40;
+        let root = scale.sqrt();
+        let zs: Vec<f64> = (0..3 * steps)
+            .map(|i| {
+                if i % 9 == 4 {
+                    f64::NAN
+                } else {
+                    root * (0.3 * i as f64).sin()
+                }
+            })
+            .collect();
+        let out = BatchFilter::new(&model, CovarianceForm::Joseph)
+            .expect("batch")
+            .run(&[0.0, 0.0], &p0, &zs, 3)
+            .expect("batch run");
+        for s in 0..3 {
+            let mut kf =
+                Filter::new(model.clone(), &[0.0, 0.0], &p0, CovarianceForm::Joseph).expect("kf");
+            let mut loglik = 0.0;
+            for k in 0..steps {
+                loglik += kf
+                    .step(&[zs[s * steps + k]], None)
+                    .expect("step")
+                    .log_likelihood;
+            }
+            let d = rel(out.log_likelihood[s], loglik);
+            assert!(
+                d < 1e-12,
+                "scale {scale:e}, series {s}: {} vs {loglik}",
+                out.log_likelihood[s]
+            );
+        }
+    }
 }
