@@ -97,7 +97,12 @@ fn bench(c: &mut Criterion) {
     g.sample_size(20);
     let pools: Vec<_> = [1, 2]
         .into_iter()
-        .map(|t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap())
+        .map(|t| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap()
+        })
         .collect();
     for n in [1000, 10_000] {
         g.throughput(Throughput::Elements((n * STEPS) as u64));

@@ -58,10 +58,10 @@ mod guide {
     struct Fitting;
     #[doc = include_str!("../../docs/nonlinear.md")]
     struct Nonlinear;
-    #[doc = include_str!("../../docs/imm.md")]
-    struct Imm;
     #[doc = include_str!("../../docs/particles.md")]
     struct Particles;
+    #[doc = include_str!("../../docs/imm.md")]
+    struct Imm;
     #[doc = include_str!("../../docs/cli.md")]
     struct Cli;
     #[doc = include_str!("../../docs/python.md")]
