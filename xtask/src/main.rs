@@ -223,7 +223,7 @@ fn reproduce(args: &[String]) -> Result<()> {
     let mut cmd = cargo();
     cmd.args(["build", "--release", "--quiet", "--package", "scenarios"]);
     run(cmd).context("building the scenarios program")?;
-    stamp("built; running `scenarios all` (fueling, uav, boom)");
+    stamp("built; running `scenarios all` (fueling, uav, boom, flightpath)");
     // Where the index is: `reports/`, or the `--out` given among `args`.
     let out = args
         .iter()
