@@ -381,13 +381,13 @@ fn argument_errors_are_one_line_naming_the_argument() {
     usage_error(
         &dir,
         &["filtr"],
-        "unknown command filtr: expected fueling, uav, boom, all, merge, filter, discretize, \
+        "unknown command filtr: expected fueling, uav, boom, flightpath, all, merge, filter, discretize, \
          steady-state or fit (did you mean fit or filter?)",
     );
     usage_error(
         &dir,
         &[],
-        "a command is required: fueling, uav, boom, all, merge, filter, discretize, \
+        "a command is required: fueling, uav, boom, flightpath, all, merge, filter, discretize, \
          steady-state or fit (see scenarios --help)",
     );
     usage_error(
