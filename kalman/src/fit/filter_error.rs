@@ -69,7 +69,7 @@ use crate::nonlinear::{GenericModel, Scalar};
 
 /// A nonlinear model whose transition, measurement function, noise and prior depend on a
 /// parameter vector θ, every function generic over the scalar (as
-/// [`GenericModel`](crate::nonlinear::GenericModel)'s) in θ and x alike, so that
+/// [`GenericModel`]'s) in θ and x alike, so that
 /// [`filter_error`] differentiates the filter exactly. Matrices are written column-major
 /// (`out[i + j·n]` is entry (i, j)).
 pub trait ParametricModel {

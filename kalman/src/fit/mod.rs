@@ -89,12 +89,12 @@ mod em;
 mod entries;
 mod error;
 #[cfg(all(feature = "autodiff", feature = "argmin"))]
-mod filter_error;
+pub mod filter_error;
 mod info;
 #[cfg(feature = "argmin")]
 mod mle;
 #[cfg(feature = "autodiff")]
-mod output_error;
+pub mod output_error;
 mod params;
 mod score;
 

@@ -522,7 +522,7 @@ impl Imm {
     ///
     /// # Errors
     /// A mode's error ([`Error::Shape`] naming `z` or `u`, [`Error::Diverged`], …; the IMM
-    /// is then unusable until [`Imm::reset`]); [`Error::Factorisation`] naming `mu` if no
+    /// is then unusable: build a new one); [`Error::Factorisation`] naming `mu` if no
     /// mode gives `z_k` a positive likelihood.
     pub fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<ImmStep, Error> {
         self.step_inner(z, u, None)

@@ -3,8 +3,8 @@
 //! h generic over the scalar, so `AutoDiff` gives the EKF's Jacobians and the output-error
 //! fit its sensitivities from the same code).
 //!
-//! **State** (n = 21; 9 when not augmented): body velocity `(u, v, w)` [m/s], Euler angles
-//! `(φ, θ, ψ)` [rad], position `(x_N, y_E, h)` [m, altitude up], then the instrument
+//! **State** (n = 21; 9 when not augmented): body velocity `(u, v, w)` (m/s), Euler angles
+//! `(φ, θ, ψ)` (rad), position `(x_N, y_E, h)` (m, altitude up), then the instrument
 //! errors `b_a` (3, m/s²), `b_ω` (3, rad/s), `λ_V, b_V, λ_α, b_α, λ_β, b_β` (constant states).
 //!
 //! **Inputs**: the IMU's specific force `a_m` and body rates `ω_m`, corrected to

@@ -77,8 +77,8 @@ impl Default for InstrumentErrors {
 
 impl InstrumentErrors {
     /// The errors in SI units, in the order of the filter's augmented state: accelerometer
-    /// biases (m/s²), gyro biases (rad/s), then (λ_V, b_V [m/s], λ_α, b_α [rad], λ_β,
-    /// b_β [rad]).
+    /// biases (m/s²), gyro biases (rad/s), then (λ_V, b_V (m/s), λ_α, b_α (rad), λ_β,
+    /// b_β (rad)).
     pub fn si(&self) -> [f64; 12] {
         let g = self.gyro_bias_dps;
         let a = self.accel_bias_mps2;
