@@ -61,7 +61,9 @@
 use faer::Mat;
 use num_dual::{Dual, Dual64};
 
-use super::info::{aic, bic, correlation, explain_unidentified, spd_inverse, std_errors_of};
+use super::info::{
+    aic, bic, central_information, correlation, explain_unidentified, spd_inverse, std_errors_of,
+};
 use super::mle::{MleOptions, Objective, optimise};
 use super::{FitError, LN_2PI, Series};
 use crate::kernels::{cholesky, symmetrise};
@@ -348,30 +350,7 @@ impl<M: ParametricModel> Objective for EkfRecords<'_, M> {
     }
 
     fn information(&self, theta: &[f64]) -> Result<Mat<f64>, FitError> {
-        let k = theta.len();
-        let mut h = Mat::zeros(k, k);
-        let mut t = theta.to_vec();
-        for j in 0..k {
-            // The gradient is exact, so the step only has to beat its round-off
-            // (relative 1e-16·|∇| over 2·step) and stay small against θ's curvature scale.
-            let step = 1e-4 * theta[j].abs().max(1.0);
-            t[j] = theta[j] + step;
-            let (_, gp) = self.loglik_gradient(&t)?;
-            t[j] = theta[j] - step;
-            let (_, gm) = self.loglik_gradient(&t)?;
-            t[j] = theta[j];
-            for i in 0..k {
-                h[(i, j)] = -(gp[i] - gm[i]) / (2.0 * step);
-            }
-        }
-        for j in 0..k {
-            for i in j + 1..k {
-                let s = 0.5 * (h[(i, j)] + h[(j, i)]);
-                h[(i, j)] = s;
-                h[(j, i)] = s;
-            }
-        }
-        Ok(h)
+        central_information(theta, |t| self.loglik_gradient(t))
     }
 
     fn hint(&self) -> &'static str {
