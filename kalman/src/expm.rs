@@ -71,6 +71,7 @@ pub(crate) struct Expm {
     v: Vec<f64>,
     t: Vec<f64>,
     piv: Vec<usize>,
+    arch: pulp::Arch,
 }
 
 impl Expm {
@@ -87,6 +88,7 @@ impl Expm {
             v: z.clone(),
             t: z,
             piv: vec![0; cap],
+            arch: pulp::Arch::new(),
         }
     }
 
@@ -108,6 +110,31 @@ impl Expm {
     /// product, the LU factors and the result keep that zero block, so the products skip it
     /// (half the work at `blk = k/2`). `blk = k` is a full matrix.
     pub(crate) fn run_block(&mut self, k: usize, blk: usize, out: &mut [f64]) -> bool {
+        // The sizes of the Van Loan blocks of models up to n = 8 (k = 2n, blk = n) and of
+        // small full matrices are compile-time constants, so the kernels' loops unroll; each
+        // runs with the widest vector instructions the processor has (mul and add stay
+        // separate, so every instruction set gives the same bits).
+        let arch = self.arch;
+        macro_rules! sized {
+            ($($k:literal, $b:literal);*) => {
+                match (k, blk) {
+                    $(($k, $b) => arch.dispatch(
+                        #[inline(always)]
+                        || self.run_sized($k, $b, out),
+                    ),)*
+                    _ => arch.dispatch(
+                        #[inline(always)]
+                        || self.run_sized(k, blk, out),
+                    ),
+                }
+            };
+        }
+        sized!(2, 1; 4, 2; 6, 3; 8, 4; 10, 5; 12, 6; 14, 7; 16, 8; 2, 2; 3, 3; 4, 4)
+    }
+
+    /// [`Expm::run_block`]'s body, inlined into each of its size-specialised callers.
+    #[inline(always)]
+    fn run_sized(&mut self, k: usize, blk: usize, out: &mut [f64]) -> bool {
         let kk = k * k;
         let norm1 = (0..k)
             .map(|j| {
@@ -223,6 +250,7 @@ impl Expm {
 }
 
 /// `c ← a b` (k×k, column-major), both zero in rows `blk..` of columns `..blk`.
+#[inline(always)]
 fn mm(blk: usize, c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
     c[..k * k].iter_mut().for_each(|x| *x = 0.0);
     for j in 0..k {
@@ -244,6 +272,7 @@ fn mm(blk: usize, c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
 }
 
 /// `c ← Σ w_i M_i + d I`.
+#[inline(always)]
 fn combine(c: &mut [f64], terms: &[(f64, &[f64])], d: f64, k: usize) {
     for i in 0..k * k {
         c[i] = terms.iter().map(|(w, m)| w * m[i]).sum();
@@ -251,6 +280,7 @@ fn combine(c: &mut [f64], terms: &[(f64, &[f64])], d: f64, k: usize) {
     add_identity(c, d, k);
 }
 
+#[inline(always)]
 fn add_identity(c: &mut [f64], d: f64, k: usize) {
     for i in 0..k {
         c[i + i * k] += d;
@@ -259,6 +289,7 @@ fn add_identity(c: &mut [f64], d: f64, k: usize) {
 
 /// Solves `a x = b` in place (a k×k destroyed by its LU factors with partial pivoting, b
 /// k×k overwritten by x). `false` for a zero pivot.
+#[inline(always)]
 fn lu_solve(a: &mut [f64], piv: &mut [usize], b: &mut [f64], k: usize, blk: usize) -> bool {
     // Below `blk`, the columns before `blk` are zero: the pivot search and the elimination of
     // such a column stop at `blk`, and L keeps the zero block.
