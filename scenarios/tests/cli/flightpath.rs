@@ -1,5 +1,6 @@
 //! `scenarios flightpath`: summary.json's keys, shards merged equal to one run, and
-//! `--data` on the simulated flight written to CSV reproducing the in-memory estimates.
+//! `--data` on the simulated flight written to CSV reproducing the in-memory estimates, and
+//! the plot style of every figure both write.
 
 use super::common::{argv, assert_same_files, ok, scratch, summary};
 
@@ -66,6 +67,13 @@ fn shards_merge_and_data_reproduces_the_nominal_run() {
         &dir,
         &argv("flightpath --data flight.csv --config short.toml --out user"),
     );
+    // Every figure of both runs keeps the plot style (`plots::check`).
+    for out in ["whole", "user"] {
+        let files = super::plots::svgs(&dir.join(out));
+        assert!(files.len() >= 8, "{out}: {files:?}");
+        let problems: Vec<String> = files.iter().flat_map(|f| super::plots::check(f)).collect();
+        assert!(problems.is_empty(), "{}", problems.join("\n"));
+    }
     let u = summary(&dir.join("user"));
     assert_eq!(u["scenario"], "flightpath-data");
     for j in 0..12 {

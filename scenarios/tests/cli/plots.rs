@@ -185,7 +185,7 @@ fn tick_value(label: &str) -> f64 {
 }
 
 /// Checks the style rules on one SVG file; returns the problems found.
-fn check(path: &Path) -> Vec<String> {
+pub(super) fn check(path: &Path) -> Vec<String> {
     let svg = read(path);
     let name = path.display();
     let els = parse(&svg);
@@ -309,7 +309,7 @@ fn in_group<'a>(els: &'a [Element], g: &'a str) -> impl Iterator<Item = &'a Elem
     els.iter().filter(move |e| e.group == g)
 }
 
-fn svgs(dir: &Path) -> Vec<PathBuf> {
+pub(super) fn svgs(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
     for entry in std::fs::read_dir(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
         let path = entry.expect("entry").path();
