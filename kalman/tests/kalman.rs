@@ -53,6 +53,7 @@ mod fit {
     pub mod likelihood;
     pub mod output_error;
     pub mod records;
+    pub mod sampled;
 }
 
 mod steady {

@@ -96,6 +96,8 @@ mod mle;
 #[cfg(feature = "autodiff")]
 pub mod output_error;
 mod params;
+#[cfg(all(feature = "autodiff", feature = "argmin"))]
+pub mod sampled;
 mod score;
 
 pub(crate) use crate::kernels::LN_2PI;
@@ -117,6 +119,8 @@ pub use output_error::{
     OutputErrorCost, OutputErrorFit, OutputErrorOptions, output_error, output_error_cost,
 };
 pub use params::{Derivative, FnMap, Free, MatrixStdErrors, ParamMap, StandardMap, Structure};
+#[cfg(all(feature = "autodiff", feature = "argmin"))]
+pub use sampled::SampledMap;
 pub use score::log_likelihood_gradient;
 
 use crate::{CovarianceForm, DynDims, Filter, MatrixInput, Model};
