@@ -42,6 +42,7 @@ use faer::Mat;
 use nalgebra::DMatrix;
 
 use crate::error::{Error, Result, ValueError};
+pub(crate) use filtering::engine_continuous;
 pub use filtering::{FilterArgs, Form, filter};
 use filtering::{engine_model, model_error};
 use model_file::{DiscreteFile, to_rows};
@@ -225,6 +226,49 @@ pub(crate) fn write_model(dest: &crate::output::Destination, file: &DiscreteFile
         crate::output::write_bytes_to(dest, text.as_bytes())
     } else {
         crate::output::write_bytes_to(dest, model_json(file).as_bytes())
+    }
+}
+
+/// Writes a continuous model file (what `fit` writes for a continuous model, read back by
+/// `filter`, `fit` and `discretize`) as JSON, or TOML for a `.toml` destination.
+pub(crate) fn write_continuous_model(
+    dest: &crate::output::Destination,
+    m: &model_file::ContinuousModel,
+) -> Result<()> {
+    use serde_json::json;
+    let rows = |a: &DMatrix<f64>| json!(to_rows(a));
+    let p = m.p();
+    let fields = [
+        ("A", Some(rows(&m.A))),
+        ("B", (p > 0).then(|| rows(&m.B))),
+        ("G", Some(rows(&m.G))),
+        ("Qc", Some(rows(&m.Qc))),
+        ("C", Some(rows(&m.C))),
+        ("D", (p > 0).then(|| rows(&m.D))),
+        ("R", m.R.as_ref().map(rows)),
+        ("x0", Some(json!(m.x0.as_slice()))),
+        ("P0", m.P0.as_ref().map(rows)),
+        ("channels", m.channels.as_ref().map(|c| json!(c))),
+    ];
+    let is_toml = match dest {
+        crate::output::Destination::File(path) => path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml")),
+        crate::output::Destination::Stdout => false,
+    };
+    if is_toml {
+        let table: serde_json::Map<String, serde_json::Value> = fields
+            .into_iter()
+            .filter_map(|(k, v)| v.map(|v| (k.to_string(), v)))
+            .collect();
+        let text = toml::to_string(&table).map_err(|source| Error::SerialiseToml {
+            dest: dest.to_string(),
+            source,
+        })?;
+        crate::output::write_bytes_to(dest, text.as_bytes())
+    } else {
+        crate::output::write_bytes_to(dest, json_object(&fields).as_bytes())
     }
 }
 

@@ -10,6 +10,8 @@ mod common;
 mod diagnostics;
 #[path = "cli/fit.rs"]
 mod fit;
+#[path = "cli/fit_continuous.rs"]
+mod fit_continuous;
 #[path = "cli/fit_entries.rs"]
 mod fit_entries;
 #[path = "cli/flightpath.rs"]

@@ -26,6 +26,7 @@
 //! A fit that does not converge is an error (exit code 1) unless `--allow-unconverged`.
 #![allow(non_snake_case)]
 
+mod continuous;
 pub mod shaping;
 
 use std::path::{Path, PathBuf};
@@ -195,7 +196,7 @@ fn parse_entry(item: &str) -> Option<Result<(Matrix, usize, usize)>> {
         "F" => Matrix::F,
         "B" => Matrix::B,
         "H" => Matrix::H,
-        "Q" => Matrix::Q,
+        "Q" | "Qc" => Matrix::Q,
         "R" => Matrix::R,
         "P0" => Matrix::P0,
         "x0" => Matrix::X0,
@@ -252,6 +253,8 @@ pub fn parse_free(s: &str) -> Result<FreeSpec> {
             Some((a, b)) => (a.trim(), Some(b.trim())),
             None => (item, None),
         };
+        // A continuous model's intensity is Qc; the discrete form calls its matrix Q.
+        let name = if name == "Qc" { "Q" } else { name };
         if seen.contains(&name.to_string()) {
             return Err(usage(format!("{name} is listed twice")));
         }
@@ -269,7 +272,7 @@ pub fn parse_free(s: &str) -> Result<FreeSpec> {
         };
         let free = &mut spec.free;
         match name {
-            "Q" => free.q = structure(kind)?,
+            "Q" | "Qc" => free.q = structure(kind)?,
             "R" => free.r = structure(kind)?,
             "x0" if kind.is_none() => free.x0 = true,
             "P0" if kind == Some("diag") => free.p0_diag = true,
@@ -559,13 +562,7 @@ pub fn fit(args: &FitArgs) -> Result<()> {
     )?;
     let model = match load_any(&args.model)? {
         AnyModel::Discrete(d) => d,
-        AnyModel::Continuous(_) => {
-            return Err(Error::invalid(
-                &args.model,
-                "fit takes a discrete model (dt, F, H, Q, R): fitting a continuous model over \
-                 a record's own time stamps is not supported yet",
-            ));
-        }
+        AnyModel::Continuous(c) => return continuous::fit(args, &spec, &c, &dest),
     };
     if model.S.is_some() {
         return Err(Error::invalid(

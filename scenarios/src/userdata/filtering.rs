@@ -194,15 +194,26 @@ fn engine_sampler(path: &Path, c: &ContinuousModel) -> Result<kalman::sampling::
              measurement noise)",
         )
     })?;
+    let model = engine_continuous(path, c, R)?;
+    kalman::sampling::Sampler::new(model, SAMPLER_CAPACITY)
+        .map_err(|e| model_error(path, e.to_string()))
+}
+
+/// The engine's continuous model of a continuous model file with the measurement noise `R`:
+/// `W = G Qc Gᵀ` and the control input `B`, every check naming the file's matrices.
+pub(crate) fn engine_continuous(
+    path: &Path,
+    c: &ContinuousModel,
+    R: &DMatrix<f64>,
+) -> Result<kalman::sampling::ContinuousModel> {
     let W = &c.G * &c.Qc * c.G.transpose();
     let err = |e: kalman::Error| model_error(path, e.to_string().replace("matrix W", "G Qc Gᵀ"));
     let model = kalman::sampling::ContinuousModel::new(&c.A, &c.C, &W, R).map_err(err)?;
-    let model = if c.p() > 0 {
-        model.with_control(&c.B).map_err(err)?
+    if c.p() > 0 {
+        model.with_control(&c.B).map_err(err)
     } else {
-        model
-    };
-    kalman::sampling::Sampler::new(model, SAMPLER_CAPACITY).map_err(err)
+        Ok(model)
+    }
 }
 
 /// Distinct intervals the continuous model's sampler keeps: a clock quantised to a few
