@@ -218,17 +218,17 @@ pub fn record_plots(
             )
             .with_color(0),
         ];
+        // The first seconds' prior band dwarfs the rest: shown from 5 % of the record on.
+        let from = t.len() / 20;
         if let Some(te) = truth_errors {
             series.push(Series::dashed(
                 "truth",
-                vec![(t[0], te[j] * f), (t[t.len() - 1], te[j] * f)],
+                vec![(t[from], te[j] * f), (t[t.len() - 1], te[j] * f)],
             ));
         }
         let title = format!("{name}: filtered estimate and ±2σ");
         let y = format!("{name} [{unit}]");
         let file = format!("error_{name}.svg");
-        // The first seconds' prior band dwarfs the rest: shown from 5 % of the record on.
-        let from = t.len() / 20;
         for s in &mut series {
             s.points.retain(|p| p.0 >= t[from]);
         }

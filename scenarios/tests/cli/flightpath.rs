@@ -74,6 +74,20 @@ fn shards_merge_and_data_reproduces_the_nominal_run() {
         let problems: Vec<String> = files.iter().flat_map(|f| super::plots::check(f)).collect();
         assert!(problems.is_empty(), "{}", problems.join("\n"));
     }
+    // The truth line of each instrument error is drawn, not only named in the legend: its
+    // colour (the palette's second) strokes the legend sample and the line.
+    for f in super::plots::svgs(&dir.join("whole")) {
+        if f.file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with("error_"))
+        {
+            let text = std::fs::read_to_string(&f).expect("svg");
+            assert!(
+                text.matches("stroke=\"#FF7F0E\"").count() >= 2,
+                "{}: the truth line is not drawn",
+                f.display()
+            );
+        }
+    }
     let u = summary(&dir.join("user"));
     assert_eq!(u["scenario"], "flightpath-data");
     for j in 0..12 {
