@@ -109,7 +109,8 @@ enum Command {
     Discretize(scenarios::userdata::DiscretizeArgs),
     /// Steady-state covariance and gain of a discrete model (DARE).
     SteadyState(scenarios::userdata::SteadyStateArgs),
-    /// Learn Q, R (and x0, P0) of a discrete model from data by maximum likelihood or EM.
+    /// Learn a model's noise and free entries from data: a discrete model (mle or EM) or a
+    /// continuous one over the record's own time stamps (mle).
     Fit(scenarios::fit::FitArgs),
 }
 

@@ -55,7 +55,9 @@ pub enum FitMethod {
 /// Options of `scenarios fit`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct FitArgs {
-    /// Discrete model (.json or .toml): the fixed parts and the starting values of the free ones.
+    /// Model (.json or .toml), discrete (dt, F, H, Q, R; a regular record) or continuous (A,
+    /// C, G, Qc, R, x0, P0; over the record's own time stamps): the fixed parts and the
+    /// starting values of the free ones.
     #[arg(long, value_name = "MODEL")]
     pub model: PathBuf,
     /// Data CSV: header t,z1,…,zm[,u1,…,up]; an empty or NaN z cell is a missing value.
@@ -72,7 +74,9 @@ pub struct FitArgs {
         help = "What to fit, comma-separated and repeatable: Q:scalar|diag|full, R:scalar|diag|full \
                 (scalar is σ²·I), x0, P0:diag; single entries, 0-based: F[i,j], B[i,j], H[i,j], \
                 Q[i,j], R[i,j], P0[i,j], x0[i] (the rest keeps its value exactly); \
-                Q:white-acceleration (the one intensity of a constant-velocity or -acceleration Q)"
+                Q:white-acceleration (the one intensity of a constant-velocity or -acceleration Q); \
+                a continuous model frees Qc:scalar|diag, R:scalar|diag, x0, P0:diag and the entries \
+                Qc[i,j], R[i,j], P0[i,j], x0[i]"
     )]
     pub free: Vec<FreeSpec>,
     /// Estimator.
