@@ -45,6 +45,7 @@ mod nonlinear {
 mod fit {
     pub mod common;
     pub mod coverage;
+    pub mod diffuse;
     pub mod entries;
     pub mod estimators;
     pub mod filter_error;

@@ -85,6 +85,8 @@
 #![allow(non_snake_case)]
 
 mod dense;
+#[cfg(all(feature = "autodiff", feature = "argmin"))]
+pub mod diffuse;
 mod em;
 mod entries;
 mod error;
@@ -103,6 +105,8 @@ mod score;
 pub(crate) use crate::kernels::LN_2PI;
 use faer::Mat;
 
+#[cfg(all(feature = "autodiff", feature = "argmin"))]
+pub use diffuse::{diffuse_log_likelihood, diffuse_log_likelihood_gradient, mle_diffuse};
 pub use em::{EM_DECREMENT, EmOptions, check_identifiable, em, em_step, em_with_progress};
 pub use entries::{Entry, Matrix, Param, Transform};
 pub use error::FitError;
