@@ -237,6 +237,18 @@ pub enum Error {
         /// What went wrong in it.
         error: Box<Error>,
     },
+    /// A record's time stamp is invalid: not finite, or earlier than the stamp before it.
+    #[error("{name}[{index}] = {value} is invalid: {rule}")]
+    TimeStamp {
+        /// The time vector (`"t"`).
+        name: &'static str,
+        /// The index of the offending stamp.
+        index: usize,
+        /// The offending stamp.
+        value: f64,
+        /// The rule broken.
+        rule: &'static str,
+    },
     /// An option of a filter is out of its valid range.
     #[error("{name} = {value} is invalid: {rule}")]
     InvalidOption {

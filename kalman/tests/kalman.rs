@@ -30,6 +30,7 @@ mod engine {
 
 mod nonlinear {
     pub mod alloc;
+    pub mod continuous;
     pub mod errors;
     pub mod fixed_lag;
     pub mod golden;

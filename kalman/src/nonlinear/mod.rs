@@ -137,6 +137,8 @@ macro_rules! forward_pass_moments {
 
 #[cfg(feature = "autodiff")]
 mod autodiff;
+#[cfg(feature = "autodiff")]
+mod continuous;
 mod ekf;
 mod fixed_lag;
 mod imm_mode;
@@ -149,6 +151,10 @@ mod ukf;
 
 #[cfg(feature = "autodiff")]
 pub use autodiff::{AutoDiff, GenericModel, Scalar};
+#[cfg(feature = "autodiff")]
+pub use continuous::{
+    ContinuousDynamics, DEFAULT_MAX_SUBSTEP, MAX_CONTINUOUS_STATES, MAX_SUBSTEPS, TimeStamped,
+};
 pub use ekf::{Ekf, EkfUpdate};
 pub use fixed_lag::FixedLag;
 pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
