@@ -43,6 +43,12 @@ pub(super) fn fit(
              (Qc[i,j], R[i,j]), not full",
         );
     }
+    if !args.diffuse.is_empty() {
+        return Err(Error::Usage(
+            "--diffuse applies to a discrete model; a continuous model's prior is its x0 and P0"
+                .into(),
+        ));
+    }
     if args.method == FitMethod::Em {
         return Err(Error::Usage(
             "--method em needs a discrete model; a continuous model is fitted by mle over the \

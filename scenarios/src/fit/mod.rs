@@ -95,6 +95,11 @@ pub struct FitArgs {
     /// 20 times as many), E/M cycles for em (default 10000).
     #[arg(long, value_name = "N")]
     pub max_iter: Option<usize>,
+    /// States with no prior (0-based, comma-separated): the exact diffuse initialisation
+    /// (their x0 and P0 ignored), the summary's loglik the diffuse log-likelihood. Discrete
+    /// models, mle only.
+    #[arg(long, value_name = "STATES", value_delimiter = ',')]
+    pub diffuse: Vec<usize>,
 }
 
 /// One `--free` value: the matrices freed as a whole, the single entries, and whether Q is
@@ -521,6 +526,7 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
         "bic": fit.bic,
         "n_params": fit.theta.len(),
         "n_obs": fit.n_obs,
+        "diffuse": args.diffuse,
     }))
 }
 
@@ -611,7 +617,17 @@ pub fn fit(args: &FitArgs) -> Result<()> {
                 opts.max_iter = k as u64;
             }
             kalman::fit::check_identifiable(&map, &series).map_err(|e| fit_error(args, e))?;
-            kalman::fit::mle(&map, map.theta_of(&base, Some(&series)), &series, &opts)
+            let theta0 = map.theta_of(&base, Some(&series));
+            if args.diffuse.is_empty() {
+                kalman::fit::mle(&map, theta0, &series, &opts)
+            } else {
+                kalman::fit::mle_diffuse(&map, theta0, &args.diffuse, &series, &opts)
+            }
+        }
+        FitMethod::Em if !args.diffuse.is_empty() => {
+            return Err(Error::Usage(
+                "--diffuse needs --method mle (EM has no exact diffuse initialisation here)".into(),
+            ));
         }
         FitMethod::Em => {
             let mut opts = EmOptions::default();

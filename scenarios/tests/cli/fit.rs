@@ -182,6 +182,7 @@ fn fit_bad_inputs_are_one_line_errors() {
         summary: None,
         allow_unconverged: false,
         max_iter: Some(2),
+        diffuse: Vec::new(),
     };
     match scenarios::fit::fit(&args) {
         Err(e @ scenarios::error::Error::FitNotConverged { .. }) => assert_eq!(e.exit_code(), 1),
@@ -199,4 +200,48 @@ fn fit_bad_inputs_are_one_line_errors() {
         json(&dir.join("s.json"))["converged"],
         serde_json::Value::Bool(false)
     );
+}
+
+/// `--diffuse 0`: the local level's level has no prior; the summary's ln L is the library's
+/// exact diffuse likelihood at the fitted variances (to the 1e-12 of a JSON round trip of the
+/// estimates), and the same model with P0 = 1e12 — a prior the first update cannot keep
+/// digits against — is refused in one line that points to `--diffuse`.
+#[test]
+fn a_diffuse_level_is_fitted_and_a_swamping_prior_is_refused() {
+    let dir = scratch("fit", "diffuse");
+    let (csv, z) = llt_csv();
+    write(&dir, "z.csv", &csv);
+    write(&dir, "m.json", LLT_MODEL);
+    ok(
+        &dir,
+        &argv(
+            "fit --model m.json --data z.csv --free Q:diag,R:diag --diffuse 0 --out d.json --summary s.json",
+        ),
+    );
+    let s = json(&dir.join("s.json"));
+    assert_eq!(s["diffuse"], serde_json::json!([0]));
+    let fitted = json(&dir.join("d.json"));
+    let (q, r) = (
+        fitted["Q"][0][0].as_f64().expect("Q"),
+        fitted["R"][0][0].as_f64().expect("R"),
+    );
+    let sys = System::new(&[[1.0]], &[[1.0]], &[[q]], &[[r]], &[0.0], &[[100.0]]).expect("system");
+    let series = Series::new(&z, 1).expect("series");
+    let want = kalman::fit::diffuse_log_likelihood(&sys, &[0], &series).expect("ll");
+    let got = s["loglik"].as_f64().expect("loglik");
+    assert!((got - want).abs() <= 1e-9 * want.abs(), "{got} vs {want}");
+    write(&dir, "wide.json", &LLT_MODEL.replace("[[100]]", "[[1e12]]"));
+    let err = fails(
+        &dir,
+        &argv("fit --model wide.json --data z.csv --free Q:diag,R:diag --out w.json"),
+    );
+    assert!(
+        err.contains("wide.json") && err.contains("--diffuse"),
+        "{err}"
+    );
+    let err = fails(
+        &dir,
+        &argv("fit --model m.json --data z.csv --free Q:diag --diffuse 0 --method em --out w.json"),
+    );
+    assert!(err.contains("--diffuse needs --method mle"), "{err}");
 }
