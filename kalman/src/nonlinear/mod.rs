@@ -14,6 +14,10 @@
 //! [`NonlinearModel::state_add`] (x ⊕ δ) and [`NonlinearModel::state_residual`] (x ⊖ y),
 //! as FilterPy's `residual_z`, `x_add` and `residual_x` do.
 //!
+//! Dynamics in continuous time over a record's own time stamps, `ẋ = a(x, u, t)`, are a
+//! `ContinuousDynamics` wrapped in `TimeStamped` (feature `autodiff`): each step integrates
+//! its interval by RK4, and `AutoDiff` differentiates the integrated map.
+//!
 //! # Jacobians (extended filters)
 //! The [`Ekf`] needs the [`Jacobians`] of f and h, from one of three sources:
 //! - written by hand: implement [`Jacobians`] for the model;
