@@ -52,6 +52,12 @@
 //! # }
 //! ```
 //!
+//! The same likelihood, maximised the same way, serves two more forms: a nonlinear model's
+//! parameters through the EKF ([`filter_error()`], the filter-error method; with no process
+//! noise [`output_error()`]), and a continuous model's noise over a record's own time stamps
+//! ([`SampledMap`]). States with no prior at all take the exact diffuse initialisation
+//! ([`mle_diffuse`], [`diffuse`]).
+//!
 //! The observed information gives the standard errors, the correlation matrix
 //! ([`Fit::correlation`]) and, when it is singular, the parameters spanning each direction
 //! the data do not identify ([`Fit::unidentified`], named in the message too).
@@ -92,6 +98,7 @@ mod entries;
 mod error;
 #[cfg(all(feature = "autodiff", feature = "argmin"))]
 pub mod filter_error;
+mod free_names;
 mod info;
 #[cfg(feature = "argmin")]
 mod mle;
@@ -115,6 +122,7 @@ pub use filter_error::{
     AtTheta, MAX_FIXED_PARAMS, ParametricFit, ParametricModel, ekf_log_likelihood,
     ekf_log_likelihood_gradient, filter_error,
 };
+pub use free_names::{FreeSpec, white_acceleration_q};
 pub use info::{Fit, Method, NULL_EIGENVALUE, aic, bic, observed_information};
 #[cfg(feature = "argmin")]
 pub use mle::{MleOptions, mle, mle_records};

@@ -1,7 +1,7 @@
 //! The noise of a continuous model fitted over a record's own time stamps: free entries of
 //! the process-noise intensity `Q_c`, of `R`, `x0` and `P0`, the model sampled exactly at
 //! each interval of the record, and the likelihood maximised through the filter-error
-//! engine ([`super::filter_error`]).
+//! engine ([`super::filter_error()`]).
 //!
 //! # The model
 //! `ẋ = A x + B u + G w` with `E[w(t) w(s)ᵀ] = Q_c δ(t − s)` (`G = I` unless a noise input
