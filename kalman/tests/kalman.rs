@@ -50,6 +50,7 @@ mod fit {
     pub mod entries;
     pub mod estimators;
     pub mod filter_error;
+    pub mod free_names;
     pub mod golden;
     pub mod honest;
     pub mod likelihood;

@@ -7,11 +7,11 @@
 use std::path::Path;
 
 use kalman::fit::{FitError, Matrix, MleOptions, Param, ParametricFit, SampledMap, Series};
-use kalman::fit::{Structure, Transform};
+use kalman::fit::{FreeSpec, Structure, Transform};
 use nalgebra::DMatrix;
 use serde_json::json;
 
-use super::{FitArgs, FitMethod, FreeSpec, fit_error};
+use super::{FitArgs, FitMethod, fit_error};
 use crate::error::{Error, Result};
 use crate::output::Destination;
 use crate::userdata::data::{DataReader, Row};
@@ -112,7 +112,7 @@ pub(super) fn fit(
         .matrices(&result.theta)
         .map_err(|e| fit_error(args, e))?;
     let mut out = model.clone();
-    out.Qc = dense(&fitted.qc);
+    out.Qc = dense(&fitted.w);
     out.R = Some(dense(&fitted.r));
     out.x0 = nalgebra::DVector::from_vec(fitted.x0.clone());
     out.P0 = Some(dense(&fitted.p0));

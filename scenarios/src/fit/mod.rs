@@ -32,10 +32,7 @@ pub mod shaping;
 use std::path::{Path, PathBuf};
 
 use faer::Mat;
-use kalman::fit::{
-    EmOptions, Fit, FitError, Free, Matrix, MleOptions, Param, Series, StandardMap, Structure,
-    System, Transform,
-};
+use kalman::fit::{EmOptions, Fit, FitError, Free, MleOptions, Series, StandardMap, System};
 use nalgebra::DMatrix;
 use serde_json::json;
 
@@ -102,205 +99,25 @@ pub struct FitArgs {
     pub diffuse: Vec<usize>,
 }
 
-/// One `--free` value: the matrices freed as a whole, the single entries, and whether Q is
-/// the white-acceleration intensity.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct FreeSpec {
-    /// Q, R, x0, P0 freed as a whole.
-    pub free: Free,
-    /// Single entries `(matrix, row, column)`, in the order given.
-    pub entries: Vec<(Matrix, usize, usize)>,
-    /// `Q:white-acceleration`.
-    pub white_acceleration: bool,
-}
+/// One `--free` value: [`kalman::fit::FreeSpec`], whose parser the command line shares
+/// with the Python module.
+pub use kalman::fit::FreeSpec;
 
-impl FreeSpec {
-    /// Several `--free` values as one; a whole-matrix item given twice is refused.
-    ///
-    /// # Errors
-    /// [`Error::Usage`] naming the item given twice.
-    pub fn merge(specs: &[FreeSpec]) -> Result<FreeSpec> {
-        let twice = |name: &str| Error::Usage(format!("--free: {name} is listed twice"));
-        let mut out = FreeSpec::default();
-        for s in specs {
-            if s.free.q != Structure::Fixed {
-                if out.free.q != Structure::Fixed || out.white_acceleration {
-                    return Err(twice("Q"));
-                }
-                out.free.q = s.free.q;
-            }
-            if s.free.r != Structure::Fixed {
-                if out.free.r != Structure::Fixed {
-                    return Err(twice("R"));
-                }
-                out.free.r = s.free.r;
-            }
-            if s.free.x0 {
-                if out.free.x0 {
-                    return Err(twice("x0"));
-                }
-                out.free.x0 = true;
-            }
-            if s.free.p0_diag {
-                if out.free.p0_diag {
-                    return Err(twice("P0"));
-                }
-                out.free.p0_diag = true;
-            }
-            if s.white_acceleration {
-                if out.free.q != Structure::Fixed || out.white_acceleration {
-                    return Err(twice("Q"));
-                }
-                out.white_acceleration = true;
-            }
-            for e in &s.entries {
-                if out.entries.contains(e) {
-                    return Err(twice(&entry_name(*e)));
-                }
-                out.entries.push(*e);
-            }
-        }
-        Ok(out)
-    }
-
-    fn is_empty(&self) -> bool {
-        self.free == Free::default() && self.entries.is_empty() && !self.white_acceleration
-    }
-}
-
-fn entry_name((m, i, j): (Matrix, usize, usize)) -> String {
-    Param::entry(m, i, j).name().to_string()
-}
-
-/// Splits at the commas outside brackets (`F[0,0],Q:diag` is two items).
-fn split_items(s: &str) -> Vec<&str> {
-    let mut out = Vec::new();
-    let (mut depth, mut start) = (0_i32, 0);
-    for (i, c) in s.char_indices() {
-        match c {
-            '[' => depth += 1,
-            ']' => depth -= 1,
-            ',' if depth == 0 => {
-                out.push(&s[start..i]);
-                start = i + 1;
-            }
-            _ => {}
-        }
-    }
-    out.push(&s[start..]);
-    out.into_iter()
-        .map(str::trim)
-        .filter(|t| !t.is_empty())
-        .collect()
-}
-
-/// Parses an entry item `NAME[i,j]` (or `x0[i]`); `None` when `item` has no bracket.
-fn parse_entry(item: &str) -> Option<Result<(Matrix, usize, usize)>> {
-    let (name, rest) = item.split_once('[')?;
-    let usage = |m: String| Error::Usage(format!("--free: {m}"));
-    let Some(inner) = rest.strip_suffix(']') else {
-        return Some(Err(usage(format!("{item}: an entry is written NAME[i,j]"))));
-    };
-    let matrix = match name.trim() {
-        "F" => Matrix::F,
-        "B" => Matrix::B,
-        "H" => Matrix::H,
-        "Q" | "Qc" => Matrix::Q,
-        "R" => Matrix::R,
-        "P0" => Matrix::P0,
-        "x0" => Matrix::X0,
-        other => {
-            return Some(Err(usage(format!(
-                "unknown matrix '{other}' in {item}: entries of F, B, H, Q, R, P0 (NAME[i,j], 0-based) or x0[i]"
-            ))));
-        }
-    };
-    let idx: Vec<std::result::Result<usize, _>> = inner
-        .split(',')
-        .map(|t| t.trim().parse::<usize>())
-        .collect();
-    let want = if matrix == Matrix::X0 { 1 } else { 2 };
-    if idx.len() != want || idx.iter().any(std::result::Result::is_err) {
-        return Some(Err(usage(format!(
-            "{item}: {} (0-based non-negative integers)",
-            if want == 1 {
-                "x0 takes one index, x0[i]"
-            } else {
-                "an entry takes two indices, NAME[i,j]"
-            }
-        ))));
-    }
-    let idx: Vec<usize> = idx.into_iter().flatten().collect();
-    Some(Ok((matrix, idx[0], idx.get(1).copied().unwrap_or(0))))
-}
-
-/// Parses one `--free` value: `Q:scalar|diag|full`, `R:scalar|diag|full`, `x0`, `P0:diag`,
-/// `Q:white-acceleration` (each at most once) and entries `F[i,j]` …, `x0[i]`. An empty
-/// list parses (and is rejected by `fit` as "nothing is free").
+/// Parses one `--free` value ([`FreeSpec::parse`]); an empty list parses (and is rejected
+/// by `fit` as "nothing is free").
+///
+/// # Errors
+/// [`Error::Usage`] naming the malformed item.
 pub fn parse_free(s: &str) -> Result<FreeSpec> {
-    let usage = |m: String| Error::Usage(format!("--free: {m}"));
-    let mut spec = FreeSpec::default();
-    let mut seen = Vec::new();
-    for item in split_items(s) {
-        if let Some(entry) = parse_entry(item) {
-            let e = entry?;
-            if spec.entries.contains(&e) {
-                return Err(usage(format!("{} is listed twice", entry_name(e))));
-            }
-            spec.entries.push(e);
-            continue;
-        }
-        if item == "Q:white-acceleration" {
-            if seen.contains(&"Q".to_string()) {
-                return Err(usage("Q is listed twice".into()));
-            }
-            seen.push("Q".to_string());
-            spec.white_acceleration = true;
-            continue;
-        }
-        let (name, kind) = match item.split_once(':') {
-            Some((a, b)) => (a.trim(), Some(b.trim())),
-            None => (item, None),
-        };
-        // A continuous model's intensity is Qc; the discrete form calls its matrix Q.
-        let name = if name == "Qc" { "Q" } else { name };
-        if seen.contains(&name.to_string()) {
-            return Err(usage(format!("{name} is listed twice")));
-        }
-        seen.push(name.to_string());
-        let structure = |kind: Option<&str>| match kind {
-            Some("scalar") => Ok(Structure::Scalar),
-            Some("diag") => Ok(Structure::Diag),
-            Some("full") => Ok(Structure::Full),
-            Some(k) => Err(usage(format!(
-                "{name}:{k}: the structure must be scalar, diag or full"
-            ))),
-            None => Err(usage(format!(
-                "{name} needs a structure: {name}:scalar, {name}:diag or {name}:full"
-            ))),
-        };
-        let free = &mut spec.free;
-        match name {
-            "Q" | "Qc" => free.q = structure(kind)?,
-            "R" => free.r = structure(kind)?,
-            "x0" if kind.is_none() => free.x0 = true,
-            "P0" if kind == Some("diag") => free.p0_diag = true,
-            "x0" => return Err(usage("x0 takes no structure (write x0)".into())),
-            "P0" => {
-                return Err(usage(
-                    "P0 can only be freed as a diagonal (write P0:diag)".into(),
-                ));
-            }
-            other => {
-                return Err(usage(format!(
-                    "unknown free item '{other}'{}: use Q:scalar|diag|full|white-acceleration, R:…, x0, P0:diag or entries such as F[0,0]",
-                    kind.map(|k| format!(" with structure '{k}'"))
-                        .unwrap_or_default()
-                )));
-            }
-        }
+    FreeSpec::parse(&[s]).map_err(free_error)
+}
+
+/// `--free: …` for a parse or parameterisation error of the free items.
+fn free_error(e: FitError) -> Error {
+    match e {
+        FitError::Parameters(m) => Error::Usage(format!("--free: {m}")),
+        e => Error::Usage(format!("--free: {e}")),
     }
-    Ok(spec)
 }
 
 fn to_faer(m: &DMatrix<f64>) -> Mat<f64> {
@@ -346,76 +163,6 @@ fn system_of(path: &Path, model: &DiscreteModel, free: Free) -> Result<System> {
     sys.model()
         .map_err(|e| Error::invalid(path, e.to_string()))?;
     Ok(sys)
-}
-
-/// The unit white-acceleration covariance of a model whose F is a chain of integrators
-/// sampled at `dt`: A = log(F)/Δt (F − I nilpotent, so the series ends), the noise entering
-/// every state whose row of A is zero (the last state of each chain), Q₁ = ∫₀^Δt e^{Aτ} G Gᵀ
-/// e^{Aᵀτ} dτ by Van Loan; e^{AΔt} must give F back.
-fn white_acceleration(path: &Path, F: &Mat<f64>, dt: f64) -> Result<Mat<f64>> {
-    let n = F.nrows();
-    let refuse = |why: &str| {
-        Error::invalid(
-            path,
-            format!(
-                "Q:white-acceleration needs F to be chains of integrators (constant velocity or constant acceleration) sampled at dt: {why}"
-            ),
-        )
-    };
-    let N = Mat::from_fn(n, n, |i, j| F[(i, j)] - if i == j { 1.0 } else { 0.0 });
-    // log(I + N) = N − N²/2 + N³/3 − … (finite when N is nilpotent)
-    let mut log = Mat::<f64>::zeros(n, n);
-    let mut power = N.clone();
-    for k in 1..=n {
-        let sign = if k % 2 == 1 { 1.0 } else { -1.0 };
-        log += Mat::from_fn(n, n, |i, j| sign * power[(i, j)] / k as f64);
-        power = &power * &N;
-    }
-    let scale = F.norm_max().max(1.0);
-    if power.norm_max() > 1e-9 * scale {
-        return Err(refuse("F − I is not nilpotent"));
-    }
-    let A = Mat::from_fn(n, n, |i, j| log[(i, j)] / dt);
-    let W = Mat::from_fn(n, n, |i, j| {
-        let zero_row = (0..n).all(|c| A[(i, c)].abs() <= 1e-12 * scale / dt);
-        if i == j && zero_row { 1.0 } else { 0.0 }
-    });
-    let (Fs, Q1) = kalman::continuous::van_loan(&A, &W, dt).map_err(|e| refuse(&e.to_string()))?;
-    if (&Fs - F).norm_max() > 1e-9 * scale || Q1.norm_max() <= 0.0 {
-        return Err(refuse("e^{log(F)} does not give F back"));
-    }
-    Ok(Q1)
-}
-
-/// The entry parameters of `spec` on `base`; with white acceleration, also `base.q` set to
-/// q₀·Q₁ (q₀ from the model file's trace, so that every cell outside Q₁'s pattern is 0).
-fn entry_params(path: &Path, spec: &FreeSpec, base: &mut System, dt: f64) -> Result<Vec<Param>> {
-    let mut params: Vec<Param> = spec
-        .entries
-        .iter()
-        .map(|&(m, i, j)| Param::entry(m, i, j))
-        .collect();
-    if spec.white_acceleration {
-        let q1 = white_acceleration(path, &base.f, dt)?;
-        let n = base.n();
-        let tr = |a: &Mat<f64>| (0..n).map(|i| a[(i, i)]).sum::<f64>();
-        let q0 = tr(&base.q) / tr(&q1);
-        base.q = Mat::from_fn(n, n, |i, j| q0 * q1[(i, j)]);
-        let mut p = Param::shared("Q:white-acceleration", Transform::Log);
-        // the diagonal first: the start is read from the first entry
-        for i in (0..n).filter(|&i| q1[(i, i)] > 0.0) {
-            p = p.with(Matrix::Q, i, i, q1[(i, i)]);
-        }
-        for j in 0..n {
-            for i in j + 1..n {
-                if q1[(i, j)] != 0.0 {
-                    p = p.with(Matrix::Q, i, j, q1[(i, j)]);
-                }
-            }
-        }
-        params.push(p);
-    }
-    Ok(params)
 }
 
 fn fit_error(args: &FitArgs, e: FitError) -> Error {
@@ -562,7 +309,7 @@ fn read_regular(
 /// [`Error::Fit`] for a fit that fails, [`Error::FitNotConverged`] for one that (without
 /// `--allow-unconverged`) does not converge; [`Error::Write`].
 pub fn fit(args: &FitArgs) -> Result<()> {
-    let spec = FreeSpec::merge(&args.free)?;
+    let spec = FreeSpec::merge(&args.free).map_err(free_error)?;
     if spec.is_empty() {
         return Err(fit_error(args, FitError::NothingFree));
     }
@@ -604,12 +351,12 @@ pub fn fit(args: &FitArgs) -> Result<()> {
     let series = Series::new(&z, m)
         .and_then(|s| if p > 0 { s.with_inputs(&u, p) } else { Ok(s) })
         .map_err(|e| fit_error(args, e))?;
-    let mut base = system_of(&args.model, &model, spec.free)?;
-    let params = entry_params(&args.model, &spec, &mut base, model.dt)?;
-    let map = StandardMap::with_params(base.clone(), spec.free, params).map_err(|e| match e {
-        FitError::Parameters(m) => Error::Usage(format!("--free: {m}")),
+    let base = system_of(&args.model, &model, spec.free)?;
+    let map = spec.map(base, Some(model.dt)).map_err(|e| match e {
+        FitError::Parameters(_) => free_error(e),
         e => fit_error(args, e),
     })?;
+    let base = map.base().clone();
     let result = match args.method {
         FitMethod::Mle => {
             let mut opts = MleOptions::default();
