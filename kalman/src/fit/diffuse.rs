@@ -67,6 +67,19 @@ use crate::nonlinear::Scalar;
 /// [`FitError::Data`] for a record whose width is not the model's,
 /// [`FitError::NotPositiveDefinite`] at a step whose observed `R` is not positive definite,
 /// [`FitError::Diverged`] where the pass stops being finite.
+///
+/// # Example
+/// ```
+/// use kalman::fit::{Series, System, diffuse_log_likelihood};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// // A local level: after one observation the level is known with variance R, so the
+/// // diffuse likelihood of one row is −½ ln 2π (the ln κ of the limit dropped).
+/// let sys = System::new(&[[1.0]], &[[1.0]], &[[2.0]], &[[3.0]], &[0.0], &[[0.0]])?;
+/// let ll = diffuse_log_likelihood(&sys, &[0], &Series::new(&[5.0], 1)?)?;
+/// assert!((ll + 0.5 * (2.0 * std::f64::consts::PI).ln()).abs() < 1e-15);
+/// # Ok(())
+/// # }
+/// ```
 pub fn diffuse_log_likelihood(
     sys: &System,
     diffuse: &[usize],
@@ -82,6 +95,20 @@ pub fn diffuse_log_likelihood(
 ///
 /// # Errors
 /// As [`diffuse_log_likelihood`] and the map's.
+///
+/// # Example
+/// ```
+/// use kalman::fit::{Free, Series, StandardMap, Structure, System, diffuse_log_likelihood_gradient};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// let base = System::new(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[0.0]])?;
+/// let free = Free { q: Structure::Diag, r: Structure::Diag, ..Free::default() };
+/// let map = StandardMap::new(base, free)?;
+/// let data = Series::new(&[1.0, 1.4, 0.9, 1.7, 2.2], 1)?;
+/// let (ll, grad) = diffuse_log_likelihood_gradient(&map, &[0.0, 0.0], &[0], &data)?;
+/// assert!(ll.is_finite() && grad.len() == 2);
+/// # Ok(())
+/// # }
+/// ```
 pub fn diffuse_log_likelihood_gradient<M: ParamMap + ?Sized>(
     map: &M,
     theta: &[f64],
@@ -114,6 +141,24 @@ pub fn diffuse_log_likelihood_gradient<M: ParamMap + ?Sized>(
 /// # Errors
 /// [`FitError::NothingFree`] for a map without parameters, [`FitError::Parameters`] for a
 /// θ0 of the wrong length, and those of [`diffuse_log_likelihood`].
+///
+/// # Example
+/// ```
+/// use kalman::fit::{Free, MleOptions, Series, StandardMap, Structure, System, mle_diffuse};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// // A level and a trend, neither with a prior: both states diffuse.
+/// let base = System::new(
+///     &[[1.0, 1.0], [0.0, 1.0]], &[[1.0, 0.0]], &[[1.0, 0.0], [0.0, 0.1]], &[[1.0]],
+///     &[0.0, 0.0], &[[0.0, 0.0], [0.0, 0.0]],
+/// )?;
+/// let map = StandardMap::new(base.clone(), Free { r: Structure::Diag, ..Free::default() })?;
+/// let z: Vec<f64> = (0..40).map(|k| 0.5 * k as f64 + (1.3 * k as f64).sin()).collect();
+/// let data = Series::new(&z, 1)?;
+/// let fit = mle_diffuse(&map, map.theta_of(&base, Some(&data)), &[0, 1], &data, &MleOptions::default())?;
+/// assert!(fit.converged && fit.system.r[(0, 0)] > 0.0);
+/// # Ok(())
+/// # }
+/// ```
 pub fn mle_diffuse<M: ParamMap + ?Sized>(
     map: &M,
     theta0: Vec<f64>,

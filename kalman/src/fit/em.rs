@@ -506,7 +506,7 @@ pub fn em_with_progress(
     progress: &mut dyn FnMut(usize, f64),
 ) -> Result<Fit, FitError> {
     data.check(map.base())?;
-    super::params::check_prior_scale(map.base(), std::slice::from_ref(data))?;
+    super::info::check_prior_scale(map.base(), std::slice::from_ref(data))?;
     check_identifiable(map, data)?;
     let free = map.free();
     if free.x0 && !free.p0_diag {

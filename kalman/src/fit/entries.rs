@@ -6,6 +6,13 @@ use faer::Mat;
 use super::{FitError, System};
 
 /// A matrix (or vector) of a [`System`] that a parameter can enter.
+///
+/// # Example
+/// ```
+/// use kalman::fit::Matrix;
+/// assert_eq!(Matrix::X0.name(), "x0");
+/// assert!(Matrix::R.is_covariance() && !Matrix::F.is_covariance());
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Matrix {
     /// The transition `F` (n×n).
@@ -70,6 +77,14 @@ impl Matrix {
 }
 
 /// How a parameter θ maps to the value `v` it gives its entries.
+///
+/// # Example
+/// ```
+/// use kalman::fit::Transform;
+/// let (v, dv) = Transform::Log.value(0.0);
+/// assert_eq!((v, dv), (1.0, 1.0));
+/// assert_eq!(Transform::Log.theta(-1.0), None, "a variance cannot be negative");
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Transform {
     /// `v = θ` (an unbounded coefficient: an entry of F, H, B, x0, an off-diagonal

@@ -351,3 +351,30 @@ pub(crate) fn finish_records<M: ParamMap + ?Sized>(
         theta,
     })
 }
+
+/// How many times the data's variance a prior variance (seen through H) may be before the
+/// first update, `P0 − P0 Hᵀ (H P0 Hᵀ + R)⁻¹ H P0`, loses more than 9 of its 16 digits.
+pub(crate) const MAX_PRIOR_RATIO: f64 = 1e9;
+
+/// Refuses a prior so wide that the first update loses most of its digits
+/// ([`MAX_PRIOR_RATIO`]): such a prior stands for "unknown", which the exact diffuse
+/// initialisation (`mle_diffuse`) states without the round-off.
+pub(crate) fn check_prior_scale(sys: &System, records: &[Series<'_>]) -> Result<(), FitError> {
+    let scale = records.iter().map(data_scale).fold(0.0_f64, f64::max);
+    let (n, m) = (sys.n(), sys.m());
+    for i in 0..n {
+        let seen: f64 = (0..m).map(|j| sys.h[(j, i)].powi(2)).sum();
+        let p = sys.p0[(i, i)];
+        if p * seen > MAX_PRIOR_RATIO * scale {
+            return Err(FitError::Model(crate::Error::InvalidOption {
+                name: "P0",
+                value: p,
+                rule: "a prior variance this large against the data's variance loses more than \
+                       9 of the 16 digits of the first update: give the states with no prior \
+                       as diffuse instead (the exact diffuse initialisation: \
+                       kalman::fit::mle_diffuse, `scenarios fit --diffuse`)",
+            }));
+        }
+    }
+    Ok(())
+}

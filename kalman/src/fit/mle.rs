@@ -375,7 +375,7 @@ pub fn mle_records<M: ParamMap + ?Sized>(
     for data in records {
         data.check(&sys0)?;
     }
-    super::params::check_prior_scale(&sys0, records)?;
+    super::info::check_prior_scale(&sys0, records)?;
     let n_obs: usize = records.iter().map(Series::observed).sum();
     let (theta, iterations, converged, message) =
         optimise(&Records { map, records }, theta0, n_obs, opts)?;

@@ -1,22 +1,22 @@
 //! The noise of a continuous model fitted over a record's own time stamps: free entries of
-//! the process-noise intensity `Q_c`, of `R`, `x0` and `P0`, the model sampled exactly at
+//! the process-noise intensity `W`, of `R`, `x0` and `P0`, the model sampled exactly at
 //! each interval of the record, and the likelihood maximised through the filter-error
 //! engine ([`super::filter_error()`]).
 //!
 //! # The model
-//! `ẋ = A x + B u + G w` with `E[w(t) w(s)ᵀ] = Q_c δ(t − s)` (`G = I` unless a noise input
+//! `ẋ = A x + B u + G w` with `E[w(t) w(s)ᵀ] = W δ(t − s)` (`G = I` unless a noise input
 //! is given), `z_k = H x(t_k) + v_k`, `cov(v_k) = R`, and the prior `(x0, P0)` of the first
 //! row. Step k predicts over `Δt_k = t_{k+1} − t_k`:
 //!
 //! ```text
 //! F_k = e^{AΔt_k},   B_k = ∫₀^Δt_k e^{Aτ} dτ B  (zero-order hold),
-//! Q_k = ∫₀^Δt_k e^{Aτ} G Q_c Gᵀ e^{Aᵀτ} dτ   (Van Loan),
+//! Q_k = ∫₀^Δt_k e^{Aτ} G W Gᵀ e^{Aᵀτ} dτ   (Van Loan),
 //! ```
 //!
 //! Two rows with the same stamp are one instant (`Δt = 0`: `F = I`, `Q = 0`).
 //!
 //! # Why the fit is exact and cheap
-//! `Q_k` is linear in `Q_c`, so with the free entries `Q_c = Q_c⁰ + Σ_j v_j(θ) S_j` (each
+//! `Q_k` is linear in `W`, so with the free entries `W = W⁰ + Σ_j v_j(θ) S_j` (each
 //! `S_j` the unit cells parameter j sets, with their coefficients) it is
 //! `Q_k = Q_k⁰ + Σ_j v_j(θ) Q_k^{(j)}`, every term sampled once per *distinct* interval when
 //! the map is built. The likelihood and its exact gradient at any θ then cost one filter
@@ -56,7 +56,7 @@ use crate::sampling::{ContinuousModel, Sampler};
 /// A continuous model with free noise entries, sampled at the intervals of one record's time
 /// stamps: a [`ParametricModel`] for [`filter_error`] (see the [module](self)).
 ///
-/// The free [`Param`]s address [`Matrix::Q`] as the intensity `Q_c` (q×q for a noise input
+/// The free [`Param`]s address [`Matrix::Q`] as the intensity `W` (q×q for a noise input
 /// `G` of q columns, n×n without one), [`Matrix::R`], [`Matrix::X0`] and [`Matrix::P0`], with
 /// [`Param::entry`]'s conventions (a diagonal variance log-transformed, an off-diagonal
 /// covariance entry setting its mirror). Memory: one n×n matrix per distinct interval and
@@ -72,13 +72,13 @@ pub struct SampledMap {
     /// The interval of each step (index into the per-interval blocks).
     step: Vec<usize>,
     /// Per distinct interval: F (n×n), B_d (n×p), the fixed part of Q_d (n×n) and one
-    /// n×n block per parameter (zero for a parameter outside Q_c), column-major.
+    /// n×n block per parameter (zero for a parameter outside W), column-major.
     f: Vec<f64>,
     b: Vec<f64>,
     q_fixed: Vec<f64>,
     q_basis: Vec<f64>,
     h: Vec<f64>,
-    /// The base Q_c, R, x0 and P0 (column-major); a free cell's base value is replaced.
+    /// The base W, R, x0 and P0 (column-major); a free cell's base value is replaced.
     qc: Vec<f64>,
     r: Vec<f64>,
     x0: Vec<f64>,
@@ -87,10 +87,23 @@ pub struct SampledMap {
 }
 
 /// The matrices of a [`SampledMap`] at a θ ([`SampledMap::matrices`]).
+///
+/// # Example
+/// ```
+/// use kalman::fit::{Matrix, Param, SampledMap};
+/// use kalman::sampling::ContinuousModel;
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let model = ContinuousModel::new(&[[0.0]], &[[1.0]], &[[2.0]], &[[0.5]])?;
+/// let map = SampledMap::new(&model, &[0.0], &[[1.0]], &[0.0, 0.1, 0.3], vec![Param::entry(Matrix::R, 0, 0)])?;
+/// let at = map.matrices(&[0.0])?; // R = e⁰ = 1, the intensity kept at 2
+/// assert_eq!((at.w[(0, 0)], at.r[(0, 0)]), (2.0, 1.0));
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Debug)]
 pub struct Matrices {
-    /// The process-noise intensity `Q_c` (q×q).
-    pub qc: Mat<f64>,
+    /// The process-noise intensity `W` (q×q).
+    pub w: Mat<f64>,
     /// The measurement noise covariance `R` (m×m).
     pub r: Mat<f64>,
     /// The prior mean.
@@ -100,7 +113,7 @@ pub struct Matrices {
 }
 
 impl SampledMap {
-    /// The map of `model` (its intensity `W` as `Q_c`, `G = I`) with the prior `(x0, P0)`, at
+    /// The map of `model` (its intensity `W` as `W`, `G = I`) with the prior `(x0, P0)`, at
     /// the time stamps `t` (seconds, non-decreasing), with the free `params`.
     ///
     /// # Errors
@@ -118,18 +131,18 @@ impl SampledMap {
     }
 
     /// The map of `model` with the process noise entering through `G` (n×q) with intensity
-    /// `Q_c` (q×q, symmetric PSD; the model's own `W` is not used).
+    /// `W` (q×q, symmetric PSD; it replaces the n×n intensity `model` was built with).
     ///
     /// # Errors
     /// [`FitError::Parameters`] for a parameter on `F`, `B` or `H` (fixed here), an entry
     /// outside its matrix, a zero or non-finite coefficient, a cell set twice or a base value
     /// its transform cannot reach; [`FitError::Data`] for time stamps that are not finite or
-    /// go back (naming the row), an `x0`, `P0`, `G` or `Q_c` of the wrong shape or not
+    /// go back (naming the row), an `x0`, `P0`, `G` or `W` of the wrong shape or not
     /// finite, or an interval whose exponential overflows.
     pub fn with_noise_input(
         model: &ContinuousModel,
         G: &impl MatrixInput,
-        Qc: &impl MatrixInput,
+        W: &impl MatrixInput,
         x0: &[f64],
         P0: &impl MatrixInput,
         t: &[f64],
@@ -139,7 +152,7 @@ impl SampledMap {
         let data = |msg: String| FitError::Data(msg);
         let g = dense("G", G, n, G.ncols())?;
         let nq = G.ncols();
-        let qc = dense("Q_c", Qc, nq, nq)?;
+        let qc = dense("W", W, nq, nq)?;
         let p0 = dense("P0", P0, n, n)?;
         if x0.len() != n || x0.iter().any(|v| !v.is_finite()) {
             return Err(data(format!(
@@ -186,7 +199,7 @@ impl SampledMap {
         let data = |msg: String| FitError::Data(msg);
         let mut slots: HashMap<u64, usize> = HashMap::new();
         let mut sampler = Sampler::new(model.clone(), 1).map_err(|e| data(e.to_string()))?;
-        // W of the fixed part (the free Q_c cells zeroed) and of each parameter's cells.
+        // W of the fixed part (the free W cells zeroed) and of each parameter's cells.
         let mut fixed = self.qc.clone();
         for prm in &self.params {
             for e in prm.entries().iter().filter(|e| e.matrix == Matrix::Q) {
@@ -376,7 +389,7 @@ impl SampledMap {
         }
         let mat = |v: &[f64], k: usize| Mat::from_fn(k, k, |i, j| v[i + j * k]);
         Ok(Matrices {
-            qc: mat(&qc, q),
+            w: mat(&qc, q),
             r: mat(&r, m),
             x0,
             p0: mat(&p0, n),

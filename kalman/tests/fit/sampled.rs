@@ -196,7 +196,7 @@ fn the_intensity_and_the_sensor_variance_are_recovered() {
         );
     }
     let fitted = map.matrices(&fit.theta).expect("matrices");
-    let (Qc, R) = (fitted.qc, fitted.r);
+    let (Qc, R) = (fitted.w, fitted.r);
     let values = map.values(&fit.theta).expect("values");
     assert_eq!(values[0].0, "Q[1,1]");
     // The same value written, not recomputed: bit-equal.
