@@ -436,11 +436,29 @@ def ukf(
 
 def fit(
     F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
-    method: str = "em", q: str = "diag", r: str = "diag", free_x0: bool = False,
+    method: Optional[str] = None, q: str = "diag", r: str = "diag", free_x0: bool = False,
     free_p0_diag: bool = False, max_iter: Optional[int] = None,
+    free: Optional[Sequence[str]] = None, dt: Optional[float] = None,
 ) -> dict[str, Any]:
-    """Learn Q and R (optionally x0 and a diagonal P0) from data by "em" (Shumway-Stoffer)
-    or "mle" (L-BFGS with the exact score). q, r: "fixed", "scalar", "diag" or "full".
-    F and H stay at the given values; the given Q, R, x0, P0 are the starting point.
-    Returns the fitted "F", "H", "Q", "R", "x0", "P0" and "loglik", "iterations",
-    "converged", "message", "boundary", "theta", "std_errors", "aic", "bic"."""
+    """Learn Q and R (optionally x0 and a diagonal P0), or the items named in free as the
+    command line's --free names them ("Q:scalar|diag|full", "R:...", "x0", "P0:diag",
+    entries "F[i,j]", "B[i,j]", "H[i,j]", "Q[i,j]", "R[i,j]", "P0[i,j]", "x0[i]",
+    "Q:white-acceleration" with dt), from data by "em" (Shumway-Stoffer; the default
+    without free) or "mle" (L-BFGS with the exact score; the default with free). q, r:
+    "fixed", "scalar", "diag" or "full" (left at the default with free). Every entry not
+    freed stays at its given value; the given matrices are the starting point. Returns the
+    fitted "F", "H", "Q", "R", "x0", "P0" and "loglik", "iterations", "converged",
+    "message", "boundary", "theta", "std_errors" (by name with free), "estimates",
+    "correlation", "aic", "bic"."""
+
+
+def fit_callable(
+    model: Callable[[Array], dict[str, Any]], theta0: Sequence[float], zs: _Series,
+    F: Optional[Array] = None, H: Optional[Array] = None, Q: Optional[Array] = None,
+    R: Optional[Array] = None, x0: Optional[Array] = None, P0: Optional[Array] = None,
+    max_iter: Optional[int] = None, log_variances: Optional[Sequence[int]] = None,
+) -> dict[str, Any]:
+    """Fit theta of model(theta) -> dict with some of "F", "H", "Q", "R", "x0", "P0" (the
+    others fixed at the keyword arguments; x0 defaults to zeros) by maximum likelihood from
+    theta0, the gradient by central differences. Returns fit's dict, the parameters named
+    "θ[i]". An exception in model or a wrong shape is a ValueError/TypeError naming it."""

@@ -129,6 +129,7 @@ fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(nonlinear::ekf, m)?)?;
     m.add_function(wrap_pyfunction!(nonlinear::ukf, m)?)?;
     m.add_function(wrap_pyfunction!(fit_fns::fit, m)?)?;
+    m.add_function(wrap_pyfunction!(fit_fns::fit_callable, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_test, m)?)?;
     Ok(())
 }
