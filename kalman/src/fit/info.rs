@@ -304,11 +304,44 @@ pub(crate) fn finish_records<M: ParamMap + ?Sized>(
     method: Method,
     iterations: usize,
     converged: bool,
-    mut message: String,
+    message: String,
 ) -> Result<Fit, FitError> {
     let (loglik, _) = gradient_sum(map, &theta, records)?;
-    let system = map.system(&theta)?;
     let information = information_of(map, &theta, records)?;
+    let run = Run {
+        method,
+        iterations,
+        converged,
+        message,
+    };
+    assemble(map, theta, records, loglik, information, run)
+}
+
+/// How an estimator ended: the fields of a [`Fit`] it decides.
+pub(crate) struct Run {
+    pub(crate) method: Method,
+    pub(crate) iterations: usize,
+    pub(crate) converged: bool,
+    pub(crate) message: String,
+}
+
+/// The [`Fit`] at θ from its log-likelihood and observed information: covariance, standard
+/// errors, boundary flags, the non-identified directions, correlation and AIC/BIC.
+pub(crate) fn assemble<M: ParamMap + ?Sized>(
+    map: &M,
+    theta: Vec<f64>,
+    records: &[Series<'_>],
+    loglik: f64,
+    information: Mat<f64>,
+    run: Run,
+) -> Result<Fit, FitError> {
+    let Run {
+        method,
+        iterations,
+        converged,
+        mut message,
+    } = run;
+    let system = map.system(&theta)?;
     let covariance = spd_inverse(&information);
     let std_errors = covariance.as_ref().map(std_errors_of);
     // A variance below 1e-8 of the data's variance is numerically zero: the boundary.

@@ -105,6 +105,8 @@ mod mle;
 #[cfg(feature = "autodiff")]
 pub mod output_error;
 mod params;
+#[cfg(feature = "argmin")]
+mod priors;
 #[cfg(all(feature = "autodiff", feature = "argmin"))]
 pub mod sampled;
 mod score;
@@ -131,6 +133,8 @@ pub use output_error::{
     OutputErrorCost, OutputErrorFit, OutputErrorOptions, output_error, output_error_cost,
 };
 pub use params::{Derivative, FnMap, Free, MatrixStdErrors, ParamMap, StandardMap, Structure};
+#[cfg(feature = "argmin")]
+pub use priors::{Prior, mle_records_with_priors};
 #[cfg(all(feature = "autodiff", feature = "argmin"))]
 pub use sampled::SampledMap;
 pub use score::log_likelihood_gradient;
