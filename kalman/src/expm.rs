@@ -6,6 +6,8 @@
 //! nothing. The Padé quotient is an LU solve with partial pivoting, not an inverse.
 //! `continuous::expm` is its public face; `sampling` calls it per interval.
 
+use crate::kernels::Real;
+
 /// Higham's θ_m for m = 3, 5, 7, 9, 13 (double precision).
 const THETA: [f64; 5] = [
     1.495_585_217_958_292e-2,
@@ -63,23 +65,27 @@ const B13: [f64; 14] = [
 #[derive(Debug, Clone)]
 pub(crate) struct Expm {
     cap: usize,
-    a: Vec<f64>,
-    a2: Vec<f64>,
-    a4: Vec<f64>,
-    a6: Vec<f64>,
-    u: Vec<f64>,
-    v: Vec<f64>,
-    t: Vec<f64>,
-    piv: Vec<usize>,
+    b: Bufs<f64>,
     arch: pulp::Arch,
 }
 
-impl Expm {
-    /// A workspace for matrices up to `cap`×`cap`.
-    pub(crate) fn new(cap: usize) -> Self {
-        let z = vec![0.0; cap * cap];
-        Expm {
-            cap,
+/// The Padé evaluation's matrices, over the scalar `T`.
+#[derive(Debug, Clone)]
+struct Bufs<T> {
+    a: Vec<T>,
+    a2: Vec<T>,
+    a4: Vec<T>,
+    a6: Vec<T>,
+    u: Vec<T>,
+    v: Vec<T>,
+    t: Vec<T>,
+    piv: Vec<usize>,
+}
+
+impl<T: Real> Bufs<T> {
+    fn new(cap: usize) -> Self {
+        let z = vec![T::constant(0.0); cap * cap];
+        Bufs {
             a: z.clone(),
             a2: z.clone(),
             a4: z.clone(),
@@ -88,6 +94,16 @@ impl Expm {
             v: z.clone(),
             t: z,
             piv: vec![0; cap],
+        }
+    }
+}
+
+impl Expm {
+    /// A workspace for matrices up to `cap`×`cap`.
+    pub(crate) fn new(cap: usize) -> Self {
+        Expm {
+            cap,
+            b: Bufs::new(cap),
             arch: pulp::Arch::new(),
         }
     }
@@ -95,7 +111,7 @@ impl Expm {
     /// The k×k input (column-major, `k ≤ cap`), to be filled before [`Expm::run`].
     pub(crate) fn input(&mut self, k: usize) -> &mut [f64] {
         debug_assert!(k <= self.cap);
-        &mut self.a[..k * k]
+        &mut self.b.a[..k * k]
     }
 
     /// `out` (k×k, column-major) ← e^A of the k×k input. Returns `false` if the result is
@@ -120,146 +136,156 @@ impl Expm {
                 match (k, blk) {
                     $(($k, $b) => arch.dispatch(
                         #[inline(always)]
-                        || self.run_sized($k, $b, out),
+                        || pade::<f64, true>(&mut self.b, $k, $b, out),
                     ),)*
                     _ => arch.dispatch(
                         #[inline(always)]
-                        || self.run_sized(k, blk, out),
+                        || pade::<f64, true>(&mut self.b, k, blk, out),
                     ),
                 }
             };
         }
         sized!(2, 1; 4, 2; 6, 3; 8, 4; 10, 5; 12, 6; 14, 7; 16, 8; 2, 2; 3, 3; 4, 4)
     }
-
-    /// [`Expm::run_block`]'s body, inlined into each of its size-specialised callers.
-    #[inline(always)]
-    fn run_sized(&mut self, k: usize, blk: usize, out: &mut [f64]) -> bool {
-        let kk = k * k;
-        let norm1 = (0..k)
-            .map(|j| {
-                self.a[j * k..(j + 1) * k]
-                    .iter()
-                    .map(|x| x.abs())
-                    .sum::<f64>()
-            })
-            .fold(0.0_f64, f64::max);
-        if !norm1.is_finite() {
-            return false;
-        }
-        let degree = THETA.iter().position(|&t| norm1 <= t).unwrap_or(4);
-        let s = if degree == 4 && norm1 > THETA[4] {
-            (norm1 / THETA[4]).log2().ceil() as i32
-        } else {
-            0
-        };
-        if s > 0 {
-            let f = 0.5_f64.powi(s);
-            self.a[..kk].iter_mut().for_each(|x| *x *= f);
-        }
-        let (a, a2, a4, a6) = (
-            &self.a[..kk],
-            &mut self.a2[..kk],
-            &mut self.a4[..kk],
-            &mut self.a6[..kk],
-        );
-        let (u, v, t) = (&mut self.u[..kk], &mut self.v[..kk], &mut self.t[..kk]);
-        mm(blk, a2, a, a, k);
-        match degree {
-            0 => {
-                // U = A (b3 A2 + b1 I), V = b2 A2 + b0 I.
-                combine(t, &[(B3[3], &*a2)], B3[1], k);
-                mm(blk, u, a, t, k);
-                combine(v, &[(B3[2], &*a2)], B3[0], k);
-            }
-            1 => {
-                mm(blk, a4, a2, a2, k);
-                combine(t, &[(B5[5], &*a4), (B5[3], &*a2)], B5[1], k);
-                mm(blk, u, a, t, k);
-                combine(v, &[(B5[4], &*a4), (B5[2], &*a2)], B5[0], k);
-            }
-            2 => {
-                mm(blk, a4, a2, a2, k);
-                mm(blk, a6, a4, a2, k);
-                combine(t, &[(B7[7], &*a6), (B7[5], &*a4), (B7[3], &*a2)], B7[1], k);
-                mm(blk, u, a, t, k);
-                combine(v, &[(B7[6], &*a6), (B7[4], &*a4), (B7[2], &*a2)], B7[0], k);
-            }
-            3 => {
-                mm(blk, a4, a2, a2, k);
-                mm(blk, a6, a4, a2, k);
-                // A8 = A4 A4 goes in v until V is formed.
-                mm(blk, v, a4, a4, k);
-                combine(
-                    t,
-                    &[(B9[9], &*v), (B9[7], &*a6), (B9[5], &*a4), (B9[3], &*a2)],
-                    B9[1],
-                    k,
-                );
-                mm(blk, u, a, t, k);
-                // V = b8 A8 + b6 A6 + b4 A4 + b2 A2 + b0 I, in place over A8.
-                for i in 0..kk {
-                    v[i] = B9[8] * v[i] + B9[6] * a6[i] + B9[4] * a4[i] + B9[2] * a2[i];
-                }
-                add_identity(v, B9[0], k);
-            }
-            _ => {
-                mm(blk, a4, a2, a2, k);
-                mm(blk, a6, a4, a2, k);
-                // U = A [A6 (b13 A6 + b11 A4 + b9 A2) + b7 A6 + b5 A4 + b3 A2 + b1 I].
-                combine(
-                    t,
-                    &[(B13[13], &*a6), (B13[11], &*a4), (B13[9], &*a2)],
-                    0.0,
-                    k,
-                );
-                mm(blk, v, a6, t, k);
-                for i in 0..kk {
-                    t[i] = v[i] + B13[7] * a6[i] + B13[5] * a4[i] + B13[3] * a2[i];
-                }
-                add_identity(t, B13[1], k);
-                mm(blk, u, a, t, k);
-                // V = A6 (b12 A6 + b10 A4 + b8 A2) + b6 A6 + b4 A4 + b2 A2 + b0 I.
-                combine(
-                    t,
-                    &[(B13[12], &*a6), (B13[10], &*a4), (B13[8], &*a2)],
-                    0.0,
-                    k,
-                );
-                mm(blk, v, a6, t, k);
-                for i in 0..kk {
-                    v[i] += B13[6] * a6[i] + B13[4] * a4[i] + B13[2] * a2[i];
-                }
-                add_identity(v, B13[0], k);
-            }
-        }
-        // (V − U) X = (V + U): the denominator in v, the numerator in out.
-        for i in 0..kk {
-            out[i] = v[i] + u[i];
-            v[i] -= u[i];
-        }
-        if !lu_solve(v, &mut self.piv[..k], out, k, blk) {
-            return false;
-        }
-        for _ in 0..s {
-            t.copy_from_slice(&out[..kk]);
-            mm(blk, out, t, t, k);
-        }
-        out[..kk].iter().all(|x| x.is_finite())
-    }
 }
 
-/// `c ← a b` (k×k, column-major), both zero in rows `blk..` of columns `..blk`.
+/// The scaling-and-squaring Padé evaluation of `e^A` for the k×k input in `bufs.a` (see
+/// [`Expm::run_block`]), over the scalar `T`: `f64`, or a dual number carrying derivatives
+/// through the same rational function. `SKIP` skips the products' exact zeros (valid for
+/// `f64` only: a dual number with a zero value may carry a derivative). Inlined into each of
+/// its size-specialised callers.
 #[inline(always)]
-fn mm(blk: usize, c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
-    c[..k * k].iter_mut().for_each(|x| *x = 0.0);
+fn pade<T: Real, const SKIP: bool>(
+    bufs: &mut Bufs<T>,
+    k: usize,
+    blk: usize,
+    out: &mut [T],
+) -> bool {
+    let kk = k * k;
+    let norm1 = (0..k)
+        .map(|j| {
+            bufs.a[j * k..(j + 1) * k]
+                .iter()
+                .map(|x| x.value().abs())
+                .sum::<f64>()
+        })
+        .fold(0.0_f64, f64::max);
+    if !norm1.is_finite() {
+        return false;
+    }
+    let degree = THETA.iter().position(|&t| norm1 <= t).unwrap_or(4);
+    let s = if degree == 4 && norm1 > THETA[4] {
+        (norm1 / THETA[4]).log2().ceil() as i32
+    } else {
+        0
+    };
+    if s > 0 {
+        let f = 0.5_f64.powi(s);
+        bufs.a[..kk].iter_mut().for_each(|x| *x = *x * f);
+    }
+    let (a, a2, a4, a6) = (
+        &bufs.a[..kk],
+        &mut bufs.a2[..kk],
+        &mut bufs.a4[..kk],
+        &mut bufs.a6[..kk],
+    );
+    let (u, v, t) = (&mut bufs.u[..kk], &mut bufs.v[..kk], &mut bufs.t[..kk]);
+    mm::<T, SKIP>(blk, a2, a, a, k);
+    match degree {
+        0 => {
+            // U = A (b3 A2 + b1 I), V = b2 A2 + b0 I.
+            combine(t, &[(B3[3], &*a2)], B3[1], k);
+            mm::<T, SKIP>(blk, u, a, t, k);
+            combine(v, &[(B3[2], &*a2)], B3[0], k);
+        }
+        1 => {
+            mm::<T, SKIP>(blk, a4, a2, a2, k);
+            combine(t, &[(B5[5], &*a4), (B5[3], &*a2)], B5[1], k);
+            mm::<T, SKIP>(blk, u, a, t, k);
+            combine(v, &[(B5[4], &*a4), (B5[2], &*a2)], B5[0], k);
+        }
+        2 => {
+            mm::<T, SKIP>(blk, a4, a2, a2, k);
+            mm::<T, SKIP>(blk, a6, a4, a2, k);
+            combine(t, &[(B7[7], &*a6), (B7[5], &*a4), (B7[3], &*a2)], B7[1], k);
+            mm::<T, SKIP>(blk, u, a, t, k);
+            combine(v, &[(B7[6], &*a6), (B7[4], &*a4), (B7[2], &*a2)], B7[0], k);
+        }
+        3 => {
+            mm::<T, SKIP>(blk, a4, a2, a2, k);
+            mm::<T, SKIP>(blk, a6, a4, a2, k);
+            // A8 = A4 A4 goes in v until V is formed.
+            mm::<T, SKIP>(blk, v, a4, a4, k);
+            combine(
+                t,
+                &[(B9[9], &*v), (B9[7], &*a6), (B9[5], &*a4), (B9[3], &*a2)],
+                B9[1],
+                k,
+            );
+            mm::<T, SKIP>(blk, u, a, t, k);
+            // V = b8 A8 + b6 A6 + b4 A4 + b2 A2 + b0 I, in place over A8.
+            for i in 0..kk {
+                v[i] = v[i] * B9[8] + a6[i] * B9[6] + a4[i] * B9[4] + a2[i] * B9[2];
+            }
+            add_identity(v, B9[0], k);
+        }
+        _ => {
+            mm::<T, SKIP>(blk, a4, a2, a2, k);
+            mm::<T, SKIP>(blk, a6, a4, a2, k);
+            // U = A [A6 (b13 A6 + b11 A4 + b9 A2) + b7 A6 + b5 A4 + b3 A2 + b1 I].
+            combine(
+                t,
+                &[(B13[13], &*a6), (B13[11], &*a4), (B13[9], &*a2)],
+                0.0,
+                k,
+            );
+            mm::<T, SKIP>(blk, v, a6, t, k);
+            for i in 0..kk {
+                t[i] = v[i] + a6[i] * B13[7] + a4[i] * B13[5] + a2[i] * B13[3];
+            }
+            add_identity(t, B13[1], k);
+            mm::<T, SKIP>(blk, u, a, t, k);
+            // V = A6 (b12 A6 + b10 A4 + b8 A2) + b6 A6 + b4 A4 + b2 A2 + b0 I.
+            combine(
+                t,
+                &[(B13[12], &*a6), (B13[10], &*a4), (B13[8], &*a2)],
+                0.0,
+                k,
+            );
+            mm::<T, SKIP>(blk, v, a6, t, k);
+            for i in 0..kk {
+                v[i] += a6[i] * B13[6] + a4[i] * B13[4] + a2[i] * B13[2];
+            }
+            add_identity(v, B13[0], k);
+        }
+    }
+    // (V − U) X = (V + U): the denominator in v, the numerator in out.
+    for i in 0..kk {
+        out[i] = v[i] + u[i];
+        v[i] -= u[i];
+    }
+    if !lu_solve::<T, SKIP>(v, &mut bufs.piv[..k], out, k, blk) {
+        return false;
+    }
+    for _ in 0..s {
+        t.copy_from_slice(&out[..kk]);
+        mm::<T, SKIP>(blk, out, t, t, k);
+    }
+    out[..kk].iter().all(|x| x.value().is_finite())
+}
+
+/// `c ← a b` (k×k, column-major), both zero in rows `blk..` of columns `..blk`; `SKIP`
+/// skips a zero entry of `b` (see [`pade`]).
+#[inline(always)]
+fn mm<T: Real, const SKIP: bool>(blk: usize, c: &mut [T], a: &[T], b: &[T], k: usize) {
+    c[..k * k].iter_mut().for_each(|x| *x = T::constant(0.0));
     for j in 0..k {
         // b's column j is zero below `blk` when j < blk; a's column l is zero below `blk`
         // when l < blk.
         let lmax = if j < blk { blk } else { k };
         for l in 0..lmax {
             let blj = b[l + j * k];
-            if blj == 0.0 {
+            if SKIP && blj.value() == 0.0 {
                 continue;
             }
             let imax = if l < blk { blk } else { k };
@@ -273,33 +299,49 @@ fn mm(blk: usize, c: &mut [f64], a: &[f64], b: &[f64], k: usize) {
 
 /// `c ← Σ w_i M_i + d I`.
 #[inline(always)]
-fn combine(c: &mut [f64], terms: &[(f64, &[f64])], d: f64, k: usize) {
+fn combine<T: Real>(c: &mut [T], terms: &[(f64, &[T])], d: f64, k: usize) {
     for i in 0..k * k {
-        c[i] = terms.iter().map(|(w, m)| w * m[i]).sum();
+        let mut acc = T::constant(0.0);
+        for (w, m) in terms {
+            acc += m[i] * *w;
+        }
+        c[i] = acc;
     }
     add_identity(c, d, k);
 }
 
 #[inline(always)]
-fn add_identity(c: &mut [f64], d: f64, k: usize) {
+fn add_identity<T: Real>(c: &mut [T], d: f64, k: usize) {
     for i in 0..k {
-        c[i + i * k] += d;
+        c[i + i * k] += T::constant(d);
     }
 }
 
-/// Solves `a x = b` in place (a k×k destroyed by its LU factors with partial pivoting, b
-/// k×k overwritten by x). `false` for a zero pivot.
+/// Solves `a x = b` in place (a k×k destroyed by its LU factors with partial pivoting on the
+/// values, b k×k overwritten by x). `false` for a zero pivot.
 #[inline(always)]
-fn lu_solve(a: &mut [f64], piv: &mut [usize], b: &mut [f64], k: usize, blk: usize) -> bool {
+fn lu_solve<T: Real, const SKIP: bool>(
+    a: &mut [T],
+    piv: &mut [usize],
+    b: &mut [T],
+    k: usize,
+    blk: usize,
+) -> bool {
     // Below `blk`, the columns before `blk` are zero: the pivot search and the elimination of
     // such a column stop at `blk`, and L keeps the zero block.
     let rows = |c: usize| if c < blk { blk } else { k };
     for c in 0..k {
         let p = (c..rows(c))
-            .max_by(|&i, &j| a[i + c * k].abs().total_cmp(&a[j + c * k].abs()))
+            .max_by(|&i, &j| {
+                a[i + c * k]
+                    .value()
+                    .abs()
+                    .total_cmp(&a[j + c * k].value().abs())
+            })
             .unwrap_or(c);
         piv[c] = p;
-        if a[p + c * k] == 0.0 || !a[p + c * k].is_finite() {
+        let pv = a[p + c * k].value();
+        if pv == 0.0 || !pv.is_finite() {
             return false;
         }
         if p != c {
@@ -309,15 +351,16 @@ fn lu_solve(a: &mut [f64], piv: &mut [usize], b: &mut [f64], k: usize, blk: usiz
         }
         let d = a[c + c * k];
         for i in c + 1..rows(c) {
-            a[i + c * k] /= d;
+            a[i + c * k] = a[i + c * k] / d;
         }
         for j in c + 1..k {
             let acj = a[c + j * k];
-            if acj == 0.0 {
+            if SKIP && acj.value() == 0.0 {
                 continue;
             }
             for i in c + 1..rows(c) {
-                a[i + j * k] -= a[i + c * k] * acj;
+                let l = a[i + c * k];
+                a[i + j * k] -= l * acj;
             }
         }
     }
@@ -333,7 +376,7 @@ fn lu_solve(a: &mut [f64], piv: &mut [usize], b: &mut [f64], k: usize, blk: usiz
             }
         }
         for c in (0..k).rev() {
-            x[c] /= a[c + c * k];
+            x[c] = x[c] / a[c + c * k];
             let xc = x[c];
             for i in 0..c {
                 x[i] -= a[i + c * k] * xc;
@@ -341,6 +384,18 @@ fn lu_solve(a: &mut [f64], piv: &mut [usize], b: &mut [f64], k: usize, blk: usiz
         }
     }
     true
+}
+
+/// `e^A` of the k×k `a` (column-major) over the scalar `T` (a dual number gives the
+/// derivative of the exponential along the input's derivative, through the same Padé
+/// approximant and squarings as `f64`), block upper triangular from `blk` as
+/// [`Expm::run_block`]; `None` where the result is not finite. Allocates its workspace: for
+/// fitting, not for the filter's step.
+pub(crate) fn expm_of<T: Real>(a: &[T], k: usize, blk: usize) -> Option<Vec<T>> {
+    let mut bufs = Bufs::<T>::new(k);
+    bufs.a[..k * k].copy_from_slice(&a[..k * k]);
+    let mut out = vec![T::constant(0.0); k * k];
+    pade::<T, false>(&mut bufs, k, blk, &mut out).then_some(out)
 }
 
 #[cfg(test)]

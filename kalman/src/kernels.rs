@@ -196,12 +196,15 @@ pub(crate) trait Real:
     + std::ops::Mul<Output = Self>
     + std::ops::Div<Output = Self>
     + std::ops::SubAssign
+    + std::ops::AddAssign
     + std::ops::Mul<f64, Output = Self>
 {
     /// The square root.
     fn sqrt(self) -> Self;
     /// The value (the real part of a dual number).
     fn value(self) -> f64;
+    /// The constant `v` (no derivative part).
+    fn constant(v: f64) -> Self;
 }
 
 #[cfg(not(feature = "autodiff"))]
@@ -214,6 +217,10 @@ impl Real for f64 {
     fn value(self) -> f64 {
         self
     }
+    #[inline(always)]
+    fn constant(v: f64) -> Self {
+        v
+    }
 }
 
 #[cfg(feature = "autodiff")]
@@ -225,6 +232,10 @@ impl<T: num_dual::DualNum<Primitive = f64> + Copy> Real for T {
     #[inline(always)]
     fn value(self) -> f64 {
         num_dual::DualStruct::re(&self)
+    }
+    #[inline(always)]
+    fn constant(v: f64) -> Self {
+        T::from(v)
     }
 }
 

@@ -274,7 +274,7 @@ fn parse_entry(item: &str) -> Option<Result<(Matrix, usize, usize), FitError>> {
         return Some(Err(bad(format!("{item}: an entry is written NAME[i,j]"))));
     };
     let matrix = match name.trim() {
-        "F" => Matrix::F,
+        "F" | "A" => Matrix::F,
         "B" => Matrix::B,
         "H" => Matrix::H,
         "Q" | "Qc" => Matrix::Q,

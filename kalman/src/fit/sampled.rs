@@ -21,8 +21,11 @@
 //! `Q_k = Q_k⁰ + Σ_j v_j(θ) Q_k^{(j)}`, every term sampled once per *distinct* interval when
 //! the map is built. The likelihood and its exact gradient at any θ then cost one filter
 //! pass per parameter with no matrix exponential: a regular or quantised clock pays the
-//! sampling once. `A`, `B` and `H` stay fixed (a free entry of `A` would put θ inside the
-//! exponential).
+//! sampling once. `B` and `H` stay fixed. A free entry of the drift `A` (addressed as
+//! [`Matrix::F`]) puts θ inside the exponential: each step then samples its interval at θ,
+//! the exponential evaluated over the pass's dual numbers (the same Padé approximant and
+//! squarings as in `f64`), so the gradient stays exact and each pass pays one exponential
+//! per step.
 //!
 //! # Example
 //! ```
@@ -84,6 +87,14 @@ pub struct SampledMap {
     x0: Vec<f64>,
     p0: Vec<f64>,
     g: Vec<f64>,
+    /// Whether a parameter enters the drift `A` (addressed as [`Matrix::F`]): then every step
+    /// samples its interval at θ, through the exponential over the scalar of the pass.
+    drift: bool,
+    /// The base drift `A` (n×n), the continuous control matrix (n×p) and each distinct
+    /// interval's Δt.
+    a: Vec<f64>,
+    bc: Vec<f64>,
+    dts: Vec<f64>,
 }
 
 /// The matrices of a [`SampledMap`] at a θ ([`SampledMap::matrices`]).
@@ -102,6 +113,8 @@ pub struct SampledMap {
 /// ```
 #[derive(Clone, Debug)]
 pub struct Matrices {
+    /// The drift `A` (n×n).
+    pub a: Mat<f64>,
     /// The process-noise intensity `W` (q×q).
     pub w: Mat<f64>,
     /// The measurement noise covariance `R` (m×m).
@@ -186,7 +199,23 @@ impl SampledMap {
             x0: x0.to_vec(),
             p0,
             g,
+            drift: false,
+            a: model
+                .a()
+                .col_iter()
+                .flat_map(|c| c.iter().copied())
+                .collect(),
+            bc: model
+                .b()
+                .col_iter()
+                .flat_map(|c| c.iter().copied())
+                .collect(),
+            dts: Vec::new(),
         };
+        this.drift = this
+            .params
+            .iter()
+            .any(|p| p.entries().iter().any(|e| e.matrix == Matrix::F));
         this.theta0()?;
         this.sample(model, t)?;
         Ok(this)
@@ -268,6 +297,7 @@ impl SampledMap {
                 }
                 blocks.extend(qd.col_iter().flat_map(|c| c.iter().copied()));
             }
+            self.dts.push(dt);
             slots.insert(dt.to_bits(), slots.len());
             self.step.push(slots.len() - 1);
         }
@@ -342,7 +372,8 @@ impl SampledMap {
             Matrix::R => self.r[i + j * self.m],
             Matrix::X0 => self.x0[i],
             Matrix::P0 => self.p0[i + j * self.n],
-            Matrix::F | Matrix::B | Matrix::H => f64::NAN,
+            Matrix::F => self.a[i + j * self.n],
+            Matrix::B | Matrix::H => f64::NAN,
         }
     }
 
@@ -367,6 +398,7 @@ impl SampledMap {
     pub fn matrices(&self, theta: &[f64]) -> Result<Matrices, FitError> {
         self.check_theta(theta)?;
         let (n, m, q) = (self.n, self.m, self.nq);
+        let mut a = self.a.clone();
         let (mut qc, mut r, mut x0, mut p0) = (
             self.qc.clone(),
             self.r.clone(),
@@ -382,13 +414,15 @@ impl SampledMap {
                         Matrix::R => r[i + j * m] = e.coefficient * v,
                         Matrix::X0 => x0[i] = e.coefficient * v,
                         Matrix::P0 => p0[i + j * n] = e.coefficient * v,
-                        Matrix::F | Matrix::B | Matrix::H => {}
+                        Matrix::F => a[i + j * n] = e.coefficient * v,
+                        Matrix::B | Matrix::H => {}
                     }
                 }
             }
         }
         let mat = |v: &[f64], k: usize| Mat::from_fn(k, k, |i, j| v[i + j * k]);
         Ok(Matrices {
+            a: mat(&a, n),
             w: mat(&qc, q),
             r: mat(&r, m),
             x0,
@@ -438,6 +472,100 @@ impl SampledMap {
         filter_error(self, self.theta0()?, std::slice::from_ref(data), opts)
     }
 
+    /// The drift at θ over the scalar of the pass.
+    fn drift_at<T: Scalar>(&self, theta: &[T]) -> Vec<T> {
+        let mut a: Vec<T> = self.a.iter().map(|&v| T::from(v)).collect();
+        self.set(theta, Matrix::F, self.n, &mut a);
+        a
+    }
+
+    /// `out = F x + B_d u` with `[[F, B_d], [0, I]] = e^{[[A, B], [0, 0]]Δt}` at θ (NaN where
+    /// the exponential is not finite, which the pass reports as its divergence).
+    fn f_at<T: Scalar>(&self, theta: &[T], x: &[T], u: Option<&[f64]>, dt: f64, out: &mut [T]) {
+        let (n, p) = (self.n, self.p);
+        if dt == 0.0 {
+            out[..n].copy_from_slice(&x[..n]);
+            return;
+        }
+        let a = self.drift_at(theta);
+        let k = n + p;
+        let mut m = vec![T::from(0.0); k * k];
+        for j in 0..n {
+            for i in 0..n {
+                m[i + j * k] = a[i + j * n] * dt;
+            }
+        }
+        for j in 0..p {
+            for i in 0..n {
+                m[i + (n + j) * k] = T::from(self.bc[i + j * n] * dt);
+            }
+        }
+        let Some(e) = crate::expm::expm_of(&m, k, n) else {
+            out[..n].iter_mut().for_each(|o| *o = T::from(f64::NAN));
+            return;
+        };
+        for i in 0..n {
+            let mut acc = T::from(0.0);
+            for j in 0..n {
+                acc += e[i + j * k] * x[j];
+            }
+            if let Some(u) = u {
+                for j in 0..p {
+                    acc += e[i + (n + j) * k] * u[j];
+                }
+            }
+            out[i] = acc;
+        }
+    }
+
+    /// Van Loan's `Q` at θ: `e^{[[−A, W], [0, Aᵀ]]Δt} = [[·, F⁻¹Q], [0, Fᵀ]]`, W = G W_θ Gᵀ.
+    fn q_at<T: Scalar>(&self, theta: &[T], dt: f64, out: &mut [T]) {
+        let (n, q) = (self.n, self.nq);
+        out[..n * n].iter_mut().for_each(|o| *o = T::from(0.0));
+        if dt == 0.0 {
+            return;
+        }
+        let a = self.drift_at(theta);
+        let mut wq: Vec<T> = self.qc.iter().map(|&v| T::from(v)).collect();
+        self.set(theta, Matrix::Q, q, &mut wq);
+        let k = 2 * n;
+        let mut m = vec![T::from(0.0); k * k];
+        for j in 0..n {
+            for i in 0..n {
+                let mut w = T::from(0.0);
+                for b in 0..q {
+                    for c in 0..q {
+                        w += wq[c + b * q] * (self.g[i + c * n] * self.g[j + b * n]);
+                    }
+                }
+                m[i + j * k] = -(a[i + j * n] * dt);
+                m[i + (n + j) * k] = w * dt;
+                m[n + i + (n + j) * k] = a[j + i * n] * dt;
+            }
+        }
+        let Some(e) = crate::expm::expm_of(&m, k, n) else {
+            out[..n * n].iter_mut().for_each(|o| *o = T::from(f64::NAN));
+            return;
+        };
+        // F = (E₂₂)ᵀ, Q = F E₁₂, symmetrised.
+        for j in 0..n {
+            for i in 0..n {
+                let mut acc = T::from(0.0);
+                for l in 0..n {
+                    acc += e[n + l + (n + i) * k] * e[l + (n + j) * k];
+                }
+                out[i + j * n] = acc;
+            }
+        }
+        for j in 0..n {
+            for i in 0..j {
+                let s = (out[i + j * n] + out[j + i * n]) * 0.5;
+                out[i + j * n] = s;
+                out[j + i * n] = s;
+            }
+        }
+    }
+
     fn interval(&self, k: usize) -> usize {
         // Past the last stamp (not reached through `fit`): the last row's Δt = 0 block.
         self.step
@@ -470,9 +598,12 @@ impl ParametricModel for SampledMap {
         self.params.iter().map(|p| p.name().to_string()).collect()
     }
 
-    fn f<T: Scalar>(&self, _theta: &[T], x: &[T], u: Option<&[f64]>, k: usize, out: &mut [T]) {
+    fn f<T: Scalar>(&self, theta: &[T], x: &[T], u: Option<&[f64]>, k: usize, out: &mut [T]) {
         let (n, p) = (self.n, self.p);
         let iv = self.interval(k);
+        if self.drift {
+            return self.f_at(theta, x, u, self.dts.get(iv).copied().unwrap_or(0.0), out);
+        }
         let (F, B) = (
             &self.f[iv * n * n..(iv + 1) * n * n],
             &self.b[iv * n * p..(iv + 1) * n * p],
@@ -503,6 +634,9 @@ impl ParametricModel for SampledMap {
     fn q<T: Scalar>(&self, theta: &[T], k: usize, out: &mut [T]) {
         let nn = self.n * self.n;
         let iv = self.interval(k);
+        if self.drift {
+            return self.q_at(theta, self.dts.get(iv).copied().unwrap_or(0.0), out);
+        }
         for (o, &v) in out.iter_mut().zip(&self.q_fixed[iv * nn..(iv + 1) * nn]) {
             *o = T::from(v);
         }
@@ -598,10 +732,11 @@ fn check_params(params: &[Param], n: usize, m: usize, nq: usize) -> Result<(), F
                 Matrix::R => (m, m),
                 Matrix::X0 => (n, 1),
                 Matrix::P0 => (n, n),
-                Matrix::F | Matrix::B | Matrix::H => {
+                Matrix::F => (n, n),
+                Matrix::B | Matrix::H => {
                     return bad(format!(
-                        "{}: {} is fixed in a continuous model's fit (its noise intensity Q, R, \
-                         x0 and P0 can be free)",
+                        "{}: {} is fixed in a continuous model's fit (the drift A, addressed as \
+                         F, its noise intensity Q, R, x0 and P0 can be free)",
                         prm.name(),
                         e.matrix.name()
                     ));

@@ -257,9 +257,14 @@ fn bad_parameters_stamps_and_records_are_named() {
     let err = |params: Vec<Param>, t: &[f64]| {
         SampledMap::new(&cv(1.0), &[0.0, 0.0], &P0, t, params).expect_err("refused")
     };
-    let e = err(vec![Param::entry(Matrix::F, 0, 1)], &t);
+    let e = err(vec![Param::entry(Matrix::H, 0, 1)], &t);
     assert!(
-        matches!(&e, FitError::Parameters(m) if m.contains("F is fixed")),
+        matches!(&e, FitError::Parameters(m) if m.contains("H is fixed")),
+        "{e}"
+    );
+    let e = err(vec![Param::entry(Matrix::F, 2, 0)], &t);
+    assert!(
+        matches!(&e, FitError::Parameters(m) if m.contains("outside")),
         "{e}"
     );
     let e = err(vec![Param::entry(Matrix::R, 1, 1)], &t);
@@ -298,4 +303,148 @@ fn bad_parameters_stamps_and_records_are_named() {
         matches!(&e, FitError::Data(m) if m.contains("19 rows")),
         "{e}"
     );
+}
+
+/// ẋ = a x + w (intensity q), z = x + v: F = e^{aΔt}, Q = q (e^{2aΔt} − 1)/(2a).
+fn ou_reference(t: &[f64], z: &[f64], a: f64, q: f64, r: f64) -> f64 {
+    let (mut x, mut p) = (0.0, 4.0);
+    let mut ll = 0.0;
+    for k in 0..t.len() {
+        let e = z[k] - x;
+        let s = p + r;
+        ll -= 0.5 * (e * e / s + s.ln() + (2.0 * std::f64::consts::PI).ln());
+        let g = p / s;
+        x += g * e;
+        p = (1.0 - g) * p * (1.0 - g) + g * g * r;
+        if let Some(next) = t.get(k + 1) {
+            let dt = next - t[k];
+            let f = (a * dt).exp();
+            x *= f;
+            p = f * p * f + q * ((2.0 * a * dt).exp() - 1.0) / (2.0 * a);
+        }
+    }
+    ll
+}
+
+fn ou_record(t: &[f64], a: f64, q: f64, r: f64, seed: u64) -> Vec<f64> {
+    let mut g = rng(seed);
+    let mut x = 0.0;
+    let mut z = Vec::with_capacity(t.len());
+    for k in 0..t.len() {
+        z.push(x + r.sqrt() * g.sample::<f64, _>(StandardNormal));
+        if let Some(next) = t.get(k + 1) {
+            let dt = next - t[k];
+            let var = q * ((2.0 * a * dt).exp() - 1.0) / (2.0 * a);
+            x = (a * dt).exp() * x + var.sqrt() * g.sample::<f64, _>(StandardNormal);
+        }
+    }
+    z
+}
+
+/// A free entry of the drift A (addressed as `Matrix::F`): every interval sampled at θ
+/// through the exponential over dual numbers. The likelihood is the closed-form
+/// Ornstein–Uhlenbeck filter's (1e-9 relative, as above), the AD gradient its central
+/// difference, and (a, q, R) come back within three standard errors from 500 rows.
+#[test]
+fn a_drift_entry_is_fitted_through_the_exponential() {
+    let t = stamps(500);
+    let (a, q, r) = (-0.8, 1.5, 0.05);
+    let z = ou_record(&t, a, q, r, 8);
+    let model = ContinuousModel::new(&[[-0.3]], &[[1.0]], &[[1.0]], &[[0.1]]).expect("model");
+    let params = vec![
+        Param::entry(Matrix::F, 0, 0),
+        Param::entry(Matrix::Q, 0, 0),
+        Param::entry(Matrix::R, 0, 0),
+    ];
+    let map = SampledMap::new(&model, &[0.0], &[[4.0]], &t, params).expect("map");
+    let data = Series::new(&z, 1).expect("series");
+    for (aa, qq, rr) in [(a, q, r), (-0.2_f64, 0.4_f64, 0.3_f64)] {
+        let theta = [aa, qq.ln(), rr.ln()];
+        let got = ekf_log_likelihood(&map, &theta, &data).expect("loglik");
+        let want = ou_reference(&t, &z, aa, qq, rr);
+        assert!(
+            (got - want).abs() <= 1e-9 * want.abs(),
+            "a {aa}: {got} vs {want}"
+        );
+    }
+    let theta = [-0.5, 0.2, -2.0];
+    let (_, grad) = ekf_log_likelihood_gradient(&map, &theta, &data).expect("gradient");
+    for j in 0..3 {
+        let h = 1e-5;
+        let (mut up, mut down) = (theta, theta);
+        up[j] += h;
+        down[j] -= h;
+        let fd = (ekf_log_likelihood(&map, &up, &data).expect("ll")
+            - ekf_log_likelihood(&map, &down, &data).expect("ll"))
+            / (2.0 * h);
+        assert!(
+            (grad[j] - fd).abs() <= 1e-6 * grad[j].abs().max(1.0),
+            "θ{j}: {} vs {fd}",
+            grad[j]
+        );
+    }
+    let fit = map.fit(&data, &MleOptions::default()).expect("fit");
+    assert!(fit.converged, "{}", fit.message);
+    let se = fit.std_errors.as_ref().expect("bounds");
+    for (j, truth) in [(0, a), (1, q.ln()), (2, r.ln())] {
+        assert!(
+            (fit.theta[j] - truth).abs() < 3.0 * se[j],
+            "{}: {} vs {truth} ± {}",
+            fit.names[j],
+            fit.theta[j],
+            se[j]
+        );
+    }
+    assert!((map.matrices(&fit.theta).expect("m").a[(0, 0)] - fit.theta[0]).abs() < 1e-15);
+}
+
+/// A 2-state drift entry: A = [[0, c], [0, 0]] with c free, so F = [[1, cΔt], [0, 1]] and
+/// Q = q [[c²Δt³/3, cΔt²/2], [cΔt²/2, Δt]]; the likelihood at c = 1.3 is that closed form's
+/// filter (1e-9 relative), which checks the transposes inside the Van Loan block.
+#[test]
+fn a_two_state_drift_entry_matches_its_closed_form() {
+    let t = stamps(200);
+    let z = simulate(&t, 0.5, 0.04, 9);
+    let (c, q, r) = (1.3_f64, 0.7_f64, 0.05_f64);
+    let params = vec![
+        Param::entry(Matrix::F, 0, 1),
+        Param::entry(Matrix::Q, 1, 1),
+        Param::entry(Matrix::R, 0, 0),
+    ];
+    let map = SampledMap::new(
+        &cv(1.0),
+        &[0.0, 0.0],
+        &[[10.0, 0.0], [0.0, 10.0]],
+        &t,
+        params,
+    )
+    .expect("map");
+    let got = ekf_log_likelihood(&map, &[c, q.ln(), r.ln()], &Series::new(&z, 1).expect("z"))
+        .expect("loglik");
+    // The closed form with c: the position is c times the integrated velocity.
+    let H = nalgebra::RowVector2::new(1.0, 0.0);
+    let (mut x, mut P) = (Vector2::new(0.0, 0.0), Matrix2::identity() * 10.0);
+    let mut want = 0.0;
+    for k in 0..t.len() {
+        let e = z[k] - (H * x)[0];
+        let s = (H * P * H.transpose())[0] + r;
+        want -= 0.5 * (e * e / s + s.ln() + (2.0 * std::f64::consts::PI).ln());
+        let K = P * H.transpose() / s;
+        x += K * e;
+        let IKH = Matrix2::identity() - K * H;
+        P = IKH * P * IKH.transpose() + K * K.transpose() * r;
+        if let Some(next) = t.get(k + 1) {
+            let dt = next - t[k];
+            let F = Matrix2::new(1.0, c * dt, 0.0, 1.0);
+            let Q = q * Matrix2::new(
+                c * c * dt.powi(3) / 3.0,
+                c * dt.powi(2) / 2.0,
+                c * dt.powi(2) / 2.0,
+                dt,
+            );
+            x = F * x;
+            P = F * P * F.transpose() + Q;
+        }
+    }
+    assert!((got - want).abs() <= 1e-9 * want.abs(), "{got} vs {want}");
 }

@@ -2,7 +2,8 @@
 //! by maximum likelihood over the record's own time stamps (`kalman::fit::SampledMap`: the
 //! model sampled exactly at each distinct interval, the likelihood and its exact gradient
 //! through the filter-error engine). The time rule is the one `filter` follows
-//! ([`crate::userdata::timing`]); `A`, `B`, `C`, `D` and `G` stay fixed.
+//! ([`crate::userdata::timing`]); entries `A[i,j]` of the drift may be free too (each step
+//! then samples its interval at θ); `B`, `C`, `D` and `G` stay fixed.
 
 use std::path::Path;
 
@@ -112,6 +113,7 @@ pub(super) fn fit(
         .matrices(&result.theta)
         .map_err(|e| fit_error(args, e))?;
     let mut out = model.clone();
+    out.A = dense(&fitted.a);
     out.Qc = dense(&fitted.w);
     out.R = Some(dense(&fitted.r));
     out.x0 = nalgebra::DVector::from_vec(fitted.x0.clone());
@@ -171,6 +173,7 @@ fn params(spec: &FreeSpec, model: &ContinuousModel) -> Vec<Param> {
     let (n, m, q) = (model.n(), model.m(), model.G.ncols());
     let name = |matrix: Matrix, i: usize, j: usize| match matrix {
         Matrix::Q => format!("Qc[{i},{j}]"),
+        Matrix::F => format!("A[{i},{j}]"),
         Matrix::X0 => format!("x0[{i}]"),
         other => format!("{}[{i},{j}]", other.name()),
     };

@@ -73,7 +73,7 @@ pub struct FitArgs {
                 Q[i,j], R[i,j], P0[i,j], x0[i] (the rest keeps its value exactly); \
                 Q:white-acceleration (the one intensity of a constant-velocity or -acceleration Q); \
                 a continuous model frees Qc:scalar|diag, R:scalar|diag, x0, P0:diag and the entries \
-                Qc[i,j], R[i,j], P0[i,j], x0[i]"
+                A[i,j], Qc[i,j], R[i,j], P0[i,j], x0[i]"
     )]
     pub free: Vec<FreeSpec>,
     /// Estimator.

@@ -122,6 +122,27 @@ fn a_continuous_model_is_fitted_over_the_records_own_time_stamps() {
         &argv("filter --model fitted.json --data z.csv --out est.csv"),
     );
     assert_eq!(read(&dir.join("est.csv")).lines().count(), 501);
+
+    // A drift entry, A[1,1] (a velocity damping; the record's truth is 0), freed beside the
+    // noise: its estimate lies within three standard errors of 0, named as the summary
+    // names it, and the fitted file carries it in A.
+    ok(
+        &dir,
+        &argv(
+            "fit --model cv.json --data z.csv --free A[1,1],Qc:scalar,R:diag --out fitted_a.json \
+             --summary fit_a.json",
+        ),
+    );
+    let s = json(&dir.join("fit_a.json"));
+    assert_eq!(s["converged"], true, "{s}");
+    let a11 = s["estimates"]["A[1,1]"].as_f64().expect("A[1,1]");
+    let se = s["std_errors"]["A[1,1]"].as_f64().expect("its std error");
+    assert!(a11.abs() < 3.0 * se, "A[1,1] = {a11} ± {se}");
+    // The same number written and read back: bit-equal.
+    assert_eq!(
+        mat(&json(&dir.join("fitted_a.json"))["A"])[1][1].to_bits(),
+        a11.to_bits()
+    );
 }
 
 /// What a continuous model's fit cannot do is refused in one line, with nothing written.
@@ -132,7 +153,7 @@ fn the_continuous_fit_refuses_what_it_cannot_fit() {
     write(&dir, "z.csv", &csv);
     write(&dir, "cv.json", CV);
     for (free, method, expect) in [
-        ("F[0,1]", "mle", "F is fixed"),
+        ("H[0,0]", "mle", "H is fixed"),
         ("Qc:full", "mle", "not full"),
         ("Q:white-acceleration", "mle", "Qc:scalar"),
         ("Qc:scalar", "em", "needs a discrete model"),
