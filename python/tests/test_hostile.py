@@ -32,7 +32,14 @@ def limited():
 def child(code, limit=False, interrupt_after_line=None, timeout=120):
     """Runs `code` in a child interpreter; returns (returncode, stdout, stderr). With
     `interrupt_after_line`, sends SIGINT once that line appears on the child's stdout."""
-    code = "import numpy as np\nimport launch_estimation as le\n" + textwrap.dedent(code)
+    # Ctrl-C raises KeyboardInterrupt in the child even where the parent runs with SIGINT
+    # ignored (a job started in the background by a non-interactive shell), which Python
+    # would otherwise inherit and keep.
+    prefix = (
+        "import signal\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "import numpy as np\nimport launch_estimation as le\n"
+    )
+    code = prefix + textwrap.dedent(code)
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
     proc = subprocess.Popen(
         [sys.executable, "-c", code],
