@@ -49,11 +49,8 @@
 
 use num_dual::Dual64;
 
-use super::info::{
-    Fit, Method, aic, bic, central_information, correlation, explain_unidentified, spd_inverse,
-    std_errors_of,
-};
-use super::mle::{MleOptions, Objective, optimise};
+use super::info::{Fit, Method, Run, assemble, central_information};
+use super::mle::{MleOptions, Objective, check_start, optimise};
 use super::{FitError, LN_2PI, ParamMap, Series, System};
 use crate::kernels::{Real, cholesky, symmetrise};
 use crate::nonlinear::Scalar;
@@ -166,45 +163,26 @@ pub fn mle_diffuse<M: ParamMap + ?Sized>(
     data: &Series<'_>,
     opts: &MleOptions,
 ) -> Result<Fit, FitError> {
-    if map.n_params() == 0 {
-        return Err(FitError::NothingFree);
-    }
-    if theta0.len() != map.n_params() {
-        return Err(FitError::Parameters(format!(
-            "θ0 has {} entries, the map has {}",
-            theta0.len(),
-            map.n_params()
-        )));
-    }
+    check_start(map, &theta0)?;
     let objective = Diffuse { map, diffuse, data };
     let n_obs = data.observed();
-    let (theta, iterations, converged, mut message) = optimise(&objective, theta0, n_obs, opts)?;
+    let (theta, iterations, converged, message) = optimise(&objective, theta0, n_obs, opts)?;
     let (loglik, _) = objective.loglik_gradient(&theta)?;
     let information = objective.information(&theta)?;
-    let covariance = spd_inverse(&information);
-    let std_errors = covariance.as_ref().map(std_errors_of);
-    let names = map.names();
-    let unidentified =
-        explain_unidentified(&information, covariance.as_ref(), &names, &mut message);
-    let k = theta.len();
-    Ok(Fit {
+    let run = Run {
         method: Method::Mle,
-        system: map.system(&theta)?,
-        loglik,
         iterations,
         converged,
         message,
-        boundary: Vec::new(),
-        correlation: covariance.as_ref().and_then(correlation),
-        information,
-        covariance,
-        std_errors,
-        unidentified,
-        n_obs,
-        aic: aic(loglik, k),
-        bic: bic(loglik, k, n_obs),
+    };
+    assemble(
+        map,
         theta,
-    })
+        std::slice::from_ref(data),
+        loglik,
+        information,
+        run,
+    )
 }
 
 /// The diffuse likelihood of one record as the optimiser's objective.

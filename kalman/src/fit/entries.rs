@@ -243,7 +243,7 @@ impl Param {
 }
 
 /// The cells `(matrix, i, j)` an entry writes (its mirror too for a covariance).
-fn cells(e: &Entry) -> Vec<(Matrix, usize, usize)> {
+pub(crate) fn cells(e: &Entry) -> Vec<(Matrix, usize, usize)> {
     if e.matrix.is_covariance() && e.row != e.col {
         vec![(e.matrix, e.row, e.col), (e.matrix, e.col, e.row)]
     } else {

@@ -361,16 +361,7 @@ pub fn mle_records<M: ParamMap + ?Sized>(
     if records.is_empty() {
         return Err(FitError::Data("no record to fit".into()));
     }
-    if map.n_params() == 0 {
-        return Err(FitError::NothingFree);
-    }
-    if theta0.len() != map.n_params() {
-        return Err(FitError::Parameters(format!(
-            "θ0 has {} entries, the map has {}",
-            theta0.len(),
-            map.n_params()
-        )));
-    }
+    check_start(map, &theta0)?;
     let sys0 = map.system(&theta0)?;
     for data in records {
         data.check(&sys0)?;
@@ -388,6 +379,21 @@ pub fn mle_records<M: ParamMap + ?Sized>(
         converged,
         message,
     )
+}
+
+/// Refuses a map with nothing free and a start of the wrong length.
+pub(crate) fn check_start<M: ParamMap + ?Sized>(map: &M, theta0: &[f64]) -> Result<(), FitError> {
+    if map.n_params() == 0 {
+        return Err(FitError::NothingFree);
+    }
+    if theta0.len() != map.n_params() {
+        return Err(FitError::Parameters(format!(
+            "θ0 has {} entries, the map has {}",
+            theta0.len(),
+            map.n_params()
+        )));
+    }
+    Ok(())
 }
 
 /// Maximises `objective` from `theta0`: [`warm_up`] from a start far off, L-BFGS (memory

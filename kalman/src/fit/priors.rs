@@ -8,7 +8,7 @@
 use faer::Mat;
 
 use super::info::{Fit, Method, Run, assemble, central_information};
-use super::mle::{MleOptions, Objective, optimise};
+use super::mle::{MleOptions, Objective, check_start, optimise};
 use super::score::log_likelihood_gradient;
 use super::{Derivative, FitError, ParamMap, Series, System};
 use crate::MatrixInput;
@@ -162,16 +162,7 @@ pub fn mle_records_with_priors<M: ParamMap + ?Sized>(
             priors.len()
         )));
     }
-    if map.n_params() == 0 {
-        return Err(FitError::NothingFree);
-    }
-    if theta0.len() != map.n_params() {
-        return Err(FitError::Parameters(format!(
-            "θ0 has {} entries, the map has {}",
-            theta0.len(),
-            map.n_params()
-        )));
-    }
+    check_start(map, &theta0)?;
     let maps: Vec<WithPrior<'_, M>> = priors
         .iter()
         .map(|prior| WithPrior { map, prior })

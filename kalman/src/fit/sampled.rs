@@ -684,13 +684,9 @@ fn value<T: Scalar>(transform: Transform, theta: T) -> T {
     }
 }
 
-/// The cells an entry sets (its mirror too for an off-diagonal covariance entry).
-fn mirror(e: &Entry) -> Vec<(usize, usize)> {
-    if e.matrix.is_covariance() && e.row != e.col {
-        vec![(e.row, e.col), (e.col, e.row)]
-    } else {
-        vec![(e.row, e.col)]
-    }
+/// The `(row, column)` cells an entry sets ([`super::entries::cells`]).
+fn mirror(e: &Entry) -> impl Iterator<Item = (usize, usize)> {
+    super::entries::cells(e).into_iter().map(|(_, i, j)| (i, j))
 }
 
 /// A `rows`×`cols` matrix, column-major, checked finite.

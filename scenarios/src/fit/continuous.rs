@@ -293,22 +293,11 @@ fn summary(map: &SampledMap, fit: &ParametricFit, distinct: usize) -> Result<ser
                     .collect(),
             )
         });
-    let correlation = fit
-        .correlation
-        .as_ref()
-        .map_or(serde_json::Value::Null, |c| {
-            json!({
-                "names": fit.names,
-                "matrix": (0..c.nrows())
-                    .map(|i| (0..c.ncols()).map(|j| c[(i, j)]).collect::<Vec<_>>())
-                    .collect::<Vec<_>>(),
-            })
-        });
-    let unidentified: Vec<serde_json::Value> = fit
-        .unidentified
-        .iter()
-        .map(|d| serde_json::Value::Object(d.iter().map(|(n, w)| (n.clone(), json!(w))).collect()))
-        .collect();
+    let correlation = fit.correlation.as_ref().map_or(
+        serde_json::Value::Null,
+        |c| json!({"names": fit.names, "matrix": super::faer_rows(c)}),
+    );
+    let unidentified = super::unidentified_json(&fit.unidentified);
     Ok(json!({
         "loglik": fit.loglik,
         "method": "mle",

@@ -124,6 +124,15 @@ fn to_faer(m: &DMatrix<f64>) -> Mat<f64> {
     Mat::from_fn(m.nrows(), m.ncols(), |i, j| m[(i, j)])
 }
 
+/// The summary's `unidentified`: each direction the data do not identify, parameter name →
+/// weight.
+fn unidentified_json(directions: &[Vec<(String, f64)>]) -> Vec<serde_json::Value> {
+    directions
+        .iter()
+        .map(|d| serde_json::Value::Object(d.iter().map(|(n, w)| (n.clone(), json!(w))).collect()))
+        .collect()
+}
+
 fn faer_rows(m: &Mat<f64>) -> Vec<Vec<f64>> {
     (0..m.nrows())
         .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
@@ -253,11 +262,7 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
         serde_json::Value::Null,
         |c| json!({"names": names, "matrix": faer_rows(c)}),
     );
-    let unidentified: Vec<serde_json::Value> = fit
-        .unidentified
-        .iter()
-        .map(|d| serde_json::Value::Object(d.iter().map(|(n, w)| (n.clone(), json!(w))).collect()))
-        .collect();
+    let unidentified = unidentified_json(&fit.unidentified);
     Ok(json!({
         "loglik": fit.loglik,
         "method": match args.method { FitMethod::Mle => "mle", FitMethod::Em => "em" },
