@@ -217,6 +217,52 @@ pub fn destination_of(option: &str, out: &Path, inputs: &[(&str, &Path)]) -> Res
     Ok(Destination::File(target))
 }
 
+/// Checks a command's outputs before any work: its main output `out` and its optional side
+/// outputs (`(option, path)`, `None` for an option not given), each as [`destination_of`]
+/// (its rules, and not one of `inputs`), and no two the same destination (standard output
+/// twice, or one file named twice, however spelt).
+///
+/// # Errors
+/// As [`destination_of`]; [`Error::Usage`] (exit code 2) naming both options for two outputs
+/// with one destination.
+pub fn destinations<const N: usize>(
+    out: (&str, &Path),
+    side: [(&str, Option<&Path>); N],
+    inputs: &[(&str, &Path)],
+) -> Result<(Destination, [Option<Destination>; N])> {
+    let main = destination_of(out.0, out.1, inputs)?;
+    let mut seen = vec![(out.0, out.1, main.clone())];
+    let mut checked = [const { None }; N];
+    for ((option, path), slot) in side.into_iter().zip(checked.iter_mut()) {
+        let Some(path) = path else { continue };
+        let d = destination_of(option, path, inputs)?;
+        if let Some((first, first_path, _)) = seen.iter().find(|(_, _, e)| same_destination(e, &d))
+        {
+            return Err(Error::Usage(format!(
+                "{option} {}: is the same destination as {first} {}; give them different files",
+                path.display(),
+                first_path.display(),
+            )));
+        }
+        seen.push((option, path, d.clone()));
+        *slot = Some(d);
+    }
+    Ok((main, checked))
+}
+
+/// Whether two destinations are one: both standard output, or files with the same absolute
+/// path or (when they exist) the same file.
+fn same_destination(a: &Destination, b: &Destination) -> bool {
+    match (a, b) {
+        (Destination::Stdout, Destination::Stdout) => true,
+        (Destination::File(x), Destination::File(y)) => {
+            let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+            abs(x) == abs(y) || same_file(x, y)
+        }
+        _ => false,
+    }
+}
+
 /// The temporary sibling of `path` used while writing it.
 fn temporary(path: &Path) -> PathBuf {
     let name = path
@@ -359,12 +405,47 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// # Errors
 /// As [`write_with`]; [`Error::Serialise`] if `value` cannot be serialised.
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
+    write_atomic(path, json_text(path, value)?.as_bytes())
+}
+
+/// The text [`write_json`] writes to `path`: pretty JSON with a final newline.
+///
+/// # Errors
+/// [`Error::Serialise`] naming `path` if `value` cannot be serialised.
+pub fn json_text(path: &Path, value: &impl Serialize) -> Result<String> {
     let mut text = serde_json::to_string_pretty(value).map_err(|source| Error::Serialise {
         path: path.to_path_buf(),
         source,
     })?;
     text.push('\n');
-    write_atomic(path, text.as_bytes())
+    Ok(text)
+}
+
+/// Writes several outputs, each whole or not at all ([`write_bytes_to`]), at the same time:
+/// a file's cost is mostly the wait for its data to reach the disk, and the waits overlap.
+/// Every output is attempted; the first error in `outputs`' order is returned, and an
+/// output that failed is absent while the others are whole.
+///
+/// # Errors
+/// As [`write_bytes_to`], for the first output that failed.
+pub fn write_files(outputs: &[(&Destination, &[u8])]) -> Result<()> {
+    let results: Vec<Result<()>> = match outputs {
+        [] => Vec::new(),
+        [(dest, bytes)] => vec![write_bytes_to(dest, bytes)],
+        [(first, bytes), rest @ ..] => std::thread::scope(|scope| {
+            let others: Vec<_> = rest
+                .iter()
+                .map(|(dest, bytes)| scope.spawn(move || write_bytes_to(dest, bytes)))
+                .collect();
+            let mut results = vec![write_bytes_to(first, bytes)];
+            results.extend(others.into_iter().map(|h| {
+                h.join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            }));
+            results
+        }),
+    };
+    results.into_iter().collect()
 }
 
 /// Writes a CSV file with a header and numeric rows, whole or not at all. Numbers use Rust's
@@ -532,6 +613,75 @@ mod tests {
             destination(&other, &[("--model", &input)]).expect("new file"),
             Destination::File(other)
         );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn several_outputs_are_each_whole_or_absent() {
+        // Three outputs written at once, the middle one under a regular file (cannot be
+        // created): the other two are whole, the failed one and every temporary are absent,
+        // and the error names the failed one.
+        let dir = scratch("several");
+        let blocker = dir.join("plain");
+        std::fs::write(&blocker, "x").expect("write");
+        let a = Destination::File(dir.join("a.json"));
+        let b = Destination::File(blocker.join("b.json"));
+        let c = Destination::File(dir.join("c.json"));
+        let e = write_files(&[(&a, b"first"), (&b, b"second"), (&c, b"third")])
+            .expect_err("b cannot be written");
+        assert!(e.to_string().contains("b.json"), "{e}");
+        assert_eq!(std::fs::read(dir.join("a.json")).expect("a"), b"first");
+        assert_eq!(std::fs::read(dir.join("c.json")).expect("c"), b"third");
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .expect("list")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.json", "c.json", "plain"]);
+        write_files(&[]).expect("nothing to write");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn two_outputs_may_not_share_a_destination() {
+        let dir = scratch("shared");
+        let input = dir.join("m.json");
+        std::fs::write(&input, "{}").expect("write");
+        let out = dir.join("o.json");
+        let dotted = dir.join(".").join("o.json");
+        let inputs = [("--model", input.as_path())];
+        let e = destinations(
+            ("--out", &out),
+            [("--summary", Some(dotted.as_path()))],
+            &inputs,
+        )
+        .expect_err("one file under two spellings");
+        assert!(e.to_string().contains("--summary"), "{e}");
+        assert!(e.to_string().contains("same destination as --out"), "{e}");
+        let e = destinations(
+            ("--out", Path::new("-")),
+            [("--summary", Some(Path::new("-")))],
+            &inputs,
+        )
+        .expect_err("standard output twice");
+        assert!(e.to_string().contains("same destination"), "{e}");
+        let e = destinations(
+            ("--out", &out),
+            [("--summary", Some(input.as_path()))],
+            &inputs,
+        )
+        .expect_err("an input");
+        assert!(e.to_string().contains("same file as --model"), "{e}");
+        let other = dir.join("s.json");
+        let (main, [side, absent]) = destinations(
+            ("--out", &out),
+            [("--summary", Some(other.as_path())), ("--log", None)],
+            &inputs,
+        )
+        .expect("distinct outputs");
+        assert_eq!(main, Destination::File(out));
+        assert_eq!(side, Some(Destination::File(other)));
+        assert_eq!(absent, None);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -211,30 +211,39 @@ fn discrete_file(d: &model::DiscreteSs, R: Option<&DMatrix<f64>>) -> model::Resu
 
 /// Writes a discrete model as JSON, or TOML when the destination's name ends in `.toml`.
 pub(crate) fn write_model(dest: &crate::output::Destination, file: &DiscreteFile) -> Result<()> {
-    let is_toml = match dest {
+    crate::output::write_bytes_to(dest, model_text(dest, file)?.as_bytes())
+}
+
+/// Whether a destination's name ends in `.toml` (case-insensitive; standard output gets
+/// JSON).
+fn is_toml(dest: &crate::output::Destination) -> bool {
+    match dest {
         crate::output::Destination::File(path) => path
             .extension()
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("toml")),
         crate::output::Destination::Stdout => false,
-    };
-    if is_toml {
-        let text = toml::to_string(file).map_err(|source| Error::SerialiseToml {
-            dest: dest.to_string(),
-            source,
-        })?;
-        crate::output::write_bytes_to(dest, text.as_bytes())
-    } else {
-        crate::output::write_bytes_to(dest, model_json(file).as_bytes())
     }
 }
 
-/// Writes a continuous model file (what `fit` writes for a continuous model, read back by
-/// `filter`, `fit` and `discretize`) as JSON, or TOML for a `.toml` destination.
-pub(crate) fn write_continuous_model(
+/// The text [`write_model`] writes to `dest`.
+pub(crate) fn model_text(dest: &crate::output::Destination, file: &DiscreteFile) -> Result<String> {
+    if is_toml(dest) {
+        toml::to_string(file).map_err(|source| Error::SerialiseToml {
+            dest: dest.to_string(),
+            source,
+        })
+    } else {
+        Ok(model_json(file))
+    }
+}
+
+/// The text of a continuous model file (what `fit` writes for a continuous model, read back
+/// by `filter`, `fit` and `discretize`): JSON, or TOML for a `.toml` destination.
+pub(crate) fn continuous_model_text(
     dest: &crate::output::Destination,
     m: &model_file::ContinuousModel,
-) -> Result<()> {
+) -> Result<String> {
     use serde_json::json;
     let rows = |a: &DMatrix<f64>| json!(to_rows(a));
     let p = m.p();
@@ -250,25 +259,17 @@ pub(crate) fn write_continuous_model(
         ("P0", m.P0.as_ref().map(rows)),
         ("channels", m.channels.as_ref().map(|c| json!(c))),
     ];
-    let is_toml = match dest {
-        crate::output::Destination::File(path) => path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("toml")),
-        crate::output::Destination::Stdout => false,
-    };
-    if is_toml {
+    if is_toml(dest) {
         let table: serde_json::Map<String, serde_json::Value> = fields
             .into_iter()
             .filter_map(|(k, v)| v.map(|v| (k.to_string(), v)))
             .collect();
-        let text = toml::to_string(&table).map_err(|source| Error::SerialiseToml {
+        toml::to_string(&table).map_err(|source| Error::SerialiseToml {
             dest: dest.to_string(),
             source,
-        })?;
-        crate::output::write_bytes_to(dest, text.as_bytes())
+        })
     } else {
-        crate::output::write_bytes_to(dest, json_object(&fields).as_bytes())
+        Ok(json_object(&fields))
     }
 }
 

@@ -5,6 +5,7 @@
 /// `C = beta·C + alpha·op(A)·op(B)`, all column-major. `op(A)` is `r×k`, `op(B)` is `k×c`;
 /// `lda`/`ldb` are the row counts of the stored `A` and `B`.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn gemm(
     c: &mut [f64],
     r: usize,
@@ -50,6 +51,7 @@ pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
 }
 
 /// Solves `L Lᵀ X = B` in place for `B` (`n×c`, column-major) with the Cholesky factor `L`.
+#[inline(always)]
 pub(crate) fn chol_solve(l: &[f64], n: usize, b: &mut [f64], c: usize) {
     for col in 0..c {
         let x = &mut b[col * n..(col + 1) * n];

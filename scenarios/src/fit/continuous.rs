@@ -14,7 +14,6 @@ use serde_json::json;
 
 use super::{FitArgs, FitMethod, fit_error};
 use crate::error::{Error, Result};
-use crate::output::Destination;
 use crate::userdata::data::{DataReader, Row};
 use crate::userdata::model_file::ContinuousModel;
 
@@ -29,7 +28,7 @@ pub(super) fn fit(
     args: &FitArgs,
     spec: &FreeSpec,
     model: &ContinuousModel,
-    dest: &Destination,
+    outputs: &super::Outputs<'_>,
 ) -> Result<()> {
     let usage = |m: &str| Err(Error::Usage(format!("--free: {m}")));
     if spec.white_acceleration {
@@ -119,11 +118,8 @@ pub(super) fn fit(
     out.x0 = nalgebra::DVector::from_vec(fitted.x0.clone());
     out.P0 = Some(dense(&fitted.p0));
     let summary = summary(&map, &result, map.distinct_intervals())?;
-    crate::userdata::write_continuous_model(dest, &out)?;
-    if let Some(path) = &args.summary {
-        crate::output::write_json(path, &summary)?;
-    }
-    Ok(())
+    let text = crate::userdata::continuous_model_text(outputs.model, &out)?;
+    outputs.write(&text, &summary)
 }
 
 /// The record's time stamps, `z − D u` row-major and the inputs (the reader refuses a stamp

@@ -79,10 +79,11 @@ pub struct FitArgs {
     /// Estimator.
     #[arg(long, value_enum, default_value_t = FitMethod::Mle)]
     pub method: FitMethod,
-    /// Fitted model file to write (.json, or .toml).
+    /// Fitted model file to write (.json, or .toml); `-` for standard output (JSON).
     #[arg(long, value_name = "FITTED")]
     pub out: PathBuf,
-    /// Summary JSON to write (log-likelihood, standard errors, AIC/BIC, convergence).
+    /// Summary JSON to write (log-likelihood, standard errors, AIC/BIC, convergence); `-`
+    /// for standard output.
     #[arg(long, value_name = "FIT.json")]
     pub summary: Option<PathBuf>,
     /// Write the result even if the estimator did not converge.
@@ -318,13 +319,18 @@ pub fn fit(args: &FitArgs) -> Result<()> {
     if spec.is_empty() {
         return Err(fit_error(args, FitError::NothingFree));
     }
-    let dest = crate::output::destination(
-        &args.out,
+    let (dest, [summary_dest]) = crate::output::destinations(
+        ("--out", &args.out),
+        [("--summary", args.summary.as_deref())],
         &[("--model", &args.model), ("--data", &args.data)],
     )?;
+    let outputs = Outputs {
+        model: &dest,
+        summary: summary_dest.as_ref(),
+    };
     let model = match load_any(&args.model)? {
         AnyModel::Discrete(d) => d,
-        AnyModel::Continuous(c) => return continuous::fit(args, &spec, &c, &dest),
+        AnyModel::Continuous(c) => return continuous::fit(args, &spec, &c, &outputs),
     };
     if model.S.is_some() {
         return Err(Error::invalid(
@@ -407,9 +413,28 @@ pub fn fit(args: &FitArgs) -> Result<()> {
         });
     }
     let summary = summary_json(args, &map, &result)?;
-    crate::userdata::write_model(&dest, &fitted_file(&model, &result.system))?;
-    if let Some(path) = &args.summary {
-        crate::output::write_json(path, &summary)?;
+    let text = crate::userdata::model_text(&dest, &fitted_file(&model, &result.system))?;
+    outputs.write(&text, &summary)
+}
+
+/// Where a fit's results go: the fitted model (`--out`) and the optional summary
+/// (`--summary`), checked against the inputs and each other before the fit runs.
+pub(crate) struct Outputs<'a> {
+    pub model: &'a crate::output::Destination,
+    pub summary: Option<&'a crate::output::Destination>,
+}
+
+impl Outputs<'_> {
+    /// Writes the fitted model's text and, when asked, the summary: each whole or not at
+    /// all, both at once ([`crate::output::write_files`]).
+    fn write(&self, model_text: &str, summary: &serde_json::Value) -> Result<()> {
+        let Some(dest) = self.summary else {
+            return crate::output::write_files(&[(self.model, model_text.as_bytes())]);
+        };
+        let summary_text = crate::output::json_text(Path::new(&dest.to_string()), summary)?;
+        crate::output::write_files(&[
+            (self.model, model_text.as_bytes()),
+            (dest, summary_text.as_bytes()),
+        ])
     }
-    Ok(())
 }

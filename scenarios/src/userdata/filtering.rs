@@ -280,20 +280,14 @@ fn engine(path: &Path, model: &AnyModel, form: Form) -> Result<Engine> {
 /// [`Error::Invalid`] for a bad model or data file (nothing is written), [`Error::Read`] /
 /// [`Error::Write`] for I/O.
 pub fn filter(args: &FilterArgs) -> Result<()> {
-    let dest = crate::output::destination(
-        &args.out,
+    let (dest, [diag, rejected_dest]) = crate::output::destinations(
+        ("--out", &args.out),
+        [
+            ("--diagnostics", args.diagnostics.as_deref()),
+            ("--rejected", args.rejected.as_deref()),
+        ],
         &[("--model", &args.model), ("--data", &args.data)],
     )?;
-    let diag = side_destination(args, "--diagnostics", args.diagnostics.as_deref(), &dest)?;
-    let rejected_dest = side_destination(args, "--rejected", args.rejected.as_deref(), &dest)?;
-    if let (Some(a), Some(b)) = (&diag, &rejected_dest)
-        && a == b
-    {
-        return Err(Error::Usage(
-            "--diagnostics and --rejected name the same destination; give them different files"
-                .into(),
-        ));
-    }
     let model = model_file::load_any(&args.model)?;
     let mut engine = engine(&args.model, &model, args.form)?;
     let mut acc = diag
@@ -345,36 +339,6 @@ pub fn filter(args: &FilterArgs) -> Result<()> {
         }
         None => Ok(()),
     }
-}
-
-/// Where a side output (`--diagnostics`, `--rejected`) goes: refused if it is an input,
-/// the same path as `--out`, or standard output while `--out` is too.
-fn side_destination(
-    args: &FilterArgs,
-    flag: &'static str,
-    path: Option<&Path>,
-    out: &crate::output::Destination,
-) -> Result<Option<crate::output::Destination>> {
-    let Some(path) = path else {
-        return Ok(None);
-    };
-    let d = crate::output::destination_of(
-        flag,
-        path,
-        &[
-            ("--model", &args.model),
-            ("--data", &args.data),
-            ("--out", &args.out),
-        ],
-    )?;
-    if d == *out {
-        return Err(Error::Usage(format!(
-            "{flag} {}: is the same destination as --out {}; give them different files",
-            path.display(),
-            args.out.display()
-        )));
-    }
-    Ok(Some(d))
 }
 
 /// One rejected entry: the row's time, the channel (0-based), the value and its e_i²/Σ_ii.

@@ -262,7 +262,7 @@ fn refusals_leave_no_file() {
     // An existing --out given again as --diagnostics (same inode) is refused too.
     ok(&dir, &base);
     let err = fails(&dir, &with(&["--diagnostics", "./est.csv"]));
-    assert!(err.contains("is the same file as --out"), "{err}");
+    assert!(err.contains("same destination as --out"), "{err}");
     // Both on standard output would interleave.
     let err = fails(
         &dir,

@@ -9,7 +9,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
-use super::common::{argv, argv_with, fails, ok, read, run, scratch};
+use super::common::{argv, argv_with, fails, ok, read, run, scratch, snapshot};
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
@@ -244,4 +244,63 @@ fn a_diffuse_level_is_fitted_and_a_swamping_prior_is_refused() {
         &argv("fit --model m.json --data z.csv --free Q:diag --diffuse 0 --method em --out w.json"),
     );
     assert!(err.contains("--diffuse needs --method mle"), "{err}");
+}
+
+/// `--summary` is an output like `--out`: refused before any work when it names an input
+/// or the same destination as `--out` (a new file under two spellings, an existing one,
+/// standard output twice), with every file in the directory left as it was; `-` sends it to
+/// standard output.
+#[test]
+fn the_summary_never_overwrites_an_input_or_the_fitted_model() {
+    let dir = scratch("fit", "summary_destination");
+    let (csv, _) = llt_csv();
+    write(&dir, "z.csv", &csv);
+    write(&dir, "m.json", LLT_MODEL);
+    let line = |outputs: &str| {
+        format!("fit --model m.json --data z.csv --free Q:scalar,R:scalar {outputs}")
+    };
+    let words = |line: &str| line.split(' ').map(str::to_owned).collect::<Vec<String>>();
+    let refuse = |outputs: &str| {
+        let w = words(&line(outputs));
+        let args: Vec<&str> = w.iter().map(String::as_str).collect();
+        fails(&dir, &args)
+    };
+    for (outputs, expect) in [
+        (
+            "--out f.json --summary z.csv",
+            "--summary z.csv: is the same file as --data z.csv",
+        ),
+        (
+            "--out f.json --summary m.json",
+            "--summary m.json: is the same file as --model m.json",
+        ),
+        (
+            "--out f.json --summary ./f.json",
+            "--summary ./f.json: is the same destination as --out f.json",
+        ),
+        (
+            "--out - --summary -",
+            "--summary -: is the same destination as --out -",
+        ),
+    ] {
+        let before = snapshot(&dir);
+        let err = refuse(outputs);
+        assert!(err.contains(expect), "{outputs}: {err}");
+        assert_eq!(snapshot(&dir), before, "{outputs} touched a file");
+    }
+    let w = words(&line("--out f.json --summary s.json"));
+    ok(&dir, &w.iter().map(String::as_str).collect::<Vec<_>>());
+    let before = snapshot(&dir);
+    let err = refuse("--out f.json --summary f.json");
+    assert!(err.contains("same destination as --out"), "{err}");
+    assert_eq!(snapshot(&dir), before, "a refusal touched a file");
+    let w = words(&line("--out f2.json --summary -"));
+    let out = run(&dir, &w.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let printed: serde_json::Value = serde_json::from_slice(&out.stdout).expect("summary JSON");
+    assert_eq!(printed["loglik"], json(&dir.join("s.json"))["loglik"]);
 }
