@@ -39,6 +39,8 @@ use kalman::nonlinear::{GenericModel, Scalar};
 
 use super::data::Grid;
 pub use super::data::M;
+/// An angle wrapped to (−π, π] (NaN stays NaN), as the simulated AHRS wraps its heading.
+pub use sensors::flight::wrap;
 
 /// Gravity, m/s².
 pub const GRAVITY: f64 = 9.806_65;
@@ -227,16 +229,5 @@ impl GenericModel for FlightModel {
             *o = x - y;
         }
         out[5] = wrap(out[5]);
-    }
-}
-
-/// An angle wrapped to (−π, π] (NaN stays NaN).
-pub fn wrap(a: f64) -> f64 {
-    let two_pi = 2.0 * std::f64::consts::PI;
-    let w = a - two_pi * (a / two_pi).round();
-    if w <= -std::f64::consts::PI {
-        w + two_pi
-    } else {
-        w
     }
 }

@@ -433,78 +433,69 @@ pub fn simulate<R: Rng + ?Sized>(
         wild_indices(config.gnss.wild_points, st[3].len(), rng),
     ];
     let ws = config.wild_sigma;
-    let noisy = |s: usize, i: usize, clean: &[f64], sd: &[f64], out: &mut [f64], rng: &mut R| {
-        let is_wild = wild[s].binary_search(&i).is_ok();
-        for ((o, c), sd) in out.iter_mut().zip(clean).zip(sd) {
-            let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
-            *o = c + sd * normal(rng) + if is_wild { sign * ws * sd } else { 0.0 };
-        }
-        is_wild
-    };
-    let mut rec = FlightRecord {
-        imu: Vec::with_capacity(st[0].len()),
-        air: Vec::with_capacity(st[1].len()),
-        ahrs: Vec::with_capacity(st[2].len()),
-        gnss: Vec::with_capacity(st[3].len()),
-    };
-    for (i, tp) in truths[0].iter().enumerate() {
-        let clean = [
+    let imu = readings(&truths[0], &wild[0], &n.imu, ws, rng, |tp| {
+        [
             tp.specific_force[0] + e[0],
             tp.specific_force[1] + e[1],
             tp.specific_force[2] + e[2],
             tp.rates[0] + e[3],
             tp.rates[1] + e[4],
             tp.rates[2] + e[5],
-        ];
-        let mut value = [0.0; 6];
-        let w = noisy(0, i, &clean, &n.imu, &mut value, rng);
-        rec.imu.push(Sample {
-            t: tp.t,
-            value,
-            truth: *tp,
-            wild: w,
-        });
-    }
-    for (i, tp) in truths[1].iter().enumerate() {
+        ]
+    });
+    let air = readings(&truths[1], &wild[1], &n.air, ws, rng, |tp| {
         let v = tp.air_velocity;
         let speed = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         let (alpha, beta) = (v[2].atan2(v[0]), (v[1] / speed).asin());
-        let clean = [
+        [
             (1.0 + e[6]) * speed + e[7],
             (1.0 + e[8]) * alpha + e[9],
             (1.0 + e[10]) * beta + e[11],
-        ];
-        let mut value = [0.0; 3];
-        let w = noisy(1, i, &clean, &n.air, &mut value, rng);
-        rec.air.push(Sample {
-            t: tp.t,
-            value,
-            truth: *tp,
-            wild: w,
-        });
+        ]
+    });
+    let mut ahrs = readings(&truths[2], &wild[2], &n.ahrs, ws, rng, |tp| tp.euler);
+    for s in &mut ahrs {
+        s.value[2] = wrap(s.value[2]);
     }
-    for (i, tp) in truths[2].iter().enumerate() {
-        let mut value = [0.0; 3];
-        let w = noisy(2, i, &tp.euler, &n.ahrs, &mut value, rng);
-        value[2] = wrap(value[2]);
-        rec.ahrs.push(Sample {
-            t: tp.t,
-            value,
-            truth: *tp,
-            wild: w,
-        });
-    }
-    for (i, tp) in truths[3].iter().enumerate() {
-        let mut value = [0.0; 3];
-        let w = noisy(3, i, &tp.position, &n.gnss, &mut value, rng);
-        rec.gnss.push(Sample {
-            t: tp.t,
-            value,
-            truth: *tp,
-            wild: w,
-        });
-    }
-    Ok(rec)
+    let gnss = readings(&truths[3], &wild[3], &n.gnss, ws, rng, |tp| tp.position);
+    Ok(FlightRecord {
+        imu,
+        air,
+        ahrs,
+        gnss,
+    })
+}
+
+/// One sensor's samples at the truths' stamps: `clean` of each truth plus white noise of
+/// standard deviations `sd`, and at the indices in `wild` (sorted) a wild point of
+/// `wild_sigma`·σ with a random sign on every channel.
+fn readings<R: Rng + ?Sized, const K: usize>(
+    truths: &[TruthPoint],
+    wild: &[usize],
+    sd: &[f64; K],
+    wild_sigma: f64,
+    rng: &mut R,
+    clean: impl Fn(&TruthPoint) -> [f64; K],
+) -> Vec<Sample<K>> {
+    truths
+        .iter()
+        .enumerate()
+        .map(|(i, tp)| {
+            let is_wild = wild.binary_search(&i).is_ok();
+            let clean = clean(tp);
+            let mut value = [0.0; K];
+            for ((o, c), sd) in value.iter_mut().zip(&clean).zip(sd) {
+                let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
+                *o = c + sd * normal(rng) + if is_wild { sign * wild_sigma * sd } else { 0.0 };
+            }
+            Sample {
+                t: tp.t,
+                value,
+                truth: *tp,
+                wild: is_wild,
+            }
+        })
+        .collect()
 }
 
 /// An angle wrapped to (−π, π].
