@@ -6,7 +6,9 @@ use std::fmt::Write as _;
 use wls::boom::{AngleRecovery, AngleUnit, AxWeightLaw, BoomConfig, RateWeight, Sign};
 
 use super::parameters::{EstimatorParams, Method};
-use super::summary::{Addition, AlternativeVerdict, BoomSummary, CaseSummary, TurnErrors};
+use super::summary::{
+    Addition, AlternativeVerdict, BeyondRow, BoomSummary, CaseSummary, TurnErrors,
+};
 
 const BOTH: [Sign; 2] = [Sign::Plus, Sign::Minus];
 
@@ -18,6 +20,30 @@ pub(super) fn fmt_num(x: f64) -> String {
 
 pub(super) fn fmt_opt(x: Option<f64>) -> String {
     x.map_or_else(|| "—".to_string(), |v| format!("{v:.2}°"))
+}
+
+/// "yes" or "no".
+pub(super) fn yes(b: bool) -> &'static str {
+    if b { "yes" } else { "no" }
+}
+
+/// Appends a Markdown table to `r`: the header of `columns`, its rule, then one row per
+/// item, `row` giving its cells between the outer bars (`a | b`).
+pub(super) fn table<T>(
+    r: &mut String,
+    columns: &[&str],
+    items: impl IntoIterator<Item = T>,
+    row: impl Fn(T) -> String,
+) {
+    let _ = writeln!(
+        r,
+        "| {} |\n|{}",
+        columns.join(" | "),
+        "---|".repeat(columns.len())
+    );
+    for item in items {
+        let _ = writeln!(r, "| {} |", row(item));
+    }
 }
 
 /// The cells `γ | variant | max δα | max δε | over the limits from | undefined from` of a
@@ -177,8 +203,7 @@ pub(super) fn alternatives_conclusion(s: &BoomSummary) -> String {
             } else {
                 d.departures_at_0.join("; ")
             },
-            d.feasible_gamma_deg
-                .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°"))
+            window(d.feasible_gamma_deg)
         );
     }
     if v.iter().all(|x| x.within_at_10) {
@@ -221,51 +246,68 @@ pub(super) fn options_md(s: &BoomSummary) -> String {
         options_intro(s),
         alternatives_conclusion(s)
     );
-    let _ = writeln!(
-        r,
-        "| options | defined at γ=0 | δα within at γ=0 | δε pattern at γ=0 | within at γ=10° | reproduces | departures at γ=0 | feasible γ window |\n|---|---|---|---|---|---|---|---|"
+    table(
+        &mut r,
+        &[
+            "options",
+            "defined at γ=0",
+            "δα within at γ=0",
+            "δε pattern at γ=0",
+            "within at γ=10°",
+            "reproduces",
+            "departures at γ=0",
+            "feasible γ window",
+        ],
+        &s.alternative_verdicts,
+        |v| {
+            format!(
+                "{} | {} | {} | {} | {} | **{}** | {} | {}",
+                options_label(&v.options),
+                yes(v.defined_at_0),
+                yes(v.alpha_within_at_0),
+                yes(v.eps_pattern_at_0),
+                yes(v.within_at_10),
+                yes(v.reproduces_paper),
+                if v.departures_at_0.is_empty() {
+                    "none".to_string()
+                } else {
+                    v.departures_at_0.join("; ")
+                },
+                window(v.feasible_gamma_deg)
+            )
+        },
     );
-    let yes = |b: bool| if b { "yes" } else { "no" };
-    for v in &s.alternative_verdicts {
-        let _ = writeln!(
-            r,
-            "| {} | {} | {} | {} | {} | **{}** | {} | {} |",
-            options_label(&v.options),
-            yes(v.defined_at_0),
-            yes(v.alpha_within_at_0),
-            yes(v.eps_pattern_at_0),
-            yes(v.within_at_10),
-            yes(v.reproduces_paper),
-            if v.departures_at_0.is_empty() {
-                "none".to_string()
-            } else {
-                v.departures_at_0.join("; ")
-            },
-            v.feasible_gamma_deg
-                .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°"))
-        );
-    }
-    let _ = writeln!(
-        r,
-        "\n| options | γ | variant | max δα, ° | max δε, °/s² | over from α (t) | undefined from α |\n|---|---|---|---|---|---|---|"
+    r.push('\n');
+    table(
+        &mut r,
+        &[
+            "options",
+            "γ",
+            "variant",
+            "max δα, °",
+            "max δε, °/s²",
+            "over from α (t)",
+            "undefined from α",
+        ],
+        &s.alternatives,
+        |a| {
+            let over_from = match (a.turn.first_violation_alpha_deg, a.first_violation_t_s) {
+                (Some(al), Some(t)) => format!("{al:.2}° ({t:.2} s)"),
+                _ => "—".to_string(),
+            };
+            format!(
+                "{} | {}",
+                options_label(&a.options),
+                turn_cells(&a.turn, &over_from)
+            )
+        },
     );
-    for a in &s.alternatives {
-        let over_from = match (a.turn.first_violation_alpha_deg, a.first_violation_t_s) {
-            (Some(al), Some(t)) => format!("{al:.2}° ({t:.2} s)"),
-            _ => "—".to_string(),
-        };
-        let _ = writeln!(
-            r,
-            "| {} | {} |",
-            options_label(&a.options),
-            turn_cells(&a.turn, &over_from)
-        );
-    }
 
     r
 }
 
-fn window(w: Option<[f64; 2]>) -> String {
+/// A γ window as "a°–b°", or "none".
+pub(super) fn window(w: Option<[f64; 2]>) -> String {
     w.map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°"))
 }
 
@@ -299,21 +341,23 @@ fn worst(s: &BoomSummary, method: Method, gamma: f64) -> (f64, f64, bool) {
         })
 }
 
+/// The beyond-the-paper rows of the WLS at γ = 10° with the centripetal term in the readings
+/// (one a variant).
+pub(super) fn centripetal_wls10(s: &BoomSummary) -> impl Iterator<Item = &BeyondRow> {
+    s.beyond_paper.iter().filter(|b| {
+        b.label == Addition::Centripetal
+            && b.method == Method::Wls
+            && (b.gamma_deg - 10.0).abs() < 1e-9
+    })
+}
+
 /// The report's opening list: what the numbers say, the centripetal result first.
 pub(super) fn findings(s: &BoomSummary) -> String {
     let lim = s.limits;
     let show = |x: Option<f64>| x.map_or("never".to_string(), |a| format!("α = {a:.2}°"));
     let mut r = String::from("## What we found\n\n");
     // The centripetal term at γ = 10°: the worst variant of the WLS with ω²r on.
-    let centripetal: Vec<_> = s
-        .beyond_paper
-        .iter()
-        .filter(|b| {
-            b.label == Addition::Centripetal
-                && b.method == Method::Wls
-                && (b.gamma_deg - 10.0).abs() < 1e-9
-        })
-        .collect();
+    let centripetal: Vec<_> = centripetal_wls10(s).collect();
     if let Some(w) = centripetal
         .iter()
         .max_by(|a, b| a.max_alpha_err_deg.total_cmp(&b.max_alpha_err_deg))

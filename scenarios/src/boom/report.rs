@@ -6,9 +6,9 @@ use std::path::Path;
 
 use wls::boom::Sign;
 
-use super::findings::{self, case, fmt_num, fmt_opt, turn_cells, wls0_comment};
+use super::findings::{self, case, fmt_num, fmt_opt, table, turn_cells, window, wls0_comment, yes};
 use super::parameters::Method;
-use super::summary::{Addition, BoomSummary, CaseSummary, Computed};
+use super::summary::{BoomSummary, CaseSummary, Computed};
 use crate::error::Result;
 use crate::output;
 use crate::plot::{Figure, Scale, Series, line_plot};
@@ -108,14 +108,7 @@ pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result
             if *method == Method::Wls && (*gamma - 10.0).abs() < 1e-9 {
                 // The finding beyond the paper, on its headline plot: the worst error over
                 // the turn once the centripetal term is in the readings.
-                let worst = s
-                    .beyond_paper
-                    .iter()
-                    .filter(|b| {
-                        b.label == Addition::Centripetal
-                            && b.method == Method::Wls
-                            && (b.gamma_deg - 10.0).abs() < 1e-9
-                    })
+                let worst = findings::centripetal_wls10(s)
                     .map(|b| {
                         let v = if what == "alpha" {
                             b.max_alpha_err_deg
@@ -280,10 +273,8 @@ pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result
     let sweep_note = [format!(
         "Feasible window here (both curves under their limits): {}; with the centripetal \
          term ω²r, which the paper ignores: {}.",
-        s.feasible_gamma_deg
-            .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°")),
-        s.feasible_gamma_deg_centripetal
-            .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°"))
+        window(s.feasible_gamma_deg),
+        window(s.feasible_gamma_deg_centripetal)
     )];
     line_plot(
         &dir.join("gamma_sweep.svg"),
@@ -522,8 +513,7 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
     let _ = writeln!(
         r,
         "| choice of γ | 10°; the prototype's window ≈ 5°–12° at Δε = 0.5 °/s² | feasible window {} (sweep {}°–{}° step {}°) | {} |\n",
-        s.feasible_gamma_deg
-            .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°")),
+        window(s.feasible_gamma_deg),
         s.params.sweep.from_deg,
         s.params.sweep.to_deg,
         s.params.sweep.step_deg,
@@ -548,19 +538,23 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
 
     // Cases table.
     let _ = writeln!(r, "## All cases\n");
-    let _ = writeln!(
-        r,
-        "| method | γ | variant | max δα, ° | max δε, °/s² | over the limits from α | undefined from α |\n|---|---|---|---|---|---|---|"
+    table(
+        &mut r,
+        &[
+            "method",
+            "γ",
+            "variant",
+            "max δα, °",
+            "max δε, °/s²",
+            "over the limits from α",
+            "undefined from α",
+        ],
+        &s.cases,
+        |c| {
+            let over_from = fmt_opt(c.turn.first_violation_alpha_deg);
+            format!("{} | {}", c.method.name(), turn_cells(&c.turn, &over_from))
+        },
     );
-    for c in &s.cases {
-        let over_from = fmt_opt(c.turn.first_violation_alpha_deg);
-        let _ = writeln!(
-            r,
-            "| {} | {} |",
-            c.method.name(),
-            turn_cells(&c.turn, &over_from)
-        );
-    }
 
     // Units and weights: the verdict here, every set in the appendix.
     let _ = writeln!(
@@ -572,7 +566,6 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
     );
 
     // Beyond the paper.
-    let yes = |b: bool| if b { "yes" } else { "no" };
     if !s.beyond_paper.is_empty() {
         let _ = writeln!(
             r,
@@ -584,26 +577,33 @@ fn report(s: &BoomSummary, figures: &[(&str, f64, &str, String)]) -> String {
             s.centripetal_mps2,
             s.centripetal_over_limit,
             s.params.beyond.noise_std_mps2,
-            s.feasible_gamma_deg_centripetal
-                .map_or("none".to_string(), |[a, b]| format!("{a}°–{b}°"))
+            window(s.feasible_gamma_deg_centripetal)
         );
-        let _ = writeln!(
-            r,
-            "| added | method | γ | variant | max δα, ° | max δε, °/s² | within limits |\n|---|---|---|---|---|---|---|"
+        table(
+            &mut r,
+            &[
+                "added",
+                "method",
+                "γ",
+                "variant",
+                "max δα, °",
+                "max δε, °/s²",
+                "within limits",
+            ],
+            &s.beyond_paper,
+            |b| {
+                format!(
+                    "{} | {} | {}° | {} | {:.4} | {:.4} | {}",
+                    b.label.label(),
+                    b.method.name(),
+                    fmt_num(b.gamma_deg),
+                    b.bias.label(),
+                    b.max_alpha_err_deg,
+                    b.max_eps_err_deg_s2,
+                    yes(b.within_limits)
+                )
+            },
         );
-        for b in &s.beyond_paper {
-            let _ = writeln!(
-                r,
-                "| {} | {} | {}° | {} | {:.4} | {:.4} | {} |",
-                b.label.label(),
-                b.method.name(),
-                fmt_num(b.gamma_deg),
-                b.bias.label(),
-                b.max_alpha_err_deg,
-                b.max_eps_err_deg_s2,
-                yes(b.within_limits)
-            );
-        }
     }
 
     // Figures.

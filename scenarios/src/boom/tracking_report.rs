@@ -8,7 +8,7 @@ use std::path::Path;
 
 use wls::boom::TurnRun;
 
-use super::findings::fmt_num;
+use super::findings::{fmt_num, table, yes};
 use super::parameters::Method;
 use super::report::{decimate, deg};
 use super::summary::{BoomSummary, Computed};
@@ -164,42 +164,53 @@ fn tracking_section(s: &BoomSummary, figures: &[String]) -> String {
             kalman::nonlinear::SigmaPoints::Simplex => "simplex points".to_string(),
         }
     );
-    let _ = writeln!(
-        r,
-        "| method | γ | no bias: max δα, ° | ±Δa: max δα, ° | ±Δa: max δε, °/s² | worst δα at α | within limits |\n|---|---|---|---|---|---|---|"
+    table(
+        &mut r,
+        &[
+            "method",
+            "γ",
+            "no bias: max δα, °",
+            "±Δa: max δα, °",
+            "±Δa: max δε, °/s²",
+            "worst δα at α",
+            "within limits",
+        ],
+        &v.bias_effects,
+        |b| {
+            format!(
+                "{} | {}° | {:.4} | {:.4} | {:.4} | {:.2}° | {}",
+                b.method.name(),
+                fmt_num(b.gamma_deg),
+                b.bias_free_alpha_deg,
+                b.with_bias_alpha_deg,
+                b.with_bias_eps_deg_s2,
+                b.alpha_at_worst_deg,
+                yes(b.within_limits)
+            )
+        },
     );
-    for b in &v.bias_effects {
-        let _ = writeln!(
-            r,
-            "| {} | {}° | {:.4} | {:.4} | {:.4} | {:.2}° | {} |",
-            b.method.name(),
-            fmt_num(b.gamma_deg),
-            b.bias_free_alpha_deg,
-            b.with_bias_alpha_deg,
-            b.with_bias_eps_deg_s2,
-            b.alpha_at_worst_deg,
-            if b.within_limits { "yes" } else { "no" }
-        );
-    }
     let runs = s.noise_mc.first().map_or(0, |m| m.runs);
-    let _ = writeln!(
+    let _ = write!(
         r,
         "\nNoise Monte Carlo: white noise σ = {} m/s² per axis on top of ±Δa, {runs} runs per γ \
-         (each a \"+\" and a \"−\" turn with the same draws; records in `runs_noise.csv`):\n\n\
-         | method | γ | runs | RMS δα, ° | RMS δε, °/s² |\n|---|---|---|---|---|",
+         (each a \"+\" and a \"−\" turn with the same draws; records in `runs_noise.csv`):\n\n",
         t.noise_std_mps2
     );
-    for m in &s.noise_mc {
-        let _ = writeln!(
-            r,
-            "| {} | {}° | {} | {:.4} | {:.4} |",
-            m.method.name(),
-            fmt_num(m.gamma_deg),
-            m.runs,
-            m.rms_alpha_err_deg,
-            m.rms_eps_err_deg_s2
-        );
-    }
+    table(
+        &mut r,
+        &["method", "γ", "runs", "RMS δα, °", "RMS δε, °/s²"],
+        &s.noise_mc,
+        |m| {
+            format!(
+                "{} | {}° | {} | {:.4} | {:.4}",
+                m.method.name(),
+                fmt_num(m.gamma_deg),
+                m.runs,
+                m.rms_alpha_err_deg,
+                m.rms_eps_err_deg_s2
+            )
+        },
+    );
     let _ = writeln!(r, "\n{}\n", tracking_comment(s));
     for f in figures {
         let _ = writeln!(r, "![{f}]({f})\n");
