@@ -171,36 +171,32 @@ impl Gate {
         }
         self.innovations(filter, model, z, self.rule == GateRule::Vector);
         let step = filter.steps();
+        let rejection = |i: usize, nis: f64| Rejection {
+            step,
+            entry: i,
+            value: z[i],
+            nis,
+        };
         match self.rule {
             GateRule::Entries => {
                 let limit = self.thresholds[1];
                 for (a, &i) in self.present.iter().enumerate() {
                     let nis = self.e[a] * self.e[a] / self.sig[a + a * r];
                     if nis > limit {
-                        self.kept[i] = f64::NAN;
-                        self.rejected.push(Rejection {
-                            step,
-                            entry: i,
-                            value: z[i],
-                            nis,
-                        });
+                        self.rejected.push(rejection(i, nis));
                     }
                 }
             }
             GateRule::Vector => {
                 let (nis, rank) = self.vector_nis(r);
                 if nis > self.thresholds[rank] {
-                    for &i in &self.present {
-                        self.kept[i] = f64::NAN;
-                        self.rejected.push(Rejection {
-                            step,
-                            entry: i,
-                            value: z[i],
-                            nis,
-                        });
-                    }
+                    let all = self.present.iter().map(|&i| rejection(i, nis));
+                    self.rejected.extend(all);
                 }
             }
+        }
+        for rej in &self.rejected {
+            self.kept[rej.entry] = f64::NAN;
         }
         Ok(&self.kept)
     }
@@ -388,18 +384,17 @@ mod tests {
         .expect("valid")
     }
 
+    /// A Joseph-form filter on `model` at x = 0 with the prior covariance `p0`.
+    fn filter_at(model: &Model<crate::DynDims>, p0: &[[f64; 2]; 2]) -> Filter<crate::DynDims> {
+        Filter::new(model.clone(), &[0.0, 0.0], p0, CovarianceForm::Joseph).expect("valid")
+    }
+
     /// The per-entry statistic is e_i²/Σ_ii with Σ = H P⁻ Hᵀ + R, computed here by hand on
     /// a prior P⁻ = diag(1, 1) ⇒ Σ_ii = 2, 5, 4.
     #[test]
     fn each_entry_is_tested_on_its_own_innovation_variance() {
         let model = two_sensors();
-        let kf = Filter::new(
-            model.clone(),
-            &[0.0, 0.0],
-            &[[1.0, 0.0], [0.0, 1.0]],
-            CovarianceForm::Joseph,
-        )
-        .expect("valid");
+        let kf = filter_at(&model, &[[1.0, 0.0], [0.0, 1.0]]);
         let mut gate = Gate::new(GateRule::Entries, 0.99, &model).expect("valid");
         let limit = gate.threshold(1);
         // χ²(1) at 0.99 is 6.6349: sqrt(limit·Σ_ii) is each entry's bound.
@@ -419,13 +414,7 @@ mod tests {
     #[test]
     fn the_vector_rule_tests_the_whole_step() {
         let model = two_sensors();
-        let kf = Filter::new(
-            model.clone(),
-            &[0.0, 0.0],
-            &[[1.0, 0.5], [0.5, 1.0]],
-            CovarianceForm::Joseph,
-        )
-        .expect("valid");
+        let kf = filter_at(&model, &[[1.0, 0.5], [0.5, 1.0]]);
         let mut gate = Gate::new(GateRule::Vector, 0.95, &model).expect("valid");
         // Entries 0 and 2 present: Σ = [[2, 1.5], [1.5, 5]] (H rows [1,0], [1,1]).
         let (a, b, d) = (2.0, 1.5, 5.0);
@@ -456,13 +445,7 @@ mod tests {
                 })
             ));
         }
-        let kf = Filter::new(
-            model.clone(),
-            &[0.0, 0.0],
-            &[[1.0, 0.0], [0.0, 1.0]],
-            CovarianceForm::Joseph,
-        )
-        .expect("valid");
+        let kf = filter_at(&model, &[[1.0, 0.0], [0.0, 1.0]]);
         let mut gate = Gate::new(GateRule::Entries, 0.9, &model).expect("valid");
         assert!(gate.screen(&kf, &model, &[1.0]).is_err());
     }

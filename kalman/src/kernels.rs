@@ -295,6 +295,27 @@ pub(crate) fn cholesky<T: Real>(a: &mut [T], n: usize, tol: f64) -> bool {
     true
 }
 
+/// Solves `L Lᵀ y = b` in place for one right-hand side `b` (length `n`), with `L` the lower
+/// factor [`cholesky`] leaves in the lower triangle of an `n`×`n` column-major matrix (the
+/// upper triangle is not read).
+#[inline(always)]
+pub(crate) fn cholesky_solve<T: Real>(l: &[T], n: usize, b: &mut [T]) {
+    for i in 0..n {
+        let mut v = b[i];
+        for c in 0..i {
+            v -= l[i + c * n] * b[c];
+        }
+        b[i] = v / l[i + i * n];
+    }
+    for i in (0..n).rev() {
+        let mut v = b[i];
+        for r in i + 1..n {
+            v -= l[r + i * n] * b[r];
+        }
+        b[i] = v / l[i + i * n];
+    }
+}
+
 /// Cyclic Jacobi eigen-decomposition of the symmetric `n`×`n` matrix `a` (destroyed; its
 /// diagonal ends up holding the eigenvalues, copied to `w`); `v` receives the eigenvectors
 /// as columns. Converges quadratically; stops when the off-diagonal mass is below

@@ -103,15 +103,8 @@ fn innovation_covariance<D: Dims>(model: &Model<D>, st: &mut State<D>) -> f64 {
     let (H, R) = (model.H.as_slice(), model.R.as_slice());
     let mask = st.mask.as_slice();
     let hp = st.hp.as_mut_slice();
-    mm(
-        &d,
-        hp,
-        Full,
-        Replace,
-        1.0,
-        N(H, m, n),
-        N(st.pp.as_slice(), n, n),
-    );
+    let pp = st.pp.as_slice();
+    mm(&d, hp, Full, Replace, 1.0, N(H, m, n), N(pp, n, n));
     for i in 0..m {
         if !mask[i] {
             for j in 0..n {
@@ -244,15 +237,8 @@ fn joseph_update<D: Dims>(model: &Model<D>, st: &mut State<D>) {
     let K = st.gain.as_slice();
     let t = st.t.as_mut_slice();
     t[..n * n].copy_from_slice(&st.pp.as_slice()[..n * n]);
-    mm(
-        &d,
-        t,
-        Full,
-        Add,
-        -1.0,
-        N(K, n, m),
-        N(st.hp.as_slice(), m, n),
-    );
+    let hp = st.hp.as_slice();
+    mm(&d, t, Full, Add, -1.0, N(K, n, m), N(hp, m, n));
     let th = st.tnm.as_mut_slice();
     mm(&d, th, Full, Replace, 1.0, N(t, n, n), T(H, m, n));
     let pf = st.pf.as_mut_slice();
@@ -280,15 +266,8 @@ pub(super) fn predict<D: Dims>(
     propagate_mean(n, p, F, model.B.as_slice(), st.xf.as_slice(), u, xp);
     let t = st.t.as_mut_slice();
     let pp = st.pp.as_mut_slice();
-    mm(
-        &d,
-        t,
-        Full,
-        Replace,
-        1.0,
-        N(F, n, n),
-        N(st.pf.as_slice(), n, n),
-    );
+    let pf = st.pf.as_slice();
+    mm(&d, t, Full, Replace, 1.0, N(F, n, n), N(pf, n, n));
     mm(&d, pp, Lower, Replace, 1.0, N(t, n, n), T(F, n, n));
     for j in 0..n {
         for i in j..n {
@@ -321,27 +300,13 @@ fn cross_terms<D: Dims>(model: &Model<D>, S: &[f64], st: &mut State<D>) {
     if st.chol {
         whiten_chol(n, m, st.fact.as_slice(), sm, gbar);
     } else {
-        mm(
-            &d,
-            gbar,
-            Full,
-            Replace,
-            1.0,
-            N(sm, n, m),
-            N(st.eigv.as_slice(), m, m),
-        );
+        let eigv = st.eigv.as_slice();
+        mm(&d, gbar, Full, Replace, 1.0, N(sm, n, m), N(eigv, m, m));
     }
     add_mat_vec(n, gbar, &st.y.as_slice()[..m], st.xp.as_mut_slice());
     let fk = st.tnm.as_mut_slice();
-    mm(
-        &d,
-        fk,
-        Full,
-        Replace,
-        1.0,
-        N(F, n, n),
-        N(st.gain.as_slice(), n, m),
-    );
+    let gain = st.gain.as_slice();
+    mm(&d, fk, Full, Replace, 1.0, N(F, n, n), N(gain, n, m));
     let pp = st.pp.as_mut_slice();
     mm(&d, pp, Lower, Add, -1.0, N(fk, n, m), T(sm, n, m));
     mm(&d, pp, Lower, Add, -1.0, N(sm, n, m), T(fk, n, m));

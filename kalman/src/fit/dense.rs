@@ -53,22 +53,8 @@ pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
 /// Solves `L Lᵀ X = B` in place for `B` (`n×c`, column-major) with the Cholesky factor `L`.
 #[inline(always)]
 pub(crate) fn chol_solve(l: &[f64], n: usize, b: &mut [f64], c: usize) {
-    for col in 0..c {
-        let x = &mut b[col * n..(col + 1) * n];
-        for i in 0..n {
-            let mut s = x[i];
-            for k in 0..i {
-                s -= l[i + k * n] * x[k];
-            }
-            x[i] = s / l[i + i * n];
-        }
-        for i in (0..n).rev() {
-            let mut s = x[i];
-            for k in i + 1..n {
-                s -= l[k + i * n] * x[k];
-            }
-            x[i] = s / l[i + i * n];
-        }
+    for x in b[..n * c].chunks_exact_mut(n) {
+        crate::kernels::cholesky_solve(l, n, x);
     }
 }
 

@@ -49,8 +49,8 @@
 
 use num_dual::Dual64;
 
-use super::info::{Fit, Method, Run, assemble, central_information};
-use super::mle::{MleOptions, Objective, check_start, optimise};
+use super::info::{Fit, assemble, central_information};
+use super::mle::{MleOptions, Objective, check_start, optimise_and_measure};
 use super::{FitError, LN_2PI, ParamMap, Series, System};
 use crate::kernels::{Real, cholesky, symmetrise};
 use crate::nonlinear::Scalar;
@@ -166,15 +166,7 @@ pub fn mle_diffuse<M: ParamMap + ?Sized>(
     check_start(map, &theta0)?;
     let objective = Diffuse { map, diffuse, data };
     let n_obs = data.observed();
-    let (theta, iterations, converged, message) = optimise(&objective, theta0, n_obs, opts)?;
-    let (loglik, _) = objective.loglik_gradient(&theta)?;
-    let information = objective.information(&theta)?;
-    let run = Run {
-        method: Method::Mle,
-        iterations,
-        converged,
-        message,
-    };
+    let (theta, loglik, information, run) = optimise_and_measure(&objective, theta0, n_obs, opts)?;
     assemble(
         map,
         theta,

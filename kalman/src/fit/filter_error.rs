@@ -539,7 +539,7 @@ impl<T: Scalar> Pass<T> {
         ln_det *= 2.0;
         // w = Σ⁻¹ e, then the quadratic form eᵀ w.
         self.w[..mk].copy_from_slice(&self.e[..mk]);
-        chol_solve(&self.s[..mk * mk], mk, &mut self.w[..mk]);
+        crate::kernels::cholesky_solve(&self.s[..mk * mk], mk, &mut self.w[..mk]);
         let mut quad = zero;
         for a in 0..mk {
             quad += self.e[a] * self.w[a];
@@ -549,7 +549,7 @@ impl<T: Scalar> Pass<T> {
             for a in 0..mk {
                 self.w[a] = self.ph[r + a * n];
             }
-            chol_solve(&self.s[..mk * mk], mk, &mut self.w[..mk]);
+            crate::kernels::cholesky_solve(&self.s[..mk * mk], mk, &mut self.w[..mk]);
             for a in 0..mk {
                 self.ph[r + a * n] = self.w[a];
             }
@@ -572,8 +572,7 @@ impl<T: Scalar> Pass<T> {
                 self.a[r + c * n] = acc;
             }
         }
-        mul(&self.a, &self.p, &mut self.tmp, n);
-        mul_t(&self.tmp, &self.a, &mut self.p, n);
+        congruence(&self.a, &mut self.p, &mut self.tmp, n);
         for c in 0..n {
             for r in 0..n {
                 let mut acc = zero;
@@ -600,8 +599,7 @@ impl<T: Scalar> Pass<T> {
         let n = self.n;
         self.f_jacobian(model, u, k);
         model.q(theta, k, &mut self.q);
-        mul(&self.jac[..n * n], &self.p, &mut self.tmp, n);
-        mul_t(&self.tmp, &self.jac[..n * n], &mut self.p, n);
+        congruence(&self.jac[..n * n], &mut self.p, &mut self.tmp, n);
         for (a, &b) in self.p.iter_mut().zip(&self.q) {
             *a += b;
         }
@@ -623,46 +621,28 @@ impl<T: Scalar> Pass<T> {
     }
 }
 
-/// `c = a b` (n × n, column-major).
-fn mul<T: Scalar>(a: &[T], b: &[T], c: &mut [T], n: usize) {
+/// `p ← a p aᵀ` (n × n, column-major), through the scratch `tmp`.
+fn congruence<T: Scalar>(a: &[T], p: &mut [T], tmp: &mut [T], n: usize) {
+    product(tmp, n, |i, l| a[i + l * n], |l, j| p[l + j * n]);
+    product(p, n, |i, l| tmp[i + l * n], |l, j| a[j + l * n]);
+}
+
+/// `c[i, j] = Σ_l a(i, l) b(l, j)` (n × n, column-major), the factors given by entry.
+#[inline(always)]
+fn product<T: Scalar>(
+    c: &mut [T],
+    n: usize,
+    a: impl Fn(usize, usize) -> T,
+    b: impl Fn(usize, usize) -> T,
+) {
     for j in 0..n {
         for i in 0..n {
             let mut acc = T::from(0.0);
             for l in 0..n {
-                acc += a[i + l * n] * b[l + j * n];
+                acc += a(i, l) * b(l, j);
             }
             c[i + j * n] = acc;
         }
     }
 }
 
-/// `c = a bᵀ` (n × n, column-major).
-fn mul_t<T: Scalar>(a: &[T], b: &[T], c: &mut [T], n: usize) {
-    for j in 0..n {
-        for i in 0..n {
-            let mut acc = T::from(0.0);
-            for l in 0..n {
-                acc += a[i + l * n] * b[j + l * n];
-            }
-            c[i + j * n] = acc;
-        }
-    }
-}
-
-/// Solves `L Lᵀ y = b` in place with the lower factor of `kernels::cholesky`.
-fn chol_solve<T: Scalar>(l: &[T], n: usize, b: &mut [T]) {
-    for i in 0..n {
-        let mut s = b[i];
-        for c in 0..i {
-            s -= l[i + c * n] * b[c];
-        }
-        b[i] = s / l[i + i * n];
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for r in i + 1..n {
-            s -= l[r + i * n] * b[r];
-        }
-        b[i] = s / l[i + i * n];
-    }
-}

@@ -256,6 +256,19 @@ pub(crate) fn std_errors_of(cov: &Mat<f64>) -> Vec<f64> {
         .collect()
 }
 
+/// The directions of [`unidentified`] as the messages write them: each `[+0.71·a −0.71·b]`,
+/// separated by commas.
+pub(crate) fn directions_text(dirs: &[Vec<(String, f64)>]) -> String {
+    let text: Vec<String> = dirs
+        .iter()
+        .map(|d| {
+            let parts: Vec<String> = d.iter().map(|(n, w)| format!("{w:+.2}·{n}")).collect();
+            format!("[{}]", parts.join(" "))
+        })
+        .collect();
+    text.join(", ")
+}
+
 /// When `covariance` is `None` (the information is not positive definite): the directions
 /// the data do not identify, named, and said in `message`; empty otherwise.
 pub(crate) fn explain_unidentified(
@@ -268,16 +281,10 @@ pub(crate) fn explain_unidentified(
         return Vec::new();
     }
     let dirs = unidentified(information, names);
-    let text: Vec<String> = dirs
-        .iter()
-        .map(|d| {
-            let parts: Vec<String> = d.iter().map(|(n, w)| format!("{w:+.2}·{n}")).collect();
-            format!("[{}]", parts.join(" "))
-        })
-        .collect();
+    let text = directions_text(&dirs);
     message.push_str(&format!(
         "; the observed information is not positive definite: the data do not identify the direction(s) {} of θ; no standard errors",
-        text.join(", ")
+        text
     ));
     dirs
 }

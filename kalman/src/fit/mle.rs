@@ -9,7 +9,7 @@ use argmin::solver::neldermead::NelderMead;
 use argmin::solver::quasinewton::LBFGS;
 
 use super::dense::{chol_solve, cholesky};
-use super::info::{Fit, Method, finish_records, gradient_sum, information_of};
+use super::info::{Fit, Method, Run, finish_records, gradient_sum, information_of};
 use super::{FitError, ParamMap, Series};
 use faer::Mat;
 
@@ -379,6 +379,26 @@ pub fn mle_records<M: ParamMap + ?Sized>(
         converged,
         message,
     )
+}
+
+/// [`optimise`], then `ln L` and the observed information at the optimum: θ, `ln L`, the
+/// information and the run's record, what [`super::info::assemble`] takes.
+pub(crate) fn optimise_and_measure<O: Objective + ?Sized>(
+    objective: &O,
+    theta0: Vec<f64>,
+    n_obs: usize,
+    opts: &MleOptions,
+) -> Result<(Vec<f64>, f64, Mat<f64>, Run), FitError> {
+    let (theta, iterations, converged, message) = optimise(objective, theta0, n_obs, opts)?;
+    let (loglik, _) = objective.loglik_gradient(&theta)?;
+    let information = objective.information(&theta)?;
+    let run = Run {
+        method: Method::Mle,
+        iterations,
+        converged,
+        message,
+    };
+    Ok((theta, loglik, information, run))
 }
 
 /// Refuses a map with nothing free and a start of the wrong length.

@@ -108,7 +108,7 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef, Side};
 
 use super::FitError;
-use super::info::{NULL_EIGENVALUE, correlation, unidentified};
+use super::info::{NULL_EIGENVALUE, correlation, directions_text, unidentified};
 use crate::nonlinear::GenericModel;
 use crate::storage::Dims;
 use record::{Problem, Weights, combine, cost_of, mean_squares, not_finite};
@@ -241,18 +241,11 @@ fn scaled(info: &Mat<f64>, names: &[String]) -> Result<(Mat<f64>, Vec<f64>), Fit
         let mut what: Vec<String> = dirs.iter().flatten().map(|(n, _)| n.clone()).collect();
         what.sort();
         what.dedup();
-        let text: Vec<String> = dirs
-            .iter()
-            .map(|d| {
-                let parts: Vec<String> = d.iter().map(|(n, w)| format!("{w:+.2}·{n}")).collect();
-                format!("[{}]", parts.join(" "))
-            })
-            .collect();
         return Err(FitError::NotIdentifiable {
             what: what.join(", "),
             why: format!(
                 "the Fisher information is singular (smallest eigenvalue of its Jacobi-scaled form {low:.1e} of the largest): the data do not identify the direction(s) {} of θ",
-                text.join(", ")
+                directions_text(&dirs)
             ),
         });
     }

@@ -7,8 +7,8 @@
 
 use faer::Mat;
 
-use super::info::{Fit, Method, Run, assemble, central_information};
-use super::mle::{MleOptions, Objective, check_start, optimise};
+use super::info::{Fit, assemble, central_information};
+use super::mle::{MleOptions, Objective, check_start, optimise_and_measure};
 use super::score::log_likelihood_gradient;
 use super::{Derivative, FitError, ParamMap, Series, System};
 use crate::MatrixInput;
@@ -172,14 +172,6 @@ pub fn mle_records_with_priors<M: ParamMap + ?Sized>(
     }
     let objective = PerRecord { maps, records };
     let n_obs: usize = records.iter().map(Series::observed).sum();
-    let (theta, iterations, converged, message) = optimise(&objective, theta0, n_obs, opts)?;
-    let (loglik, _) = objective.loglik_gradient(&theta)?;
-    let information = objective.information(&theta)?;
-    let run = Run {
-        method: Method::Mle,
-        iterations,
-        converged,
-        message,
-    };
+    let (theta, loglik, information, run) = optimise_and_measure(&objective, theta0, n_obs, opts)?;
     assemble(map, theta, records, loglik, information, run)
 }

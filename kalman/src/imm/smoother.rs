@@ -321,7 +321,7 @@ impl ImmRecord {
                     for a in 0..n {
                         d[a] = cc[i + a * n];
                     }
-                    chol_solve(L, n, d);
+                    crate::kernels::cholesky_solve(L, n, d);
                     for a in 0..n {
                         G[i + a * n] = d[a];
                     }
@@ -382,20 +382,3 @@ fn factor_prediction(A: &[f64], n: usize, L: &mut [f64]) -> Result<(), ()> {
     }
 }
 
-/// Solves `L Lᵀ y = b` in place.
-fn chol_solve(L: &[f64], n: usize, b: &mut [f64]) {
-    for i in 0..n {
-        let mut v = b[i];
-        for c in 0..i {
-            v -= L[i + c * n] * b[c];
-        }
-        b[i] = v / L[i + i * n];
-    }
-    for i in (0..n).rev() {
-        let mut v = b[i];
-        for c in i + 1..n {
-            v -= L[c + i * n] * b[c];
-        }
-        b[i] = v / L[i + i * n];
-    }
-}

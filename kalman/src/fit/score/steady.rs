@@ -9,7 +9,7 @@
 //! term `tr(Σ⁻¹ ∂Σ)` is added once per run of reused steps.
 #![allow(non_snake_case)]
 
-use super::{Flat, FlatDeriv, Work, gemm};
+use super::{Flat, FlatDeriv, Observation, Work, gemm};
 use crate::fit::LN_2PI;
 
 /// The reused stage's matrices and the parameters' `∂x`, side by side.
@@ -124,23 +124,8 @@ impl Steady {
     /// data terms (added to `grad`), `w.xn` and the next `∂x`. Dispatches to
     /// [`Steady::step_in`] with the state and measurement dimensions as constants for the
     /// small models most fits have (the loops unroll), else as run-time values.
-    pub(super) fn step(
-        &mut self,
-        w: &mut Work,
-        s: &Flat,
-        d: &[FlatDeriv],
-        z: &[f64],
-        u: &[f64],
-        grad: &mut [f64],
-    ) -> f64 {
-        let a = Step {
-            w,
-            s,
-            d,
-            z,
-            u,
-            grad,
-        };
+    pub(super) fn step(&mut self, w: &mut Work, at: &Observation<'_>, grad: &mut [f64]) -> f64 {
+        let a = Step { w, at: *at, grad };
         match (self.n, self.m) {
             (1, 1) => self.step_in(Fixed::<1>, Fixed::<1>, a),
             (2, 1) => self.step_in(Fixed::<2>, Fixed::<1>, a),
@@ -156,14 +141,8 @@ impl Steady {
     /// [`Steady::step`] with the state dimension `n` and the measurement dimension `m`.
     #[inline(always)]
     fn step_in(&mut self, n: impl Size, m: impl Size, a: Step<'_>) -> f64 {
-        let Step {
-            w,
-            s,
-            d,
-            z,
-            u,
-            grad,
-        } = a;
+        let Step { w, at, grad } = a;
+        let Observation { s, d, z, u } = at;
         let (n, m, k) = (n.get(), m.get(), self.k);
         let (F, H, L, x) = (&s.F[..n * n], &s.H[..m * n], &w.L[..m * m], &w.x[..n]);
         // x' = F x + B u (+ G e below)
@@ -240,10 +219,7 @@ impl Steady {
 /// The arguments of one step of [`Steady::step`].
 struct Step<'a> {
     w: &'a mut Work,
-    s: &'a Flat,
-    d: &'a [FlatDeriv],
-    z: &'a [f64],
-    u: &'a [f64],
+    at: Observation<'a>,
     grad: &'a mut [f64],
 }
 
