@@ -49,6 +49,17 @@ fn call_with<'py>(
     f.call1(PyTuple::new(f.py(), all)?)
 }
 
+/// Calls `f(x, *args)` with the filter's current x.
+fn call_at_x<'py>(
+    kf: &Bound<'py, KalmanFilter>,
+    f: &Bound<'py, PyAny>,
+    name: &str,
+    args: &[Bound<'py, PyAny>],
+) -> PyResult<Bound<'py, PyAny>> {
+    let x = kf.try_borrow_mut()?.get(kf.py(), A::X);
+    call_with(f, name, x.bind(kf.py()), args)
+}
+
 /// One EKF update of `kf` at its current x: H = HJacobian(x, *args), y = residual(z,
 /// Hx(x, *hx_args)), then the Joseph-form update with that H and y. `before`: the state to
 /// record as the prior instead of the current one (predict_update's FilterPy order).
@@ -67,8 +78,7 @@ fn ekf_update<'py>(
         let me = kf.try_borrow()?;
         (me.core.n, me.core.m)
     };
-    let x = kf.try_borrow_mut()?.get(py, A::X);
-    let hx = call_with(Hx, "Hx", x.bind(py), hx_args)?;
+    let hx = call_at_x(kf, Hx, "Hx", hx_args)?;
     let z = match scalar(z) {
         Some(v) if m == 1 => PyTuple::new(py, [v])?.into_any(),
         _ => z.clone(),
@@ -134,8 +144,7 @@ impl ExtendedKalmanFilter {
                 return kf.try_borrow_mut()?.do_update(py, z, None, None, false);
             }
             kf.try_borrow_mut()?.sync(py)?;
-            let x = kf.try_borrow_mut()?.get(py, A::X);
-            let H = call_with(HJacobian, "HJacobian", x.bind(py), &extra_args(args))?;
+            let H = call_at_x(kf, HJacobian, "HJacobian", &extra_args(args))?;
             let hx_args = extra_args(hx_args);
             ekf_update(kf, z, &H, Hx, R, &hx_args, residual)
         })
@@ -149,8 +158,7 @@ impl ExtendedKalmanFilter {
             let kf = slf.cast::<KalmanFilter>()?;
             let mut me = kf.try_borrow_mut()?;
             me.sync(py)?;
-            let p = if me.core.B.is_some() { me.core.p } else { 0 };
-            let u = me.read_u(u, p)?;
+            let u = me.read_u(u, me.controls())?;
             me.core.predict_x(u.as_deref());
             me.invalidate(&[A::X]);
             Ok(())
@@ -176,13 +184,11 @@ impl ExtendedKalmanFilter {
             let py = slf.py();
             let kf = slf.cast::<KalmanFilter>()?;
             kf.try_borrow_mut()?.sync(py)?;
-            let x = kf.try_borrow_mut()?.get(py, A::X);
-            let H = call_with(HJacobian, "HJacobian", x.bind(py), &extra_args(args))?;
+            let H = call_at_x(kf, HJacobian, "HJacobian", &extra_args(args))?;
             let (x0, P0) = {
                 let mut me = kf.try_borrow_mut()?;
                 let (x0, P0) = (me.core.x.clone(), me.core.P.clone());
-                let p = if me.core.B.is_some() { me.core.p } else { 0 };
-                let u = me.read_u(u, p)?;
+                let u = me.read_u(u, me.controls())?;
                 me.core.predict(u.as_deref(), None, None, None);
                 me.invalidate(&PREDICTED);
                 (x0, P0)

@@ -1,6 +1,7 @@
 //! `launch_estimation.KalmanFilter`: FilterPy's `KalmanFilter` API over state kept in Rust.
-//! The state and the attribute plumbing are in `kf_attrs.rs`; copying, pickling, the
-//! `__dict__` view and FilterPy's other conveniences in `kf_compat.rs`.
+//! The state and the attribute plumbing (the array attributes x, P, …, one descriptor each,
+//! put on the class at import) are in `kf_attrs.rs`; copying, pickling, the `__dict__` view
+//! and FilterPy's other conveniences in `kf_compat.rs`.
 #![allow(non_snake_case)]
 
 use pyo3::prelude::*;
@@ -10,129 +11,10 @@ use crate::batch::PerStepArgs;
 use crate::convert::{scalar, type_error, type_name, value_error};
 use crate::guard;
 pub(crate) use crate::kf_attrs::KalmanFilter;
-use crate::kf_attrs::{A, PREDICTED, UPDATED};
+use crate::kf_attrs::{PREDICTED, UPDATED};
 
 #[pymethods]
 impl KalmanFilter {
-    /// State estimate, (dim_x, 1) (or (dim_x,) if set so).
-    #[getter]
-    fn x(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::X)
-    }
-    #[setter]
-    fn set_x(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::X, value))
-    }
-    /// State covariance, (dim_x, dim_x); symmetric PSD.
-    #[getter]
-    fn P(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::P)
-    }
-    #[setter]
-    fn set_P(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::P, value))
-    }
-    /// State transition F, (dim_x, dim_x).
-    #[getter]
-    fn F(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::F)
-    }
-    #[setter]
-    fn set_F(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::F, value))
-    }
-    /// Process noise covariance Q, (dim_x, dim_x); symmetric PSD.
-    #[getter]
-    fn Q(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::Q)
-    }
-    #[setter]
-    fn set_Q(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::Q, value))
-    }
-    /// Measurement matrix H, (dim_z, dim_x).
-    #[getter]
-    fn H(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::H)
-    }
-    #[setter]
-    fn set_H(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::H, value))
-    }
-    /// Measurement noise covariance R, (dim_z, dim_z); symmetric PSD.
-    #[getter]
-    fn R(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::R)
-    }
-    #[setter]
-    fn set_R(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::R, value))
-    }
-    /// Control matrix B, (dim_x, dim_u), or None.
-    #[getter]
-    fn B(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::B)
-    }
-    #[setter]
-    fn set_B(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::B, value))
-    }
-    /// Cross-covariance of the prior state error and the measurement noise, (dim_x, dim_z);
-    /// used by `update_correlated` only.
-    #[getter]
-    fn M(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::M)
-    }
-    #[setter]
-    fn set_M(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
-        guard(|| self.assign(A::M, value))
-    }
-    /// Kalman gain of the last update, (dim_x, dim_z).
-    #[getter]
-    fn K(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::K)
-    }
-    /// Innovation (residual) of the last update, (dim_z, 1).
-    #[getter]
-    fn y(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::Y)
-    }
-    /// Innovation covariance of the last update, (dim_z, dim_z).
-    #[getter]
-    fn S(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::S)
-    }
-    /// Inverse of S (computed from its factorisation when read).
-    #[getter]
-    fn SI(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::SI)
-    }
-    /// Last measurement, (dim_z, 1); NaN where missing (FilterPy stores None).
-    #[getter]
-    fn z(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::Z)
-    }
-    /// Prior (predicted) state after the last predict.
-    #[getter]
-    fn x_prior(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::XPrior)
-    }
-    /// Prior covariance after the last predict.
-    #[getter]
-    fn P_prior(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::PPrior)
-    }
-    /// Posterior state after the last update.
-    #[getter]
-    fn x_post(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::XPost)
-    }
-    /// Posterior covariance after the last update.
-    #[getter]
-    fn P_post(&mut self, py: Python<'_>) -> Py<PyAny> {
-        self.get(py, A::PPost)
-    }
-
     /// update(z, R=None, H=None): FilterPy's update (Joseph form). `z = None` skips the
     /// update; NaN entries of z skip their rows; z may be a (dim_z, 1) column, a (dim_z,)
     /// vector, a (1, dim_z) row, a sequence, or a scalar (a 0-d array too) when dim_z = 1.
@@ -313,7 +195,7 @@ impl KalmanFilter {
         R_i: Option<&Bound<'_, PyAny>>,
         H_i: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        guard(|| self.sequential(py, start, z_i, R_i, H_i))
+        guard(|| self.sequential(py, start, z_i, [R_i, H_i]))
     }
 
     /// test_matrix_dimensions(z=None, H=None, R=None, F=None, Q=None): FilterPy's shape

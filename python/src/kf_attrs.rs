@@ -9,16 +9,20 @@
 //! stay snapshots (`xs.append(kf.x)` works as in FilterPy). An array the user assigns is
 //! kept as it is, whatever its real dtype (an integer or float32 array is read through the
 //! one conversion, `convert::float_array`), so its in-place edits are seen as FilterPy sees
-//! them.
+//! them. Each array attribute is an `ArrayAttribute` descriptor on the class, made from the
+//! `DOCS` table at import, rather than a getter and a setter written out per attribute.
 #![allow(non_snake_case)]
 
 use numpy::{PyArrayDescrMethods, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use pyo3::exceptions::PyAttributeError;
 use pyo3::prelude::*;
+use pyo3::types::PyType;
 
 use crate::convert::{
     check_psd, float_array, matrix_out, read_matrix, read_vector, scalar, shape_str, type_error,
     type_name, value_error, vector_out,
 };
+use crate::guard;
 use crate::kf_core::{Core, UpdateError};
 
 /// The attributes a `KalmanFilter` keeps a returned array for.
@@ -71,6 +75,126 @@ pub struct KalmanFilter {
     /// Whether x is a (n, 1) column (FilterPy's default) rather than a (n,) vector.
     pub(crate) x_col: bool,
     pub(crate) cache: [Option<Py<PyAny>>; N_ATTR],
+}
+
+/// The docstring of each array attribute of the class.
+const DOCS: [(A, &str); N_ATTR] = [
+    (A::X, "State estimate, (dim_x, 1) (or (dim_x,) if set so)."),
+    (A::P, "State covariance, (dim_x, dim_x); symmetric PSD."),
+    (A::F, "State transition F, (dim_x, dim_x)."),
+    (
+        A::Q,
+        "Process noise covariance Q, (dim_x, dim_x); symmetric PSD.",
+    ),
+    (A::H, "Measurement matrix H, (dim_z, dim_x)."),
+    (
+        A::R,
+        "Measurement noise covariance R, (dim_z, dim_z); symmetric PSD.",
+    ),
+    (A::B, "Control matrix B, (dim_x, dim_u), or None."),
+    (
+        A::M,
+        "Cross-covariance of the prior state error and the measurement noise, (dim_x, dim_z);\n\
+         used by `update_correlated` only.",
+    ),
+    (A::K, "Kalman gain of the last update, (dim_x, dim_z)."),
+    (
+        A::Y,
+        "Innovation (residual) of the last update, (dim_z, 1).",
+    ),
+    (
+        A::S,
+        "Innovation covariance of the last update, (dim_z, dim_z).",
+    ),
+    (
+        A::SI,
+        "Inverse of S (computed from its factorisation when read).",
+    ),
+    (
+        A::Z,
+        "Last measurement, (dim_z, 1); NaN where missing (FilterPy stores None).",
+    ),
+    (A::XPrior, "Prior (predicted) state after the last predict."),
+    (A::PPrior, "Prior covariance after the last predict."),
+    (A::XPost, "Posterior state after the last update."),
+    (A::PPost, "Posterior covariance after the last update."),
+];
+
+// The class attribute behind `kf.x`, `kf.K`, …: reading returns `KalmanFilter::get`'s array,
+// assigning one of the `INPUTS` goes through `KalmanFilter::assign`, the others are
+// read-only. One descriptor type serves every array attribute, with the errors a property
+// gives; a plain comment, not a docstring, so that `__doc__` is the attribute's own.
+#[pyclass(module = "launch_estimation", frozen)]
+pub(crate) struct ArrayAttribute {
+    a: A,
+    doc: &'static str,
+}
+
+impl ArrayAttribute {
+    /// Puts the descriptor of every array attribute on the class (once, at import).
+    pub(crate) fn install(class: &Bound<'_, PyType>) -> PyResult<()> {
+        for (a, doc) in DOCS {
+            class.setattr(KalmanFilter::name(a), Self { a, doc })?;
+        }
+        Ok(())
+    }
+
+    fn read_only(&self) -> PyErr {
+        PyAttributeError::new_err(format!(
+            "attribute '{}' of 'launch_estimation.KalmanFilter' objects is not writable",
+            KalmanFilter::name(self.a)
+        ))
+    }
+}
+
+#[pymethods]
+impl ArrayAttribute {
+    fn __get__(
+        slf: &Bound<'_, Self>,
+        obj: Option<&Bound<'_, PyAny>>,
+        _owner: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Py<PyAny>> {
+        match obj.filter(|o| !o.is_none()) {
+            Some(o) => Ok(o
+                .cast::<KalmanFilter>()?
+                .try_borrow_mut()?
+                .get(o.py(), slf.get().a)),
+            None => Ok(slf.clone().into_any().unbind()),
+        }
+    }
+
+    fn __set__(&self, obj: &Bound<'_, PyAny>, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        if !INPUTS.contains(&self.a) {
+            return Err(self.read_only());
+        }
+        let kf = obj.cast::<KalmanFilter>()?;
+        guard(|| kf.try_borrow_mut()?.assign(self.a, value))
+    }
+
+    fn __delete__(&self, _obj: &Bound<'_, PyAny>) -> PyResult<()> {
+        Err(if INPUTS.contains(&self.a) {
+            PyAttributeError::new_err("property has no deleter")
+        } else {
+            self.read_only()
+        })
+    }
+
+    #[getter]
+    fn __doc__(&self) -> &'static str {
+        self.doc
+    }
+
+    #[getter]
+    fn __name__(&self) -> &'static str {
+        KalmanFilter::name(self.a)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<attribute '{}' of 'launch_estimation.KalmanFilter' objects>",
+            KalmanFilter::name(self.a)
+        )
+    }
 }
 
 /// Reads a dimension argument: a non-negative int (a Python int, a NumPy integer scalar or a
@@ -357,14 +481,16 @@ impl KalmanFilter {
                 read_matrix(b, "B", n, p, false, &mut buf)?;
                 Ok((Some(buf), p))
             }
-            _ => Ok((
-                None,
-                if self.core.B.is_some() {
-                    self.core.p
-                } else {
-                    0
-                },
-            )),
+            _ => Ok((None, self.controls())),
+        }
+    }
+
+    /// The number of controls p of the filter's own B (0 without one).
+    pub(crate) fn controls(&self) -> usize {
+        if self.core.B.is_some() {
+            self.core.p
+        } else {
+            0
         }
     }
 

@@ -174,8 +174,7 @@ impl KalmanFilter {
         py: Python<'_>,
         start: &Bound<'_, PyAny>,
         z_i: &Bound<'_, PyAny>,
-        R_i: Option<&Bound<'_, PyAny>>,
-        H_i: Option<&Bound<'_, PyAny>>,
+        [R_i, H_i]: [Option<&Bound<'_, PyAny>>; 2],
     ) -> PyResult<()> {
         self.sync(py)?;
         let (n, m) = (self.core.n, self.core.m);

@@ -111,6 +111,7 @@ fn _panic_for_test() -> PyResult<()> {
 #[pymodule]
 fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<kf::KalmanFilter>()?;
+    kf_attrs::ArrayAttribute::install(&m.py().get_type::<kf::KalmanFilter>())?;
     m.add_class::<ekf::ExtendedKalmanFilter>()?;
     m.add_class::<ukf::UnscentedKalmanFilter>()?;
     m.add_class::<sigma::MerweScaledSigmaPoints>()?;

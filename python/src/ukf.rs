@@ -10,7 +10,7 @@
 #![allow(non_snake_case)]
 
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyDict, PyString, PyTuple};
 
 use crate::convert::{memory_error, type_error, value_error, zeros};
 use crate::guard;
@@ -52,6 +52,37 @@ fn atomically<'py, T>(d: &Bound<'py, PyDict>, f: impl FnOnce() -> PyResult<T>) -
         d.clear();
         let _ = d.update(snapshot.as_mapping());
     })
+}
+
+/// The number kept in the dict under `key`, or else `compute()`'s, then kept there (FilterPy
+/// computes the likelihoods and the Mahalanobis distance on first use; an update clears them).
+fn kept<'py>(
+    d: &Bound<'py, PyDict>,
+    key: &Bound<'py, PyString>,
+    compute: impl FnOnce() -> PyResult<f64>,
+) -> PyResult<f64> {
+    if let Some(v) = d.get_item(key)?.filter(|v| !v.is_none()) {
+        return v.extract();
+    }
+    let v = compute()?;
+    d.set_item(key, v)?;
+    Ok(v)
+}
+
+/// m, the innovation y and the m×m matrix `name` (S or SI) the last update left in the dict.
+fn last_update(d: &Bound<'_, PyDict>, name: &str) -> PyResult<(usize, Vec<f64>, Vec<f64>)> {
+    let m: usize = item(d, pyo3::intern!(d.py(), "_dim_z"))?.extract()?;
+    let mut y = zeros(m, "y")?;
+    crate::convert::read_vector(
+        &item(d, pyo3::intern!(d.py(), "y"))?,
+        "y",
+        m,
+        true,
+        false,
+        &mut y,
+    )?;
+    let matrix = read_mat(&item(d, name)?, name, m, m)?;
+    Ok((m, y, matrix))
 }
 
 #[pymethods]
@@ -322,33 +353,16 @@ impl UnscentedKalmanFilter {
     fn log_likelihood(slf: &Bound<'_, Self>) -> PyResult<f64> {
         guard(|| {
             let d = dict_of(slf.as_any())?;
-            if let Some(v) = d
-                .get_item(pyo3::intern!(d.py(), "_log_likelihood"))?
-                .filter(|v| !v.is_none())
-            {
-                return v.extract();
-            }
-            let m: usize = item(&d, pyo3::intern!(d.py(), "_dim_z"))?.extract()?;
-            let mut y = zeros(m, "y")?;
-            crate::convert::read_vector(
-                &item(&d, pyo3::intern!(d.py(), "y"))?,
-                "y",
-                m,
-                true,
-                false,
-                &mut y,
-            )?;
-            let S = read_mat(&item(&d, pyo3::intern!(d.py(), "S"))?, "S", m, m)?;
-            let mut f = Factor::try_new(m).ok_or_else(|| memory_error(m * m, "S"))?;
-            let ll = if f.factor(&S, m) {
+            kept(&d, pyo3::intern!(d.py(), "_log_likelihood"), || {
+                let (m, y, S) = last_update(&d, "S")?;
+                let mut f = Factor::try_new(m).ok_or_else(|| memory_error(m * m, "S"))?;
+                if !f.factor(&S, m) {
+                    return Ok(f64::NEG_INFINITY);
+                }
                 let mut work = zeros(m, "y")?;
                 let q = f.quad(&y, &mut work);
-                -0.5 * (m as f64 * (2.0 * std::f64::consts::PI).ln() + f.log_abs_det() + q)
-            } else {
-                f64::NEG_INFINITY
-            };
-            d.set_item(pyo3::intern!(d.py(), "_log_likelihood"), ll)?;
-            Ok(ll)
+                Ok(-0.5 * (m as f64 * (2.0 * std::f64::consts::PI).ln() + f.log_abs_det() + q))
+            })
         })
     }
 
@@ -356,16 +370,10 @@ impl UnscentedKalmanFilter {
     #[getter]
     fn likelihood(slf: &Bound<'_, Self>) -> PyResult<f64> {
         let d = guard(|| dict_of(slf.as_any()))?;
-        if let Some(v) = d
-            .get_item(pyo3::intern!(d.py(), "_likelihood"))?
-            .filter(|v| !v.is_none())
-        {
-            return v.extract();
-        }
-        let l = Self::log_likelihood(slf)?.exp();
-        let l = if l > 0.0 { l } else { f64::MIN_POSITIVE };
-        d.set_item(pyo3::intern!(d.py(), "_likelihood"), l)?;
-        Ok(l)
+        kept(&d, pyo3::intern!(d.py(), "_likelihood"), || {
+            let l = Self::log_likelihood(slf)?.exp();
+            Ok(if l > 0.0 { l } else { f64::MIN_POSITIVE })
+        })
     }
 
     /// √(yᵀ SI y) of the last update.
@@ -373,29 +381,13 @@ impl UnscentedKalmanFilter {
     fn mahalanobis(slf: &Bound<'_, Self>) -> PyResult<f64> {
         guard(|| {
             let d = dict_of(slf.as_any())?;
-            if let Some(v) = d
-                .get_item(pyo3::intern!(d.py(), "_mahalanobis"))?
-                .filter(|v| !v.is_none())
-            {
-                return v.extract();
-            }
-            let m: usize = item(&d, pyo3::intern!(d.py(), "_dim_z"))?.extract()?;
-            let mut y = zeros(m, "y")?;
-            crate::convert::read_vector(
-                &item(&d, pyo3::intern!(d.py(), "y"))?,
-                "y",
-                m,
-                true,
-                false,
-                &mut y,
-            )?;
-            let SI = read_mat(&item(&d, pyo3::intern!(d.py(), "SI"))?, "SI", m, m)?;
-            let q: f64 = (0..m)
-                .map(|i| y[i] * (0..m).map(|j| SI[i * m + j] * y[j]).sum::<f64>())
-                .sum();
-            let v = q.sqrt();
-            d.set_item(pyo3::intern!(d.py(), "_mahalanobis"), v)?;
-            Ok(v)
+            kept(&d, pyo3::intern!(d.py(), "_mahalanobis"), || {
+                let (m, y, SI) = last_update(&d, "SI")?;
+                let q: f64 = (0..m)
+                    .map(|i| y[i] * (0..m).map(|j| SI[i * m + j] * y[j]).sum::<f64>())
+                    .sum();
+                Ok(q.sqrt())
+            })
         })
     }
 
