@@ -9,12 +9,12 @@ package in release mode for this (`pip install ./python`, or `maturin develop --
 """
 
 import argparse
-import time
 
 import numpy as np
 from filterpy.kalman import KalmanFilter as FpKalmanFilter
 
 import launch_estimation as le
+from timing import best_of
 
 
 def problem(n=7, m=2, steps=100_000, seed=1):
@@ -34,17 +34,6 @@ def make(cls, F, H, Q, R):
     kf.F, kf.H, kf.Q, kf.R = F.copy(), H.copy(), Q.copy(), R.copy()
     kf.P = np.eye(n)
     return kf
-
-
-def best_of(fn, repeats):
-    """The best wall-clock and the best CPU time over `repeats` calls."""
-    wall, cpu = [], []
-    for _ in range(repeats):
-        t, c = time.perf_counter(), time.process_time()
-        fn()
-        wall.append(time.perf_counter() - t)
-        cpu.append(time.process_time() - c)
-    return min(wall), min(cpu)
 
 
 def main():

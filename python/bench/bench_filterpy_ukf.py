@@ -16,13 +16,13 @@ Build the package in release mode for this (`pip install ./python`, or
 """
 
 import argparse
-import time
 
 import numpy as np
 from filterpy.kalman import MerweScaledSigmaPoints as FpMerwe
 from filterpy.kalman import UnscentedKalmanFilter as FpUKF
 
 import launch_estimation as le
+from timing import best_of
 
 DT = 0.05
 
@@ -72,17 +72,6 @@ def make(cls, points, fx, hx, **kw):
     return kf
 
 
-def timed(fn, repeats):
-    """The best wall-clock and the best CPU time over `repeats` calls."""
-    wall, cpu = [], []
-    for _ in range(repeats):
-        t, c = time.perf_counter(), time.process_time()
-        fn()
-        wall.append(time.perf_counter() - t)
-        cpu.append(time.process_time() - c)
-    return min(wall), min(cpu)
-
-
 def loop(kf, zs):
     for z in zs:
         kf.predict()
@@ -121,15 +110,15 @@ def main():
     for cname, fx, hx, vec in (("FilterPy's callables", fx_filterpy, hx_filterpy, False),
                                ("plain callables", fx_plain, hx_plain, False),
                                ("vectorised callables", fx_vec, hx_vec, True)):
-        t, _ = timed(lambda: alone(fx, hx, vec), args.repeats)
+        t, _ = best_of(lambda: alone(fx, hx, vec), args.repeats)
         print(f"{cname} alone: {1e6 * t / n:.2f} µs/step")
     for label, run in (("predict + update loop", lambda kf: loop(kf, zs)),
                        ("batch_filter", lambda kf: kf.batch_filter(zs))):
         for cname, fx, hx in (("FilterPy's callables", fx_filterpy, hx_filterpy),
                               ("plain callables", fx_plain, hx_plain)):
-            t_fp, c_fp = timed(lambda: run(fp(fx, hx)), args.repeats)
-            t_o, c_o = timed(lambda: run(ours(fx, hx)), args.repeats)
-            t_v, c_v = timed(lambda: run(ours(fx_vec, hx_vec, vectorized=True)), args.repeats)
+            t_fp, c_fp = best_of(lambda: run(fp(fx, hx)), args.repeats)
+            t_o, c_o = best_of(lambda: run(ours(fx, hx)), args.repeats)
+            t_v, c_v = best_of(lambda: run(ours(fx_vec, hx_vec, vectorized=True)), args.repeats)
             print(f"{label}, {cname}, {n} steps: FilterPy {1e6 * t_fp / n:.1f} µs/step; "
                   f"ours {1e6 * t_o / n:.2f} µs/step ({t_fp / t_o:.1f}x, CPU {c_fp / c_o:.1f}x); "
                   f"ours vectorised {1e6 * t_v / n:.2f} µs/step ({t_fp / t_v:.1f}x, "

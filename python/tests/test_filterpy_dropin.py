@@ -158,27 +158,26 @@ Z1 = {
 }
 
 
-@pytest.mark.parametrize("form", list(Z2))
-def test_z_forms_dim_z_2(form):
-    pr = problem(13, 3, 2)
+def check_z_form(pr, form, z_of, attrs):
+    """Eight predict/update steps of both filters on problem `pr`, each z passed as
+    `z_of(z)`; `attrs` agree with FilterPy's after each step."""
     ours, theirs = setup(le.KalmanFilter, pr), setup(FpKalmanFilter, pr)
     for z in pr["zs"][:8]:
         for f in (ours, theirs):
             f.predict()
-            f.update(Z2[form](z))
-        close(ours.x, theirs.x, f"x with z as {form}")
-        close(ours.P, theirs.P, f"P with z as {form}")
+            f.update(z_of(z))
+        for a in attrs:
+            close(getattr(ours, a), getattr(theirs, a), f"{a} with z as {form}")
+
+
+@pytest.mark.parametrize("form", list(Z2))
+def test_z_forms_dim_z_2(form):
+    check_z_form(problem(13, 3, 2), form, Z2[form], ["x", "P"])
 
 
 @pytest.mark.parametrize("form", list(Z1))
 def test_z_forms_dim_z_1(form):
-    pr = problem(14, 2, 1)
-    ours, theirs = setup(le.KalmanFilter, pr), setup(FpKalmanFilter, pr)
-    for z in pr["zs"][:8]:
-        for f in (ours, theirs):
-            f.predict()
-            f.update(Z1[form](z[0, 0]))
-        close(ours.x, theirs.x, f"x with z as {form}")
+    check_z_form(problem(14, 2, 1), form, lambda z: Z1[form](z[0, 0]), ["x"])
 
 
 @pytest.mark.parametrize("R_i", ["own", "scalar", "matrix"])

@@ -17,6 +17,7 @@ import sys
 import textwrap
 import time
 
+import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -73,6 +74,23 @@ def raises_in_child(code, exc, limit=False):
     assert out.strip().splitlines()[-1] == exc, (out, err[-2000:])
 
 
+def memory_error_in_child(code, setup=""):
+    """Runs `setup` then `code` in a child under the address-space limit: `code` must raise
+    MemoryError."""
+    raises_in_child(
+        setup
+        + f"""
+try:
+{textwrap.indent(textwrap.dedent(code), "    ")}
+    print("no error")
+except MemoryError:
+    print("MemoryError")
+""",
+        "MemoryError",
+        limit=True,
+    )
+
+
 MEMORY = {
     "KalmanFilter(10000, 1)": "le.KalmanFilter(10000, 1)",
     "KalmanFilter(1, 10000) then update": """
@@ -107,14 +125,7 @@ MEMORY = {
 
 @pytest.mark.parametrize("name", list(MEMORY))
 def test_memory_error_not_abort(name):
-    code = f"""
-try:
-{textwrap.indent(textwrap.dedent(MEMORY[name]), "    ")}
-    print("no error")
-except MemoryError:
-    print("MemoryError")
-"""
-    raises_in_child(code, "MemoryError", limit=True)
+    memory_error_in_child(MEMORY[name])
 
 
 def test_ctrl_c_in_a_long_batch_filter_raises_and_keeps_the_filter():
@@ -171,10 +182,10 @@ def test_ctrl_c_inside_a_callable_raises(which):
 
 SILENT = {
     # FilterPy takes these; ours must give FilterPy's numbers (compared in the child).
-    "float32 F edited in place": ("F", "np.float32"),
-    "int F edited in place": ("F", "np.int64"),
-    "int H edited in place": ("H", "np.int64"),
-    "float32 x edited in place": ("x", "np.float32"),
+    "float32 F edited in place": ("F", np.float32),
+    "int F edited in place": ("F", np.int64),
+    "int H edited in place": ("H", np.int64),
+    "float32 x edited in place": ("x", np.float32),
 }
 
 
@@ -190,7 +201,7 @@ def test_no_silent_difference_from_filterpy(name):
             kf = cls(2, 1)
             kf.H = np.array([[1.0, 0.0]])
             kf.F = np.array([[1.0, 1.0], [0.0, 1.0]])
-            a = np.array(base["{attr}"], dtype={dtype})
+            a = np.array(base["{attr}"], dtype=np.{dtype.__name__})
             kf.{attr} = a
             a[0, 0] = 3  # the edit FilterPy uses
             for z in [1.0, 2.5, 2.0, 4.0]:

@@ -4,11 +4,9 @@ MemoryError under a 4 GiB address-space limit, Ctrl-C inside a long call or insi
 KeyboardInterrupt and leaves the filter as it was, an exception raised by fx or hx reaches the
 caller unchanged (the same object), and bad input is a typed error naming what is wrong."""
 
-import textwrap
-
 import pytest
 
-from test_hostile import child, raises_in_child
+from test_hostile import child, memory_error_in_child, raises_in_child
 
 SETUP = """
 def fx(x, dt):
@@ -52,14 +50,7 @@ MEMORY = {
 
 @pytest.mark.parametrize("name", list(MEMORY))
 def test_memory_error_not_abort(name):
-    code = SETUP + f"""
-try:
-{textwrap.indent(textwrap.dedent(MEMORY[name]), "    ")}
-    print("no error")
-except MemoryError:
-    print("MemoryError")
-"""
-    raises_in_child(code, "MemoryError", limit=True)
+    memory_error_in_child(MEMORY[name], SETUP)
 
 
 @pytest.mark.parametrize("vectorized", [False, True])
