@@ -8,7 +8,7 @@ use faer::MatRef;
 
 use crate::Error;
 use crate::model::{
-    MatrixInput, Model, ModelSource, check_vec, load, load_vec, psd_factor, symmetrise,
+    MatrixInput, Model, ModelSource, check_symmetric, check_vec, load, load_vec, psd_factor,
 };
 use crate::storage::{Buf, Dims, DynDims};
 
@@ -365,7 +365,7 @@ fn init_prior<D: Dims>(
     let mut P = D::Nn::zeros(n * n);
     load_vec("x0", x0, n, x.as_mut_slice())?;
     load("P0", P0, n, n, P.as_mut_slice())?;
-    symmetrise("P0", P.as_mut_slice(), n)?;
+    check_symmetric("P0", P.as_mut_slice(), n)?;
     let mut L = vec![0.0; n * n];
     psd_factor("P0", P.as_slice(), n, &mut L)?;
     if st.form == CovarianceForm::SquareRoot {

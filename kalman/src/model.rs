@@ -208,8 +208,9 @@ pub(crate) fn load_vec(
     Ok(())
 }
 
-/// Checks symmetry within [`SYMMETRY_TOL`] and symmetrises `a` (`n`×`n`, column-major).
-pub(crate) fn symmetrise(name: &'static str, a: &mut [f64], n: usize) -> Result<(), Error> {
+/// Checks symmetry within [`SYMMETRY_TOL`] and symmetrises `a` (`n`×`n`, column-major) with
+/// the crate's kernel ([`crate::kernels::symmetrise`]).
+pub(crate) fn check_symmetric(name: &'static str, a: &mut [f64], n: usize) -> Result<(), Error> {
     let scale = a[..n * n].iter().fold(0.0_f64, |s, x| s.max(x.abs()));
     let tol = SYMMETRY_TOL * scale;
     let mut worst = (0.0, 0, 0);
@@ -231,13 +232,7 @@ pub(crate) fn symmetrise(name: &'static str, a: &mut [f64], n: usize) -> Result<
             tol,
         });
     }
-    for j in 0..n {
-        for i in j + 1..n {
-            let s = 0.5 * (a[i + j * n] + a[j + i * n]);
-            a[i + j * n] = s;
-            a[j + i * n] = s;
-        }
-    }
+    crate::kernels::symmetrise(a, n);
     Ok(())
 }
 
@@ -385,8 +380,8 @@ impl<D: Dims> Model<D> {
         load("H", H, m, n, model.H.as_mut_slice())?;
         load("Q", Q, n, n, model.Q.as_mut_slice())?;
         load("R", R, m, m, model.R.as_mut_slice())?;
-        symmetrise("Q", model.Q.as_mut_slice(), n)?;
-        symmetrise("R", model.R.as_mut_slice(), m)?;
+        check_symmetric("Q", model.Q.as_mut_slice(), n)?;
+        check_symmetric("R", model.R.as_mut_slice(), m)?;
         let mut scratch = vec![0.0; n.max(m) * n.max(m)];
         psd_factor("Q", model.Q.as_slice(), n, &mut scratch)?;
         psd_factor("R", model.R.as_slice(), m, &mut scratch)?;
@@ -434,7 +429,7 @@ impl<D: Dims> Model<D> {
         let (n, m, p) = (self.dims.n(), self.dims.m(), self.dims.p());
         self.F.as_mut_slice()[..n * n].copy_from_slice(&F[..n * n]);
         self.Q.as_mut_slice()[..n * n].copy_from_slice(&Q[..n * n]);
-        symmetrise("Q", self.Q.as_mut_slice(), n)?;
+        check_symmetric("Q", self.Q.as_mut_slice(), n)?;
         self.B.as_mut_slice()[..n * p].copy_from_slice(&B[..n * p]);
         if self.S.is_some() {
             return self.refactor_joint();

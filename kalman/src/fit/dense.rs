@@ -38,9 +38,10 @@ pub(crate) fn gemm(
     }
 }
 
-/// In-place lower Cholesky of the `n×n` matrix `a` (upper triangle zeroed): the filter's
-/// kernel with a zero pivot tolerance. `false` if a pivot is not positive.
-pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
+/// The whole lower Cholesky factor of the `n×n` matrix `a`, in place: the crate's kernel
+/// ([`crate::kernels::cholesky`], zero pivot tolerance), then the strict upper triangle
+/// zeroed so that `a` holds `L` as a matrix. `false` if a pivot is not positive.
+pub(crate) fn lower_factor(a: &mut [f64], n: usize) -> bool {
     if !crate::kernels::cholesky(a, n, 0.0) {
         return false;
     }
@@ -50,9 +51,10 @@ pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
     true
 }
 
-/// Solves `L Lᵀ X = B` in place for `B` (`n×c`, column-major) with the Cholesky factor `L`.
+/// Solves `L Lᵀ X = B` in place for `B` (`n×c`, column-major) with the Cholesky factor `L`,
+/// one column at a time by the crate's kernel ([`crate::kernels::cholesky_solve`]).
 #[inline(always)]
-pub(crate) fn chol_solve(l: &[f64], n: usize, b: &mut [f64], c: usize) {
+pub(crate) fn solve_each_column(l: &[f64], n: usize, b: &mut [f64], c: usize) {
     for x in b[..n * c].chunks_exact_mut(n) {
         crate::kernels::cholesky_solve(l, n, x);
     }
@@ -74,10 +76,10 @@ mod tests {
             a[i + 3 * i] += 1.0;
         }
         let mut l = a;
-        assert!(cholesky(&mut l, 3));
+        assert!(lower_factor(&mut l, 3));
         let b = [1.0, -2.0, 0.5, 4.0, 0.0, 1.0];
         let mut x = b;
-        chol_solve(&l, 3, &mut x, 2);
+        solve_each_column(&l, 3, &mut x, 2);
         let mut back = [0.0; 6];
         gemm(&mut back, 3, 2, 3, 1.0, &a, 3, false, &x, 3, false, 0.0);
         for (u, v) in back.iter().zip(b) {

@@ -4,7 +4,7 @@
 
 use faer::Mat;
 
-use super::dense::{chol_solve, cholesky, gemm, symmetrise};
+use super::dense::{solve_each_column, gemm, lower_factor, symmetrise};
 use super::info::{Fit, Method, finish};
 use super::score::Flat;
 use super::score::log_likelihood_gradient;
@@ -129,7 +129,7 @@ pub(crate) fn e_step(s: &Flat, data: &Series<'_>) -> Result<EStep, FitError> {
                 }
             }
             symmetrise(&mut L[..mo * mo], mo);
-            if !cholesky(&mut L[..mo * mo], mo) {
+            if !lower_factor(&mut L[..mo * mo], mo) {
                 return Err(FitError::NotPositiveDefinite {
                     name: "innovation covariance",
                     step: k,
@@ -142,9 +142,9 @@ pub(crate) fn e_step(s: &Flat, data: &Series<'_>) -> Result<EStep, FitError> {
                     Kt[r + c * mo] = PHt[c + r * n];
                 }
             }
-            chol_solve(&L[..mo * mo], mo, &mut Kt[..mo * n], n);
+            solve_each_column(&L[..mo * mo], mo, &mut Kt[..mo * n], n);
             let mut a = e[..mo].to_vec();
-            chol_solve(&L[..mo * mo], mo, &mut a, 1);
+            solve_each_column(&L[..mo * mo], mo, &mut a, 1);
             ll -= 0.5 * ((0..mo).map(|i| e[i] * a[i]).sum::<f64>() + logdet + mo as f64 * LN_2PI);
             gemm(
                 &mut xk,
@@ -215,14 +215,14 @@ pub(crate) fn e_step(s: &Flat, data: &Series<'_>) -> Result<EStep, FitError> {
         );
         // Jᵀ = P_{k+1|k}⁻¹ F P_{k|k}
         Lp.copy_from_slice(Ppk);
-        if !cholesky(&mut Lp, n) {
+        if !lower_factor(&mut Lp, n) {
             return Err(FitError::NotPositiveDefinite {
                 name: "predicted covariance",
                 step: k + 1,
             });
         }
         gemm(&mut Jt, n, n, n, 1.0, &s.F, n, false, Pfk, n, false, 0.0);
-        chol_solve(&Lp, n, &mut Jt, n);
+        solve_each_column(&Lp, n, &mut Jt, n);
         // C_{k+1,k} = P_{k+1|N} Jᵀ
         gemm(&mut C, n, n, n, 1.0, &Ps, n, false, &Jt, n, false, 0.0);
         // x_{k|N} = x_{k|k} + J (x_{k+1|N} − x_{k+1|k}); P_{k|N} = P_{k|k} + J (P_{k+1|N} − P_{k+1|k}) Jᵀ
@@ -333,7 +333,7 @@ fn add_r_term(
                 Loo[ri + c * mo] = r_at(i, j);
             }
         }
-        if !cholesky(&mut Loo, mo) {
+        if !lower_factor(&mut Loo, mo) {
             return Err(FitError::NotPositiveDefinite {
                 name: "observed block of R",
                 step: k,
@@ -344,7 +344,7 @@ fn add_r_term(
                 Gt[ri + c * mo] = r_at(i, j);
             }
         }
-        chol_solve(&Loo, mo, &mut Gt, mu);
+        solve_each_column(&Loo, mo, &mut Gt, mu);
     }
     // E[v_U v_Oᵀ] = G A (mu×mo)
     let mut GA = vec![0.0; mu * mo];
@@ -635,13 +635,13 @@ pub fn em_step(
         // Q = q·Q₁: the M-step maximises −½(N−1) ln det(q Q₁) − ½ tr((q Q₁)⁻¹ S) at
         // q = tr(Q₁⁻¹ S) / (n (N−1)), S = Σ E[w wᵀ] (a Q₁ that is not PD has no such step).
         let mut l = super::flat(q1);
-        if !cholesky(&mut l, n) {
+        if !lower_factor(&mut l, n) {
             return Err(FitError::Unsupported(
                 "EM updates an intensity q of Q = q·Q₁ only for a positive definite Q₁; use the MLE".into(),
             ));
         }
         let mut x = es.sq.clone();
-        chol_solve(&l, n, &mut x, n);
+        solve_each_column(&l, n, &mut x, n);
         let q = (0..n).map(|i| x[i + i * n]).sum::<f64>() / (n * (N - 1)) as f64;
         next.q = Mat::from_fn(n, n, |i, j| q * q1[(i, j)]);
     }

@@ -645,4 +645,3 @@ fn product<T: Scalar>(
         }
     }
 }
-

@@ -3,7 +3,7 @@
 
 use faer::Mat;
 
-use super::dense::{chol_solve, cholesky};
+use super::dense::{solve_each_column, lower_factor};
 use super::params::data_scale;
 use super::score::log_likelihood_gradient;
 use super::{FitError, ParamMap, Series, System};
@@ -170,14 +170,14 @@ pub(crate) fn central_information(
 pub(crate) fn spd_inverse(a: &Mat<f64>) -> Option<Mat<f64>> {
     let k = a.nrows();
     let mut l = super::flat(a);
-    if !cholesky(&mut l, k) {
+    if !lower_factor(&mut l, k) {
         return None;
     }
     let mut x = vec![0.0; k * k];
     for i in 0..k {
         x[i + i * k] = 1.0;
     }
-    chol_solve(&l, k, &mut x, k);
+    solve_each_column(&l, k, &mut x, k);
     let mut m = Mat::from_fn(k, k, |i, j| x[i + j * k]);
     for j in 0..k {
         for i in j + 1..k {

@@ -8,7 +8,7 @@ use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::neldermead::NelderMead;
 use argmin::solver::quasinewton::LBFGS;
 
-use super::dense::{chol_solve, cholesky};
+use super::dense::{solve_each_column, lower_factor};
 use super::info::{Fit, Method, Run, finish_records, gradient_sum, information_of};
 use super::{FitError, ParamMap, Series};
 use faer::Mat;
@@ -214,12 +214,12 @@ fn newton_polish<O: Objective + ?Sized>(
     let mut steps = 0;
     while steps < NEWTON_STEPS && max_abs(&g) > grad_tol {
         let mut l = super::flat(&memo.objective.information(&theta)?);
-        if !cholesky(&mut l, k) {
+        if !lower_factor(&mut l, k) {
             break;
         }
         let decrement = |g: &[f64]| {
             let mut d = g.to_vec();
-            chol_solve(&l, k, &mut d, 1);
+            solve_each_column(&l, k, &mut d, 1);
             (d.iter().zip(g).map(|(a, b)| a * b).sum::<f64>(), d)
         };
         let (d0, delta) = decrement(&g);

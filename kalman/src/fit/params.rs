@@ -311,7 +311,7 @@ fn theta_of(s: Structure, a: &Mat<f64>, fallback: f64) -> Vec<f64> {
         Structure::Diag => (0..n).map(|i| pos(a[(i, i)]).ln()).collect(),
         Structure::Full => {
             let mut w = super::flat(a);
-            let ok = super::dense::cholesky(&mut w, n);
+            let ok = super::dense::lower_factor(&mut w, n);
             if !ok {
                 w = vec![0.0; n * n];
                 for i in 0..n {

@@ -3,7 +3,7 @@
 #![allow(non_snake_case)]
 
 use crate::Error;
-use crate::model::{MatrixInput, load, psd_factor, symmetrise};
+use crate::model::{MatrixInput, check_symmetric, load, psd_factor};
 use crate::storage::Dims;
 
 /// `out = a − b` entry by entry: the default residual and state difference.
@@ -173,7 +173,7 @@ fn load_cov(
     work: &mut [f64],
 ) -> Result<(), Error> {
     load(name, a, d, d, dst)?;
-    symmetrise(name, dst, d)?;
+    check_symmetric(name, dst, d)?;
     psd_factor(name, dst, d, work)
 }
 

@@ -5,7 +5,7 @@ use faer::{Mat, MatRef};
 use num_dual::Dual64;
 
 use super::super::FitError;
-use super::super::dense::cholesky;
+use super::super::dense::lower_factor;
 use crate::nonlinear::GenericModel;
 use crate::storage::Dims;
 
@@ -335,7 +335,7 @@ impl<'a, G: GenericModel> Problem<'a, G> {
             }
         }
         let l = &mut l[..mo * mo];
-        if l.iter().any(|v| !v.is_finite()) || !cholesky(l, mo) {
+        if l.iter().any(|v| !v.is_finite()) || !lower_factor(l, mo) {
             return Err(FitError::NotPositiveDefinite { name: "R", step: k });
         }
         for (r, &i) in obs.iter().enumerate() {

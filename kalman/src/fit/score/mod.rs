@@ -3,7 +3,7 @@
 
 mod steady;
 
-use super::dense::{chol_solve, cholesky, gemm, symmetrise};
+use super::dense::{solve_each_column, gemm, lower_factor, symmetrise};
 use super::{Derivative, FitError, LN_2PI, ParamMap, Series, System, flat};
 use steady::Steady;
 
@@ -339,7 +339,7 @@ impl Work {
         symmetrise(sig, mo);
         let L = &mut self.L[..mo * mo];
         L.copy_from_slice(sig);
-        if !cholesky(L, mo) {
+        if !lower_factor(L, mo) {
             return Err(FitError::NotPositiveDefinite {
                 name: "innovation covariance",
                 step: k,
@@ -358,7 +358,7 @@ impl Work {
                 tm[c + r * mo] = M[r + c * n];
             }
         }
-        chol_solve(L, mo, tm, n);
+        solve_each_column(L, mo, tm, n);
         for r in 0..n {
             for c in 0..mo {
                 G[r + c * n] = tm[c + r * mo];
@@ -406,7 +406,7 @@ impl Work {
             }
             // tr(Σ⁻¹ dΣ)
             X.copy_from_slice(dsig);
-            chol_solve(L, mo, X, mo);
+            solve_each_column(L, mo, X, mo);
             *tr = (0..mo).map(|r| X[r + r * mo]).sum();
             // dM = dF P Hoᵀ + F dP Hoᵀ + F P dHoᵀ   (tm holds dP Hoᵀ)
             gemm(dM, n, mo, n, 1.0, &s.F, n, false, tm, n, false, 0.0);
@@ -450,7 +450,7 @@ impl Work {
             e[r] = z[i] - (0..n).map(|c| Ho[r + c * mo] * self.x[c]).sum::<f64>();
         }
         alpha.copy_from_slice(e);
-        chol_solve(L, mo, alpha, 1);
+        solve_each_column(L, mo, alpha, 1);
         let quad: f64 = (0..mo).map(|i| e[i] * alpha[i]).sum();
         let term = -0.5 * (quad + self.logdet + mo as f64 * LN_2PI);
         for (i, di) in d.iter().enumerate() {
