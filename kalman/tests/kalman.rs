@@ -30,6 +30,7 @@ mod engine {
 
 mod nonlinear {
     pub mod alloc;
+    pub mod common;
     pub mod continuous;
     pub mod errors;
     pub mod fixed_lag;
@@ -55,6 +56,7 @@ mod fit {
     pub mod honest;
     pub mod likelihood;
     pub mod output_error;
+    pub mod pendulum;
     pub mod records;
     pub mod sampled;
 }

@@ -1,6 +1,8 @@
 //! Seeded simulation and the local-linear-trend model shared by the fitting tests.
 
-use kalman::fit::{Fit, Free, MleOptions, Series, StandardMap, Structure, System, mle};
+use kalman::fit::{
+    Fit, Free, Matrix, MleOptions, Param, Series, StandardMap, Structure, System, mle,
+};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -46,6 +48,25 @@ pub fn llt(q_level: f64, q_slope: f64, r: f64, x0: [f64; 2], p0: [f64; 2]) -> Sy
     .expect("valid LLT")
 }
 
+/// AR(1) plus noise: x_{k+1} = φ x_k + w, z = x + v, Var w = q, Var v = r, from x0 = 0,
+/// P0 = 1.
+pub fn ar1(phi: f64, q: f64, r: f64) -> System {
+    System::new(&[[phi]], &[[1.0]], &[[q]], &[[r]], &[0.0], &[[1.0]]).expect("valid AR(1)")
+}
+
+/// AR(1) plus noise started far from the data (φ = 0.3, q = r = 2), and the map freeing φ,
+/// q and r as entries of F, Q and R.
+pub fn ar1_far_start() -> (System, StandardMap) {
+    let start = ar1(0.3, 2.0, 2.0);
+    let params = vec![
+        Param::entry(Matrix::F, 0, 0),
+        Param::entry(Matrix::Q, 0, 0),
+        Param::entry(Matrix::R, 0, 0),
+    ];
+    let map = StandardMap::with_params(start.clone(), Free::default(), params).expect("map");
+    (start, map)
+}
+
 /// The lower and upper limits of a central 99.9 % band of Binomial(n, p): the count lies
 /// outside with probability below 0.1 %.
 pub fn binomial_band(n: usize, p: f64) -> (usize, usize) {
@@ -80,13 +101,19 @@ pub fn mle_qr(base: &System, q: Structure, r: Structure, data: &Series) -> (Stan
         ..Free::default()
     };
     let map = StandardMap::new(base.clone(), free).expect("map");
-    let fit = mle(
-        &map,
-        map.theta_of(base, Some(data)),
+    let fit = mle_from(&map, base, data);
+    assert!(fit.converged, "{}", fit.message);
+    (map, fit)
+}
+
+/// The maximum likelihood fit of `map` on `data` from the parameters of `start` (default
+/// options).
+pub fn mle_from(map: &StandardMap, start: &System, data: &Series) -> Fit {
+    mle(
+        map,
+        map.theta_of(start, Some(data)),
         data,
         &MleOptions::default(),
     )
-    .expect("mle");
-    assert!(fit.converged, "{}", fit.message);
-    (map, fit)
+    .expect("mle")
 }

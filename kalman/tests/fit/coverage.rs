@@ -1,9 +1,9 @@
 //! Are the Cramér–Rao bounds honest? 95 % Wald intervals from the observed information
 //! over repeated simulated records must cover the truth about 95 % of the time.
 
-use kalman::fit::{Free, Matrix, MleOptions, Param, Series, StandardMap, System, mle};
+use kalman::fit::Series;
 
-use super::common::{binomial_band, rng, simulate_diag};
+use super::common::{ar1, ar1_far_start, binomial_band, mle_from, rng, simulate_diag};
 
 #[test]
 fn wald_intervals_of_free_entries_cover_the_truth() {
@@ -11,28 +11,15 @@ fn wald_intervals_of_free_entries_cover_the_truth() {
     // seconds); 400 samples per record, where the estimates are close to normal.
     const RECORDS: usize = 240;
     let (phi, q, r) = (0.7, 1.0, 1.0);
-    let truth = System::new(&[[phi]], &[[1.0]], &[[q]], &[[r]], &[0.0], &[[1.0]]).expect("truth");
-    let start =
-        System::new(&[[0.3]], &[[1.0]], &[[2.0]], &[[2.0]], &[0.0], &[[1.0]]).expect("start");
-    let params = vec![
-        Param::entry(Matrix::F, 0, 0),
-        Param::entry(Matrix::Q, 0, 0),
-        Param::entry(Matrix::R, 0, 0),
-    ];
-    let map = StandardMap::with_params(start.clone(), Free::default(), params).expect("map");
+    let truth = ar1(phi, q, r);
+    let (start, map) = ar1_far_start();
     let want = [phi, q, r];
     let mut covered = [0usize; 3];
     let mut g = rng(2026);
     for run in 0..RECORDS {
         let z = simulate_diag(&truth, 400, &mut g);
         let data = Series::new(&z, 1).expect("series");
-        let fit = mle(
-            &map,
-            map.theta_of(&start, Some(&data)),
-            &data,
-            &MleOptions::default(),
-        )
-        .expect("mle");
+        let fit = mle_from(&map, &start, &data);
         assert!(fit.converged, "record {run}: {}", fit.message);
         let values = map.param_values(&fit.theta).expect("values");
         // A record whose information is singular gives no interval: it counts as a miss.

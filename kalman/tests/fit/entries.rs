@@ -5,7 +5,7 @@
 
 use kalman::CovarianceForm;
 
-use super::common::{rng, simulate_diag};
+use super::common::{mle_from, rng, simulate_diag};
 use kalman::fit::{
     EmOptions, FitError, Free, Matrix, MleOptions, Param, ParamMap, Series, StandardMap, Structure,
     System, Transform, em, log_likelihood, log_likelihood_gradient, mle,
@@ -66,14 +66,17 @@ fn ar2_with_measurement_error_matches_statsmodels_sarimax() {
     let p = |key: &str, name: &str| num(&g[key][name]);
     // The likelihood itself at fixed parameters: two exact evaluations of one number, 800
     // steps of round-off apart (|ln L| ≈ 1.3e3, so 1e-9 relative is ~1e-6 absolute).
-    let c = "check_params";
-    let sys = ar2(
-        &g,
-        p(c, "ar.L1"),
-        p(c, "ar.L2"),
-        p(c, "var.measurement_error"),
-        p(c, "sigma2"),
-    );
+    // The AR(2) at one of the stored parameter sets.
+    let ar2_at = |set: &str| {
+        ar2(
+            &g,
+            p(set, "ar.L1"),
+            p(set, "ar.L2"),
+            p(set, "var.measurement_error"),
+            p(set, "sigma2"),
+        )
+    };
+    let sys = ar2_at("check_params");
     let ll = log_likelihood(&sys, &data, CovarianceForm::Joseph).expect("ll");
     let want = num(&g["check_llf"]);
     assert!(
@@ -81,22 +84,9 @@ fn ar2_with_measurement_error_matches_statsmodels_sarimax() {
         "ln L {ll} vs {want}"
     );
     // The MLE from statsmodels' start.
-    let s = "start";
-    let base = ar2(
-        &g,
-        p(s, "ar.L1"),
-        p(s, "ar.L2"),
-        p(s, "var.measurement_error"),
-        p(s, "sigma2"),
-    );
+    let base = ar2_at("start");
     let map = StandardMap::with_params(base.clone(), Free::default(), ar2_params()).expect("map");
-    let fit = mle(
-        &map,
-        map.theta_of(&base, Some(&data)),
-        &data,
-        &MleOptions::default(),
-    )
-    .expect("mle");
+    let fit = mle_from(&map, &base, &data);
     assert!(fit.converged, "{}", fit.message);
     // Both optimisers stop on a gradient tolerance, where ln L is flat to second order:
     // the two optima agree far inside 1e-3.

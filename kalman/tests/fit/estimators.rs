@@ -7,7 +7,7 @@ use kalman::fit::{
     Structure, System, em, mle,
 };
 
-use super::common::{binomial_band, llt, mle_qr, rng, simulate_diag};
+use super::common::{binomial_band, llt, mle_from, mle_qr, rng, simulate_diag};
 
 #[test]
 fn mle_and_em_reach_the_same_optimum_on_a_local_linear_trend() {
@@ -24,13 +24,7 @@ fn mle_and_em_reach_the_same_optimum_on_a_local_linear_trend() {
         },
     )
     .expect("map");
-    let fm = mle(
-        &map,
-        map.theta_of(&base, Some(&data)),
-        &data,
-        &MleOptions::default(),
-    )
-    .expect("mle");
+    let fm = mle_from(&map, &base, &data);
     let fe = em(&map, &data, &EmOptions::default()).expect("em");
     assert!(fm.converged, "{}", fm.message);
     assert!(fe.converged, "{}", fe.message);
@@ -46,32 +40,30 @@ fn mle_and_em_reach_the_same_optimum_on_a_local_linear_trend() {
     assert!((fm.bic - (3.0 * 400f64.ln() - 2.0 * fm.loglik)).abs() < 1e-9);
 }
 
+/// A random walk of variance q per step seen by two channels of variance r each, from
+/// x0 = 0 with variance p0.
+fn walk_two_channels(q: f64, r: f64, p0: f64) -> System {
+    System::new(
+        &[[1.0]],
+        &[[1.0], [1.0]],
+        &[[q]],
+        &[[r, 0.0], [0.0, r]],
+        &[0.0],
+        &[[p0]],
+    )
+    .expect("two-channel walk")
+}
+
 #[test]
 fn em_honours_constraints_and_agrees_with_mle_with_missing_data() {
     // Two measurement channels of one random walk with scalar R, some entries missing.
-    let truth = System::new(
-        &[[1.0]],
-        &[[1.0], [1.0]],
-        &[[0.3]],
-        &[[1.0, 0.0], [0.0, 1.0]],
-        &[0.0],
-        &[[1.0]],
-    )
-    .expect("sys");
+    let truth = walk_two_channels(0.3, 1.0, 1.0);
     let mut z = simulate_diag(&truth, 300, &mut rng(5));
     for k in (0..300).step_by(7) {
         z[2 * k + (k % 2)] = f64::NAN;
     }
     let data = Series::new(&z, 2).expect("series");
-    let base = System::new(
-        &[[1.0]],
-        &[[1.0], [1.0]],
-        &[[1.0]],
-        &[[2.0, 0.0], [0.0, 2.0]],
-        &[0.0],
-        &[[10.0]],
-    )
-    .expect("base");
+    let base = walk_two_channels(1.0, 2.0, 10.0);
     let map = StandardMap::new(
         base,
         Free {
@@ -82,13 +74,7 @@ fn em_honours_constraints_and_agrees_with_mle_with_missing_data() {
     )
     .expect("map");
     let fe = em(&map, &data, &EmOptions::default()).expect("em");
-    let fm = mle(
-        &map,
-        map.theta_of(map.base(), Some(&data)),
-        &data,
-        &MleOptions::default(),
-    )
-    .expect("mle");
+    let fm = mle_from(&map, map.base(), &data);
     assert!(
         (fm.loglik - fe.loglik).abs() < 1e-3,
         "{} vs {}",
@@ -205,15 +191,7 @@ fn wald_intervals_of_a_shaping_filter_cover_at_the_nominal_rate() {
 
 #[test]
 fn bad_input_is_a_typed_error() {
-    let base = System::new(
-        &[[1.0]],
-        &[[1.0], [1.0]],
-        &[[1.0]],
-        &[[1.0, 0.0], [0.0, 1.0]],
-        &[0.0],
-        &[[1.0]],
-    )
-    .expect("sys");
+    let base = walk_two_channels(1.0, 1.0, 1.0);
     assert_eq!(
         StandardMap::new(base.clone(), Free::default()).err(),
         Some(FitError::NothingFree)

@@ -4,57 +4,47 @@
 
 use kalman::DynDims;
 use kalman::faer::Mat;
-use kalman::fit::{FitError, OutputErrorOptions, output_error, output_error_cost};
+use kalman::fit::{FitError, OutputErrorFit, OutputErrorOptions, output_error, output_error_cost};
 use kalman::nonlinear::{GenericModel, Scalar};
 use nalgebra::{DMatrix, DVector};
 use rand::RngExt;
 use rand_distr::StandardNormal;
 
 use super::common::{binomial_band, rng};
+use super::pendulum::{Pendulum, START, TRUTH, torque};
 
-/// A damped pendulum driven by a known torque `u`, integrated by symplectic Euler:
-/// x = (φ, ω, b, s); the displacement sensor reads `sin φ + b`, the rate gyro `(1 + s) ω`.
-pub struct Pendulum {
-    /// Step, s.
-    pub dt: f64,
-    /// Noise variances of the two sensors.
-    pub r: [f64; 2],
-}
-
-impl GenericModel for Pendulum {
-    fn f<T: Scalar>(&self, x: &[T], u: Option<&[f64]>, _k: usize, out: &mut [T]) {
-        let torque = u.map_or(0.0, |u| u[0]);
-        let w = x[1] + (x[0].sin() * -9.81 - x[1] * 0.1 + torque) * self.dt;
-        out[0] = x[0] + w * self.dt;
-        out[1] = w;
-        out[2] = x[2];
-        out[3] = x[3];
-    }
-    fn h<T: Scalar>(&self, x: &[T], _k: usize, out: &mut [T]) {
-        out[0] = x[0].sin() + x[2];
-        out[1] = x[1] * (x[3] + 1.0);
-    }
-    fn q(&self, _k: usize, out: &mut [f64]) {
-        out.fill(0.0);
-    }
-    fn r(&self, _k: usize, out: &mut [f64]) {
-        out.copy_from_slice(&[self.r[0], 0.0, 0.0, self.r[1]]);
-    }
-}
-
-/// The pendulum's truth: φ0 = 0.5 rad, ω0 = 0, bias 0.05, scale factor 2 %.
-pub const TRUTH: [f64; 4] = [0.5, 0.0, 0.05, 0.02];
-/// The starting guess of the fits.
-const START: [f64; 4] = [0.3, 0.2, 0.0, 0.0];
 const STEPS: usize = 200;
 
 fn dims4() -> DynDims {
     DynDims::new(4, 2, 1).expect("valid dims")
 }
 
-/// The torque input (N×1).
-pub fn torque(steps: usize, dt: f64) -> Mat<f64> {
-    Mat::from_fn(steps, 1, |k, _| 0.3 * (0.5 * k as f64 * dt).sin())
+/// The pendulum at Δt = 0.05 s with the sensors' true noise variances.
+fn pendulum() -> Pendulum {
+    Pendulum {
+        dt: 0.05,
+        r: [4e-4, 2.5e-3],
+    }
+}
+
+/// The output-error fit of `model` from `x0`, all four initial-state entries free.
+fn fit_all(
+    model: &Pendulum,
+    x0: &[f64],
+    z: &Mat<f64>,
+    u: &Mat<f64>,
+    options: &OutputErrorOptions,
+) -> OutputErrorFit {
+    output_error(
+        model,
+        dims4(),
+        x0,
+        &[0, 1, 2, 3],
+        z.as_ref(),
+        Some(u.as_ref()),
+        options,
+    )
+    .expect("fit")
 }
 
 /// The noise-free outputs of `model` from `x0` with inputs `u` (N×m).
@@ -90,10 +80,7 @@ fn noisy(y: &Mat<f64>, sd: &[f64], seed: u64) -> Mat<f64> {
 
 #[test]
 fn ad_gradient_equals_central_differences() {
-    let model = Pendulum {
-        dt: 0.05,
-        r: [4e-4, 2.5e-3],
-    };
+    let model = pendulum();
     let u = torque(STEPS, model.dt);
     let z = noisy(&outputs(&model, &TRUTH, &u, 2), &[0.02, 0.05], 7);
     let free = [0, 1, 2, 3];
@@ -254,26 +241,14 @@ fn linear_model_equals_weighted_least_squares() {
 /// Fits `records` noisy pendulum records; returns the normalised errors (θ̂ − θ)/σ̂ by
 /// parameter and the 1.96σ̂ coverage counts.
 fn pendulum_monte_carlo(records: usize) -> (Vec<Vec<f64>>, Vec<usize>) {
-    let model = Pendulum {
-        dt: 0.05,
-        r: [4e-4, 2.5e-3],
-    };
+    let model = pendulum();
     let u = torque(STEPS, model.dt);
     let y = outputs(&model, &TRUTH, &u, 2);
     let mut normalised: Vec<Vec<f64>> = (0..4).map(|_| Vec::with_capacity(records)).collect();
     let mut covered = vec![0; 4];
     for run in 0..records {
         let z = noisy(&y, &[0.02, 0.05], 1000 + run as u64);
-        let fit = output_error(
-            &model,
-            dims4(),
-            &START,
-            &[0, 1, 2, 3],
-            z.as_ref(),
-            Some(u.as_ref()),
-            &OutputErrorOptions::default(),
-        )
-        .expect("fit");
+        let fit = fit_all(&model, &START, &z, &u, &OutputErrorOptions::default());
         assert!(fit.converged, "run {run} did not converge");
         for j in 0..4 {
             let e = (fit.estimate[j] - TRUTH[j]) / fit.std[j];
@@ -329,16 +304,7 @@ fn estimate_r_recovers_the_noise_variance() {
         estimate_r: true,
         ..OutputErrorOptions::default()
     };
-    let fit = output_error(
-        &model,
-        dims4(),
-        &START,
-        &[0, 1, 2, 3],
-        z.as_ref(),
-        Some(u.as_ref()),
-        &options,
-    )
-    .expect("fit");
+    let fit = fit_all(&model, &START, &z, &u, &options);
     assert!(fit.converged);
     let band = 4.0 * (2.0 / steps as f64).sqrt();
     for i in 0..2 {
@@ -382,6 +348,16 @@ impl GenericModel for Scaled {
     }
 }
 
+/// The name, rows and columns of `e` if it is the model's shape error.
+fn shape_of(e: &FitError) -> Option<(&'static str, usize, usize)> {
+    match e {
+        FitError::Model(kalman::Error::Shape {
+            name, rows, cols, ..
+        }) => Some((*name, *rows, *cols)),
+        _ => None,
+    }
+}
+
 #[test]
 fn output_error_errors_name_what_is_wrong() {
     let ok = Scaled {
@@ -397,34 +373,11 @@ fn output_error_errors_name_what_is_wrong() {
     };
     // Shapes of x0, z and u against the dimensions.
     let e = fit(&ok, &[1.0, 0.0], &[0], &z, None).expect_err("refused");
-    assert!(
-        matches!(
-            e,
-            FitError::Model(kalman::Error::Shape {
-                name: "x0",
-                rows: 2,
-                ..
-            })
-        ),
-        "{e}"
-    );
+    assert!(matches!(shape_of(&e), Some(("x0", 2, _))), "{e}");
     let e = fit(&ok, &[1.0, 0.0, 0.0], &[0], &Mat::zeros(6, 3), None).expect_err("refused");
-    assert!(
-        matches!(
-            e,
-            FitError::Model(kalman::Error::Shape {
-                name: "z",
-                cols: 3,
-                ..
-            })
-        ),
-        "{e}"
-    );
+    assert!(matches!(shape_of(&e), Some(("z", _, 3))), "{e}");
     let e = fit(&ok, &[1.0, 0.0, 0.0], &[0], &z, Some(&Mat::zeros(6, 1))).expect_err("refused");
-    assert!(
-        matches!(e, FitError::Model(kalman::Error::Shape { name: "u", .. })),
-        "{e}"
-    );
+    assert!(matches!(shape_of(&e), Some(("u", _, _))), "{e}");
     let e = output_error(
         &ok,
         DynDims::new(3, 2, 1).expect("dims"),
@@ -435,17 +388,7 @@ fn output_error_errors_name_what_is_wrong() {
         &o,
     )
     .expect_err("refused");
-    assert!(
-        matches!(
-            e,
-            FitError::Model(kalman::Error::Shape {
-                name: "u",
-                rows: 0,
-                ..
-            })
-        ),
-        "{e}"
-    );
+    assert!(matches!(shape_of(&e), Some(("u", 0, _))), "{e}");
     let e = fit(&ok, &[1.0, f64::NAN, 0.0], &[0], &z, None).expect_err("refused");
     assert!(
         matches!(
@@ -579,16 +522,7 @@ fn pendulum_agrees_with_scipy_least_squares() {
         tolerance: 1e-10,
         ..OutputErrorOptions::default()
     };
-    let fit = output_error(
-        &model,
-        dims4(),
-        &start,
-        &[0, 1, 2, 3],
-        z.as_ref(),
-        Some(u.as_ref()),
-        &options,
-    )
-    .expect("fit");
+    let fit = fit_all(&model, &start, &z, &u, &options);
     assert!(fit.converged);
     let est = vec("estimate");
     let cov = rows("covariance");

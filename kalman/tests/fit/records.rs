@@ -3,24 +3,16 @@
 
 use kalman::CovarianceForm;
 use kalman::fit::{
-    Free, Matrix, MleOptions, Param, Series, StandardMap, System, log_likelihood,
-    log_likelihood_gradient, mle, mle_records,
+    Free, MleOptions, Series, StandardMap, System, log_likelihood, log_likelihood_gradient, mle,
+    mle_records,
 };
 
-use super::common::{rng, simulate_diag};
+use super::common::{ar1, ar1_far_start, rng, simulate_diag};
 
 #[test]
 fn a_pooled_fit_sums_the_records_and_beats_each_alone() {
-    let truth =
-        System::new(&[[0.8]], &[[1.0]], &[[0.5]], &[[1.0]], &[0.0], &[[1.0]]).expect("truth");
-    let start =
-        System::new(&[[0.3]], &[[1.0]], &[[2.0]], &[[2.0]], &[0.0], &[[1.0]]).expect("start");
-    let params = vec![
-        Param::entry(Matrix::F, 0, 0),
-        Param::entry(Matrix::Q, 0, 0),
-        Param::entry(Matrix::R, 0, 0),
-    ];
-    let map = StandardMap::with_params(start.clone(), Free::default(), params).expect("map");
+    let truth = ar1(0.8, 0.5, 1.0);
+    let (start, map) = ar1_far_start();
     let mut g = rng(12);
     let zs: Vec<Vec<f64>> = [150, 220, 180]
         .iter()

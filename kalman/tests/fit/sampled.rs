@@ -72,6 +72,18 @@ fn simulate(t: &[f64], q: f64, r: f64, seed: u64) -> Vec<f64> {
 
 /// The Gaussian log-likelihood of `z` by a filter written out here with the closed form.
 fn reference_loglik(t: &[f64], z: &[f64], q: f64, r: f64, p0: f64) -> f64 {
+    reference_loglik_sampled(t, z, r, p0, |dt| closed_form(q, dt))
+}
+
+/// The same filter of a 2-state model measured in its first state, sampled at each interval
+/// Δt by `sample(Δt) = (F, Q)`, from x0 = 0, P0 = p0·I.
+fn reference_loglik_sampled(
+    t: &[f64],
+    z: &[f64],
+    r: f64,
+    p0: f64,
+    sample: impl Fn(f64) -> (Matrix2<f64>, Matrix2<f64>),
+) -> f64 {
     let H = nalgebra::RowVector2::new(1.0, 0.0);
     let (mut x, mut P) = (Vector2::new(0.0, 0.0), Matrix2::identity() * p0);
     let mut ll = 0.0;
@@ -84,7 +96,7 @@ fn reference_loglik(t: &[f64], z: &[f64], q: f64, r: f64, p0: f64) -> f64 {
         let IKH = Matrix2::identity() - K * H;
         P = IKH * P * IKH.transpose() + K * K.transpose() * r;
         if let Some(next) = t.get(k + 1) {
-            let (F, Q) = closed_form(q, next - t[k]);
+            let (F, Q) = sample(next - t[k]);
             x = F * x;
             P = F * P * F.transpose() + Q;
         }
@@ -96,6 +108,38 @@ fn free_q_r() -> Vec<Param> {
     vec![Param::entry(Matrix::Q, 1, 1), Param::entry(Matrix::R, 0, 0)]
 }
 
+/// The constant-velocity model at the stamps `t`, from x0 = 0, P0 = 10·I, with `params` free.
+fn cv_map(t: &[f64], params: Vec<Param>) -> SampledMap {
+    SampledMap::new(
+        &cv(1.0),
+        &[0.0, 0.0],
+        &[[10.0, 0.0], [0.0, 10.0]],
+        t,
+        params,
+    )
+    .expect("map")
+}
+
+/// The exact gradient at `theta` against central differences of the likelihood: step 1e-5
+/// in each coordinate, 1e-6 relative (floor 1).
+fn assert_gradient_is_the_slope<const N: usize>(map: &SampledMap, theta: [f64; N], data: &Series) {
+    let (_, grad) = ekf_log_likelihood_gradient(map, &theta, data).expect("gradient");
+    for j in 0..N {
+        let h = 1e-5;
+        let (mut up, mut down) = (theta, theta);
+        up[j] += h;
+        down[j] -= h;
+        let fd = (ekf_log_likelihood(map, &up, data).expect("ll")
+            - ekf_log_likelihood(map, &down, data).expect("ll"))
+            / (2.0 * h);
+        assert!(
+            (grad[j] - fd).abs() <= 1e-6 * grad[j].abs().max(1.0),
+            "θ{j}: {} vs {fd}",
+            grad[j]
+        );
+    }
+}
+
 /// The map's likelihood is the closed-form filter's: the Van Loan blocks, their linear
 /// combination in q and the filter pass all agree with an implementation that shares none of
 /// them. Tolerance 1e-9 relative: both sum ~300 terms of order 1 whose inputs agree to a
@@ -104,14 +148,7 @@ fn free_q_r() -> Vec<Param> {
 fn the_likelihood_is_the_closed_form_filters_over_irregular_stamps() {
     let t = stamps(300);
     let z = simulate(&t, 0.5, 0.04, 3);
-    let map = SampledMap::new(
-        &cv(1.0),
-        &[0.0, 0.0],
-        &[[10.0, 0.0], [0.0, 10.0]],
-        &t,
-        free_q_r(),
-    )
-    .expect("map");
+    let map = cv_map(&t, free_q_r());
     assert_eq!(map.len(), 300);
     assert!(
         map.distinct_intervals() < 300,
@@ -136,31 +173,10 @@ fn the_likelihood_is_the_closed_form_filters_over_irregular_stamps() {
 fn the_gradient_is_the_likelihoods_slope() {
     let t = stamps(120);
     let z = simulate(&t, 0.5, 0.04, 4);
-    let map = SampledMap::new(
-        &cv(1.0),
-        &[0.0, 0.0],
-        &[[10.0, 0.0], [0.0, 10.0]],
-        &t,
-        free_q_r(),
-    )
-    .expect("map");
+    let map = cv_map(&t, free_q_r());
     let data = Series::new(&z, 1).expect("series");
     let theta = [0.2, -2.0];
-    let (_, grad) = ekf_log_likelihood_gradient(&map, &theta, &data).expect("gradient");
-    for j in 0..2 {
-        let h = 1e-5;
-        let (mut a, mut b) = (theta, theta);
-        a[j] += h;
-        b[j] -= h;
-        let fd = (ekf_log_likelihood(&map, &a, &data).expect("ll")
-            - ekf_log_likelihood(&map, &b, &data).expect("ll"))
-            / (2.0 * h);
-        assert!(
-            (grad[j] - fd).abs() <= 1e-6 * grad[j].abs().max(1.0),
-            "θ{j}: {} vs {fd}",
-            grad[j]
-        );
-    }
+    assert_gradient_is_the_slope(&map, theta, &data);
 }
 
 /// From a 600-row irregular record with a dropout, q and R come back within three of their
@@ -171,14 +187,7 @@ fn the_intensity_and_the_sensor_variance_are_recovered() {
     let t = stamps(600);
     let (q, r) = (0.5, 0.04);
     let z = simulate(&t, q, r, 5);
-    let map = SampledMap::new(
-        &cv(1.0),
-        &[0.0, 0.0],
-        &[[10.0, 0.0], [0.0, 10.0]],
-        &t,
-        free_q_r(),
-    )
-    .expect("map");
+    let map = cv_map(&t, free_q_r());
     let fit = map
         .fit(&Series::new(&z, 1).expect("series"), &MleOptions::default())
         .expect("fit");
@@ -257,21 +266,17 @@ fn bad_parameters_stamps_and_records_are_named() {
     let err = |params: Vec<Param>, t: &[f64]| {
         SampledMap::new(&cv(1.0), &[0.0, 0.0], &P0, t, params).expect_err("refused")
     };
-    let e = err(vec![Param::entry(Matrix::H, 0, 1)], &t);
-    assert!(
-        matches!(&e, FitError::Parameters(m) if m.contains("H is fixed")),
-        "{e}"
-    );
-    let e = err(vec![Param::entry(Matrix::F, 2, 0)], &t);
-    assert!(
-        matches!(&e, FitError::Parameters(m) if m.contains("outside")),
-        "{e}"
-    );
-    let e = err(vec![Param::entry(Matrix::R, 1, 1)], &t);
-    assert!(
-        matches!(&e, FitError::Parameters(m) if m.contains("outside")),
-        "{e}"
-    );
+    // One free entry refused with a message containing `says`.
+    let refused = |param: Param, says: &str| {
+        let e = err(vec![param], &t);
+        assert!(
+            matches!(&e, FitError::Parameters(m) if m.contains(says)),
+            "{e}"
+        );
+    };
+    refused(Param::entry(Matrix::H, 0, 1), "H is fixed");
+    refused(Param::entry(Matrix::F, 2, 0), "outside");
+    refused(Param::entry(Matrix::R, 1, 1), "outside");
     let e = err(vec![Param::entry(Matrix::Q, 0, 0)], &t);
     assert!(
         matches!(&e, FitError::Parameters(m) if m.contains("cannot be reached")),
@@ -368,21 +373,7 @@ fn a_drift_entry_is_fitted_through_the_exponential() {
         );
     }
     let theta = [-0.5, 0.2, -2.0];
-    let (_, grad) = ekf_log_likelihood_gradient(&map, &theta, &data).expect("gradient");
-    for j in 0..3 {
-        let h = 1e-5;
-        let (mut up, mut down) = (theta, theta);
-        up[j] += h;
-        down[j] -= h;
-        let fd = (ekf_log_likelihood(&map, &up, &data).expect("ll")
-            - ekf_log_likelihood(&map, &down, &data).expect("ll"))
-            / (2.0 * h);
-        assert!(
-            (grad[j] - fd).abs() <= 1e-6 * grad[j].abs().max(1.0),
-            "θ{j}: {} vs {fd}",
-            grad[j]
-        );
-    }
+    assert_gradient_is_the_slope(&map, theta, &data);
     let fit = map.fit(&data, &MleOptions::default()).expect("fit");
     assert!(fit.converged, "{}", fit.message);
     let se = fit.std_errors.as_ref().expect("bounds");
@@ -411,40 +402,19 @@ fn a_two_state_drift_entry_matches_its_closed_form() {
         Param::entry(Matrix::Q, 1, 1),
         Param::entry(Matrix::R, 0, 0),
     ];
-    let map = SampledMap::new(
-        &cv(1.0),
-        &[0.0, 0.0],
-        &[[10.0, 0.0], [0.0, 10.0]],
-        &t,
-        params,
-    )
-    .expect("map");
+    let map = cv_map(&t, params);
     let got = ekf_log_likelihood(&map, &[c, q.ln(), r.ln()], &Series::new(&z, 1).expect("z"))
         .expect("loglik");
     // The closed form with c: the position is c times the integrated velocity.
-    let H = nalgebra::RowVector2::new(1.0, 0.0);
-    let (mut x, mut P) = (Vector2::new(0.0, 0.0), Matrix2::identity() * 10.0);
-    let mut want = 0.0;
-    for k in 0..t.len() {
-        let e = z[k] - (H * x)[0];
-        let s = (H * P * H.transpose())[0] + r;
-        want -= 0.5 * (e * e / s + s.ln() + (2.0 * std::f64::consts::PI).ln());
-        let K = P * H.transpose() / s;
-        x += K * e;
-        let IKH = Matrix2::identity() - K * H;
-        P = IKH * P * IKH.transpose() + K * K.transpose() * r;
-        if let Some(next) = t.get(k + 1) {
-            let dt = next - t[k];
-            let F = Matrix2::new(1.0, c * dt, 0.0, 1.0);
-            let Q = q * Matrix2::new(
-                c * c * dt.powi(3) / 3.0,
-                c * dt.powi(2) / 2.0,
-                c * dt.powi(2) / 2.0,
-                dt,
-            );
-            x = F * x;
-            P = F * P * F.transpose() + Q;
-        }
-    }
+    let want = reference_loglik_sampled(&t, &z, r, 10.0, |dt| {
+        let F = Matrix2::new(1.0, c * dt, 0.0, 1.0);
+        let Q = q * Matrix2::new(
+            c * c * dt.powi(3) / 3.0,
+            c * dt.powi(2) / 2.0,
+            c * dt.powi(2) / 2.0,
+            dt,
+        );
+        (F, Q)
+    });
     assert!((got - want).abs() <= 1e-9 * want.abs(), "{got} vs {want}");
 }

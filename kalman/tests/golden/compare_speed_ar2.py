@@ -19,7 +19,8 @@ import time
 import warnings
 
 import numpy as np
-import statsmodels.api as sm
+
+from ar2_sarimax import sarimax, simulate
 
 N = 1500
 PHI1, PHI2, SIGMA2, MEAS = 0.6, 0.25, 1.0, 0.5
@@ -28,12 +29,7 @@ P0 = np.diag([4.0, 1.0])
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 EXE = os.path.join(ROOT, "target", "release", "scenarios")
 
-rng = np.random.default_rng(7)
-x = np.zeros(2)
-y = np.empty(N)
-for k in range(N):
-    y[k] = x[0] + rng.normal() * np.sqrt(MEAS)
-    x = np.array([PHI1 * x[0] + x[1] + rng.normal() * np.sqrt(SIGMA2), PHI2 * x[0]])
+y = simulate(np.random.default_rng(7), N, PHI1, PHI2, SIGMA2, MEAS)
 
 tmp = tempfile.mkdtemp()
 with open(os.path.join(tmp, "z.csv"), "w") as f:
@@ -54,10 +50,7 @@ for _ in range(7):
 with open(os.path.join(tmp, "s.json")) as f:
     ll_ours = json.load(f)["loglik"]
 
-mod = sm.tsa.SARIMAX(y, order=(2, 0, 0), trend="n", measurement_error=True,
-                     enforce_stationarity=False)
-mod.ssm.initialize_known(np.zeros(2), P0)
-mod.ssm.loglikelihood_burn = 0
+mod = sarimax(y, np.zeros(2), P0)
 theirs = []
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")

@@ -21,18 +21,11 @@ Conventions matched to the Rust filters (step k = update with z_k, then predict)
 - The cubature set is MerweScaledSigmaPoints(alpha=1, beta=0, kappa=0) (zero-weight centre).
 """
 
-import csv
-import os
-
 import numpy as np
 from filterpy.kalman import (ExtendedKalmanFilter, MerweScaledSigmaPoints,
                              UnscentedKalmanFilter)
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-
-
-def r(v):
-    return repr(float(v))
+from sigma_rows import r, random_mean_cov, sigma_rows, write_csv
 
 
 def merwe_cases():
@@ -41,25 +34,12 @@ def merwe_cases():
     cases = [(1, 0.3, 2.0, 2.0), (2, 0.1, 2.0, 1.0), (3, 1e-3, 2.0, 0.0),
              (4, 0.5, 2.0, -1.0), (5, 1.0, 0.0, -2.0), (6, 0.8, 1.5, 3.0)]
     for c, (n, alpha, beta, kappa) in enumerate(cases):
-        x = rng.normal(size=n)
-        A = rng.normal(size=(n, n))
-        P = A @ A.T + 0.5 * np.eye(n)
+        x, P = random_mean_cov(rng, n)
         pts = MerweScaledSigmaPoints(n, alpha=alpha, beta=beta, kappa=kappa)
         sig = pts.sigma_points(x, P)  # (2n+1) x n
-        head = [c, n, r(alpha), r(beta), r(kappa)]
-        for i in range(n):
-            rows.append(head + ["x", i, 0, r(x[i])])
-            for j in range(n):
-                rows.append(head + ["P", i, j, r(P[i, j])])
-            for j in range(2 * n + 1):
-                rows.append(head + ["sigma", i, j, r(sig[j, i])])
-        for j in range(2 * n + 1):
-            rows.append(head + ["Wm", j, 0, r(pts.Wm[j])])
-            rows.append(head + ["Wc", j, 0, r(pts.Wc[j])])
-    with open(os.path.join(HERE, "merwe_sigma.csv"), "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["case", "n", "alpha", "beta", "kappa", "what", "i", "j", "value"])
-        w.writerows(rows)
+        rows += sigma_rows([c, n, r(alpha), r(beta), r(kappa)], x, P, sig, pts)
+    head = ["case", "n", "alpha", "beta", "kappa", "what", "i", "j", "value"]
+    write_csv("merwe_sigma.csv", head, rows)
 
 
 def wrap(a):
@@ -154,10 +134,7 @@ def record(rows, k, z, x, P, nis, m):
 def write(name, p, rows):
     head = (["k"] + [f"z{i+1}" for i in range(p.m)] + [f"x{i+1}" for i in range(p.n)]
             + [f"P{i+1}_{j+1}" for j in range(p.n) for i in range(p.n)] + ["nis"])
-    with open(os.path.join(HERE, name), "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(head)
-        w.writerows(rows)
+    write_csv(name, head, rows)
 
 
 def with_prior(filt, p):

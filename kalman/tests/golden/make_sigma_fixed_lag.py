@@ -30,18 +30,11 @@ prior is x_{-1}; the Rust prior of the first measurement is x0 = F x_{-1},
 P0 = F P_{-1} F^T + Q, written into the file as `x0`/`P0` rows (k = -1).
 """
 
-import csv
-import os
-
 import numpy as np
 from filterpy.kalman import FixedLagSmoother, JulierSigmaPoints, SimplexSigmaPoints
 from scipy.linalg import cholesky
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-
-
-def r(v):
-    return repr(float(v))
+from sigma_rows import r, random_mean_cov, sigma_rows, write_csv
 
 
 def sigma_cases():
@@ -51,9 +44,7 @@ def sigma_cases():
              ("simplex", 1, 0.0), ("simplex", 2, 0.0), ("simplex", 4, 0.0),
              ("simplex", 7, 0.0), ("simplex_diag", 3, 0.0)]
     for c, (name, n, kappa) in enumerate(cases):
-        x = rng.normal(size=n)
-        A = rng.normal(size=(n, n))
-        P = A @ A.T + 0.5 * np.eye(n)
+        x, P = random_mean_cov(rng, n)
         if name == "julier":
             pts = JulierSigmaPoints(n, kappa=kappa)
         elif name == "simplex":
@@ -64,20 +55,8 @@ def sigma_cases():
         sig = pts.sigma_points(x, P)  # N x n
         d = sig - x
         assert np.allclose(d.T @ np.diag(pts.Wc) @ d, P, atol=1e-12)
-        head = [c, name.split("_")[0], n, r(kappa)]
-        for i in range(n):
-            rows.append(head + ["x", i, 0, r(x[i])])
-            for j in range(n):
-                rows.append(head + ["P", i, j, r(P[i, j])])
-            for j in range(sig.shape[0]):
-                rows.append(head + ["sigma", i, j, r(sig[j, i])])
-        for j in range(sig.shape[0]):
-            rows.append(head + ["Wm", j, 0, r(pts.Wm[j])])
-            rows.append(head + ["Wc", j, 0, r(pts.Wc[j])])
-    with open(os.path.join(HERE, "sigma_sets.csv"), "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["case", "set", "n", "kappa", "what", "i", "j", "value"])
-        w.writerows(rows)
+        rows += sigma_rows([c, name.split("_")[0], n, r(kappa)], x, P, sig, pts)
+    write_csv("sigma_sets.csv", ["case", "set", "n", "kappa", "what", "i", "j", "value"], rows)
 
 
 def fixed_lag():
@@ -158,10 +137,7 @@ def fixed_lag():
             rows.append([k, r(zs[k][0]), "filterpy", i, r(filterpy[k][i])])
             if k in lag:
                 rows.append([k, r(zs[k][0]), "lag", i, r(lag[k][i])])
-    with open(os.path.join(HERE, "fixed_lag.csv"), "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["k", "z", "what", "i", "value"])
-        w.writerows(rows)
+    write_csv("fixed_lag.csv", ["k", "z", "what", "i", "value"], rows)
 
 
 if __name__ == "__main__":

@@ -20,7 +20,8 @@ import os
 
 import numpy as np
 import statsmodels
-import statsmodels.api as sm
+
+from ar2_sarimax import sarimax, simulate
 
 N = 800
 PHI1, PHI2, SIGMA2, MEAS = 0.6, 0.25, 1.0, 0.5
@@ -30,21 +31,14 @@ P0 = np.diag([4.0, 1.0])
 START = {"ar.L1": 0.3, "ar.L2": 0.0, "var.measurement_error": 1.0, "sigma2": 2.0}
 
 rng = np.random.default_rng(20261201)
-x = np.zeros(2)
-y = np.empty(N)
-for k in range(N):
-    y[k] = x[0] + rng.normal() * np.sqrt(MEAS)
-    x = np.array([PHI1 * x[0] + x[1] + rng.normal() * np.sqrt(SIGMA2), PHI2 * x[0]])
+y = simulate(rng, N, PHI1, PHI2, SIGMA2, MEAS)
 # Gaps: one run of 25 and about 5 % scattered.
 missing = np.zeros(N, dtype=bool)
 missing[400:425] = True
 missing |= rng.random(N) < 0.05
 y[missing] = np.nan
 
-mod = sm.tsa.SARIMAX(y, order=(2, 0, 0), trend="n", measurement_error=True,
-                     enforce_stationarity=False)
-mod.ssm.initialize_known(X0, P0)
-mod.ssm.loglikelihood_burn = 0
+mod = sarimax(y, X0, P0)
 names = list(mod.param_names)
 assert names == ["ar.L1", "ar.L2", "var.measurement_error", "sigma2"], names
 start = np.array([START[n] for n in names])

@@ -12,6 +12,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
+use super::common::assert_f_non_finite_at;
 use crate::common::counting::allocations;
 
 /// ẋ = A x with a noise intensity W, position measured.
@@ -542,17 +543,7 @@ fn an_interval_past_a_blow_up_is_the_filters_error_at_that_step() {
     ekf.step(&[f64::NAN], None).expect("step 0");
     assert!((ekf.predicted_state()[0] - 2.0).abs() < 1e-6);
     let err = ekf.step(&[2.0], None).expect_err("refused");
-    assert!(
-        matches!(
-            err,
-            Error::ModelNonFinite {
-                function: "f",
-                step: 1,
-                ..
-            }
-        ),
-        "{err}"
-    );
+    assert_f_non_finite_at(&err, 1);
 }
 
 /// No heap allocation per step: the RK4 stages are stack arrays, and AD's workspaces and

@@ -5,6 +5,8 @@
 use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, Ukf};
 use kalman::{DynDims, Error, FixedDims};
 
+use super::common::assert_f_non_finite_at;
+
 /// The transition and measurement closures of the scalar test model.
 type Transition = Box<dyn FnMut(&[f64], Option<&[f64]>, usize, &mut [f64])>;
 type Measurement = Box<dyn FnMut(&[f64], usize, &mut [f64])>;
@@ -48,17 +50,7 @@ fn non_finite_model_values_name_function_and_step() {
     let mut ekf = Ekf::new(d, cd, &[0.0], &[[1.0]], EkfUpdate::Extended).expect("ekf");
     ekf.step(&[0.1], None).expect("step 0");
     let err = ekf.step(&[0.1], None).expect_err("f is NaN at step 1");
-    assert!(
-        matches!(
-            err,
-            Error::ModelNonFinite {
-                function: "f",
-                step: 1,
-                ..
-            }
-        ),
-        "{err:?}"
-    );
+    assert_f_non_finite_at(&err, 1);
 }
 
 #[test]
