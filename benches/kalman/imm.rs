@@ -18,7 +18,10 @@ use kalman::nonlinear::{SigmaPoints, Ukf};
 #[path = "../../kalman/tests/nonlinear/models.rs"]
 mod models;
 
+mod track;
+
 use models::{Hand, RangeBearing};
+use track::{P0, X0, measurements};
 
 const QS: [f64; 3] = [0.05, 0.5, 5.0];
 
@@ -30,28 +33,6 @@ fn model(q: f64) -> RangeBearing {
         sb: 0.01,
     }
 }
-
-/// The nonlinear bench's 64 measurements of a circular track, cycled.
-fn measurements() -> Vec<[f64; 2]> {
-    (0..64)
-        .map(|k| {
-            let t = 2.0 * std::f64::consts::PI * k as f64 / 64.0;
-            let (px, py) = (200.0 + 50.0 * t.cos(), 50.0 * t.sin());
-            [
-                px.hypot(py) + 0.3 * (1.7 * k as f64).sin(),
-                py.atan2(px) + 0.005 * (2.3 * k as f64).cos(),
-            ]
-        })
-        .collect()
-}
-
-const X0: [f64; 4] = [250.0, 0.0, 0.0, 4.9];
-const P0: [[f64; 4]; 4] = [
-    [10.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 0.0],
-    [0.0, 0.0, 10.0, 0.0],
-    [0.0, 0.0, 0.0, 1.0],
-];
 
 fn ukf(q: f64) -> Ukf<FixedDims<4, 2>, Hand<RangeBearing>> {
     let d = FixedDims::<4, 2>::new();

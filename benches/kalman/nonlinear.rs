@@ -20,7 +20,10 @@ use kalman::nonlinear::{AutoDiff, Ekf, EkfUpdate, SigmaPoints, SqrtUkf, Ukf};
 #[path = "../../kalman/tests/nonlinear/models.rs"]
 mod models;
 
+mod track;
+
 use models::{Hand, RangeBearing};
+use track::{P0, X0, measurements};
 
 /// The FilterPy script's model: Δt = 1 s, white acceleration of intensity 0.5 m²/s³, range
 /// σ 0.5 m, bearing σ 0.01 rad.
@@ -30,29 +33,6 @@ const MODEL: RangeBearing = RangeBearing {
     sr: 0.5,
     sb: 0.01,
 };
-
-/// 64 measurements of a circle of radius 50 m centred 200 m out, one turn per 64 steps,
-/// with a deterministic ripple standing in for noise (the FilterPy script's data).
-fn measurements() -> Vec<[f64; 2]> {
-    (0..64)
-        .map(|k| {
-            let t = 2.0 * std::f64::consts::PI * k as f64 / 64.0;
-            let (px, py) = (200.0 + 50.0 * t.cos(), 50.0 * t.sin());
-            [
-                px.hypot(py) + 0.3 * (1.7 * k as f64).sin(),
-                py.atan2(px) + 0.005 * (2.3 * k as f64).cos(),
-            ]
-        })
-        .collect()
-}
-
-const X0: [f64; 4] = [250.0, 0.0, 0.0, 4.9];
-const P0: [[f64; 4]; 4] = [
-    [10.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 0.0],
-    [0.0, 0.0, 10.0, 0.0],
-    [0.0, 0.0, 0.0, 1.0],
-];
 
 fn nonlinear(c: &mut Criterion) {
     let mut g = c.benchmark_group("nonlinear_step");

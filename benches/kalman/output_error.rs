@@ -8,37 +8,25 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use kalman::DynDims;
 use kalman::faer::Mat;
 use kalman::fit::{OutputErrorOptions, output_error, output_error_cost};
-use kalman::nonlinear::{GenericModel, Scalar};
+use kalman::nonlinear::GenericModel;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use std::hint::black_box;
 
-/// x = (φ, ω, b, s): a damped pendulum under a known torque (symplectic Euler, Δt = 0.05 s);
-/// the displacement sensor reads `sin φ + b`, the gyro `(1 + s) ω`.
-struct Pendulum;
-const DT: f64 = 0.05;
+// The output-error tests' pendulum, its truth, start and torque.
+#[path = "../../kalman/tests/fit/pendulum.rs"]
+mod pendulum;
 
-impl GenericModel for Pendulum {
-    fn f<T: Scalar>(&self, x: &[T], u: Option<&[f64]>, _k: usize, out: &mut [T]) {
-        let torque = u.map_or(0.0, |u| u[0]);
-        let w = x[1] + (x[0].sin() * -9.81 - x[1] * 0.1 + torque) * DT;
-        out[0] = x[0] + w * DT;
-        out[1] = w;
-        out[2] = x[2];
-        out[3] = x[3];
-    }
-    fn h<T: Scalar>(&self, x: &[T], _k: usize, out: &mut [T]) {
-        out[0] = x[0].sin() + x[2];
-        out[1] = x[1] * (x[3] + 1.0);
-    }
-    fn q(&self, _k: usize, out: &mut [f64]) {
-        out.fill(0.0);
-    }
-    fn r(&self, _k: usize, out: &mut [f64]) {
-        out.copy_from_slice(&[4e-4, 0.0, 0.0, 2.5e-3]);
-    }
-}
+use pendulum::{Pendulum, START, TRUTH, torque};
+
+/// The step, s.
+const DT: f64 = 0.05;
+/// The tests' pendulum (symplectic Euler) at Δt = 0.05 s with the sensors' noise variances.
+const PENDULUM: Pendulum = Pendulum {
+    dt: DT,
+    r: [4e-4, 2.5e-3],
+};
 
 /// One `f64` integration of the record: the outputs, N×2.
 fn integrate(x0: &[f64], u: &Mat<f64>) -> Mat<f64> {
@@ -47,10 +35,10 @@ fn integrate(x0: &[f64], u: &Mat<f64>) -> Mat<f64> {
     let mut y = [0.0; 2];
     let mut out = Mat::zeros(u.nrows(), 2);
     for k in 0..u.nrows() {
-        Pendulum.h::<f64>(&x, k, &mut y);
+        PENDULUM.h::<f64>(&x, k, &mut y);
         out[(k, 0)] = y[0];
         out[(k, 1)] = y[1];
-        Pendulum.f::<f64>(&x, Some(&[u[(k, 0)]]), k, &mut next);
+        PENDULUM.f::<f64>(&x, Some(&[u[(k, 0)]]), k, &mut next);
         std::mem::swap(&mut x, &mut next);
     }
     out
@@ -58,64 +46,45 @@ fn integrate(x0: &[f64], u: &Mat<f64>) -> Mat<f64> {
 
 fn bench(c: &mut Criterion) {
     let steps = 2000;
-    let truth = [0.5, 0.0, 0.05, 0.02];
-    let start = [0.3, 0.2, 0.0, 0.0];
     let free = [0, 1, 2, 3];
     let dims = DynDims::new(4, 2, 1).expect("dims");
-    let u = Mat::from_fn(steps, 1, |k, _| 0.3 * (0.5 * k as f64 * DT).sin());
+    let u = torque(steps, DT);
     let mut rng = ChaCha8Rng::seed_from_u64(2026);
-    let mut z = integrate(&truth, &u);
+    let mut z = integrate(&TRUTH, &u);
     for k in 0..steps {
         z[(k, 0)] += 0.02 * rng.sample::<f64, _>(StandardNormal);
         z[(k, 1)] += 0.05 * rng.sample::<f64, _>(StandardNormal);
     }
     let options = OutputErrorOptions::default();
-    let fit = output_error(
-        &Pendulum,
-        dims,
-        &start,
-        &free,
-        z.as_ref(),
-        Some(u.as_ref()),
-        &options,
-    )
-    .expect("fit");
+    let cost = |x0: &[f64]| {
+        output_error_cost(&PENDULUM, dims, x0, &free, z.as_ref(), Some(u.as_ref())).expect("cost")
+    };
+    let fit = |x0: &[f64]| {
+        output_error(
+            &PENDULUM,
+            dims,
+            x0,
+            &free,
+            z.as_ref(),
+            Some(u.as_ref()),
+            &options,
+        )
+        .expect("fit")
+    };
+    let first = fit(&START);
     eprintln!(
         "pendulum 2000: θ̂ = {:?}, σ = {:?}, {} iterations, converged {}",
-        fit.estimate, fit.std, fit.iterations, fit.converged
+        first.estimate, first.std, first.iterations, first.converged
     );
     let mut g = c.benchmark_group("output_error_pendulum2000");
     g.sample_size(20);
     g.bench_function("baseline_integration", |b| {
-        b.iter(|| integrate(black_box(&start), &u))
+        b.iter(|| integrate(black_box(&START), &u))
     });
     g.bench_function("cost_gradient_information", |b| {
-        b.iter(|| {
-            output_error_cost(
-                &Pendulum,
-                dims,
-                black_box(&start),
-                &free,
-                z.as_ref(),
-                Some(u.as_ref()),
-            )
-            .expect("cost")
-        })
+        b.iter(|| cost(black_box(&START)))
     });
-    g.bench_function("fit_from_far_start", |b| {
-        b.iter(|| {
-            output_error(
-                &Pendulum,
-                dims,
-                black_box(&start),
-                &free,
-                z.as_ref(),
-                Some(u.as_ref()),
-                &options,
-            )
-            .expect("fit")
-        })
-    });
+    g.bench_function("fit_from_far_start", |b| b.iter(|| fit(black_box(&START))));
     g.finish();
 }
 
