@@ -4,7 +4,7 @@
 use num_dual::{Dual64, DualNum};
 
 use super::Jacobians;
-use super::models::{difference, forward_model, sum};
+use super::models::{default_hooks, forward_model};
 use crate::storage::Dims;
 
 /// The scalars a [`GenericModel`] is evaluated with: `f64` for values, `num_dual::Dual64`
@@ -51,18 +51,7 @@ pub trait GenericModel {
     fn q(&self, k: usize, out: &mut [f64]);
     /// `R_k` (m×m, column-major).
     fn r(&self, k: usize, out: &mut [f64]);
-    /// The measurement residual `a − b` (override to wrap angles).
-    fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        difference(a, b, out);
-    }
-    /// The state addition `x ⊕ δ` (override to wrap angles).
-    fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-        sum(x, dx, out);
-    }
-    /// The state difference `a ⊖ b` (override to wrap angles).
-    fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        difference(a, b, out);
-    }
+    default_hooks!();
 }
 
 /// A [`GenericModel`] with exact Jacobians by forward-mode automatic differentiation:

@@ -4,7 +4,7 @@
 //!
 //! The model, the integration and the noise are documented on [`TimeStamped`].
 
-use super::models::{difference, sum};
+use super::models::{default_hooks, forward_hooks};
 use super::{GenericModel, Scalar};
 use crate::Error;
 use crate::storage::Dims;
@@ -62,18 +62,7 @@ pub trait ContinuousDynamics {
     fn w(&self, t: f64, out: &mut [f64]);
     /// `R_k` (m×m, symmetric PSD), the covariance of row k's measurement noise.
     fn r(&self, k: usize, out: &mut [f64]);
-    /// The measurement residual `a − b` (override to wrap angles).
-    fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        difference(a, b, out);
-    }
-    /// The state addition `x ⊕ δ` (override to wrap angles).
-    fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-        sum(x, dx, out);
-    }
-    /// The state difference `a ⊖ b` (override to wrap angles).
-    fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        difference(a, b, out);
-    }
+    default_hooks!();
 }
 
 /// [`ContinuousDynamics`] over a record's time stamps, as the discrete [`GenericModel`] of
@@ -319,13 +308,5 @@ impl<D: ContinuousDynamics> GenericModel for TimeStamped<D> {
     fn r(&self, k: usize, out: &mut [f64]) {
         self.dynamics.r(k, out);
     }
-    fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        self.dynamics.residual(a, b, out);
-    }
-    fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-        self.dynamics.state_add(x, dx, out);
-    }
-    fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        self.dynamics.state_residual(a, b, out);
-    }
+    forward_hooks!(dynamics);
 }

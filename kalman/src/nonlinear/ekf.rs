@@ -7,8 +7,8 @@ use super::linalg::{
     joseph, mirror_lower, mul, mul_nt, nis_logdet, pd_cholesky, right_solve, symmetrise,
 };
 use super::{
-    Core, Jacobians, LN_2PI, NlDims, Stages, StepInfo, UpdateWork, compact_rows, compact_square,
-    compact_vec, finite,
+    Core, Jacobians, NlDims, Stages, StepInfo, UpdateWork, compact_rows, compact_square,
+    compact_vec, finite, observed_info,
 };
 use crate::storage::Buf;
 use crate::{Error, MatrixInput, RANK_TOL};
@@ -146,20 +146,13 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
 
     fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
-        let mo = self.c.load_r(&mut self.model, z)?;
-        let mut info = StepInfo {
-            step: k,
-            observed: mo,
-            rank: mo,
-            ..StepInfo::default()
-        };
-        let xp = &self.c.xp.as_slice()[..n];
-        let pp = &self.c.pp.as_slice()[..n * n];
+        let mut info = self.c.open_update(&mut self.model, z)?;
+        let mo = info.observed;
         if mo == 0 {
-            self.c.xf.as_mut_slice()[..n].copy_from_slice(xp);
-            self.c.pf.as_mut_slice()[..n * n].copy_from_slice(pp);
             return Ok(info);
         }
+        let xp = &self.c.xp.as_slice()[..n];
+        let pp = &self.c.pp.as_slice()[..n * n];
         let (max_it, tol, name) = match self.update {
             EkfUpdate::Extended => (1, 0.0, "EKF"),
             EkfUpdate::Iterated {
@@ -248,9 +241,7 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
             &mut self.w.t.as_mut_slice()[..n * n],
             &mut self.w.kr.as_mut_slice()[..n * mo],
         );
-        info.nis = Some(nis.0);
-        info.log_likelihood = -0.5 * (nis.0 + nis.1 + mo as f64 * LN_2PI);
-        Ok(info)
+        Ok(observed_info(info, nis.0, nis.1, info.iterations))
     }
 
     fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {

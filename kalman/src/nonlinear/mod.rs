@@ -152,6 +152,7 @@ mod sigma;
 mod smoother;
 mod sqrt_ukf;
 mod ukf;
+mod unscented;
 
 #[cfg(feature = "autodiff")]
 pub use autodiff::{AutoDiff, GenericModel, Scalar};
@@ -247,6 +248,43 @@ trait Stages<D: NlDims> {
     }
 }
 
+/// An update stage that is an update with the mo ≥ 1 rows z observes, for the unscented
+/// filters.
+trait ObservedUpdate<D: NlDims>: Stages<D> {
+    /// The update with `mo` ≥ 1 observed rows, reporting into `info`.
+    fn update_observed(
+        &mut self,
+        z: &[f64],
+        mo: usize,
+        info: StepInfo,
+    ) -> Result<StepInfo, crate::Error>;
+
+    /// The update with z_k, opened as `info` ([`Core::open_update`]): with no row observed
+    /// `info` is the result. The usual case, every row observed, gets its own copy of
+    /// [`ObservedUpdate::update_observed`] in which mo is the constant m on the fixed-size
+    /// path: its loops and copies unroll.
+    #[inline(always)]
+    fn update_rows(&mut self, z: &[f64], info: StepInfo) -> Result<StepInfo, crate::Error> {
+        let m = self.core().dims.m();
+        match info.observed {
+            0 => Ok(info),
+            mo if mo == m => self.update_observed(z, m, info),
+            mo => self.update_observed(z, mo, info),
+        }
+    }
+}
+
+/// `info` completed by an update whose innovation has the normalised square `nis`
+/// (`eᵀ Σ⁻¹ e`) and `ln det Σ` = `logdet` after `iterations` linearisations: the Gaussian
+/// log-likelihood of the rows observed.
+#[inline(always)]
+fn observed_info(mut info: StepInfo, nis: f64, logdet: f64, iterations: usize) -> StepInfo {
+    info.nis = Some(nis);
+    info.log_likelihood = -0.5 * (nis + logdet + info.observed as f64 * LN_2PI);
+    info.iterations = iterations;
+    info
+}
+
 /// The update's workspaces that the EKF and the UKF share: the gain (or the UKF's
 /// cross-covariance before it becomes the gain), R and Σ with the reciprocals of its factor's
 /// diagonal, the innovation, and the Joseph form's scratch.
@@ -338,6 +376,41 @@ impl<D: NlDims> Core<D> {
         finite("R", self.k, r)?;
         linalg::symmetrise(r, m);
         Ok(z.iter().filter(|v| !v.is_nan()).count())
+    }
+
+    /// Opens the update with `z_k`: loads `R_k` and starts the step's report with the rows
+    /// z observes. With none observed (an all-NaN z: a predict-only step) the filtered
+    /// moments are the predicted ones.
+    #[inline(always)]
+    fn open_update<M: NonlinearModel + ?Sized>(
+        &mut self,
+        model: &mut M,
+        z: &[f64],
+    ) -> Result<StepInfo, crate::Error> {
+        let n = self.dims.n();
+        let mo = self.load_r(model, z)?;
+        if mo == 0 {
+            self.xf.as_mut_slice()[..n].copy_from_slice(&self.xp.as_slice()[..n]);
+            self.pf.as_mut_slice()[..n * n].copy_from_slice(&self.pp.as_slice()[..n * n]);
+        }
+        Ok(StepInfo {
+            step: self.k,
+            observed: mo,
+            rank: mo,
+            ..StepInfo::default()
+        })
+    }
+
+    /// The `mo`×`mo` block of `R_k` on the rows z observes into `dst` (a copy when every
+    /// row is observed).
+    #[inline(always)]
+    fn observed_r(&self, z: &[f64], mo: usize, dst: &mut [f64]) {
+        let m = self.dims.m();
+        if mo == m {
+            dst[..m * m].copy_from_slice(&self.r.as_slice()[..m * m]);
+        } else {
+            compact_square(self.r.as_slice(), m, z, mo, dst);
+        }
     }
 
     /// Loads `Q_k` (checked finite, symmetrised).

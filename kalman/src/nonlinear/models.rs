@@ -22,6 +22,45 @@ pub(crate) fn sum(x: &[f64], dx: &[f64], out: &mut [f64]) {
     }
 }
 
+/// The measurement residual, state addition and state difference of a model trait, as
+/// provided methods: the entry-by-entry forms, which a model overrides to wrap angles.
+macro_rules! default_hooks {
+    () => {
+        /// The measurement residual `a − b` (override to wrap angles); `out` has length m.
+        fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+            $crate::nonlinear::models::difference(a, b, out);
+        }
+        /// The state addition `x ⊕ δ` (override to wrap angles); `out` has length n.
+        fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
+            $crate::nonlinear::models::sum(x, dx, out);
+        }
+        /// The state difference `a ⊖ b` (override to wrap angles); `out` has length n.
+        fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+            $crate::nonlinear::models::difference(a, b, out);
+        }
+    };
+}
+#[cfg(feature = "autodiff")]
+pub(crate) use default_hooks;
+
+/// The measurement residual, state addition and state difference forwarded to the wrapped
+/// model in the field `$field`, for an implementation of a model trait over another.
+macro_rules! forward_hooks {
+    ($field:ident) => {
+        fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+            self.$field.residual(a, b, out);
+        }
+        fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
+            self.$field.state_add(x, dx, out);
+        }
+        fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+            self.$field.state_residual(a, b, out);
+        }
+    };
+}
+// Named by path in `forward_model`, which expands in other modules too.
+pub(crate) use forward_hooks;
+
 /// A nonlinear state-space model `x_{k+1} = f(x_k, u_k, k) + w_k`, `z_k = h(x_k, k) + v_k`
 /// with `cov(w_k) = Q_k`, `cov(v_k) = R_k`.
 ///
@@ -56,18 +95,7 @@ pub trait NonlinearModel {
     fn q(&mut self, k: usize, out: &mut [f64]);
     /// `R_k` (m×m, symmetric PSD); as for `Q_k`, its symmetric part is used.
     fn r(&mut self, k: usize, out: &mut [f64]);
-    /// The measurement residual `a − b` (override to wrap angles); `out` has length m.
-    fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        difference(a, b, out);
-    }
-    /// The state addition `x ⊕ δ` (override to wrap angles); `out` has length n.
-    fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-        sum(x, dx, out);
-    }
-    /// The state difference `a ⊖ b` (override to wrap angles); `out` has length n.
-    fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        difference(a, b, out);
-    }
+    default_hooks!();
 }
 
 /// The Jacobians of a [`NonlinearModel`], needed by the extended filters: written by hand,
@@ -335,15 +363,7 @@ macro_rules! forward_model {
             fn r(&mut self, k: usize, out: &mut [f64]) {
                 self.model.r(k, out);
             }
-            fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-                self.model.residual(a, b, out);
-            }
-            fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-                self.model.state_add(x, dx, out);
-            }
-            fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-                self.model.state_residual(a, b, out);
-            }
+            $crate::nonlinear::models::forward_hooks!(model);
         }
     };
 }

@@ -4,11 +4,10 @@
 
 use faer::MatRef;
 
-use super::linalg::{downdate_rows, gram_lower, mul, positive_pivots, psd_cholesky, rank1};
-use super::sigma::{SigmaPoints, SigmaSet};
-use super::{
-    Core, LN_2PI, NlDims, NonlinearModel, Stages, StepInfo, compact_square, compact_vec, finite,
-};
+use super::linalg::{downdate_rows, gram_lower, positive_pivots, psd_cholesky, rank1};
+use super::sigma::SigmaPoints;
+use super::unscented::Unscented;
+use super::{Core, NlDims, NonlinearModel, ObservedUpdate, Stages, StepInfo, observed_info};
 use crate::kernels::lq_rows;
 use crate::storage::Buf;
 use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
@@ -88,18 +87,12 @@ use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
 #[derive(Clone, Debug)]
 pub struct SqrtUkf<D: NlDims, M> {
     model: M,
-    set: SigmaSet<D>,
+    /// The sigma-point set and its workspaces.
+    pts: Unscented<D>,
     c: Core<D>,
     /// Lower factors of `P_{k+1|k}` and `P_{k|k}` (column-major).
     sp: D::Nn,
     sf: D::Nn,
-    /// Sigma points (n × s), their images under f, and deviations.
-    chi: D::Sig,
-    y: D::Sig,
-    dchi: D::Sig,
-    dy: D::Sig,
-    zs: D::ZSig,
-    dz: D::ZSig,
     /// G (n × m), the factors of Q and R and the reciprocals of their diagonals.
     g: D::Nm,
     qs: D::Nn,
@@ -109,8 +102,6 @@ pub struct SqrtUkf<D: NlDims, M> {
     rinv: D::Mv,
     dx: D::Nv,
     xi: D::Nv,
-    zbar: D::Mv,
-    col: D::Mv,
     e: D::Mv,
     /// The pre-array (row-major), its pivots and the rows' squared norms.
     arr: Vec<f64>,
@@ -137,20 +128,14 @@ impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
     ) -> Result<Self, Error> {
         let c = Core::new(dims, x0, P0)?;
         let (n, m) = (dims.n(), dims.m());
-        let set = SigmaSet::new(points, n)?;
-        let s = set.count;
+        let pts = Unscented::new(points, n, m)?;
+        let s = pts.set.count;
         let ld = (m + s + n).max(s + n);
         let mut f = Self {
             model,
-            set,
+            pts,
             sp: D::Nn::zeros(n * n),
             sf: D::Nn::zeros(n * n),
-            chi: D::Sig::zeros(n * s),
-            y: D::Sig::zeros(n * s),
-            dchi: D::Sig::zeros(n * s),
-            dy: D::Sig::zeros(n * s),
-            zs: D::ZSig::zeros(m * s),
-            dz: D::ZSig::zeros(m * s),
             g: D::Nm::zeros(n * m),
             qs: D::Nn::zeros(n * n),
             qinv: D::Nv::zeros(n),
@@ -159,8 +144,6 @@ impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
             rinv: D::Mv::zeros(m),
             dx: D::Nv::zeros(n),
             xi: D::Nv::zeros(n),
-            zbar: D::Mv::zeros(m),
-            col: D::Mv::zeros(m),
             e: D::Mv::zeros(m),
             arr: vec![0.0; (m + n) * ld],
             piv: vec![None; m + n],
@@ -184,67 +167,32 @@ impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
     pub fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
         self.run_step(z, u)
     }
+}
 
-    /// The update with `mo` ≥ 1 observed rows.
+impl<D: NlDims, M: NonlinearModel> ObservedUpdate<D> for SqrtUkf<D, M> {
     #[inline(always)]
-    fn update_observed(
-        &mut self,
-        z: &[f64],
-        mo: usize,
-        mut info: StepInfo,
-    ) -> Result<StepInfo, Error> {
+    fn update_observed(&mut self, z: &[f64], mo: usize, info: StepInfo) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
-        let s = self.set.count;
+        let s = self.pts.set.count;
         let xp = &self.c.xp.as_slice()[..n];
         let Sp = &self.sp.as_slice()[..n * n];
-        let chi = &mut self.chi.as_mut_slice()[..n * s];
-        self.set
-            .draw(&self.model, xp, Sp, n, self.dx.as_mut_slice(), chi);
-        let zs = &mut self.zs.as_mut_slice()[..m * s];
-        for i in 0..s {
-            let zi = &mut zs[i * m..(i + 1) * m];
-            self.model.h(&chi[i * n..(i + 1) * n], k, zi);
-            finite("h", k, zi)?;
-        }
-        // ẑ = Z_0 + Σ_{i≥1} Wm_i (Z_i ⊖ Z_0), as in the plain filter.
-        let wm = &self.set.wm.as_slice()[..s];
-        let wc = &self.set.wc.as_slice()[..s];
-        let zbar = &mut self.zbar.as_mut_slice()[..m];
-        let col = &mut self.col.as_mut_slice()[..m];
-        let d0 = &mut self.dz.as_mut_slice()[..m * s];
-        for i in 1..s {
-            self.model.residual(
-                &zs[i * m..(i + 1) * m],
-                &zs[..m],
-                &mut d0[i * m..(i + 1) * m],
-            );
-        }
-        mul(zbar, &d0[m..], &wm[1..], m, s - 1, 1, false);
-        for (a, b) in zbar.iter_mut().zip(&zs[..m]) {
-            *a += b;
-        }
-        let all = mo == m;
-        let dz = &mut self.dz.as_mut_slice()[..mo * s];
-        for i in 0..s {
-            let zi = &zs[i * m..(i + 1) * m];
-            let di = &mut dz[i * mo..(i + 1) * mo];
-            if all {
-                self.model.residual(zi, zbar, di);
-            } else {
-                self.model.residual(zi, zbar, col);
-                compact_vec(col, z, di);
-            }
-        }
+        self.pts
+            .draw(&self.model, xp, Sp, n, self.dx.as_mut_slice());
+        // ẑ and the deviations dz (mo × s), as in the plain filter.
+        self.pts.measure(&mut self.model, z, n, m, mo, k)?;
+        let set = &self.pts.set;
+        let wc = &set.wc.as_slice()[..s];
+        let dz = &mut self.pts.dz.as_mut_slice()[..mo * s];
         // G = Σ Wc_i ξ_i dz_iᵀ, then the residuals ε_i = dz_i − Gᵀ ξ_i in place of dz_i.
         let G = &mut self.g.as_mut_slice()[..n * mo];
         G.fill(0.0);
         let xi = &mut self.xi.as_mut_slice()[..n];
         for i in 0..s {
-            self.set.unit(n, i, xi);
+            set.unit(n, i, xi);
             rank1(G, wc[i], xi, &dz[i * mo..(i + 1) * mo], n, mo);
         }
         for i in 0..s {
-            self.set.unit(n, i, xi);
+            set.unit(n, i, xi);
             let di = &mut dz[i * mo..(i + 1) * mo];
             for (a, d) in di.iter_mut().enumerate() {
                 let g = &G[a * n..(a + 1) * n];
@@ -253,11 +201,7 @@ impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
         }
         // R^{1/2} of the observed block.
         let rc = &mut self.rc.as_mut_slice()[..mo * mo];
-        if all {
-            rc.copy_from_slice(&self.c.r.as_slice()[..m * m]);
-        } else {
-            compact_square(self.c.r.as_slice(), m, z, mo, rc);
-        }
+        self.c.observed_r(z, mo, rc);
         let Rs = &mut self.rs.as_mut_slice()[..mo * mo];
         psd_cholesky(
             rc,
@@ -337,12 +281,7 @@ impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
         }
         // y = Σ^{-1/2} e, x = x⁻ ⊕ K̄ y.
         let e = &mut self.e.as_mut_slice()[..mo];
-        if all {
-            self.model.residual(z, zbar, e);
-        } else {
-            self.model.residual(z, zbar, col);
-            compact_vec(col, z, e);
-        }
+        self.pts.innovation(&self.model, z, m, mo, e);
         let mut logdet = 0.0;
         for a in 0..mo {
             let mut v = e[a];
@@ -372,10 +311,7 @@ impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
             }
         }
         gram_lower(Sf, n, &mut self.c.pf.as_mut_slice()[..n * n]);
-        info.nis = Some(nis);
-        info.log_likelihood = -0.5 * (nis + logdet + mo as f64 * LN_2PI);
-        info.iterations = 1;
-        Ok(info)
+        Ok(observed_info(info, nis, logdet, 1))
     }
 }
 
@@ -385,30 +321,17 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for SqrtUkf<D, M> {
     }
 
     fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
-        let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
-        let mo = self.c.load_r(&mut self.model, z)?;
-        let info = StepInfo {
-            step: k,
-            observed: mo,
-            rank: mo,
-            ..StepInfo::default()
-        };
-        if mo == 0 {
-            self.c.xf.as_mut_slice()[..n].copy_from_slice(&self.c.xp.as_slice()[..n]);
-            self.c.pf.as_mut_slice()[..n * n].copy_from_slice(&self.c.pp.as_slice()[..n * n]);
+        let n = self.c.dims.n();
+        let info = self.c.open_update(&mut self.model, z)?;
+        if info.observed == 0 {
             self.sf.as_mut_slice()[..n * n].copy_from_slice(&self.sp.as_slice()[..n * n]);
-            return Ok(info);
         }
-        if mo == m {
-            self.update_observed(z, m, info)
-        } else {
-            self.update_observed(z, mo, info)
-        }
+        self.update_rows(z, info)
     }
 
     fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
         let (n, k) = (self.c.dims.n(), self.c.k);
-        let s = self.set.count;
+        let s = self.pts.set.count;
         self.c.load_q(&mut self.model)?;
         let Qs = &mut self.qs.as_mut_slice()[..n * n];
         psd_cholesky(
@@ -427,40 +350,14 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for SqrtUkf<D, M> {
             tol: PSD_TOL,
         })?;
         let xf = &self.c.xf.as_slice()[..n];
-        let chi = &mut self.chi.as_mut_slice()[..n * s];
-        self.set.draw(
-            &self.model,
-            xf,
-            &self.sf.as_slice()[..n * n],
-            n,
-            self.dx.as_mut_slice(),
-            chi,
-        );
-        let wm = &self.set.wm.as_slice()[..s];
-        let wc = &self.set.wc.as_slice()[..s];
-        let y = &mut self.y.as_mut_slice()[..n * s];
-        for i in 0..s {
-            let yi = &mut y[i * n..(i + 1) * n];
-            self.model.f(&chi[i * n..(i + 1) * n], u, k, yi);
-            finite("f", k, yi)?;
-        }
-        // x⁺ = y_0 ⊕ Σ_{i≥1} Wm_i (y_i ⊖ y_0), as in the plain filter.
-        let dy = &mut self.dy.as_mut_slice()[..n * s];
-        let dx = &mut self.dx.as_mut_slice()[..n];
-        for i in 1..s {
-            self.model
-                .state_residual(&y[i * n..(i + 1) * n], &y[..n], &mut dy[i * n..(i + 1) * n]);
-        }
-        mul(dx, &dy[n..], &wm[1..], n, s - 1, 1, false);
+        let dx = self.dx.as_mut_slice();
+        self.pts
+            .draw(&self.model, xf, &self.sf.as_slice()[..n * n], n, dx);
+        // x⁺ and the deviations, as in the plain filter.
         let xp = &mut self.c.xp.as_mut_slice()[..n];
-        self.model.state_add(&y[..n], dx, xp);
-        let dchi = &mut self.dchi.as_mut_slice()[..n * s];
-        for i in 0..s {
-            self.model
-                .state_residual(&y[i * n..(i + 1) * n], xp, &mut dy[i * n..(i + 1) * n]);
-            self.model
-                .state_residual(&chi[i * n..(i + 1) * n], xf, &mut dchi[i * n..(i + 1) * n]);
-        }
+        self.pts.propagate(&mut self.model, u, n, k, xf, xp, dx)?;
+        let wc = &self.pts.set.wc.as_slice()[..s];
+        let dy = &self.pts.dy.as_slice()[..n * s];
         // [√Wc_i dy_i …, Q^{1/2}] (n rows of length s + n), triangularised.
         let ld = s + n;
         let arr = &mut self.arr[..n * ld];
@@ -540,7 +437,7 @@ impl<D: NlDims, M> SqrtUkf<D, M> {
 
     /// The sigma-point set.
     pub fn sigma_points(&self) -> SigmaPoints {
-        self.set.points
+        self.pts.set.points
     }
     /// The lower factor S of `P_{k|k}` (`S Sᵀ = P_{k|k}`; its Cholesky factor where P is
     /// positive definite).
@@ -560,24 +457,6 @@ impl<D: NlDims, M> super::ForwardPass for SqrtUkf<D, M> {
     forward_pass_moments!();
     /// `C_k = Σ Wc_i (χ_i ⊖ x_{k|k})(f(χ_i) ⊖ x_{k+1|k})ᵀ` of the last prediction.
     fn cross_covariance(&self, out: &mut [f64]) {
-        let n = self.c.dims.n();
-        let s = self.set.count;
-        let (wc, dchi, dy) = (
-            &self.set.wc.as_slice()[..s],
-            &self.dchi.as_slice()[..n * s],
-            &self.dy.as_slice()[..n * s],
-        );
-        let out = &mut out[..n * n];
-        out.fill(0.0);
-        for i in 0..s {
-            rank1(
-                out,
-                wc[i],
-                &dchi[i * n..(i + 1) * n],
-                &dy[i * n..(i + 1) * n],
-                n,
-                n,
-            );
-        }
+        self.pts.cross_covariance(self.c.dims.n(), out);
     }
 }

@@ -7,10 +7,10 @@ use super::linalg::{
     factored_joseph, forward, mirror_lower, mul, mul_tn, nis_logdet, pd_cholesky, psd_cholesky,
     rank1, rank1_lower, right_solve,
 };
-use super::sigma::{SigmaPoints, SigmaSet};
+use super::sigma::SigmaPoints;
+use super::unscented::Unscented;
 use super::{
-    Core, LN_2PI, NlDims, NonlinearModel, Stages, StepInfo, UpdateWork, compact_square,
-    compact_vec, finite,
+    Core, NlDims, NonlinearModel, ObservedUpdate, Stages, StepInfo, UpdateWork, observed_info,
 };
 use crate::storage::Buf;
 use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
@@ -54,22 +54,14 @@ use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
 #[derive(Clone, Debug)]
 pub struct Ukf<D: NlDims, M> {
     model: M,
-    set: SigmaSet<D>,
+    /// The sigma-point set (2n + 1 points for the symmetric sets) and its workspaces.
+    pts: Unscented<D>,
     c: Core<D>,
-    /// Sigma points (n × 2n+1), their images under f, and deviations.
-    chi: D::Sig,
-    y: D::Sig,
-    dchi: D::Sig,
-    dy: D::Sig,
-    zs: D::ZSig,
-    dz: D::ZSig,
     l: D::Nn,
     /// Reciprocals of the diagonals of the factors of P (`l`) and of Σ (in `sig`).
     linv: D::Nv,
     ht: D::Nm,
     rt: D::Mm,
-    zbar: D::Mv,
-    col: D::Mv,
     w: UpdateWork<D>,
 }
 
@@ -89,25 +81,15 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
     ) -> Result<Self, Error> {
         let c = Core::new(dims, x0, P0)?;
         let (n, m) = (dims.n(), dims.m());
-        let set = SigmaSet::new(points, n)?;
-        let s = set.count;
         Ok(Self {
             w: UpdateWork::new(n, m),
             model,
-            set,
+            pts: Unscented::new(points, n, m)?,
             c,
-            chi: D::Sig::zeros(n * s),
-            y: D::Sig::zeros(n * s),
-            dchi: D::Sig::zeros(n * s),
-            dy: D::Sig::zeros(n * s),
-            zs: D::ZSig::zeros(m * s),
-            dz: D::ZSig::zeros(m * s),
             l: D::Nn::zeros(n * n),
             linv: D::Nv::zeros(n),
             ht: D::Nm::zeros(n * m),
             rt: D::Mm::zeros(m * m),
-            zbar: D::Mv::zeros(m),
-            col: D::Mv::zeros(m),
         })
     }
 
@@ -141,75 +123,31 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             pivot,
             tol: PSD_TOL,
         })?;
-        let chi = self.chi.as_mut_slice();
-        let dx = &mut self.w.dx.as_mut_slice()[..n];
-        self.set.draw(&self.model, x, L, n, dx, chi);
+        self.pts
+            .draw(&self.model, x, L, n, &mut self.w.dx.as_mut_slice()[..n]);
         Ok(())
     }
+}
 
-    /// The update with `mo` ≥ 1 observed rows (see [`Stages::update_stage`]).
+impl<D: NlDims, M: NonlinearModel> ObservedUpdate<D> for Ukf<D, M> {
     #[inline(always)]
-    fn update_observed(
-        &mut self,
-        z: &[f64],
-        mo: usize,
-        mut info: StepInfo,
-    ) -> Result<StepInfo, Error> {
+    fn update_observed(&mut self, z: &[f64], mo: usize, info: StepInfo) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
-        let s = self.set.count;
+        let s = self.pts.set.count;
         self.draw(true)?;
-        let wm = &self.set.wm.as_slice()[..s];
-        let wc = &self.set.wc.as_slice()[..s];
-        let chi = &self.chi.as_slice()[..n * s];
-        let zs = &mut self.zs.as_mut_slice()[..m * s];
-        for i in 0..s {
-            let zi = &mut zs[i * m..(i + 1) * m];
-            self.model.h(&chi[i * n..(i + 1) * n], k, zi);
-            finite("h", k, zi)?;
-        }
-        // ẑ = Z_0 + Σ_{i≥1} Wm_i (Z_i ⊖ Z_0): no cancellation between a large negative
-        // Wm_0 and the other weights, and wrapped components averaged around Z_0.
-        // The Z_i ⊖ Z_0 go to the deviations' workspace first (all of them before the sum
-        // reads them back), which the deviations from ẑ overwrite below.
-        let zbar = &mut self.zbar.as_mut_slice()[..m];
-        let col = &mut self.col.as_mut_slice()[..m];
-        let d0 = &mut self.dz.as_mut_slice()[..m * s];
-        for i in 1..s {
-            self.model.residual(
-                &zs[i * m..(i + 1) * m],
-                &zs[..m],
-                &mut d0[i * m..(i + 1) * m],
-            );
-        }
-        mul(zbar, &d0[m..], &wm[1..], m, s - 1, 1, false);
-        for (a, b) in zbar.iter_mut().zip(&zs[..m]) {
-            *a += b;
-        }
+        // ẑ and the deviations dz (mo × s, observed rows), dchi = χ_i ⊖ x⁻ (n × s).
+        self.pts.measure(&mut self.model, z, n, m, mo, k)?;
+        let wc = &self.pts.set.wc.as_slice()[..s];
+        let chi = &self.pts.chi.as_slice()[..n * s];
         let xp = &self.c.xp.as_slice()[..n];
-        // Deviations: dz (mo × s, observed rows), dchi (n × s).
-        let dz = &mut self.dz.as_mut_slice()[..mo * s];
-        let dchi = &mut self.dchi.as_mut_slice()[..n * s];
-        // With every row observed (mo = m: no NaN in z) the compactions are copies: the
-        // residuals go straight to their places.
-        let all = mo == m;
+        let dz = &self.pts.dz.as_slice()[..mo * s];
+        let dchi = &mut self.pts.dchi.as_mut_slice()[..n * s];
         for i in 0..s {
-            let zi = &zs[i * m..(i + 1) * m];
-            let di = &mut dz[i * mo..(i + 1) * mo];
-            if all {
-                self.model.residual(zi, zbar, di);
-            } else {
-                self.model.residual(zi, zbar, col);
-                compact_vec(col, z, di);
-            }
             self.model
                 .state_residual(&chi[i * n..(i + 1) * n], xp, &mut dchi[i * n..(i + 1) * n]);
         }
         let sig = &mut self.w.sig.as_mut_slice()[..mo * mo];
-        if all {
-            sig.copy_from_slice(&self.c.r.as_slice()[..m * m]);
-        } else {
-            compact_square(self.c.r.as_slice(), m, z, mo, sig);
-        }
+        self.c.observed_r(z, mo, sig);
         let C = &mut self.w.gain.as_mut_slice()[..n * mo];
         C.fill(0.0);
         for i in 0..s {
@@ -251,12 +189,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         let K = C;
         right_solve(sig, sinv, mo, K, n);
         let e = &mut self.w.e.as_mut_slice()[..mo];
-        if all {
-            self.model.residual(z, zbar, e);
-        } else {
-            self.model.residual(z, zbar, col);
-            compact_vec(col, z, e);
-        }
+        self.pts.innovation(&self.model, z, m, mo, e);
         let dx = &mut self.w.dx.as_mut_slice()[..n];
         mul(dx, K, e, n, mo, 1, false);
         self.model
@@ -275,10 +208,7 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
             &mut self.w.kr.as_mut_slice()[..n * mo],
         );
         let nl = nis_logdet(sig, sinv, mo, e, &mut self.w.tmpm.as_mut_slice()[..mo]);
-        info.nis = Some(nl.0);
-        info.log_likelihood = -0.5 * (nl.0 + nl.1 + mo as f64 * LN_2PI);
-        info.iterations = 1;
-        Ok(info)
+        Ok(observed_info(info, nl.0, nl.1, 1))
     }
 }
 
@@ -288,60 +218,26 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
     }
 
     fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
-        let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
-        let mo = self.c.load_r(&mut self.model, z)?;
-        let info = StepInfo {
-            step: k,
-            observed: mo,
-            rank: mo,
-            ..StepInfo::default()
-        };
-        if mo == 0 {
-            self.c.xf.as_mut_slice()[..n].copy_from_slice(&self.c.xp.as_slice()[..n]);
-            self.c.pf.as_mut_slice()[..n * n].copy_from_slice(&self.c.pp.as_slice()[..n * n]);
-            return Ok(info);
-        }
-        // The usual case, every row observed, gets its own copy in which mo is the constant
-        // m on the fixed-size path: its loops and copies unroll.
-        if mo == m {
-            self.update_observed(z, m, info)
-        } else {
-            self.update_observed(z, mo, info)
-        }
+        let info = self.c.open_update(&mut self.model, z)?;
+        self.update_rows(z, info)
     }
 
     fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
         let (n, k) = (self.c.dims.n(), self.c.k);
-        let s = self.set.count;
+        let s = self.pts.set.count;
         self.c.load_q(&mut self.model)?;
         self.draw(false)?;
-        let wm = &self.set.wm.as_slice()[..s];
-        let wc = &self.set.wc.as_slice()[..s];
-        let chi = &self.chi.as_slice()[..n * s];
-        let y = &mut self.y.as_mut_slice()[..n * s];
-        for i in 0..s {
-            let yi = &mut y[i * n..(i + 1) * n];
-            self.model.f(&chi[i * n..(i + 1) * n], u, k, yi);
-            finite("f", k, yi)?;
-        }
-        // x⁺ = y_0 ⊕ Σ_{i≥1} Wm_i (y_i ⊖ y_0) (as ẑ in the update).
-        let dy = &mut self.dy.as_mut_slice()[..n * s];
-        let dx = &mut self.w.dx.as_mut_slice()[..n];
-        for i in 1..s {
-            self.model
-                .state_residual(&y[i * n..(i + 1) * n], &y[..n], &mut dy[i * n..(i + 1) * n]);
-        }
-        mul(dx, &dy[n..], &wm[1..], n, s - 1, 1, false);
-        let xp = &mut self.c.xp.as_mut_slice()[..n];
-        self.model.state_add(&y[..n], dx, xp);
-        let xf = &self.c.xf.as_slice()[..n];
-        let dchi = &mut self.dchi.as_mut_slice()[..n * s];
-        for i in 0..s {
-            self.model
-                .state_residual(&y[i * n..(i + 1) * n], xp, &mut dy[i * n..(i + 1) * n]);
-            self.model
-                .state_residual(&chi[i * n..(i + 1) * n], xf, &mut dchi[i * n..(i + 1) * n]);
-        }
+        self.pts.propagate(
+            &mut self.model,
+            u,
+            n,
+            k,
+            &self.c.xf.as_slice()[..n],
+            &mut self.c.xp.as_mut_slice()[..n],
+            self.w.dx.as_mut_slice(),
+        )?;
+        let wc = &self.pts.set.wc.as_slice()[..s];
+        let dy = &self.pts.dy.as_slice()[..n * s];
         let pp = &mut self.c.pp.as_mut_slice()[..n * n];
         pp.copy_from_slice(&self.c.q.as_slice()[..n * n]);
         // The cross-covariance C_k = Σ Wc_i dchi_i dy_iᵀ is formed only when a smoother asks
@@ -365,7 +261,7 @@ impl<D: NlDims, M> Ukf<D, M> {
     }
     /// The sigma-point set.
     pub fn sigma_points(&self) -> SigmaPoints {
-        self.set.points
+        self.pts.set.points
     }
     filter_accessors!();
 }
@@ -374,24 +270,6 @@ impl<D: NlDims, M> super::ForwardPass for Ukf<D, M> {
     forward_pass_moments!();
     /// `C_k = Σ Wc_i (χ_i ⊖ x_{k|k})(f(χ_i) ⊖ x_{k+1|k})ᵀ` of the last prediction.
     fn cross_covariance(&self, out: &mut [f64]) {
-        let n = self.c.dims.n();
-        let s = self.set.count;
-        let (wc, dchi, dy) = (
-            &self.set.wc.as_slice()[..s],
-            &self.dchi.as_slice()[..n * s],
-            &self.dy.as_slice()[..n * s],
-        );
-        let out = &mut out[..n * n];
-        out.fill(0.0);
-        for i in 0..s {
-            rank1(
-                out,
-                wc[i],
-                &dchi[i * n..(i + 1) * n],
-                &dy[i * n..(i + 1) * n],
-                n,
-                n,
-            );
-        }
+        self.pts.cross_covariance(self.c.dims.n(), out);
     }
 }
