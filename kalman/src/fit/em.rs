@@ -4,7 +4,7 @@
 
 use faer::Mat;
 
-use super::dense::{solve_each_column, gemm, lower_factor, symmetrise};
+use super::dense::{gemm, lower_factor, solve_each_column, symmetrise};
 use super::info::{Fit, Method, finish};
 use super::score::Flat;
 use super::score::log_likelihood_gradient;

@@ -3,7 +3,7 @@
 
 use faer::Mat;
 
-use super::dense::{solve_each_column, lower_factor};
+use super::dense::{lower_factor, solve_each_column};
 use super::params::data_scale;
 use super::score::log_likelihood_gradient;
 use super::{FitError, ParamMap, Series, System};

@@ -8,7 +8,7 @@ use argmin::solver::linesearch::MoreThuenteLineSearch;
 use argmin::solver::neldermead::NelderMead;
 use argmin::solver::quasinewton::LBFGS;
 
-use super::dense::{solve_each_column, lower_factor};
+use super::dense::{lower_factor, solve_each_column};
 use super::info::{Fit, Method, Run, finish_records, gradient_sum, information_of};
 use super::{FitError, ParamMap, Series};
 use faer::Mat;

@@ -381,4 +381,3 @@ fn factor_prediction(A: &[f64], n: usize, L: &mut [f64]) -> Result<(), ()> {
         Err(())
     }
 }
-

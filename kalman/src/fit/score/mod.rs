@@ -3,7 +3,7 @@
 
 mod steady;
 
-use super::dense::{solve_each_column, gemm, lower_factor, symmetrise};
+use super::dense::{gemm, lower_factor, solve_each_column, symmetrise};
 use super::{Derivative, FitError, LN_2PI, ParamMap, Series, System, flat};
 use steady::Steady;
 
