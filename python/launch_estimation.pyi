@@ -301,6 +301,39 @@ class UnscentedKalmanFilter:
                      UT: Optional[Callable[..., Any]] = None) -> tuple[Array, Array, Array]:
         """(xs, ps, Ks): the unscented RTS smoother; Qs[k] (default Q) is used at step k."""
 
+class FixedLagSmoother:
+    """FilterPy 2.0.0's ``FixedLagSmoother`` API; the attributes live in the instance
+    ``__dict__`` as FilterPy keeps them. Each step is FilterPy's predict and Joseph-form
+    update; the smoothed estimates are the Rauch-Tung-Striebel estimates over the window (the
+    augmented-state fixed-lag smoother): after step k, ``xSmooth[j]`` = x[j|k] for j = k - N
+    .. k, so lag 0 is the filter and a lag covering every step the full RTS smoother. These
+    are not FilterPy's numbers, which depart from the smoother (its lag 0 returns the
+    predictions, a lag of at least the number of steps the filter)."""
+    dim_x: int
+    dim_z: int
+    N: Optional[int]
+    x: Array
+    x_s: Array
+    P: Array
+    F: Array
+    H: Array
+    Q: Array
+    R: Array
+    K: Array
+    y: Array
+    S: Array
+    B: Any
+    count: int
+    xSmooth: list[Array]
+    def __init__(self, dim_x: int, dim_z: int, N: Optional[int] = None) -> None: ...
+    def smooth(self, z: Any, u: Any = None) -> None:
+        """One step (x = F x + B u when u is given, then the update with z); xSmooth gains
+        the step and its last N + 1 entries become x[j|k]; x_s = x[k-N|k]. NaN in z is a
+        ValueError. A failed call changes nothing."""
+    def smooth_batch(self, zs: Any, N: int, us: Any = None) -> tuple[Array, Array]:
+        """(xhat_smooth, xhat): x[k|min(k+N, last)] and the filter's x[k|k], from the
+        attributes (left unchanged), in Rust without the GIL."""
+
 FilterResult = dict[str, Array]
 # filter/smooth and their continuous forms: the arrays below, plus, when a gate is given,
 # "rejected": a dict of 1-d arrays "step" and "channel" (int64: the row of zs and the

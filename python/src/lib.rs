@@ -1,5 +1,6 @@
 //! `launch_estimation`: the estimation engine from Python — a FilterPy-compatible
-//! `KalmanFilter` whose state lives in Rust, and the engine's whole-series functions.
+//! `KalmanFilter` whose state lives in Rust (with its extended, unscented and fixed-lag
+//! companions), and the engine's whole-series functions.
 //!
 //! Notation (as in the Rust crates): n states, m measurements, p control inputs;
 //! x_{k+1} = F x_k + B u_k + w_k, z_k = H x_k + v_k, cov(w) = Q, cov(v) = R,
@@ -63,6 +64,7 @@ mod convert;
 mod ekf;
 mod engine;
 mod fit_fns;
+mod fixed_lag;
 mod kf;
 mod kf_attrs;
 mod kf_compat;
@@ -114,6 +116,7 @@ fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     kf_attrs::ArrayAttribute::install(&m.py().get_type::<kf::KalmanFilter>())?;
     m.add_class::<ekf::ExtendedKalmanFilter>()?;
     m.add_class::<ukf::UnscentedKalmanFilter>()?;
+    m.add_class::<fixed_lag::FixedLagSmoother>()?;
     m.add_class::<sigma::MerweScaledSigmaPoints>()?;
     m.add_class::<sigma::JulierSigmaPoints>()?;
     m.add_class::<sigma::SimplexSigmaPoints>()?;
