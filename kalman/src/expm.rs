@@ -391,6 +391,7 @@ fn lu_solve<T: Real, const SKIP: bool>(
 /// approximant and squarings as `f64`), block upper triangular from `blk` as
 /// [`Expm::run_block`]; `None` where the result is not finite. Allocates its workspace: for
 /// fitting, not for the filter's step.
+#[cfg(all(feature = "autodiff", feature = "argmin"))]
 pub(crate) fn expm_of<T: Real>(a: &[T], k: usize, blk: usize) -> Option<Vec<T>> {
     let mut bufs = Bufs::<T>::new(k);
     bufs.a[..k * k].copy_from_slice(&a[..k * k]);
