@@ -12,6 +12,7 @@ use super::estimate::{self, Estimates};
 use super::model::{N_ERR, N_KIN};
 use super::parameters::FlightPathParams;
 use super::records::RunRecord;
+use super::smoother::Pass;
 use crate::error::{Error, Result};
 use crate::montecarlo::{Shard, par_runs, run_rng};
 
@@ -84,6 +85,21 @@ pub fn true_state(tp: &TruthPoint, errors: &[f64; N_ERR]) -> Vec<f64> {
     x
 }
 
+/// The smoothed estimate's error at grid step `k` against the true state `x_true`, the Euler
+/// angles' differences wrapped to (−π, π].
+pub fn smoothed_error(pass: &Pass, k: usize, x_true: &[f64]) -> Vec<f64> {
+    (0..x_true.len())
+        .map(|i| {
+            let d = pass.smoothed[(i, k)] - x_true[i];
+            if (3..6).contains(&i) {
+                super::model::wrap(d)
+            } else {
+                d
+            }
+        })
+        .collect()
+}
+
 /// `eᵀ P⁻¹ e` by a Cholesky solve (NaN if P is not positive definite).
 pub fn nees(e: &[f64], p: &Mat<f64>) -> f64 {
     let n = e.len();
@@ -141,17 +157,7 @@ pub fn run_one(
         r.oe_std = oe.std;
     }
     let x_true = true_state(&truth[mid], &errors);
-    let e: Vec<f64> = (0..x_true.len())
-        .map(|i| {
-            let d = fs.smoothed[(i, mid)] - x_true[i];
-            if (3..6).contains(&i) {
-                super::model::wrap(d)
-            } else {
-                d
-            }
-        })
-        .collect();
-    r.nees_smoothed = nees(&e, &fs.smoothed_cov_at[0]);
+    r.nees_smoothed = nees(&smoothed_error(&fs, mid, &x_true), &fs.smoothed_cov_at[0]);
     Ok((r, est, truth))
 }
 

@@ -8,7 +8,9 @@ use sensors::flight::InstrumentErrors;
 use super::data::FlightData;
 use super::model::{FlightModel, M, N_ERR, N_KIN};
 use super::parameters::FlightPathParams;
-use super::simulation::{flight_data, nees, noise_model, rms_groups, true_state, truth_on_grid};
+use super::simulation::{
+    flight_data, nees, noise_model, rms_groups, smoothed_error, true_state, truth_on_grid,
+};
 use super::smoother::{self, Settings};
 use super::userflight::{flight_csv, read_flight};
 
@@ -61,17 +63,7 @@ fn smoothed_beats_filtered_and_nees_is_in_band() {
             );
         }
         let xt = true_state(&truth[mid], &p.flight.errors.si());
-        let e: Vec<f64> = (0..xt.len())
-            .map(|i| {
-                let d = pass.smoothed[(i, mid)] - xt[i];
-                if (3..6).contains(&i) {
-                    super::model::wrap(d)
-                } else {
-                    d
-                }
-            })
-            .collect();
-        nees_sum += nees(&e, &pass.smoothed_cov_at[0]);
+        nees_sum += nees(&smoothed_error(&pass, mid, &xt), &pass.smoothed_cov_at[0]);
     }
     let dof = runs as usize * (N_KIN + N_ERR);
     let mean = nees_sum / runs as f64;
@@ -253,17 +245,7 @@ fn startup_pass_keeps_the_bounds_honest() {
             *q += z * z;
         }
         let xt = true_state(&truth[mid], &errors);
-        let e: Vec<f64> = (0..xt.len())
-            .map(|i| {
-                let d = pass.smoothed[(i, mid)] - xt[i];
-                if (3..6).contains(&i) {
-                    super::model::wrap(d)
-                } else {
-                    d
-                }
-            })
-            .collect();
-        nees_sum += nees(&e, &pass.smoothed_cov_at[0]);
+        nees_sum += nees(&smoothed_error(&pass, mid, &xt), &pass.smoothed_cov_at[0]);
     }
     for (q, name) in sq.iter().zip(["alpha scale", "alpha bias"]) {
         let rms = (q / runs as f64).sqrt();
