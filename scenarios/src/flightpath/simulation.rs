@@ -157,7 +157,7 @@ pub fn run_one(
         r.oe_std = oe.std;
     }
     let x_true = true_state(&truth[mid], &errors);
-    r.nees_smoothed = nees(&smoothed_error(&fs, mid, &x_true), &fs.smoothed_cov_at[0]);
+    r.nees_smoothed = nees(&smoothed_error(fs, mid, &x_true), &fs.smoothed_cov_at[0]);
     Ok((r, est, truth))
 }
 
