@@ -21,6 +21,33 @@ pub fn short() -> FlightPathParams {
     p
 }
 
+/// One seeded simulated flight as the filter–smoother sees it: the truth on the grid, the
+/// grid with each sensor's first sample consumed by the prior, the settings and the
+/// mid-record step.
+struct Simulated {
+    truth: Vec<sensors::flight::TruthPoint>,
+    grid: super::data::Grid,
+    settings: Settings,
+    mid: usize,
+}
+
+/// Run `run` of the campaign seeded `seed` under `p`, as [`Simulated`].
+fn simulated(p: &FlightPathParams, seed: u64, run: u64) -> Simulated {
+    let rec = sensors::flight::simulate(&p.flight, &mut crate::montecarlo::run_rng(seed, run))
+        .expect("flight");
+    let data = flight_data(&rec);
+    let grid = data.grid();
+    let truth = truth_on_grid(&rec, &grid).expect("truth");
+    let noise = noise_model(&p.flight.noise_si(), p.flight.imu.rate_hz);
+    let settings = super::estimate::settings(&data, &grid, &noise, p);
+    Simulated {
+        truth,
+        mid: grid.t.len() / 2,
+        grid: super::estimate::consumed(&data, &grid),
+        settings,
+    }
+}
+
 /// The smoothed trajectory beats the filtered one in every group on every run, and the
 /// smoothed NEES of the whole state at mid-record, averaged over 2 runs of the default
 /// 120 s flight, lies in its χ²(2·21)/2 95 % band ([13.0, 31.0]): an over-confident
@@ -32,16 +59,13 @@ fn smoothed_beats_filtered_and_nees_is_in_band() {
     let runs = 2;
     let mut nees_sum = 0.0;
     for run in 0..runs {
-        let rec = sensors::flight::simulate(&p.flight, &mut crate::montecarlo::run_rng(7, run))
-            .expect("flight");
-        let data = flight_data(&rec);
-        let grid = data.grid();
-        let truth = truth_on_grid(&rec, &grid).expect("truth");
-        let noise = noise_model(&p.flight.noise_si(), p.flight.imu.rate_hz);
-        let s = super::estimate::settings(&data, &grid, &noise, &p);
-        let mid = grid.t.len() / 2;
-        let pass = smoother::run(&super::estimate::consumed(&data, &grid), &s, &[mid])
-            .expect("filter–smoother");
+        let Simulated {
+            truth,
+            grid,
+            settings: s,
+            mid,
+        } = simulated(&p, 7, run);
+        let pass = smoother::run(&grid, &s, &[mid]).expect("filter–smoother");
         let (f, sm) = (
             rms_groups(&pass.filtered, &truth),
             rms_groups(&pass.smoothed, &truth),
@@ -224,21 +248,15 @@ fn startup_pass_keeps_the_bounds_honest() {
     let mut sq = [0.0; 2];
     let mut nees_sum = 0.0;
     for run in 0..runs {
-        let rec = sensors::flight::simulate(&p.flight, &mut crate::montecarlo::run_rng(11, run))
-            .expect("flight");
-        let data = flight_data(&rec);
-        let grid = data.grid();
-        let truth = truth_on_grid(&rec, &grid).expect("truth");
-        let noise = noise_model(&p.flight.noise_si(), p.flight.imu.rate_hz);
-        let s = super::estimate::settings(&data, &grid, &noise, &p);
-        let mid = grid.t.len() / 2;
-        let pass = super::estimate::filter_smoother(
-            &super::estimate::consumed(&data, &grid),
-            &s,
-            super::estimate::STARTUP_FRACTION,
-            &[mid],
-        )
-        .expect("filter–smoother");
+        let Simulated {
+            truth,
+            grid,
+            settings: s,
+            mid,
+        } = simulated(&p, 11, run);
+        let pass =
+            super::estimate::filter_smoother(&grid, &s, super::estimate::STARTUP_FRACTION, &[mid])
+                .expect("filter–smoother");
         let errors = p.flight.errors.si();
         for (q, j) in sq.iter_mut().zip([N_KIN + 8, N_KIN + 9]) {
             let z = (pass.smoothed[(j, 0)] - errors[j - N_KIN]) / pass.smoothed_var[(j, 0)].sqrt();
