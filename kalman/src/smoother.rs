@@ -23,7 +23,7 @@
 use std::marker::PhantomData;
 
 use faer::linalg::solvers::Solve;
-use faer::{Mat, MatRef, Side};
+use faer::{Mat, MatMut, MatRef, Side};
 
 use crate::filter::diverged;
 use crate::riccati::symmetrise;
@@ -427,23 +427,53 @@ fn push(v: &mut Vec<f64>, M: MatRef<'_, f64>) {
     }
 }
 
-/// Solves A X = B for symmetric PSD A: Cholesky, or the minimum-norm solution through the
-/// eigen-decomposition when A is (numerically) singular.
+/// Solves A X = B for symmetric PSD A. The solve runs on the Jacobi-scaled system
+/// `(D⁻¹ A D⁻¹)(D X) = D⁻¹ B`, `D = diag(√A_ii)` (1 where `A_ii = 0`), so that its rank test
+/// reads correlations, not units: a state known to 1e-6 rad/s beside one known to 10 m is
+/// not a linear dependence. Cholesky of the scaled matrix, or, when it is (numerically)
+/// singular, its pseudo-inverse through the eigen-decomposition, which gives a generalised
+/// inverse of A (the same X as A⁺B whenever B's columns lie in A's range, as the RTS
+/// smoother's `C_kᵀ` do).
 pub(crate) fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
     let n = A.nrows();
-    let amax = (0..n).map(|i| A[(i, i)].abs()).fold(0.0, f64::max);
-    if let Ok(llt) = A.llt(Side::Lower) {
-        // Accept the Cholesky factor only if its pivots are not tiny relative to the diagonal
-        // (the eigen-decomposition below gives the same solution to round-off, only slower).
+    let d: Vec<f64> = (0..n)
+        .map(|i| {
+            if A[(i, i)] > 0.0 {
+                A[(i, i)].sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let S = Mat::from_fn(n, n, |i, j| A[(i, j)] / (d[i] * d[j]));
+    let mut Y = Mat::from_fn(n, B.ncols(), |i, j| B[(i, j)] / d[i]);
+    solve_psd_scaled(S.as_ref(), Y.as_mut())?;
+    for j in 0..Y.ncols() {
+        for i in 0..n {
+            Y[(i, j)] /= d[i];
+        }
+    }
+    Ok(Y)
+}
+
+/// Overwrites B with the solution of S X = B for a Jacobi-scaled PSD S (unit or zero
+/// diagonal): Cholesky when every pivot² exceeds `RANK_TOL` (the eigen route gives the same
+/// solution to round-off, only slower), else the pseudo-inverse with eigenvalues at or
+/// below `RANK_TOL·λ_max` treated as zero.
+fn solve_psd_scaled(S: MatRef<'_, f64>, mut B: MatMut<'_, f64>) -> Result<(), Error> {
+    let n = S.nrows();
+    let smax = (0..n).map(|i| S[(i, i)].abs()).fold(0.0, f64::max);
+    if let Ok(llt) = S.llt(Side::Lower) {
         let L = llt.L();
         let dmin = (0..n)
             .map(|i| L[(i, i)] * L[(i, i)])
             .fold(f64::INFINITY, f64::min);
-        if dmin > RANK_TOL * amax {
-            return Ok(llt.solve(B));
+        if dmin > RANK_TOL * smax {
+            llt.solve_in_place(B);
+            return Ok(());
         }
     }
-    let evd = A
+    let evd = S
         .self_adjoint_eigen(Side::Lower)
         .map_err(|_| Error::Factorisation {
             name: "P_{k+1|k}",
@@ -451,10 +481,10 @@ pub(crate) fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f6
         })?;
     let U = evd.U();
     let s = evd.S().column_vector();
-    let smax = (0..n).map(|i| s[i].abs()).fold(0.0, f64::max);
-    let mut UtB = U.transpose() * B;
+    let lmax = (0..n).map(|i| s[i].abs()).fold(0.0, f64::max);
+    let mut UtB = U.transpose() * B.as_ref();
     for i in 0..n {
-        let inv = if s[i] > RANK_TOL * smax {
+        let inv = if s[i] > RANK_TOL * lmax {
             1.0 / s[i]
         } else {
             0.0
@@ -463,7 +493,8 @@ pub(crate) fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f6
             UtB[(i, j)] *= inv;
         }
     }
-    Ok(U * UtB)
+    B.copy_from(U * UtB);
+    Ok(())
 }
 
 #[cfg(test)]
@@ -549,17 +580,33 @@ mod tests {
 
     #[test]
     fn a_factor_with_a_tiny_pivot_takes_the_fallback_too() {
-        // diag(100, 1e-11) factors (pivot² 1e-11 > 0), but that pivot² is below RANK_TOL =
-        // 1e-12 of the diagonal's scale 100, and so is the eigenvalue 1e-11 of the largest:
-        // the solve must treat the matrix as singular and return the minimum-norm solution
-        // (4, 0), not the Cholesky one (4, 1e11). The scale is not 1, and the small
-        // eigenvalue is far above its round-off (≈ 2e-14), so that a tolerance divided by
-        // the scale instead of multiplied would show.
-        let a = faer::mat![[100.0, 0.0], [0.0, 1e-11]];
+        // Correlation ρ = 1 − 1e-14 between two states of scales 10 and 1e-6: the scaled
+        // matrix [[1, ρ], [ρ, 1]] has the eigenvalue 1 − ρ ≤ RANK_TOL·λ_max, so the solve
+        // must treat it as singular. With B = A (1, 1)ᵀ (in the range) the scaled solution
+        // y = D X of the pseudo-inverse is the minimum-norm one, along (1, 1): y₁ = y₂. The
+        // Cholesky answer would be y = D (1, 1)ᵀ = (10, 1e-6). A X = B holds to round-off.
+        let (s1, s2, rho) = (10.0, 1e-6, 1.0 - 1e-14);
+        let a = faer::mat![[s1 * s1, rho * s1 * s2], [rho * s1 * s2, s2 * s2]];
+        let b = faer::mat![[s1 * s1 + rho * s1 * s2], [rho * s1 * s2 + s2 * s2]];
+        let x = solve_psd(a.as_ref(), b.as_ref()).expect("must succeed");
+        // D X minimum-norm in the scaled system: both scaled components (s1·x1, s2·x2) equal.
+        let (y1, y2) = (s1 * x[(0, 0)], s2 * x[(1, 0)]);
+        assert!((y1 - y2).abs() < 1e-6 * y1.abs(), "{x:?}");
+        let r = &a * &x - &b;
+        assert!(r[(0, 0)].abs() < 1e-12 * b[(0, 0)].abs(), "{r:?}");
+        assert!(r[(1, 0)].abs() < 1e-12 * s1 * s2, "{r:?}");
+    }
+
+    #[test]
+    fn states_of_very_different_scales_are_not_a_dependence() {
+        // diag(100, 1e-14) is perfectly conditioned once scaled: the solve must be the exact
+        // (4, 1e14), not the truncated (4, 0) a rank test on the raw diagonal would give (the
+        // smoother's gyro-bias variance of 1e-12 (rad/s)² beside position variances of m²).
+        let a = faer::mat![[100.0, 0.0], [0.0, 1e-14]];
         let b = faer::mat![[400.0], [1.0]];
         let x = solve_psd(a.as_ref(), b.as_ref()).expect("must succeed");
         assert!(
-            (x[(0, 0)] - 4.0).abs() < 1e-14 && x[(1, 0)].abs() < 1e-14,
+            (x[(0, 0)] - 4.0).abs() < 1e-14 && (x[(1, 0)] - 1e14).abs() < 1.0,
             "{x:?}"
         );
     }

@@ -21,9 +21,10 @@
 //! ```
 //!
 //! The filter's time grid is the union of every sensor's stamps; step k integrates over its
-//! own `Δt_k = t_{k+1} − t_k` by one classical Runge–Kutta step with the IMU reading
-//! interpolated linearly at the step's midpoint (the model holds the stamp table and the
-//! inputs and indexes them by k, so the filters are called with `u = None`).
+//! own `Δt_k = t_{k+1} − t_k` by one classical Runge–Kutta step with the IMU reading at
+//! each stage time (t_k, the midpoint, t_{k+1}) from a cubic through the nearest samples
+//! ([`super::data::FlightData::imu_at`]; the model holds the stamp table and the inputs and
+//! indexes them by k, so the filters are called with `u = None`).
 //!
 //! **Outputs** (m = 9): `V_m = (1 + λ_V) V + b_V`, `α_m = (1 + λ_α) α + b_α`,
 //! `β_m = (1 + λ_β) β + b_β` (`V = |(u, v, w)|`, `α = atan2(w, u)`, `β = asin(v/V)`), the
@@ -37,8 +38,8 @@
 
 use kalman::nonlinear::{GenericModel, Scalar};
 
-use super::data::Grid;
 pub use super::data::M;
+use super::data::{Grid, Stages};
 /// An angle wrapped to (−π, π] (NaN stays NaN), as the simulated AHRS wraps its heading.
 pub use sensors::flight::wrap;
 
@@ -64,7 +65,7 @@ pub struct Noise {
 #[derive(Debug, Clone)]
 pub struct FlightModel {
     t: Vec<f64>,
-    input: Vec<[f64; 6]>,
+    input: Vec<Stages>,
     augmented: bool,
     intensity: [f64; 6],
     r: [f64; M],
@@ -136,29 +137,36 @@ impl GenericModel for FlightModel {
         if dt <= 0.0 {
             return;
         }
-        let m = self.input.get(k).copied().unwrap_or([0.0; 6]);
-        let mut a: [T; 3] = std::array::from_fn(|i| T::from(m[i]));
-        let mut w: [T; 3] = std::array::from_fn(|i| T::from(m[3 + i]));
-        if self.augmented {
-            for i in 0..3 {
-                a[i] -= x[N_KIN + i];
-                w[i] -= x[N_KIN + 3 + i];
+        let stages = self.input.get(k).copied().unwrap_or([[0.0; 6]; 3]);
+        // The corrected inputs (a, ω) at one stage.
+        let corrected = |m: &[f64; 6]| {
+            let mut a: [T; 3] = std::array::from_fn(|i| T::from(m[i]));
+            let mut w: [T; 3] = std::array::from_fn(|i| T::from(m[3 + i]));
+            if self.augmented {
+                for i in 0..3 {
+                    a[i] -= x[N_KIN + i];
+                    w[i] -= x[N_KIN + 3 + i];
+                }
             }
-        }
+            (a, w)
+        };
+        let (a0, w0) = corrected(&stages[0]);
+        let (a1, w1) = corrected(&stages[1]);
+        let (a2, w2) = corrected(&stages[2]);
         let mut stage = [x[0]; N_KIN];
-        let k1 = Self::rates(x, &a, &w);
+        let k1 = Self::rates(x, &a0, &w0);
         for i in 0..N_KIN {
             stage[i] = x[i] + k1[i] * (0.5 * dt);
         }
-        let k2 = Self::rates(&stage, &a, &w);
+        let k2 = Self::rates(&stage, &a1, &w1);
         for i in 0..N_KIN {
             stage[i] = x[i] + k2[i] * (0.5 * dt);
         }
-        let k3 = Self::rates(&stage, &a, &w);
+        let k3 = Self::rates(&stage, &a1, &w1);
         for i in 0..N_KIN {
             stage[i] = x[i] + k3[i] * dt;
         }
-        let k4 = Self::rates(&stage, &a, &w);
+        let k4 = Self::rates(&stage, &a2, &w2);
         for i in 0..N_KIN {
             out[i] = x[i] + (k1[i] + (k2[i] + k3[i]) * 2.0 + k4[i]) * (dt / 6.0);
         }

@@ -1,7 +1,21 @@
 //! The filter–smoother estimator: the EKF on the augmented kinematic model (Jacobians by
 //! forward-mode AD of [`FlightModel`]) over the union grid, with every measurement gated
 //! on its innovation before the update, and the extended RTS smoother over the recorded
-//! forward pass.
+//! forward pass; or the same pass on the model linearised about a nominal trajectory
+//! ([`run_about`]), the step of the iterated extended smoother.
+//!
+//! **Iterated smoother.** The EKF linearises the bilinear air-data outputs
+//! `(1 + λ) β + b` about its own running estimate. Early in a record, before the
+//! manoeuvres, that estimate of the sideslip is off by the prior uncertainty of the
+//! lateral velocity (metres per second, a sideslip of a degree where the truth is zero),
+//! and `∂h/∂λ = β̂` then credits the scale factor with information the data do not hold;
+//! no later step removes it. Linearising instead about the previous pass's smoothed
+//! trajectory `x̄` (`f(x) ≈ f(x̄_k) + F(x̄_k)(x − x̄_k)`, likewise h, Q at `x̄_k`) makes each
+//! pass the Kalman filter and RTS smoother of the linearised problem, that is, one
+//! Gauss–Newton step towards the maximum a posteriori trajectory of the full record under
+//! the original prior (Bell, "The iterated Kalman smoother as a Gauss–Newton method",
+//! SIAM J. Optim. 4, 1994); at its fixed point the smoothed covariance is that of the
+//! linearisation about the best estimate, as the output-error fit's Cramér–Rao bound is.
 //!
 //! **Gate.** Before step k, each sampled entry i of z_k is tested against the prediction:
 //! `e_i² / Σ_ii > g` with `e = z ⊖ h(x⁻)` and `Σ_ii = H_i P⁻ H_iᵀ + R_ii` rejects it (set
@@ -14,9 +28,7 @@
 //! can lock a channel out for good.
 
 use faer::Mat;
-use kalman::nonlinear::{
-    AutoDiff, Ekf, EkfUpdate, GenericModel, Jacobians, NonlinearModel, NonlinearRts,
-};
+use kalman::nonlinear::{AutoDiff, Ekf, EkfUpdate, Jacobians, NonlinearModel, NonlinearRts};
 
 use super::data::Grid;
 use super::model::{FlightModel, M, Noise};
@@ -65,12 +77,162 @@ pub struct Pass {
     pub residuals: Vec<[f64; M]>,
 }
 
+/// The flight model as the filter sees it: [`FlightModel`] itself (Jacobians by AD at the
+/// filter's own estimates), or its linearisation about a nominal trajectory.
+struct Linearised {
+    ad: AutoDiff<FlightModel>,
+    /// x̄ (n×N), or `None` for the model itself.
+    nominal: Option<Mat<f64>>,
+    /// The step whose `f(x̄_k)` and `F(x̄_k)` are in `fbar`, `fjac`.
+    f_at: Option<usize>,
+    fbar: Vec<f64>,
+    fjac: Vec<f64>,
+    /// The step whose `h(x̄_k)` and `H(x̄_k)` are in `hbar`, `hjac`.
+    h_at: Option<usize>,
+    hbar: [f64; M],
+    hjac: Vec<f64>,
+    xbar: Vec<f64>,
+}
+
+impl Linearised {
+    fn new(model: FlightModel, dims: kalman::DynDims, nominal: Option<Mat<f64>>) -> Self {
+        let n = model.n();
+        Self {
+            ad: AutoDiff::new(model, dims),
+            nominal,
+            f_at: None,
+            fbar: vec![0.0; n],
+            fjac: vec![0.0; n * n],
+            h_at: None,
+            hbar: [0.0; M],
+            hjac: vec![0.0; M * n],
+            xbar: vec![0.0; n],
+        }
+    }
+
+    /// Sets the point Q is evaluated at: the prediction `x` for the model itself, `x̄_k`
+    /// (set in [`NonlinearModel::q`]) for the linearisation.
+    fn set_point(&mut self, x: &[f64]) {
+        if self.nominal.is_none() {
+            self.ad.inner_mut().set_point(x);
+        }
+    }
+
+    /// Loads x̄_k into `xbar`; false for the model itself.
+    fn load(&mut self, k: usize) -> bool {
+        let Some(nom) = &self.nominal else {
+            return false;
+        };
+        let k = k.min(nom.ncols() - 1);
+        for (i, v) in self.xbar.iter_mut().enumerate() {
+            *v = nom[(i, k)];
+        }
+        true
+    }
+
+    /// `out = bar + jac (x − x̄)` for a rows×n column-major `jac`.
+    fn affine(bar: &[f64], jac: &[f64], x: &[f64], xbar: &[f64], out: &mut [f64]) {
+        let rows = bar.len();
+        out.copy_from_slice(bar);
+        for (j, (a, b)) in x.iter().zip(xbar).enumerate() {
+            let d = a - b;
+            if d != 0.0 {
+                for (o, c) in out.iter_mut().zip(&jac[j * rows..(j + 1) * rows]) {
+                    *o += c * d;
+                }
+            }
+        }
+    }
+
+    fn at_f(&mut self, u: Option<&[f64]>, k: usize) {
+        if self.f_at != Some(k) {
+            self.ad.f(&self.xbar, u, k, &mut self.fbar);
+            self.ad.f_jacobian(&self.xbar, u, k, &mut self.fjac);
+            self.f_at = Some(k);
+        }
+    }
+
+    fn at_h(&mut self, k: usize) {
+        if self.h_at != Some(k) {
+            self.ad.h(&self.xbar, k, &mut self.hbar);
+            self.ad.h_jacobian(&self.xbar, k, &mut self.hjac);
+            self.h_at = Some(k);
+        }
+    }
+}
+
+impl NonlinearModel for Linearised {
+    fn f(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]) {
+        if !self.load(k) {
+            return self.ad.f(x, u, k, out);
+        }
+        self.at_f(u, k);
+        Self::affine(&self.fbar, &self.fjac, x, &self.xbar, out);
+    }
+
+    fn h(&mut self, x: &[f64], k: usize, out: &mut [f64]) {
+        if !self.load(k) {
+            return self.ad.h(x, k, out);
+        }
+        self.at_h(k);
+        Self::affine(&self.hbar, &self.hjac, x, &self.xbar, out);
+    }
+
+    fn q(&mut self, k: usize, out: &mut [f64]) {
+        if self.load(k) {
+            self.ad.inner_mut().set_point(&self.xbar);
+        }
+        self.ad.q(k, out);
+    }
+
+    fn r(&mut self, k: usize, out: &mut [f64]) {
+        self.ad.r(k, out);
+    }
+
+    fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+        self.ad.residual(a, b, out);
+    }
+}
+
+impl Jacobians for Linearised {
+    fn f_jacobian(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, jac: &mut [f64]) {
+        if !self.load(k) {
+            return self.ad.f_jacobian(x, u, k, jac);
+        }
+        self.at_f(u, k);
+        jac.copy_from_slice(&self.fjac);
+    }
+
+    fn h_jacobian(&mut self, x: &[f64], k: usize, jac: &mut [f64]) {
+        if !self.load(k) {
+            return self.ad.h_jacobian(x, k, jac);
+        }
+        self.at_h(k);
+        jac.copy_from_slice(&self.hjac);
+    }
+}
+
 /// Runs the gated EKF and the extended RTS smoother over `grid`; the full smoothed
 /// covariance is kept at the steps `keep_cov` (indices into the grid).
 ///
 /// # Errors
 /// A filter or smoother error of `kalman` (divergence, a singular innovation).
 pub fn run(grid: &Grid, s: &Settings, keep_cov: &[usize]) -> Result<Pass> {
+    run_about(grid, s, keep_cov, None)
+}
+
+/// As [`run`], on the model linearised about `nominal` (n×N, one state per grid step; the
+/// iterated smoother's step, see the module documentation), or on the model itself when
+/// `nominal` is `None`.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_about(
+    grid: &Grid,
+    s: &Settings,
+    keep_cov: &[usize],
+    nominal: Option<Mat<f64>>,
+) -> Result<Pass> {
     let model = FlightModel::new(grid, &s.noise, s.augmented);
     let n = model.n();
     let big_n = grid.t.len();
@@ -81,7 +243,7 @@ pub fn run(grid: &Grid, s: &Settings, keep_cov: &[usize]) -> Result<Pass> {
     }
     let mut ekf = Ekf::new(
         dims,
-        AutoDiff::new(model, dims),
+        Linearised::new(model, dims, nominal),
         &s.x0,
         &p0,
         EkfUpdate::Extended,
@@ -111,7 +273,7 @@ pub fn run(grid: &Grid, s: &Settings, keep_cov: &[usize]) -> Result<Pass> {
             let ad = ekf.model_mut();
             ad.h(&xp, k, &mut zh);
             ad.h_jacobian(&xp, k, &mut hj);
-            ad.inner().r(k, &mut r);
+            ad.r(k, &mut r);
             ad.residual(z, &zh, &mut e);
             for i in 0..M {
                 if !z[i].is_finite() {
@@ -138,7 +300,7 @@ pub fn run(grid: &Grid, s: &Settings, keep_cov: &[usize]) -> Result<Pass> {
                 }
             }
         }
-        ekf.model_mut().inner_mut().set_point(&xp);
+        ekf.model_mut().set_point(&xp);
         ekf.step(z, None).map_err(kal("flightpath EKF"))?;
         rts.record(&ekf).map_err(kal("flightpath smoother"))?;
         let (x, p) = (ekf.state(), ekf.covariance());

@@ -354,7 +354,7 @@ fn verdict_text(v: &Verdict, runs: usize) -> String {
             v.nominal_max_normalised_error[m] <= 4.0 && v.rms_in_range[m] && v.coverage_in_range[m];
         parts.push(format!(
             "{}: {} (nominal run within {:.1} σ of the truth; over {runs} runs the RMS normalised \
-             error of every error {} [0.6, 1.6] and the pooled 95 % coverage {} [0.85, 1])",
+             error {} [0.6, 1.6] and the pooled 95 % coverage {} [0.85, 1])",
             method[m],
             if ok {
                 "its bounds are honest"
@@ -363,9 +363,9 @@ fn verdict_text(v: &Verdict, runs: usize) -> String {
             },
             v.nominal_max_normalised_error[m],
             if v.rms_in_range[m] {
-                "lies in"
+                "of every error lies in"
             } else {
-                "is outside"
+                "of some error lies outside"
             },
             if v.coverage_in_range[m] {
                 "lies in"

@@ -48,7 +48,8 @@ fn simulated(p: &FlightPathParams, seed: u64, run: u64) -> Simulated {
     }
 }
 
-/// The smoothed trajectory beats the filtered one in every group on every run, and the
+/// The iterated filter–smoother as the scenario runs it: the smoothed trajectory beats the
+/// filtered one in every group on every run, and the
 /// smoothed NEES of the whole state at mid-record, averaged over 2 runs of the default
 /// 120 s flight, lies in its χ²(2·21)/2 95 % band ([13.0, 31.0]): an over-confident
 /// smoother (NEES too large) or a pessimistic one fails. (The filter–smoother alone: the
@@ -65,7 +66,9 @@ fn smoothed_beats_filtered_and_nees_is_in_band() {
             settings: s,
             mid,
         } = simulated(&p, 7, run);
-        let pass = smoother::run(&grid, &s, &[mid]).expect("filter–smoother");
+        let its = super::estimate::SMOOTHER_ITERATIONS;
+        let pass =
+            super::estimate::filter_smoother(&grid, &s, its, &[mid]).expect("filter–smoother");
         let (f, sm) = (
             rms_groups(&pass.filtered, &truth),
             rms_groups(&pass.smoothed, &truth),
@@ -234,19 +237,25 @@ fn flight_csv_round_trips_exactly() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The start-up pass keeps the filter–smoother from locking in the covariance of its
-/// first linearisations: over 6 seeded runs of the 40 s flight, the RMS normalised error
-/// (estimate − truth)/std of the α scale and of the α bias stays below 2.2 and the mean
-/// smoothed NEES at mid-record below 1.5 times the χ²(6·21)/6 97.5 % point (≈ 39.6).
-/// Without the start-up pass these runs give 4.1 and 3.1 on the α pair and a NEES of 65;
-/// with it 1.7, 1.8 and 33 (the compressed manoeuvres of the 40 s flight leave more
-/// over-confidence than the 120 s one, where the α pair comes to ≈ 1.3).
+/// The iterated smoother keeps the bounds honest where a single EKF–RTS pass is
+/// over-confident. Over 6 seeded runs of the 40 s flight, the RMS normalised error
+/// (estimate − truth)/std of each of the four flow-angle errors (α and β scale and bias)
+/// lies in the 95 % interval of an honest bound for 6 runs, `√(χ²(6)/6)` = [0.46, 1.55],
+/// and the mean smoothed NEES at mid-record in its χ²(6·21)/6 95 % band; the single pass
+/// fails both on the same runs (RMS 4.1 and 3.2 on the α pair, NEES 63), so the test
+/// guards the iteration. A further linearised pass moves no instrument-error estimate by
+/// more than a quarter of its smoothed standard deviation (0.15 on these runs, 0.04 on the
+/// 120 s flight): one pass is near the fixed point.
 #[test]
-fn startup_pass_keeps_the_bounds_honest() {
+fn iterated_smoother_keeps_the_bounds_honest() {
     let p = short();
     let runs = 6u64;
-    let mut sq = [0.0; 2];
-    let mut nees_sum = 0.0;
+    let flow = [N_KIN + 8, N_KIN + 9, N_KIN + 10, N_KIN + 11];
+    let its = super::estimate::SMOOTHER_ITERATIONS;
+    let mut sq = [[0.0; 4]; 2];
+    let mut nees_sum = [0.0; 2];
+    let mut moved: f64 = 0.0;
+    let errors = p.flight.errors.si();
     for run in 0..runs {
         let Simulated {
             truth,
@@ -254,22 +263,58 @@ fn startup_pass_keeps_the_bounds_honest() {
             settings: s,
             mid,
         } = simulated(&p, 11, run);
-        let pass =
-            super::estimate::filter_smoother(&grid, &s, super::estimate::STARTUP_FRACTION, &[mid])
-                .expect("filter–smoother");
-        let errors = p.flight.errors.si();
-        for (q, j) in sq.iter_mut().zip([N_KIN + 8, N_KIN + 9]) {
-            let z = (pass.smoothed[(j, 0)] - errors[j - N_KIN]) / pass.smoothed_var[(j, 0)].sqrt();
-            *q += z * z;
-        }
         let xt = true_state(&truth[mid], &errors);
-        nees_sum += nees(&smoothed_error(&pass, mid, &xt), &pass.smoothed_cov_at[0]);
+        // The single pass, the iterated smoother from it, and one more linearised pass.
+        let mut passes = vec![smoother::run(&grid, &s, &[mid]).expect("filter–smoother")];
+        for _ in 0..=its {
+            let nominal = passes.last().expect("a pass").smoothed.clone();
+            passes.push(smoother::run_about(&grid, &s, &[mid], Some(nominal)).expect("pass"));
+        }
+        for (m, pass) in [&passes[0], &passes[its]].into_iter().enumerate() {
+            for (q, &j) in sq[m].iter_mut().zip(&flow) {
+                let z =
+                    (pass.smoothed[(j, 0)] - errors[j - N_KIN]) / pass.smoothed_var[(j, 0)].sqrt();
+                *q += z * z;
+            }
+            nees_sum[m] += nees(&smoothed_error(pass, mid, &xt), &pass.smoothed_cov_at[0]);
+        }
+        let (pass, more) = (&passes[its], &passes[its + 1]);
+        for j in N_KIN..N_KIN + N_ERR {
+            let d = (more.smoothed[(j, 0)] - pass.smoothed[(j, 0)]).abs();
+            moved = moved.max(d / pass.smoothed_var[(j, 0)].sqrt());
+        }
     }
-    for (q, name) in sq.iter().zip(["alpha scale", "alpha bias"]) {
-        let rms = (q / runs as f64).sqrt();
-        assert!(rms < 2.2, "{name}: RMS normalised error {rms}");
-    }
-    let mean = nees_sum / runs as f64;
-    let hi = 1.5 * kalman::chi2_quantile(0.975, runs as usize * (N_KIN + N_ERR)) / runs as f64;
-    assert!(mean < hi, "mean NEES {mean} above {hi}");
+    let r = runs as f64;
+    let rms = sq.map(|q| q.map(|v| (v / r).sqrt()));
+    let mean = nees_sum.map(|v| v / r);
+    let dof = runs as usize;
+    let (lo, hi) = (
+        (kalman::chi2_quantile(0.025, dof) / r).sqrt(),
+        (kalman::chi2_quantile(0.975, dof) / r).sqrt(),
+    );
+    let nees_dof = runs as usize * (N_KIN + N_ERR);
+    let (nlo, nhi) = (
+        kalman::chi2_quantile(0.025, nees_dof) / r,
+        kalman::chi2_quantile(0.975, nees_dof) / r,
+    );
+    assert!(
+        rms[1].iter().all(|v| (lo..=hi).contains(v)),
+        "iterated: RMS normalised errors {:?} outside [{lo}, {hi}]",
+        rms[1]
+    );
+    assert!(
+        (nlo..=nhi).contains(&mean[1]),
+        "iterated: mean NEES {} outside [{nlo}, {nhi}]",
+        mean[1]
+    );
+    assert!(
+        rms[0].iter().any(|&v| v > hi) && mean[0] > nhi,
+        "the single pass is no longer over-confident here: {:?}, NEES {}",
+        rms[0],
+        mean[0]
+    );
+    assert!(
+        moved < 0.25,
+        "a further pass moved an estimate by {moved} σ"
+    );
 }

@@ -23,20 +23,26 @@ struct Jet {
     d: f64,
 }
 
-/// Raised-cosine pulse 0 → 1 → 0 over `[t0, t0 + len]`.
+/// Smooth pulse 0 → 1 → 0 over `[t0, t0 + len]`: `sin⁴(π s)`, `s = (t − t0)/len`. It and
+/// its first three derivatives vanish at both ends, so the rates and specific forces it
+/// drives (its first derivative enters them) are twice continuously differentiable, as a
+/// real vehicle's are; a raised cosine would put a kink into them at every start and stop,
+/// which no interpolation of the IMU samples can follow.
 fn bump(t: f64, t0: f64, len: f64) -> Jet {
     let s = (t - t0) / len;
     if !(0.0..=1.0).contains(&s) {
         return Jet { v: 0.0, d: 0.0 };
     }
-    let w = 2.0 * std::f64::consts::PI;
+    let (sn, cs) = (std::f64::consts::PI * s).sin_cos();
     Jet {
-        v: 0.5 * (1.0 - (w * s).cos()),
-        d: 0.5 * w * (w * s).sin() / len,
+        v: sn.powi(4),
+        d: 4.0 * std::f64::consts::PI * sn.powi(3) * cs / len,
     }
 }
 
-/// Smooth ramp 0 → 1 over `[t0, t0 + len]` (half a raised cosine), 1 afterwards.
+/// Smooth ramp 0 → 1 over `[t0, t0 + len]`, 1 afterwards: the integral of the [`bump`]
+/// shape scaled to end at 1, `s − (2/3π) sin 2πs + (1/12π) sin 4πs`, whose derivative
+/// `(8/3) sin⁴(π s)` is as smooth at the ends as the pulse.
 fn ramp(t: f64, t0: f64, len: f64) -> Jet {
     let s = (t - t0) / len;
     if s <= 0.0 {
@@ -45,10 +51,10 @@ fn ramp(t: f64, t0: f64, len: f64) -> Jet {
     if s >= 1.0 {
         return Jet { v: 1.0, d: 0.0 };
     }
-    let w = std::f64::consts::PI;
+    let pi = std::f64::consts::PI;
     Jet {
-        v: 0.5 * (1.0 - (w * s).cos()),
-        d: 0.5 * w * (w * s).sin() / len,
+        v: s - 2.0 / (3.0 * pi) * (2.0 * pi * s).sin() + 1.0 / (12.0 * pi) * (4.0 * pi * s).sin(),
+        d: 8.0 / 3.0 * (pi * s).sin().powi(4) / len,
     }
 }
 
@@ -326,6 +332,30 @@ impl Flight {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each shape's derivative is the central difference of its value (step 1e-6 s, error
+    /// ~1e-10), and the pulse's derivative vanishes to third order at its ends: at ε = 1e-3
+    /// of its length from an end it is below 4π⁴ε³/len (the leading term) plus round-off,
+    /// where a raised cosine's is ~2π²ε/len, six orders larger.
+    #[test]
+    fn shapes_are_smooth_and_their_derivatives_exact() {
+        let (t0, len) = (3.0, 2.0);
+        for shape in [bump, ramp] {
+            for s in [0.1, 0.37, 0.5, 0.81] {
+                let t = t0 + s * len;
+                let h = 1e-6;
+                let fd = (shape(t + h, t0, len).v - shape(t - h, t0, len).v) / (2.0 * h);
+                assert!((fd - shape(t, t0, len).d).abs() < 1e-8, "s = {s}");
+            }
+        }
+        let eps: f64 = 1e-3;
+        let pi = std::f64::consts::PI;
+        let bound = 4.0 * pi.powi(4) * eps.powi(3) / len + 1e-15;
+        for t in [t0 + eps * len, t0 + (1.0 - eps) * len] {
+            assert!(bump(t, t0, len).d.abs() < bound, "{}", bump(t, t0, len).d);
+        }
+        assert!((ramp(t0 + len, t0, len).v - 1.0).abs() < 1e-15);
+    }
 
     /// The specific force and rates are the exact derivatives: a finite difference of the
     /// air velocity and Euler angles reproduces them (step 1e-5 s, error ~1e-9).
