@@ -86,6 +86,18 @@ pub(crate) fn type_name(obj: &Bound<'_, PyAny>) -> String {
         .unwrap_or_else(|_| "?".into())
 }
 
+/// Refuses a callable argument `name` that cannot be called (a `TypeError` naming it).
+pub(crate) fn ensure_callable(f: &Bound<'_, PyAny>, name: &str) -> PyResult<()> {
+    if f.is_callable() {
+        Ok(())
+    } else {
+        Err(type_error(format!(
+            "{name} must be callable, not {}",
+            type_name(f)
+        )))
+    }
+}
+
 /// `obj` as a float64 NumPy array (integer arrays are converted; every other dtype, and
 /// anything that is not an `ndarray`, is a `TypeError` naming `name`).
 pub(crate) fn float_array<'py>(

@@ -9,7 +9,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::convert::{read_matrix, read_vector, scalar, type_error, value_error, zeros};
+use crate::convert::{ensure_callable, read_matrix, read_vector, scalar, value_error, zeros};
 use crate::guard;
 use crate::kf_attrs::{A, KalmanFilter, PREDICTED, UPDATED};
 use crate::kf_core::UpdateError;
@@ -37,12 +37,7 @@ fn call_with<'py>(
     x: &Bound<'py, PyAny>,
     args: &[Bound<'py, PyAny>],
 ) -> PyResult<Bound<'py, PyAny>> {
-    if !f.is_callable() {
-        return Err(type_error(format!(
-            "{name} must be callable, not {}",
-            crate::convert::type_name(f)
-        )));
-    }
+    ensure_callable(f, name)?;
     let all: Vec<Bound<'py, PyAny>> = std::iter::once(x.clone())
         .chain(args.iter().cloned())
         .collect();
@@ -60,6 +55,17 @@ fn call_at_x<'py>(
     call_with(f, name, x.bind(kf.py()), args)
 }
 
+/// Brings `kf`'s state up to date with its array attributes, then calls
+/// `HJacobian(x, *args)` (FilterPy's `args`) at that x.
+fn jacobian_at_x<'py>(
+    kf: &Bound<'py, KalmanFilter>,
+    HJacobian: &Bound<'py, PyAny>,
+    args: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    kf.try_borrow_mut()?.sync(kf.py())?;
+    call_at_x(kf, HJacobian, "HJacobian", &extra_args(args))
+}
+
 /// One EKF update of `kf` at its current x: H = HJacobian(x, *args), y = residual(z,
 /// Hx(x, *hx_args)), then the Joseph-form update with that H and y. `before`: the state to
 /// record as the prior instead of the current one (predict_update's FilterPy order).
@@ -70,7 +76,7 @@ fn ekf_update<'py>(
     H: &Bound<'py, PyAny>,
     Hx: &Bound<'py, PyAny>,
     R: Option<&Bound<'py, PyAny>>,
-    hx_args: &[Bound<'py, PyAny>],
+    hx_args: Option<&Bound<'py, PyAny>>,
     residual: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<()> {
     let py = kf.py();
@@ -78,7 +84,7 @@ fn ekf_update<'py>(
         let me = kf.try_borrow()?;
         (me.core.n, me.core.m)
     };
-    let hx = call_at_x(kf, Hx, "Hx", hx_args)?;
+    let hx = call_at_x(kf, Hx, "Hx", &extra_args(hx_args))?;
     let z = match scalar(z) {
         Some(v) if m == 1 => PyTuple::new(py, [v])?.into_any(),
         _ => z.clone(),
@@ -138,15 +144,14 @@ impl ExtendedKalmanFilter {
         residual: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<()> {
         guard(|| {
-            let py = slf.py();
             let kf = slf.cast::<KalmanFilter>()?;
             if z.is_none() {
-                return kf.try_borrow_mut()?.do_update(py, z, None, None, false);
+                return kf
+                    .try_borrow_mut()?
+                    .do_update(slf.py(), z, None, None, false);
             }
-            kf.try_borrow_mut()?.sync(py)?;
-            let H = call_at_x(kf, HJacobian, "HJacobian", &extra_args(args))?;
-            let hx_args = extra_args(hx_args);
-            ekf_update(kf, z, &H, Hx, R, &hx_args, residual)
+            let H = jacobian_at_x(kf, HJacobian, args)?;
+            ekf_update(kf, z, &H, Hx, R, hx_args, residual)
         })
     }
 
@@ -181,10 +186,8 @@ impl ExtendedKalmanFilter {
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<()> {
         guard(|| {
-            let py = slf.py();
             let kf = slf.cast::<KalmanFilter>()?;
-            kf.try_borrow_mut()?.sync(py)?;
-            let H = call_at_x(kf, HJacobian, "HJacobian", &extra_args(args))?;
+            let H = jacobian_at_x(kf, HJacobian, args)?;
             let (x0, P0) = {
                 let mut me = kf.try_borrow_mut()?;
                 let (x0, P0) = (me.core.x.clone(), me.core.P.clone());
@@ -193,8 +196,7 @@ impl ExtendedKalmanFilter {
                 me.invalidate(&PREDICTED);
                 (x0, P0)
             };
-            let hx_args = extra_args(hx_args);
-            ekf_update(kf, z, &H, Hx, None, &hx_args, None)?;
+            ekf_update(kf, z, &H, Hx, None, hx_args, None)?;
             let mut me = kf.try_borrow_mut()?;
             me.core.x_prior.copy_from_slice(&x0);
             me.core.P_prior.copy_from_slice(&P0);

@@ -12,7 +12,9 @@ use numpy::{PyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{FilterRecord, float_array, mat, read_vector, shape_str, value_error};
+use crate::convert::{
+    FilterRecord, ensure_callable, float_array, mat, read_vector, shape_str, value_error,
+};
 
 /// Calls `func(*args)` and reads its result as a vector of length `len` into `out`; on any
 /// failure (a pending signal included) keeps the first error in `slot` and writes NaN
@@ -55,12 +57,7 @@ fn run<'py>(
     us: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     for (name, c) in [("f", f), ("h", h)] {
-        if !c.is_callable() {
-            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
-                "{name} must be callable, not {}",
-                crate::convert::type_name(c)
-            )));
-        }
+        ensure_callable(c, name)?;
     }
     let (Q, R) = (mat(Q, "Q")?, mat(R, "R")?);
     let (n, m) = (Q.nrows(), R.nrows());

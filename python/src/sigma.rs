@@ -43,6 +43,22 @@ where
     })
 }
 
+/// `v` when it is given and not None, else `d[key]` (an argument that defaults to the
+/// attribute).
+pub(crate) fn item_or<'py, K>(
+    v: Option<&Bound<'py, PyAny>>,
+    d: &Bound<'py, PyDict>,
+    key: K,
+) -> PyResult<Bound<'py, PyAny>>
+where
+    K: IntoPyObject<'py> + std::fmt::Display + Copy,
+{
+    match v.filter(|v| !v.is_none()) {
+        Some(v) => Ok(v.clone()),
+        None => item(d, key),
+    }
+}
+
 /// A real number attribute.
 fn number<'py, K>(d: &Bound<'py, PyDict>, key: K) -> PyResult<f64>
 where

@@ -12,10 +12,10 @@
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString, PyTuple};
 
-use crate::convert::{memory_error, type_error, value_error, zeros};
+use crate::convert::{ensure_callable, memory_error, value_error, zeros};
 use crate::guard;
 use crate::linalg::Factor;
-use crate::sigma::{dict_of, item};
+use crate::sigma::{dict_of, item, item_or};
 use crate::ukf_core::{Ctx, arr2, read_mat, read_noise, read_z};
 use crate::ukf_state::{
     np_call, state, update_noise, write_no_update, write_no_update_z, write_predicted,
@@ -123,12 +123,7 @@ impl UnscentedKalmanFilter {
             let d = dict_of(slf.as_any())?;
             let (n, m) = (dim(dim_x, "dim_x")?, dim(dim_z, "dim_z")?);
             for (name, f) in [("hx", hx), ("fx", fx)] {
-                if !f.is_callable() {
-                    return Err(type_error(format!(
-                        "{name} must be callable, not {}",
-                        crate::convert::type_name(f)
-                    )));
-                }
+                ensure_callable(f, name)?;
             }
             let N: usize = points.call_method0("num_sigmas")?.extract()?;
             let none = py.None().into_bound(py);
@@ -206,14 +201,8 @@ impl UnscentedKalmanFilter {
             let (x, P) = state(&c)?;
             let Qo = item(&c.d, pyo3::intern!(c.d.py(), "Q"))?;
             let Q = read_noise(&Qo, "Q", c.n)?;
-            let dt = match dt.filter(|v| !v.is_none()) {
-                Some(v) => v.clone(),
-                None => item(&c.d, pyo3::intern!(c.d.py(), "_dt"))?,
-            };
-            let fx = match fx.filter(|v| !v.is_none()) {
-                Some(f) => f.clone(),
-                None => item(&c.d, pyo3::intern!(c.d.py(), "fx"))?,
-            };
+            let dt = item_or(dt, &c.d, pyo3::intern!(c.d.py(), "_dt"))?;
+            let fx = item_or(fx, &c.d, pyo3::intern!(c.d.py(), "fx"))?;
             let p = crate::ukf_core::predict(&c, &x, &P, (&Q, &Qo), &fx, &dt, kw(fx_args))?;
             write_predicted(&c, &p)
         })
@@ -245,10 +234,7 @@ impl UnscentedKalmanFilter {
                 c.n,
             )?;
             let (Rv, Ro) = update_noise(&c, R)?;
-            let hx = match hx.filter(|v| !v.is_none()) {
-                Some(f) => f.clone(),
-                None => item(&c.d, pyo3::intern!(c.d.py(), "hx"))?,
-            };
+            let hx = item_or(hx, &c.d, pyo3::intern!(c.d.py(), "hx"))?;
             let zv = read_z(z, c.m)?;
             let u = crate::ukf_core::update(&c, &x, &P, &sf, zv, (&Rv, &Ro), &hx, kw(hx_args))?;
             write_updated(&c, &u)
@@ -267,10 +253,7 @@ impl UnscentedKalmanFilter {
         guard(|| {
             let c = Ctx::new(slf.as_any(), None)?;
             let (x, P) = state(&c)?;
-            let fx = match fx.filter(|v| !v.is_none()) {
-                Some(f) => f.clone(),
-                None => item(&c.d, pyo3::intern!(c.d.py(), "fx"))?,
-            };
+            let fx = item_or(fx, &c.d, pyo3::intern!(c.d.py(), "fx"))?;
             let sig = c.sigmas(&x, &P)?;
             let sf = c.apply(
                 &fx,
