@@ -182,6 +182,17 @@ impl<K> Rts<K> {
         self.steps == 0
     }
 
+    /// Reserves room for `steps` more steps of `n` states, so that a long record does not
+    /// copy its storage as it grows (three n×n matrices and two n-vectors per step).
+    pub fn reserve(&mut self, n: usize, steps: usize) {
+        let (v, m) = (n * steps, n * n * steps);
+        self.xf.reserve(v);
+        self.xp.reserve(v);
+        self.pf.reserve(m);
+        self.pp.reserve(m);
+        self.ct.reserve(m);
+    }
+
     /// Admits a step of a filter with `n` states: the first step fixes n, a later one must
     /// match it.
     ///
@@ -221,6 +232,25 @@ impl<K> Rts<K> {
         &self,
         mut check: impl FnMut(usize, &Mat<f64>, &Mat<f64>) -> Result<(), Error>,
     ) -> Result<Smoothed, Error> {
+        let mut covs = vec![Mat::<f64>::zeros(self.n, self.n); self.steps];
+        let means = self.backward_each(|k, means, P| {
+            check(k, means, P)?;
+            covs[k] = P.clone();
+            Ok(())
+        })?;
+        Ok(Smoothed {
+            means,
+            covariances: covs,
+        })
+    }
+
+    /// The backward pass of [`Self::backward`], handing each step's P_{k|N} to
+    /// `visit(k, means, P_{k|N})` (last step first) instead of keeping them all; returns
+    /// the smoothed means.
+    pub(crate) fn backward_each(
+        &self,
+        mut visit: impl FnMut(usize, &Mat<f64>, &Mat<f64>) -> Result<(), Error>,
+    ) -> Result<Mat<f64>, Error> {
         let (n, N) = (self.n, self.steps);
         if N == 0 {
             return Err(Error::Dimension {
@@ -236,12 +266,12 @@ impl<K> Rts<K> {
             MatRef::from_column_major_slice(&v[k * n..(k + 1) * n], n, 1)
         }
         let mut means = Mat::<f64>::zeros(n, N);
-        let mut covs = vec![Mat::<f64>::zeros(n, n); N];
         means
             .as_mut()
             .col_mut(N - 1)
             .copy_from(vec(&self.xf, N - 1, n).col(0));
-        covs[N - 1] = mat(&self.pf, N - 1, n).to_owned();
+        let mut next = mat(&self.pf, N - 1, n).to_owned();
+        visit(N - 1, &means, &next)?;
         for k in (0..N - 1).rev() {
             let Pp = mat(&self.pp, k, n);
             let Jt = solve_psd(Pp, mat(&self.ct, k, n).transpose())?;
@@ -249,15 +279,12 @@ impl<K> Rts<K> {
             let dx = means.as_ref().col(k + 1).as_mat() - vec(&self.xp, k, n);
             let x = vec(&self.xf, k, n) + J * dx;
             means.as_mut().col_mut(k).copy_from(x.col(0));
-            let mut P = mat(&self.pf, k, n) + J * (&covs[k + 1] - Pp) * J.transpose();
+            let mut P = mat(&self.pf, k, n) + J * (&next - Pp) * J.transpose();
             symmetrise(&mut P);
-            check(k, &means, &P)?;
-            covs[k] = P;
+            visit(k, &means, &P)?;
+            next = P;
         }
-        Ok(Smoothed {
-            means,
-            covariances: covs,
-        })
+        Ok(means)
     }
 }
 

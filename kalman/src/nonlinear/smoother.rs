@@ -1,7 +1,7 @@
 //! The extended and unscented Rauch–Tung–Striebel smoothers over a recorded forward pass.
 #![allow(non_snake_case)]
 
-use faer::MatRef;
+use faer::{Mat, MatRef};
 
 use crate::Error;
 use crate::smoother::{Nonlinear, Rts, Smoothed};
@@ -95,6 +95,50 @@ impl Rts<Nonlinear> {
     /// fallback for a singular `P_{k+1|k}` fails.
     pub fn smooth(&self) -> Result<Smoothed, Error> {
         self.backward(|_, _, _| Ok(()))
+    }
+
+    /// The backward pass without keeping every covariance: `visit(k, P_{k|N})` sees each
+    /// step's smoothed covariance (last step first) and the smoothed means are returned
+    /// (n×N). For long records, where the N covariances of [`Self::smooth`] would be the
+    /// largest allocation of the run.
+    ///
+    /// ```
+    /// use kalman::DynDims;
+    /// use kalman::nonlinear::{FnModel, NonlinearRts, SigmaPoints, Ukf};
+    /// # fn main() -> Result<(), kalman::Error> {
+    /// let d = DynDims::new(1, 1, 0)?;
+    /// let model = FnModel::new(
+    ///     d,
+    ///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = x[0],
+    ///     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0],
+    ///     &[[1.0]],
+    ///     &[[1.0]],
+    /// )?;
+    /// let mut ukf = Ukf::new(d, model, &[0.0], &[[1.0]], SigmaPoints::merwe(1.0, 2.0, 0.0))?;
+    /// let mut rts = NonlinearRts::new();
+    /// for z in [1.0, 3.0] {
+    ///     ukf.step(&[z], None)?;
+    ///     rts.record(&ukf)?;
+    /// }
+    /// let mut variances = [0.0; 2];
+    /// let means = rts.smooth_each(|k, p| variances[k] = p[(0, 0)])?;
+    /// let all = rts.smooth()?;
+    /// assert_eq!(means, all.means);
+    /// assert_eq!(variances[0], all.covariances[0][(0, 0)]);
+    /// # Ok(())
+    /// # }
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Self::smooth`].
+    pub fn smooth_each(
+        &self,
+        mut visit: impl FnMut(usize, MatRef<'_, f64>),
+    ) -> Result<Mat<f64>, Error> {
+        self.backward_each(|k, _, p| {
+            visit(k, p.as_ref());
+            Ok(())
+        })
     }
 }
 

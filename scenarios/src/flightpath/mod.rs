@@ -2,12 +2,13 @@
 //! A simulated flight (`sensors::flight`: IMU, air data, AHRS and GNSS with instrument
 //! errors, jittered stamps, dropouts and wild points) or a user's recorded flight is
 //! checked for kinematic consistency by two estimators side by side: the EKF with the
-//! instrument errors as augmented states followed by the extended RTS smoother, and the
+//! instrument errors as augmented states followed by the extended RTS smoother, iterated
+//! once on the model linearised about its smoothed trajectory, and the
 //! output-error maximum-likelihood fit of the same errors with Cramér–Rao bounds
 //! (`kalman::fit::output_error`).
 //!
 //! Layout: [`model`] (the kinematic equations as a `GenericModel`), [`data`] (records and
-//! the filter's grid), [`smoother`] (the gated EKF + RTS), [`estimate`] (both estimators on
+//! the filter's grid), [`smoother`] (the gated EKF + RTS, and its linearised pass), [`estimate`] (both estimators on
 //! one record), then the campaign's files as in every scenario: [`parameters`],
 //! [`records`], [`simulation`], [`summary`], [`report`].
 

@@ -250,6 +250,7 @@ pub fn run_about(
     )
     .map_err(kal("flightpath filter: prior"))?;
     let mut rts = NonlinearRts::new();
+    rts.reserve(n, big_n);
     let mut filtered = Mat::<f64>::zeros(n, big_n);
     let mut filtered_var = Mat::<f64>::zeros(n, big_n);
     let mut gated = grid.z.clone();
@@ -310,22 +311,25 @@ pub fn run_about(
         }
     }
     drop(ekf);
-    let sm = rts.smooth().map_err(kal("flightpath smoother"))?;
-    drop(rts);
     let mut smoothed_var = Mat::<f64>::zeros(n, big_n);
-    for (k, c) in sm.covariances.iter().enumerate() {
-        for i in 0..n {
-            smoothed_var[(i, k)] = c[(i, i)];
-        }
-    }
-    let smoothed_cov_at = keep_cov
-        .iter()
-        .map(|&k| sm.covariances[k.min(big_n - 1)].clone())
-        .collect();
+    let mut smoothed_cov_at = vec![Mat::<f64>::zeros(n, n); keep_cov.len()];
+    let means = rts
+        .smooth_each(|k, c| {
+            for i in 0..n {
+                smoothed_var[(i, k)] = c[(i, i)];
+            }
+            for (slot, &want) in smoothed_cov_at.iter_mut().zip(keep_cov) {
+                if want.min(big_n - 1) == k {
+                    slot.copy_from(c);
+                }
+            }
+        })
+        .map_err(kal("flightpath smoother"))?;
+    drop(rts);
     Ok(Pass {
         filtered,
         filtered_var,
-        smoothed: sm.means,
+        smoothed: means,
         smoothed_var,
         smoothed_cov_at,
         gated,
