@@ -318,7 +318,8 @@ fn report_text(s: &FlightPathSummary, files: &[(String, String)]) -> String {
          instrument errors side by side, as Mulder et al. (1999) and Klein & Morelli (2006, \
          ch. 10) compare them: the **filter–smoother** (EKF with the errors as augmented \
          constant states, exact AD Jacobians, measurements gated on their innovations, then \
-         the extended RTS smoother) and **output error** (maximum likelihood of the errors \
+         the extended RTS smoother, iterated once on the model linearised about its smoothed \
+         trajectory) and **output error** (maximum likelihood of the errors \
          and the initial state with the IMU integrated deterministically, Gauss–Newton with \
          exact AD sensitivities, Cramér–Rao bounds).\n",
         s.params.flight.duration_s,
