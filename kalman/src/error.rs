@@ -215,7 +215,7 @@ pub enum Error {
     /// The innovation covariance of a nonlinear update is singular (the nonlinear filters
     /// have no pseudo-inverse path: the linearised gain would be arbitrary).
     #[error(
-        "step {step}: the innovation covariance ({m}x{m}) of the {filter} update is singular: Cholesky pivot {pivot:e} <= {tol:e}"
+        "step {step}: the innovation covariance ({m}x{m}) of the {filter} update is singular: Cholesky pivot {pivot:e} <= {tol:e} of its diagonal entry"
     )]
     SingularInnovation {
         /// The filter (`"EKF"`, `"iterated EKF"`, `"UKF"`).
@@ -226,7 +226,7 @@ pub enum Error {
         m: usize,
         /// The offending pivot.
         pivot: f64,
-        /// The tolerance (relative to the largest diagonal entry).
+        /// The tolerance (relative to the pivot's own diagonal entry of the covariance).
         tol: f64,
     },
     /// An error in one series of a [`crate::batch::BatchFilter`] run.

@@ -265,9 +265,12 @@ pub(crate) fn mirror_lower(a: &mut [f64], n: usize) {
 /// ln 2π, the constant of every Gaussian log-likelihood in the crate.
 pub(crate) const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
-/// Relative pivot tolerance of the innovation-covariance factorisation: a Cholesky pivot
-/// `d_j ≤ RANK_TOL·max_i Σ_ii` (a channel predicted to within 1e-6 of its scale) or an
-/// eigenvalue `λ ≤ RANK_TOL·λ_max` is treated as an exact linear dependence.
+/// Relative pivot tolerance of the covariance factorisations: a Cholesky pivot
+/// `d_j ≤ RANK_TOL·max_i Σ_ii` (a channel predicted to within 1e-6 of its scale; the linear
+/// engine and the gate), `d_j ≤ RANK_TOL·Σ_jj` (entry j within 1e-6 of a combination of
+/// the earlier ones, whatever its units; the nonlinear filters, whose states and channels
+/// mix units by many orders) or an eigenvalue `λ ≤ RANK_TOL·λ_max` is treated as an exact
+/// linear dependence.
 pub const RANK_TOL: f64 = 1e-12;
 
 /// In-place lower Cholesky of the `n`×`n` matrix `a` (only the lower triangle is read and

@@ -78,10 +78,12 @@ pub(crate) fn max_diag(a: &[f64], n: usize) -> f64 {
 
 /// Lower Cholesky factor `L` (`L Lᵀ = a`) of the symmetric PSD `n`×`n` `a`, written to `L`
 /// (upper triangle zeroed), with the reciprocals of its diagonal in `inv` (the solves below
-/// multiply by them: no division in their dependency chains). A pivot within
-/// `zero_tol·max_diag` of zero (or below it but above `−neg_tol·max_diag`) is a zero pivot:
-/// its column of `L` is zero and its `inv` entry 0 (the semidefinite case). A pivot below
-/// `−neg_tol·max_diag` is returned as `Err(pivot)`.
+/// multiply by them: no division in their dependency chains). A pivot `d_j` at or below
+/// `zero_tol·a_jj` (entry j is, to that share of its own variance, a combination of the
+/// earlier ones, whatever its units; and any pivot of a zero diagonal entry) or below zero
+/// but above `−neg_tol·max_diag` (round-off) is a zero pivot: its column of `L` is zero and
+/// its `inv` entry 0 (the semidefinite case). A pivot below `−neg_tol·max_diag` is
+/// returned as `Err(pivot)`.
 ///
 /// Computed as `a = U D Uᵀ` first (see [`ldl_pass`]): the chain from one pivot to the next
 /// holds one division and no square root; the square roots come after, all independent.
@@ -105,11 +107,11 @@ pub(crate) fn psd_cholesky(
             L[i + j * n] = a[i + j * n];
         }
     }
-    ldl_pass(L, n, inv, |d| {
+    ldl_pass(L, n, inv, |d, ajj| {
         if d.is_nan() || d < -neg_tol * scale {
             Err(d)
         } else {
-            Ok(d > zero_tol * scale)
+            Ok(d > zero_tol * ajj)
         }
     })?;
     scale_columns(L, n, inv);
@@ -117,14 +119,13 @@ pub(crate) fn psd_cholesky(
 }
 
 /// Lower Cholesky factor of a positive definite `n`×`n` `a` in place (lower triangle), with
-/// the reciprocals of its diagonal in `inv`. Returns `Err(pivot)` for the first pivot at or
-/// below `tol·max_diag`. Computed as [`psd_cholesky`].
+/// the reciprocals of its diagonal in `inv`. Returns `Err(pivot)` for the first pivot `d_j`
+/// at or below `tol·a_jj` (see [`psd_cholesky`]). Computed as [`psd_cholesky`].
 #[inline(always)]
 pub(crate) fn pd_cholesky(a: &mut [f64], n: usize, inv: &mut [f64], tol: f64) -> Result<(), f64> {
     let (a, inv) = (&mut a[..n * n], &mut inv[..n]);
-    let scale = max_diag(a, n);
-    ldl_pass(a, n, inv, |d| {
-        if d.is_nan() || d <= tol * scale {
+    ldl_pass(a, n, inv, |d, ajj| {
+        if d.is_nan() || d <= tol * ajj {
             Err(d)
         } else {
             Ok(true)
@@ -139,21 +140,24 @@ pub(crate) fn pd_cholesky(a: &mut [f64], n: usize, inv: &mut [f64], tol: f64) ->
 /// column before its division), `d_j` on it and `1/d_j` in `inv`. With `w_k = s_jk / d_k`,
 /// `d_j = a_jj − Σ_{k<j} s_jk w_k` and `s_ij = a_ij − Σ_{k<j} s_ik w_k` (i > j). `pivot`
 /// judges each `d_j`: `Err` stops, `Ok(false)` makes it a zero pivot (its column and its
-/// `inv` entry zero, so later columns ignore it).
+/// `inv` entry zero, so later columns ignore it); it sees `d_j` and `a_jj`, so that it can
+/// judge `d_j / a_jj = 1 − R²_j`, the share of entry j's variance that the earlier entries
+/// do not explain, whatever the units of each entry.
 #[inline(always)]
 fn ldl_pass(
     a: &mut [f64],
     n: usize,
     inv: &mut [f64],
-    pivot: impl Fn(f64) -> Result<bool, f64>,
+    pivot: impl Fn(f64, f64) -> Result<bool, f64>,
 ) -> Result<(), f64> {
     for j in 0..n {
-        let mut d = a[j + j * n];
+        let ajj = a[j + j * n];
+        let mut d = ajj;
         for k in 0..j {
             let s = a[j + k * n];
             d -= s * (s * inv[k]);
         }
-        if !pivot(d)? {
+        if !pivot(d, ajj)? {
             for i in j..n {
                 a[i + j * n] = 0.0;
             }
@@ -457,6 +461,28 @@ pub(crate) fn gram_lower(S: &[f64], n: usize, P: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// States of very different units are not a dependence: diag(100, 1e-14) with a
+    /// correlation of 0.5 factors in full (both pivots kept, L Lᵀ = a to round-off), where a
+    /// tolerance on the largest diagonal entry would zero the second column (its pivot
+    /// 7.5e-15 is below 1e-12·100). A true dependence at that small scale, the same
+    /// matrix with correlation 1, still gives a zero pivot.
+    #[test]
+    fn pivots_are_judged_against_their_own_diagonal() {
+        let (s1, s2) = (10.0, 1e-7);
+        for (rho, full) in [(0.5, true), (1.0, false)] {
+            let a = [s1 * s1, rho * s1 * s2, rho * s1 * s2, s2 * s2];
+            let (mut L, mut inv) = ([0.0; 4], [0.0; 2]);
+            psd_cholesky(&a, 2, &mut L, &mut inv, 1e-12, 1e-10).expect("PSD");
+            assert_eq!(inv[1] != 0.0, full, "ρ = {rho}: {L:?}");
+            let mut r = [0.0; 4];
+            mul_nt(&mut r, &L, &L, 2, 2, 2, false);
+            assert!((r[3] - a[3]).abs() <= 1e-12 * a[3], "ρ = {rho}: {r:?}");
+            let mut b = a;
+            let mut binv = [0.0; 2];
+            assert_eq!(pd_cholesky(&mut b, 2, &mut binv, 1e-12).is_ok(), full);
+        }
+    }
 
     #[test]
     fn semidefinite_cholesky_reconstructs_and_rejects_indefinite() {
