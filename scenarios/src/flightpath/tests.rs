@@ -60,12 +60,8 @@ fn smoothed_beats_filtered_and_nees_is_in_band() {
     let runs = 2;
     let mut nees_sum = 0.0;
     for run in 0..runs {
-        let Simulated {
-            truth,
-            grid,
-            settings: s,
-            mid,
-        } = simulated(&p, 7, run);
+        let sim = simulated(&p, 7, run);
+        let (truth, grid, s, mid) = (sim.truth, sim.grid, sim.settings, sim.mid);
         let its = super::estimate::SMOOTHER_ITERATIONS;
         let pass =
             super::estimate::filter_smoother(&grid, &s, its, &[mid]).expect("filter–smoother");
@@ -257,12 +253,8 @@ fn iterated_smoother_keeps_the_bounds_honest() {
     let mut moved: f64 = 0.0;
     let errors = p.flight.errors.si();
     for run in 0..runs {
-        let Simulated {
-            truth,
-            grid,
-            settings: s,
-            mid,
-        } = simulated(&p, 11, run);
+        let sim = simulated(&p, 11, run);
+        let (truth, grid, s, mid) = (sim.truth, sim.grid, sim.settings, sim.mid);
         let xt = true_state(&truth[mid], &errors);
         // The single pass, the iterated smoother from it, and one more linearised pass.
         let mut passes = vec![smoother::run(&grid, &s, &[mid]).expect("filter–smoother")];
