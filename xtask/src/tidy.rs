@@ -26,7 +26,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("sensors", &["model"]),
     ("scenarios", &["model", "kalman", "wls", "sensors"]),
     ("python", &["model", "kalman", "wls", "sensors"]),
-    ("benches", &["kalman", "wls", "sensors"]),
+    ("benches", &["kalman", "wls", "sensors", "scenarios"]),
     ("xtask", &[]),
 ];
 
