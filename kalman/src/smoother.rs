@@ -232,12 +232,14 @@ impl<K> Rts<K> {
         &self,
         mut check: impl FnMut(usize, &Mat<f64>, &Mat<f64>) -> Result<(), Error>,
     ) -> Result<Smoothed, Error> {
-        let mut covs = vec![Mat::<f64>::zeros(self.n, self.n); self.steps];
+        // Visited last step first: collected in that order, then reversed.
+        let mut covs = Vec::with_capacity(self.steps);
         let means = self.backward_each(|k, means, P| {
             check(k, means, P)?;
-            covs[k] = P.clone();
+            covs.push(P.clone());
             Ok(())
         })?;
+        covs.reverse();
         Ok(Smoothed {
             means,
             covariances: covs,

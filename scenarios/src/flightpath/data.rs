@@ -105,8 +105,9 @@ impl FlightData {
             *hint += 1;
         }
         let i = *hint;
+        // Before the first sample the hint is still 0; after the last it is the last.
         if t <= imu[0].0 || i + 1 == imu.len() {
-            return imu[if t <= imu[0].0 { 0 } else { i }].1;
+            return imu[i].1;
         }
         let nodes = &imu[i.saturating_sub(1)..(i + 3).min(imu.len())];
         let mut out = [0.0; 6];
