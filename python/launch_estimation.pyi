@@ -334,6 +334,36 @@ class FixedLagSmoother:
         """(xhat_smooth, xhat): x[k|min(k+N, last)] and the filter's x[k|k], from the
         attributes (left unchanged), in Rust without the GIL."""
 
+class IMMEstimator:
+    """FilterPy 2.0.0's ``IMMEstimator`` over a bank of at least two filters with FilterPy's
+    interface (this module's, FilterPy's, or any object with ``x``, ``P``, ``predict(u)``,
+    ``update(z)`` and ``likelihood``); the attributes live in the instance ``__dict__`` as
+    FilterPy keeps them. The mixing and moment matching run in Rust (two passes about the
+    mean); mu is formed from the filters' ``log_likelihood`` where they have one. ``M`` must
+    be a transition matrix (rows summing to one) and ``mu`` non-negative with a positive
+    sum. A failed call (a filter's error, Ctrl-C, no positive likelihood) leaves the
+    estimator and every filter as they were."""
+    filters: Any
+    N: int
+    M: Any
+    mu: Array
+    cbar: Array
+    omega: Array
+    likelihood: Array
+    x: Array
+    P: Array
+    x_prior: Array
+    P_prior: Array
+    x_post: Array
+    P_post: Array
+    def __init__(self, filters: Any, mu: Any, M: Any) -> None: ...
+    def update(self, z: Any) -> None:
+        """Every filter updates with z; mu, cbar, omega, likelihood and the combined x, P,
+        x_post, P_post follow."""
+    def predict(self, u: Any = None) -> None:
+        """Each filter j starts from the mixture of the bank with weights omega[:, j] and
+        predicts with predict(u); the combined x, P, x_prior, P_prior follow."""
+
 FilterResult = dict[str, Array]
 # filter/smooth and their continuous forms: the arrays below, plus, when a gate is given,
 # "rejected": a dict of 1-d arrays "step" and "channel" (int64: the row of zs and the

@@ -391,6 +391,112 @@ impl FixedLagSmoother {
         })
     }
 
+    /// Copy and pickle support: the class rebuilt without `__init__`, then
+    /// `__setstate__((dict, window))`, the window being the smoother's steps so far (None
+    /// before the first `smooth`). A shallow copy shares the attribute arrays, as FilterPy's
+    /// does; the window is always copied.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+        guard(|| {
+            let py = slf.py();
+            let newobj = py.import("copyreg")?.getattr("__newobj__")?;
+            let d = slf.as_any().getattr("__dict__")?.cast_into::<PyDict>()?;
+            let window = match &slf.borrow().run {
+                None => py.None().into_bound(py),
+                Some(run) => {
+                    let st = run.lag.state();
+                    let w = PyDict::new(py);
+                    w.set_item("n", st.n)?;
+                    w.set_item("lag", st.lag)?;
+                    w.set_item("steps", st.steps)?;
+                    for (k, v) in [
+                        ("xf", &st.xf),
+                        ("pf", &st.pf),
+                        ("xp", &st.xp),
+                        ("pp", &st.pp),
+                        ("ct", &st.ct),
+                        ("xs", &st.xs),
+                        ("ps", &st.ps),
+                    ] {
+                        w.set_item(k, v)?;
+                    }
+                    w.into_any()
+                }
+            };
+            let state = (d.copy()?, window).into_pyobject(py)?;
+            (newobj, (slf.get_type(),), state).into_pyobject(py)
+        })
+    }
+
+    /// Restores what `__reduce__` saved: `(dict, window)`.
+    fn __setstate__(slf: &Bound<'_, Self>, state: &Bound<'_, PyAny>) -> PyResult<()> {
+        guard(|| {
+            let bad = || type_error("FixedLagSmoother state must be (dict, window or None)");
+            let t = state.cast::<PyTuple>().map_err(|_| bad())?;
+            if t.len() != 2 {
+                return Err(bad());
+            }
+            let d = t.get_item(0)?;
+            let d = d.cast::<PyDict>().map_err(|_| bad())?;
+            let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+                d.get_item(k)?
+                    .ok_or_else(|| value_error(format!("FixedLagSmoother state has no {k}")))
+            };
+            let (n, m) = (
+                dim(&get("dim_x")?, "dim_x", true)?,
+                dim(&get("dim_z")?, "dim_z", true)?,
+            );
+            let window = t.get_item(1)?;
+            let run = if window.is_none() {
+                None
+            } else {
+                let w = window.cast::<PyDict>().map_err(|_| bad())?;
+                let item = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+                    w.get_item(k)?.ok_or_else(|| {
+                        value_error(format!("FixedLagSmoother state: the window has no {k}"))
+                    })
+                };
+                let list = |k: &str| -> PyResult<Vec<f64>> {
+                    item(k)?.extract().map_err(|_| {
+                        type_error(format!("FixedLagSmoother state: window {k} must be floats"))
+                    })
+                };
+                let count = |k: &str| -> PyResult<usize> {
+                    item(k)?.extract().map_err(|_| {
+                        type_error(format!("FixedLagSmoother state: window {k} must be an int"))
+                    })
+                };
+                let st = kalman::nonlinear::FixedLagState {
+                    n: count("n")?,
+                    lag: count("lag")?,
+                    steps: count("steps")?,
+                    xf: list("xf")?,
+                    pf: list("pf")?,
+                    xp: list("xp")?,
+                    pp: list("pp")?,
+                    ct: list("ct")?,
+                    xs: list("xs")?,
+                    ps: list("ps")?,
+                };
+                if st.n != n {
+                    return Err(value_error(format!(
+                        "FixedLagSmoother state: the window has {} states but dim_x is {n}",
+                        st.n
+                    )));
+                }
+                let lag = FixedLag::from_state(st)
+                    .map_err(|e| value_error(format!("FixedLagSmoother state: {e}")))?;
+                Some(Run {
+                    core: Core::new(n, m, 0)?,
+                    lag,
+                })
+            };
+            let own = slf.as_any().getattr("__dict__")?;
+            own.call_method1("update", (d,))?;
+            *slf.borrow_mut() = Self { n, m, run };
+            Ok(())
+        })
+    }
+
     /// smooth_batch(zs, N, us=None) -> (xhat_smooth, xhat): the lag-N smoothed estimates
     /// x_{k|min(k+N, last)} and the filter's x_{k|k} over zs, from the attributes, which are
     /// left unchanged; (steps, dim_x, 1) arrays when x is a column, else (steps, dim_x).

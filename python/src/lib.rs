@@ -65,6 +65,7 @@ mod ekf;
 mod engine;
 mod fit_fns;
 mod fixed_lag;
+mod imm;
 mod kf;
 mod kf_attrs;
 mod kf_compat;
@@ -117,6 +118,7 @@ fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<ekf::ExtendedKalmanFilter>()?;
     m.add_class::<ukf::UnscentedKalmanFilter>()?;
     m.add_class::<fixed_lag::FixedLagSmoother>()?;
+    m.add_class::<imm::IMMEstimator>()?;
     m.add_class::<sigma::MerweScaledSigmaPoints>()?;
     m.add_class::<sigma::JulierSigmaPoints>()?;
     m.add_class::<sigma::SimplexSigmaPoints>()?;

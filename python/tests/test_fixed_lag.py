@@ -255,3 +255,62 @@ def test_hostile_inputs():
     with pytest.raises(ValueError, match="new FixedLagSmoother"):
         f.smooth(2.0)
     assert f.count == 1 and len(f.xSmooth) == 1
+
+
+@pytest.mark.parametrize("how", ["copy", "deepcopy", "pickle"])
+def test_copies_and_pickles_carry_the_window(how):
+    """A smoother copied mid-run continues exactly as the original (bit for bit), before
+    its first step and after several. A shallow copy shares the attribute arrays and the
+    xSmooth list, as FilterPy's does (so it is continued alone here), never the window."""
+    import copy
+    import pickle
+
+    zs = track(30)
+    fresh = setup(le.FixedLagSmoother(2, 1, N=4))
+    clone = {"copy": copy.copy, "deepcopy": copy.deepcopy}.get(
+        how, lambda o: pickle.loads(pickle.dumps(o))
+    )
+    first = clone(fresh)
+    if how == "copy":
+        first.xSmooth = []
+    for z in zs[:12]:
+        fresh.smooth(z)
+    second = clone(fresh)
+    if how == "copy":
+        assert second.xSmooth is fresh.xSmooth
+        fresh = copy.deepcopy(fresh)
+        second.xSmooth = list(second.xSmooth)
+    for z in zs[12:]:
+        fresh.smooth(z)
+        second.smooth(z)
+    np.testing.assert_array_equal(np.array(second.xSmooth), np.array(fresh.xSmooth))
+    np.testing.assert_array_equal(second.P, fresh.P)
+    assert second.count == fresh.count == 30
+    for z in zs:
+        first.smooth(z)
+    np.testing.assert_array_equal(np.array(first.xSmooth), np.array(fresh.xSmooth))
+
+
+def test_a_damaged_pickled_state_is_refused():
+    import pickle
+
+    f = setup(le.FixedLagSmoother(2, 1, N=3))
+    for z in track(6):
+        f.smooth(z)
+    cls, args, (d, window) = f.__reduce__()
+    for k, v, message in [
+        ("pf", window["pf"][:-1], "pf is"),
+        ("xs", [float("nan")] * len(window["xs"]), "non-finite"),
+        ("n", 3, "3 states but dim_x is 2"),
+        ("lag", "x", "lag must be an int"),
+    ]:
+        bad = dict(window, **{k: v})
+        g = cls(*args)
+        with pytest.raises((ValueError, TypeError), match=message):
+            g.__setstate__((d, bad))
+    g = cls(*args)
+    with pytest.raises(TypeError, match="state must be"):
+        g.__setstate__(d)
+    # The undamaged state still round-trips.
+    g.__setstate__((d, window))
+    assert pickle.loads(pickle.dumps(g)).count == 6

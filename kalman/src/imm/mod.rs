@@ -70,7 +70,10 @@
 //! ```
 #![allow(non_snake_case)]
 
+mod mixture;
 pub mod smoother;
+
+pub use mixture::{Moments, mixing_probabilities, probability_vector};
 
 pub use smoother::{ImmRecord, ImmSmoothed};
 
@@ -305,39 +308,6 @@ impl Structure {
                     (true, true) if a == b => e.fill_var[a],
                     _ => 0.0,
                 };
-            }
-        }
-    }
-}
-
-/// Moment matching: `x = Σ w_i x_i`, `P = Σ w_i (P_i + (x_i − x)(x_i − x)ᵀ)` accumulated one
-/// term at a time: [`Moments::add`] the terms into `(sx, sp, sxx)` after [`Moments::clear`],
-/// then [`Moments::finish`] writes `(x, P)`.
-pub(crate) struct Moments;
-
-impl Moments {
-    pub(crate) fn clear(x: &mut [f64], P: &mut [f64]) {
-        x.fill(0.0);
-        P.fill(0.0);
-    }
-    /// Adds `w (x_i, P_i + x_i x_iᵀ)` to `(x, P)`.
-    pub(crate) fn add(w: f64, (xi, Pi): (&[f64], &[f64]), x: &mut [f64], P: &mut [f64]) {
-        let n = x.len();
-        for a in 0..n {
-            x[a] += w * xi[a];
-            for b in 0..n {
-                P[a + b * n] += w * (Pi[a + b * n] + xi[a] * xi[b]);
-            }
-        }
-    }
-    /// Turns the second moment into the covariance: `P −= x xᵀ`, symmetrised.
-    pub(crate) fn finish(x: &[f64], P: &mut [f64]) {
-        let n = x.len();
-        for a in 0..n {
-            for b in 0..=a {
-                let v = 0.5 * (P[a + b * n] + P[b + a * n]) - x[a] * x[b];
-                P[a + b * n] = v;
-                P[b + a * n] = v;
             }
         }
     }
@@ -592,40 +562,29 @@ impl Imm {
     fn combine(&mut self) {
         let nc = self.s.nc;
         Moments::clear(&mut self.x, &mut self.P);
-        for i in 0..self.s.r {
-            self.s.lift(
-                i,
-                self.modes[i].mode_posterior(),
-                &mut self.ex,
-                &mut self.ep,
-            );
-            Moments::add(
-                self.mu[i],
-                (&self.ex[..nc], &self.ep[..nc * nc]),
-                &mut self.x,
-                &mut self.P,
-            );
+        for pass in 0..2 {
+            for i in 0..self.s.r {
+                self.s.lift(
+                    i,
+                    self.modes[i].mode_posterior(),
+                    &mut self.ex,
+                    &mut self.ep,
+                );
+                let (ex, ep) = (&self.ex[..nc], &self.ep[..nc * nc]);
+                if pass == 0 {
+                    Moments::add_mean(self.mu[i], ex, &mut self.x);
+                } else {
+                    Moments::add_spread(self.mu[i], (ex, ep), &self.x, &mut self.P);
+                }
+            }
         }
-        Moments::finish(&self.x, &mut self.P);
+        Moments::finish(&mut self.P);
     }
 
     /// Mixing: c_{k+1}, ω, the mixed estimates, written into the modes' posteriors.
     fn mix(&mut self) {
         let r = self.s.r;
-        for j in 0..r {
-            let mut c = 0.0;
-            for i in 0..r {
-                c += self.s.pi[i * r + j] * self.mu[i];
-            }
-            self.cbar[j] = c;
-            for i in 0..r {
-                self.omega[i + j * r] = if c > 0.0 {
-                    self.s.pi[i * r + j] * self.mu[i] / c
-                } else {
-                    0.0
-                };
-            }
-        }
+        mixing_probabilities(&self.s.pi, &self.mu, &mut self.cbar, &mut self.omega);
         for j in 0..r {
             let nj = self.s.n(j);
             let (o, op) = (self.off[j], self.offp[j]);
@@ -638,22 +597,29 @@ impl Imm {
                 continue;
             }
             Moments::clear(xm, pm);
-            for i in 0..r {
-                let w = self.omega[i + j * r];
-                if w <= 0.0 {
-                    continue;
+            for pass in 0..2 {
+                for i in 0..r {
+                    let w = self.omega[i + j * r];
+                    if w <= 0.0 {
+                        continue;
+                    }
+                    self.s.project(
+                        i,
+                        self.modes[i].mode_posterior(),
+                        j,
+                        self.modes[j].mode_posterior(),
+                        &mut self.ex[..nj],
+                        &mut self.ep[..nj * nj],
+                    );
+                    let (ex, ep) = (&self.ex[..nj], &self.ep[..nj * nj]);
+                    if pass == 0 {
+                        Moments::add_mean(w, ex, xm);
+                    } else {
+                        Moments::add_spread(w, (ex, ep), xm, pm);
+                    }
                 }
-                self.s.project(
-                    i,
-                    self.modes[i].mode_posterior(),
-                    j,
-                    self.modes[j].mode_posterior(),
-                    &mut self.ex[..nj],
-                    &mut self.ep[..nj * nj],
-                );
-                Moments::add(w, (&self.ex[..nj], &self.ep[..nj * nj]), xm, pm);
             }
-            Moments::finish(xm, pm);
+            Moments::finish(pm);
         }
         for j in 0..r {
             let nj = self.s.n(j);
@@ -716,26 +682,4 @@ impl Imm {
     pub fn mode_mixed_state(&self, j: usize) -> &[f64] {
         self.modes[j].mode_posterior().0
     }
-}
-
-/// A probability vector: finite entries ≥ 0 summing to one within 1e-9.
-fn probability_vector(name: &'static str, v: &[f64]) -> Result<(), Error> {
-    if let Some(&x) = v.iter().find(|x| **x < 0.0) {
-        return Err(Error::InvalidOption {
-            name,
-            value: x,
-            rule: "a probability must be non-negative",
-        });
-    }
-    let s: f64 = v.iter().sum();
-    // Rows typed to a few digits sum to one within a few ulps; 1e-9 also accepts
-    // probabilities printed to nine decimals.
-    if (s - 1.0).abs() > 1e-9 {
-        return Err(Error::InvalidOption {
-            name,
-            value: s,
-            rule: "probabilities (each row of the transition matrix) must sum to one",
-        });
-    }
-    Ok(())
 }

@@ -36,7 +36,7 @@
 use faer::Mat;
 
 use super::ops::ModeOps;
-use super::{Imm, ImmStep, Moments, Structure};
+use super::{Imm, ImmStep, Moments, Structure, mixing_probabilities};
 use crate::Error;
 
 /// A recorded IMM forward pass: per step the mode probabilities, and per mode the
@@ -223,19 +223,25 @@ impl ImmRecord {
             vec![0.0; nc],
             vec![0.0; nc * nc],
         );
-        let mut bjl = vec![0.0; r * r];
+        let (mut bjl, mut cpred) = (vec![0.0; r * r], vec![0.0; r]);
         let mut out = |k: usize, x: &[f64], P: &[f64], mu: &[f64]| {
             let (mut cx, mut cp) = (vec![0.0; nc], vec![0.0; nc * nc]);
             let (mut lx, mut lp) = (vec![0.0; nc], vec![0.0; nc * nc]);
-            for i in 0..r {
-                let (xi, Pi) = (
-                    &x[off[i]..off[i] + ns[i]],
-                    &P[offp[i]..offp[i] + ns[i] * ns[i]],
-                );
-                s.lift(i, (xi, Pi), &mut lx, &mut lp);
-                Moments::add(mu[i], (&lx, &lp), &mut cx, &mut cp);
+            for pass in 0..2 {
+                for i in 0..r {
+                    let (xi, Pi) = (
+                        &x[off[i]..off[i] + ns[i]],
+                        &P[offp[i]..offp[i] + ns[i] * ns[i]],
+                    );
+                    s.lift(i, (xi, Pi), &mut lx, &mut lp);
+                    if pass == 0 {
+                        Moments::add_mean(mu[i], &lx, &mut cx);
+                    } else {
+                        Moments::add_spread(mu[i], (&lx, &lp), &cx, &mut cp);
+                    }
+                }
             }
-            Moments::finish(&cx, &mut cp);
+            Moments::finish(&mut cp);
             for a in 0..nc {
                 means[(a, k)] = cx[a];
                 for b in 0..nc {
@@ -249,19 +255,11 @@ impl ImmRecord {
         out(N - 1, &xn, &pn, &mun);
         for k in (0..N.saturating_sub(1)).rev() {
             let mu = &self.mu[k * r..(k + 1) * r];
-            // 1. Backward transition and smoothed mode probabilities.
-            for l in 0..r {
-                let c: f64 = (0..r).map(|i| s.pi[i * r + l] * mu[i]).sum();
-                for j in 0..r {
-                    bjl[j * r + l] = if c > 0.0 {
-                        s.pi[j * r + l] * mu[j] / c
-                    } else {
-                        0.0
-                    };
-                }
-            }
+            // 1. Backward transition (the mixing probabilities ω_{j|l}, bjl[j + l·r]) and
+            // smoothed mode probabilities.
+            mixing_probabilities(&s.pi, mu, &mut cpred, &mut bjl);
             for j in 0..r {
-                muc[j] = (0..r).map(|l| bjl[j * r + l] * mun[l]).sum();
+                muc[j] = (0..r).map(|l| bjl[j + l * r] * mun[l]).sum();
             }
             let total: f64 = muc.iter().sum();
             if total > 0.0 {
@@ -277,24 +275,32 @@ impl ImmRecord {
                 let (xt, pt) = (&mut xt[..n], &mut pt[..n * n]);
                 if muc[j] > 0.0 {
                     Moments::clear(xt, pt);
-                    for l in 0..r {
-                        let w = bjl[j * r + l] * mun[l] / (muc[j] * total.max(f64::MIN_POSITIVE));
-                        if w <= 0.0 {
-                            continue;
+                    for pass in 0..2 {
+                        for l in 0..r {
+                            let w =
+                                bjl[j + l * r] * mun[l] / (muc[j] * total.max(f64::MIN_POSITIVE));
+                            if w <= 0.0 {
+                                continue;
+                            }
+                            let xl = &xn[off[l]..off[l] + ns[l]];
+                            let pl = &pn[offp[l]..offp[l] + ns[l] * ns[l]];
+                            s.project(
+                                l,
+                                (xl, pl),
+                                j,
+                                (xj_next, pj_next),
+                                &mut ex[..n],
+                                &mut ep[..n * n],
+                            );
+                            let (ex, ep) = (&ex[..n], &ep[..n * n]);
+                            if pass == 0 {
+                                Moments::add_mean(w, ex, xt);
+                            } else {
+                                Moments::add_spread(w, (ex, ep), xt, pt);
+                            }
                         }
-                        let xl = &xn[off[l]..off[l] + ns[l]];
-                        let pl = &pn[offp[l]..offp[l] + ns[l] * ns[l]];
-                        s.project(
-                            l,
-                            (xl, pl),
-                            j,
-                            (xj_next, pj_next),
-                            &mut ex[..n],
-                            &mut ep[..n * n],
-                        );
-                        Moments::add(w, (&ex[..n], &ep[..n * n]), xt, pt);
                     }
-                    Moments::finish(xt, pt);
+                    Moments::finish(pt);
                 } else {
                     xt.copy_from_slice(xj_next);
                     pt.copy_from_slice(pj_next);

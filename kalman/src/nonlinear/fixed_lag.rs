@@ -75,7 +75,120 @@ pub struct FixedLag {
     t: Vec<f64>,
 }
 
+/// What a [`FixedLag`] carries from step to step, to save and restore it
+/// ([`FixedLag::state`], [`FixedLag::from_state`]): the ring of the last L + 1 records and
+/// the smoothed window, each buffer in the smoother's layout (step slot `j mod (L + 1)`,
+/// n×n blocks column-major).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FixedLagState {
+    /// States n.
+    pub n: usize,
+    /// The lag L.
+    pub lag: usize,
+    /// Steps recorded.
+    pub steps: usize,
+    /// x_{j|j}, (L + 1)·n.
+    pub xf: Vec<f64>,
+    /// P_{j|j}, (L + 1)·n².
+    pub pf: Vec<f64>,
+    /// x_{j+1|j}, (L + 1)·n.
+    pub xp: Vec<f64>,
+    /// P_{j+1|j}, (L + 1)·n².
+    pub pp: Vec<f64>,
+    /// C_j, (L + 1)·n².
+    pub ct: Vec<f64>,
+    /// The smoothed means, entry b the step k − b, (L + 1)·n.
+    pub xs: Vec<f64>,
+    /// The smoothed covariances, (L + 1)·n².
+    pub ps: Vec<f64>,
+}
+
 impl FixedLag {
+    /// What the smoother carries, for [`FixedLag::from_state`].
+    pub fn state(&self) -> FixedLagState {
+        FixedLagState {
+            n: self.n,
+            lag: self.lag,
+            steps: self.steps,
+            xf: self.xf.clone(),
+            pf: self.pf.clone(),
+            xp: self.xp.clone(),
+            pp: self.pp.clone(),
+            ct: self.ct.clone(),
+            xs: self.xs.clone(),
+            ps: self.ps.clone(),
+        }
+    }
+
+    /// The smoother [`FixedLag::state`] saved.
+    ///
+    /// ```
+    /// use kalman::nonlinear::FixedLag;
+    /// let s = FixedLag::new(2, 3)?;
+    /// assert_eq!(FixedLag::from_state(s.state())?.state(), s.state());
+    /// let mut bad = s.state();
+    /// bad.pf.pop();
+    /// assert!(FixedLag::from_state(bad).is_err());
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] naming `n` (zero); [`Error::Shape`] naming the buffer whose
+    /// length does not match n and the lag; [`Error::NonFinite`] naming a buffer with a
+    /// NaN or infinite entry.
+    pub fn from_state(state: FixedLagState) -> Result<Self, Error> {
+        let (n, lag) = (state.n, state.lag);
+        let FixedLagState {
+            xf,
+            pf,
+            xp,
+            pp,
+            ct,
+            xs,
+            ps,
+            ..
+        } = state;
+        // The lengths are checked before anything is allocated: the buffers given bound
+        // what the smoother allocates, whatever n and the lag say.
+        let w = lag.checked_add(1);
+        let vec_len = w.and_then(|w| w.checked_mul(n));
+        let mat_len = vec_len.and_then(|v| v.checked_mul(n));
+        let bufs = [
+            ("xf", xf, vec_len),
+            ("pf", pf, mat_len),
+            ("xp", xp, vec_len),
+            ("pp", pp, mat_len),
+            ("ct", ct, mat_len),
+            ("xs", xs, vec_len),
+            ("ps", ps, mat_len),
+        ];
+        for (name, buf, len) in &bufs {
+            if Some(buf.len()) != *len {
+                return Err(Error::Shape {
+                    name,
+                    rows: buf.len(),
+                    cols: 1,
+                    expected_rows: len.unwrap_or(usize::MAX),
+                    expected_cols: 1,
+                });
+            }
+            if let Some(row) = buf.iter().position(|v| !v.is_finite()) {
+                return Err(Error::NonFinite {
+                    name,
+                    rows: buf.len(),
+                    cols: 1,
+                    row,
+                    col: 0,
+                });
+            }
+        }
+        let mut out = Self::new(n, lag)?;
+        let [xf, pf, xp, pp, ct, xs, ps] = bufs.map(|(_, buf, _)| buf);
+        (out.xf, out.pf, out.xp, out.pp, out.ct, out.xs, out.ps) = (xf, pf, xp, pp, ct, xs, ps);
+        out.steps = state.steps;
+        Ok(out)
+    }
+
     /// A smoother of `n` states and lag `lag` (0 gives the filtered estimates).
     ///
     /// # Errors

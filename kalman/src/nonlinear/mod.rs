@@ -161,7 +161,7 @@ pub use continuous::{
     ContinuousDynamics, DEFAULT_MAX_SUBSTEP, MAX_CONTINUOUS_STATES, MAX_SUBSTEPS, TimeStamped,
 };
 pub use ekf::{Ekf, EkfUpdate};
-pub use fixed_lag::FixedLag;
+pub use fixed_lag::{FixedLag, FixedLagState};
 pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
 pub use sigma::SigmaPoints;
 pub use smoother::{ForwardPass, NonlinearRts};

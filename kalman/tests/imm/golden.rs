@@ -165,3 +165,37 @@ fn one_mode_is_the_filter() {
     }
     assert_eq!(imm.steps(), 5);
 }
+
+/// Two one-state modes far from the origin with a tight covariance (x ≈ 1e4, P = 1e-12, the
+/// spread between the modes 1e-6): the combined P is the two-pass mixture formula to 1e-24
+/// absolute (its own size is ~1e-12; a second moment x² ≈ 1e8 formed and subtracted would
+/// leave errors of ~1e8·ε ≈ 1e-8, four orders larger than P itself).
+#[test]
+fn a_tight_covariance_far_from_the_origin_is_kept() {
+    let mode = |x0: f64| -> Box<dyn Mode> {
+        let m = Model::new(
+            FixedDims::<1, 1>::new(),
+            &[[1.0]],
+            &[[1.0]],
+            &[[0.0]],
+            &[[1e-12]],
+        )
+        .expect("model");
+        Box::new(Filter::new(m, &[x0], &[[1e-12]], CovarianceForm::Joseph).expect("filter"))
+    };
+    let (a, b) = (1e4, 1e4 + 1e-6);
+    let imm = Imm::new(
+        vec![
+            (mode(a), Embedding::identity(1)),
+            (mode(b), Embedding::identity(1)),
+        ],
+        &[[0.9, 0.1], [0.1, 0.9]],
+        &[0.3, 0.7],
+    )
+    .expect("imm");
+    let x = 0.3 * a + 0.7 * b;
+    let p = 0.3 * ((a - x) * (a - x) + 1e-12) + 0.7 * ((b - x) * (b - x) + 1e-12);
+    assert!((imm.state()[0] - x).abs() <= 1e-12 * x);
+    let got = imm.covariance()[(0, 0)];
+    assert!((got - p).abs() < 1e-24, "P = {got:e}, two-pass {p:e}");
+}
