@@ -6,10 +6,13 @@ solve with a Cholesky factor of S), so on these well-conditioned problems (cond(
 catching any formula difference, which shows at 1e-3 or more.
 """
 
+import functools
+
 import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter as FpKalmanFilter
 
+import compare
 import launch_estimation as le
 from problems import problem, setup
 
@@ -17,11 +20,7 @@ TOL = 1e-10
 SIZES = [(1, 1, 0), (2, 1, 1), (3, 2, 0), (4, 3, 2), (7, 2, 1), (5, 5, 0), (9, 2, 0), (10, 4, 1)]
 
 
-def close(a, b, what):
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    assert a.shape == b.shape, f"{what}: shape {a.shape} vs FilterPy's {b.shape}"
-    scale = max(1.0, float(np.max(np.abs(b))) if b.size else 1.0)
-    np.testing.assert_allclose(a, b, rtol=TOL, atol=TOL * scale, err_msg=what)
+close = functools.partial(compare.close, tol=TOL)
 
 
 @pytest.mark.parametrize("n,m,p", SIZES)

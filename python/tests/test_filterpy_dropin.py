@@ -8,6 +8,7 @@ factor S), on well-conditioned problems, so 1e-10 relative (as in test_filterpy_
 a copy or a pickle must give the same bits."""
 
 import copy
+import functools
 import pickle
 
 import numpy as np
@@ -15,6 +16,7 @@ import pytest
 from filterpy.common import Saver
 from filterpy.kalman import KalmanFilter as FpKalmanFilter
 
+import compare
 import launch_estimation as le
 from problems import problem, setup
 
@@ -23,11 +25,7 @@ ATTRS = ["x", "P", "F", "Q", "H", "R", "B", "M", "K", "y", "S", "SI", "z",
          "x_prior", "P_prior", "x_post", "P_post"]
 
 
-def close(a, b, what):
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    assert a.shape == b.shape, f"{what}: shape {a.shape} vs FilterPy's {b.shape}"
-    scale = max(1.0, float(np.max(np.abs(b))) if b.size else 1.0)
-    np.testing.assert_allclose(a, b, rtol=TOL, atol=TOL * scale, err_msg=what)
+close = functools.partial(compare.close, tol=TOL)
 
 
 def same_bits(a, b, what):

@@ -6,23 +6,21 @@ Tolerance 1e-10 relative, as for KalmanFilter: the same formulas in the same ord
 solve (FilterPy forms inv(S), we factor S)."""
 
 import copy
+import functools
 import pickle
 
 import numpy as np
 import pytest
 from filterpy.kalman import ExtendedKalmanFilter as FpEKF
 
+import compare
 import launch_estimation as le
 
 TOL = 1e-10
 DT = 0.05
 
 
-def close(a, b, what):
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    assert a.shape == b.shape, f"{what}: shape {a.shape} vs FilterPy's {b.shape}"
-    scale = max(1.0, float(np.max(np.abs(b))) if b.size else 1.0)
-    np.testing.assert_allclose(a, b, rtol=TOL, atol=TOL * scale, err_msg=what)
+close = functools.partial(compare.close, tol=TOL)
 
 
 def HJacobian(x, scale=1.0):

@@ -15,6 +15,7 @@ What is checked, and against what:
 """
 
 import copy
+import functools
 import pickle
 
 import numpy as np
@@ -23,17 +24,14 @@ from filterpy.common import Saver
 from filterpy.kalman import IMMEstimator as FpIMM
 from filterpy.kalman import KalmanFilter as FpKF
 
+import compare
 import launch_estimation as le
 
 TOL = 1e-9
 TRANS = np.array([[0.97, 0.03], [0.03, 0.97]])
 
 
-def close(a, b, what, tol=TOL):
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    assert a.shape == b.shape, f"{what}: shape {a.shape} vs {b.shape}"
-    scale = max(1.0, float(np.max(np.abs(b))) if b.size else 1.0)
-    np.testing.assert_allclose(a, b, rtol=tol, atol=tol * scale, err_msg=what)
+close = functools.partial(compare.close, tol=TOL)
 
 
 def bank(cls, far=False):

@@ -14,19 +14,18 @@ What is checked, and against what:
   references above and FilterPy's departures are pinned where they are exact.
 """
 
+import functools
+
 import numpy as np
 import pytest
 
+import compare
 import launch_estimation as le
 
 TOL = 1e-9
 
 
-def close(a, b, what, tol=TOL):
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    assert a.shape == b.shape, f"{what}: shape {a.shape} vs {b.shape}"
-    scale = max(1.0, float(np.max(np.abs(b))) if b.size else 1.0)
-    np.testing.assert_allclose(a, b, rtol=tol, atol=tol * scale, err_msg=what)
+close = functools.partial(compare.close, tol=TOL)
 
 
 def setup(f, column=True):
@@ -190,14 +189,14 @@ def test_filter_quantities_match_filterpy():
         ours, theirs = setup(le.FixedLagSmoother(2, 1)), setup(fp.FixedLagSmoother(2, 1))
         _, xa = ours.smooth_batch(zs, N)
         sb, xb = theirs.smooth_batch(zs, N)
-        close(xa, xb, f"xhat vs FilterPy (N={N})", 1e-10)
+        close(xa, xb, f"xhat vs FilterPy (N={N})", tol=1e-10)
         assert ours.smooth_batch(zs, N)[0].shape == sb.shape
     a, b = setup(le.FixedLagSmoother(2, 1, N=3)), setup(fp.FixedLagSmoother(2, 1, N=3))
     for z in zs:
         a.smooth(z)
         b.smooth(z)
         for name in ("x", "P", "y", "S"):
-            close(getattr(a, name), getattr(b, name), f"{name} vs FilterPy", 1e-10)
+            close(getattr(a, name), getattr(b, name), f"{name} vs FilterPy", tol=1e-10)
     assert a.count == b.count and len(a.xSmooth) == len(b.xSmooth)
     assert a.xSmooth[0].shape == b.xSmooth[0].shape
 
