@@ -52,7 +52,7 @@ fn nonlinear(c: &mut Criterion) {
             })
         },
     );
-    let mut ad = Ekf::new(d, AutoDiff::new(MODEL, d), &X0, &P0, EkfUpdate::Extended).unwrap();
+    let mut ad = Ekf::new(d, AutoDiff::new(d, MODEL), &X0, &P0, EkfUpdate::Extended).unwrap();
     g.bench_function(BenchmarkId::new("ekf_autodiff_jacobians", label), |b| {
         b.iter(|| {
             k = (k + 1) % zs.len();

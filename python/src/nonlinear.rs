@@ -131,7 +131,7 @@ fn run<'py>(
     }
     match kind {
         Kind::Ekf(update) => {
-            drive!(Ekf::new(dims, CentralDiff::new(model, dims), &x0v, &P0, update).map_err(err)?)
+            drive!(Ekf::new(dims, CentralDiff::new(dims, model), &x0v, &P0, update).map_err(err)?)
         }
         Kind::Ukf(points) => drive!(Ukf::new(dims, model, &x0v, &P0, points).map_err(err)?),
     }

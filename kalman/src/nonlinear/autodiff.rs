@@ -34,7 +34,7 @@ impl<T: DualNum<Primitive = f64> + Copy> Scalar for T {}
 ///     fn r(&self, _k: usize, out: &mut [f64]) { out.copy_from_slice(&[1e-2, 0.0, 0.0, 1e-4]); }
 /// }
 /// # fn main() -> Result<(), kalman::Error> {
-/// let mut ad = AutoDiff::new(RangeBearing, DynDims::new(2, 2, 0)?);
+/// let mut ad = AutoDiff::new(DynDims::new(2, 2, 0)?, RangeBearing);
 /// let mut jac = [0.0; 4];
 /// ad.h_jacobian(&[3.0, 4.0], 0, &mut jac);
 /// // ∂r/∂x = x/r, ∂θ/∂x = −y/r² (column-major: jac[0], jac[1] are column x).
@@ -67,7 +67,7 @@ pub struct AutoDiff<G> {
 
 impl<G: GenericModel> AutoDiff<G> {
     /// Wraps `model` for the dimensions `dims`.
-    pub fn new(model: G, dims: impl Dims) -> Self {
+    pub fn new(dims: impl Dims, model: G) -> Self {
         Self {
             model,
             xd: vec![Dual64::from_re(0.0); dims.n()],

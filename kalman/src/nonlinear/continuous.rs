@@ -123,7 +123,7 @@ pub trait ContinuousDynamics {
 /// let d = DynDims::new(2, 1, 0)?;
 /// let model = TimeStamped::new(Pendulum, d, &t)?.with_max_substep(0.005)?;
 /// assert_eq!(model.substeps(1), 26); // ⌈0.13 / 0.005⌉
-/// let mut ekf = Ekf::new(d, AutoDiff::new(model, d), &[0.3, 0.0],
+/// let mut ekf = Ekf::new(d, AutoDiff::new(d, model), &[0.3, 0.0],
 ///     &[[1e-2, 0.0], [0.0, 1e-1]], EkfUpdate::Extended)?;
 /// for zk in z {
 ///     ekf.step(&[zk], None)?;

@@ -52,7 +52,7 @@ pub enum EkfUpdate {
 ///     &[[1e-2]],
 /// )?;
 /// let update = EkfUpdate::Iterated { max_iterations: 10, tolerance: 1e-12 };
-/// let mut iekf = Ekf::new(d, CentralDiff::new(model, d), &[1.0], &[[0.25]], update)?;
+/// let mut iekf = Ekf::new(d, CentralDiff::new(d, model), &[1.0], &[[0.25]], update)?;
 /// let info = iekf.step(&[1.331], None)?; // 1.1³
 /// assert!(info.iterations > 1);
 /// assert!((iekf.state()[0] - 1.1).abs() < 0.02);

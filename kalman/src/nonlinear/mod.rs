@@ -70,7 +70,7 @@
 //! )?;
 //! let mut ukf = Ukf::new(FixedDims::<2, 1>::new(), model.clone(), &[0.5, 0.0],
 //!     &[[0.1, 0.0], [0.0, 0.1]], SigmaPoints::merwe(1e-3, 2.0, 0.0))?;
-//! let ekf_model = CentralDiff::new(model, FixedDims::<2, 1>::new());
+//! let ekf_model = CentralDiff::new(FixedDims::<2, 1>::new(), model);
 //! let mut ekf = Ekf::new(FixedDims::<2, 1>::new(), ekf_model, &[0.5, 0.0],
 //!     &[[0.1, 0.0], [0.0, 0.1]], EkfUpdate::Extended)?;
 //! for z in [0.45, 0.44, f64::NAN, 0.39] {
@@ -162,7 +162,7 @@ pub use continuous::{
 };
 pub use ekf::{Ekf, EkfUpdate};
 pub use fixed_lag::{FixedLag, FixedLagState};
-pub use models::{CentralDiff, FnModel, Jacobians, NonlinearModel};
+pub use models::{CentralDiff, FnModel, Hook, Jacobians, NonlinearModel};
 pub use sigma::SigmaPoints;
 pub use smoother::{ForwardPass, NonlinearRts};
 pub use sqrt_ukf::SqrtUkf;

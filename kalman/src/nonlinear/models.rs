@@ -153,6 +153,29 @@ pub struct FnModel<F, H> {
     h: H,
     q: Vec<f64>,
     r: Vec<f64>,
+    hooks: Hooks,
+}
+
+/// A residual, state difference or state addition: `(a, b, out)`.
+pub type Hook = fn(&[f64], &[f64], &mut [f64]);
+
+/// The [`FnModel`]'s residual, state difference and state addition (entry by entry unless
+/// set).
+#[derive(Clone, Copy)]
+struct Hooks {
+    residual: Hook,
+    state_residual: Hook,
+    state_add: Hook,
+}
+
+impl Default for Hooks {
+    fn default() -> Self {
+        Self {
+            residual: difference,
+            state_residual: difference,
+            state_add: sum,
+        }
+    }
 }
 
 impl<F, H> core::fmt::Debug for FnModel<F, H> {
@@ -188,7 +211,52 @@ where
         let mut work = vec![0.0; n.max(m) * n.max(m)];
         load_cov("Q", Q, n, &mut q, &mut work)?;
         load_cov("R", R, m, &mut r, &mut work)?;
-        Ok(Self { f, h, q, r })
+        Ok(Self {
+            f,
+            h,
+            q,
+            r,
+            hooks: Hooks::default(),
+        })
+    }
+
+    /// The model with the measurement residual `a − b` replaced by `residual(a, b, out)`:
+    /// a bearing's wrapped difference, so that an innovation of 359° is −1°.
+    ///
+    /// ```
+    /// use kalman::FixedDims;
+    /// use kalman::nonlinear::{FnModel, NonlinearModel};
+    /// use std::f64::consts::PI;
+    /// # fn main() -> Result<(), kalman::Error> {
+    /// let wrap = |a: &[f64], b: &[f64], out: &mut [f64]| {
+    ///     out[0] = (a[0] - b[0] + PI).rem_euclid(2.0 * PI) - PI;
+    /// };
+    /// let model = FnModel::new(
+    ///     FixedDims::<1, 1>::new(),
+    ///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = x[0],
+    ///     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0],
+    ///     &[[1e-4]],
+    ///     &[[1e-2]],
+    /// )?
+    /// .with_residual(wrap);
+    /// let mut y = [0.0];
+    /// model.residual(&[PI - 0.1], &[-PI + 0.1], &mut y);
+    /// assert!((y[0] + 0.2).abs() < 1e-12);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn with_residual(mut self, residual: Hook) -> Self {
+        self.hooks.residual = residual;
+        self
+    }
+
+    /// The model with the state difference `a ⊖ b` and the state addition `x ⊕ δ` replaced
+    /// (a heading state wrapped to (−π, π]): the unscented filters and smoothers form every
+    /// spread and correction of the state through these two.
+    pub fn with_state_hooks(mut self, state_residual: Hook, state_add: Hook) -> Self {
+        self.hooks.state_residual = state_residual;
+        self.hooks.state_add = state_add;
+        self
     }
 }
 
@@ -222,6 +290,15 @@ where
     fn r(&mut self, _k: usize, out: &mut [f64]) {
         out.copy_from_slice(&self.r);
     }
+    fn residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+        (self.hooks.residual)(a, b, out);
+    }
+    fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
+        (self.hooks.state_add)(x, dx, out);
+    }
+    fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
+        (self.hooks.state_residual)(a, b, out);
+    }
 }
 
 /// Jacobians of any [`NonlinearModel`] by central differences.
@@ -246,7 +323,7 @@ where
 ///     &[[0.1]],
 ///     &[[0.2]],
 /// )?;
-/// let mut cd = CentralDiff::new(model, DynDims::new(1, 1, 0)?);
+/// let mut cd = CentralDiff::new(DynDims::new(1, 1, 0)?, model);
 /// let mut j = [0.0];
 /// cd.h_jacobian(&[0.3], 0, &mut j);
 /// assert!((j[0] - 0.3_f64.cos()).abs() < 1e-9);
@@ -269,7 +346,7 @@ pub const CENTRAL_DIFF_STEP: f64 = 6.055_454_452_393_343e-6;
 impl<M: NonlinearModel> CentralDiff<M> {
     /// Wraps `model` for the dimensions `dims` (workspaces are allocated here, not per
     /// step), with the default relative step ε^{1/3}.
-    pub fn new(model: M, dims: impl Dims) -> Self {
+    pub fn new(dims: impl Dims, model: M) -> Self {
         let k = dims.n().max(dims.m());
         Self {
             model,

@@ -200,7 +200,7 @@ fn the_fitted_model_is_the_crates_ekf() {
     let p0 = Mat::from_fn(2, 2, |i, j| p0[i + 2 * j]);
     let mut ekf = Ekf::new(
         dims,
-        AutoDiff::new(fixed, dims),
+        AutoDiff::new(dims, fixed),
         &x0,
         &p0,
         EkfUpdate::Extended,

@@ -153,7 +153,7 @@ fn an_imm_step_over_three_filter_kinds_allocates_nothing() {
     let q: [[f64; 5]; 5] =
         std::array::from_fn(|i| std::array::from_fn(|j| if i == j { 0.1 } else { 0.0 }));
     let r = [[100.0, 0.0], [0.0, 100.0]];
-    let ekf_model = CentralDiff::new(FnModel::new(d, turn, pos, &q, &r).expect("model"), d);
+    let ekf_model = CentralDiff::new(d, FnModel::new(d, turn, pos, &q, &r).expect("model"));
     let ekf = Ekf::new(d, ekf_model, &x0, &p0, EkfUpdate::Extended).expect("EKF");
     let ukf_dyn = Ukf::new(
         d,

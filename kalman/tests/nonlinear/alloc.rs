@@ -58,7 +58,7 @@ fn linear_case<D: NlDims>(p: &FilterProblem, d: D) {
     for u in updates {
         let mut f = Ekf::new(d, Linear::new(p), &p.x0, &p.p0, u).expect("ekf");
         assert_eq!(count(&mut f, &p.z, &p.u), 0, "EKF {u:?} hand");
-        let cd = CentralDiff::new(Linear::new(p), d);
+        let cd = CentralDiff::new(d, Linear::new(p));
         let mut f = Ekf::new(d, cd, &p.x0, &p.p0, u).expect("ekf");
         assert_eq!(
             count(&mut f, &p.z, &p.u),
@@ -112,7 +112,7 @@ fn no_allocation_per_nonlinear_step() {
     let dynd = DynDims::new(4, 2, 0).expect("dims");
     let mut f = Ekf::new(
         fixed,
-        AutoDiff::new(RangeBearing::default(), fixed),
+        AutoDiff::new(fixed, RangeBearing::default()),
         &x0,
         &p0,
         EkfUpdate::Extended,
@@ -121,7 +121,7 @@ fn no_allocation_per_nonlinear_step() {
     assert_eq!(count(&mut f, &zs, &[]), 0, "EKF AD fixed");
     let mut f = Ekf::new(
         dynd,
-        AutoDiff::new(RangeBearing::default(), dynd),
+        AutoDiff::new(dynd, RangeBearing::default()),
         &x0,
         &p0,
         EkfUpdate::Extended,

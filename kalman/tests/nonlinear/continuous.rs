@@ -145,10 +145,10 @@ fn linear_dynamics_predict_as_the_matrix_exponential() {
     let x0 = [1.0, -0.5];
     let p0 = [[0.2, 0.05], [0.05, 0.4]];
     let mut ekf =
-        Ekf::new(d, AutoDiff::new(model(), d), &x0, &p0, EkfUpdate::Extended).expect("ekf");
+        Ekf::new(d, AutoDiff::new(d, model()), &x0, &p0, EkfUpdate::Extended).expect("ekf");
     let mut ukf = Ukf::new(
         d,
-        AutoDiff::new(model(), d),
+        AutoDiff::new(d, model()),
         &x0,
         &p0,
         SigmaPoints::merwe(0.5, 2.0, 0.0),
@@ -256,7 +256,7 @@ fn cubic_decay_matches_its_closed_form_and_derivative() {
         let m = TimeStamped::new(Cubic, d, &t)
             .and_then(|m| m.with_max_substep(hmax))
             .expect("model");
-        let mut ad = AutoDiff::new(m.clone(), d);
+        let mut ad = AutoDiff::new(d, m.clone());
         (0..t.len())
             .map(|k| {
                 let (mut y, mut jac) = ([0.0_f64], [0.0_f64]);
@@ -404,7 +404,7 @@ fn pendulum_ekf_and_smoother_are_consistent_on_an_irregular_clock() {
             .and_then(|m| m.with_max_substep(0.01))
             .expect("model");
         let mut ekf =
-            Ekf::new(d, AutoDiff::new(model, d), &m0, &p0, EkfUpdate::Extended).expect("ekf");
+            Ekf::new(d, AutoDiff::new(d, model), &m0, &p0, EkfUpdate::Extended).expect("ekf");
         let mut rts = NonlinearRts::new();
         for k in 0..t.len() {
             ekf.step(&[z[k]], None).expect("step");
@@ -534,7 +534,7 @@ fn an_interval_past_a_blow_up_is_the_filters_error_at_that_step() {
     let model = TimeStamped::new(BlowUp, d, &[0.0, 0.5, 3.0, 3.1]).expect("model");
     let mut ekf = Ekf::new(
         d,
-        AutoDiff::new(model, d),
+        AutoDiff::new(d, model),
         &[1.0],
         &[[1e-4]],
         EkfUpdate::Extended,
@@ -566,7 +566,7 @@ fn steps_allocate_nothing() {
     let p0 = [[0.01, 0.0], [0.0, 0.04]];
     let mut ekf = Ekf::new(
         d,
-        AutoDiff::new(model, d),
+        AutoDiff::new(d, model),
         &[0.5, 0.0],
         &p0,
         EkfUpdate::Extended,

@@ -46,7 +46,7 @@ fn non_finite_model_values_name_function_and_step() {
         }
     );
     assert!(err.to_string().contains("step 2"));
-    let cd = CentralDiff::new(scalar_model(99, 1), d);
+    let cd = CentralDiff::new(d, scalar_model(99, 1));
     let mut ekf = Ekf::new(d, cd, &[0.0], &[[1.0]], EkfUpdate::Extended).expect("ekf");
     ekf.step(&[0.1], None).expect("step 0");
     let err = ekf.step(&[0.1], None).expect_err("f is NaN at step 1");
@@ -135,7 +135,7 @@ fn singular_innovation_covariance_is_an_error() {
     );
     let mut ekf = Ekf::new(
         d,
-        CentralDiff::new(model, d),
+        CentralDiff::new(d, model),
         &[0.0],
         &[[1.0]],
         EkfUpdate::Extended,
@@ -162,7 +162,7 @@ fn bad_options_and_shapes_are_errors() {
             "{err:?}"
         );
     }
-    let cd = || CentralDiff::new(scalar_model(99, 99), d);
+    let cd = || CentralDiff::new(d, scalar_model(99, 99));
     let bad = EkfUpdate::Iterated {
         max_iterations: 0,
         tolerance: 1e-9,

@@ -173,7 +173,7 @@ fn range_bearing_runs_equal_filterpy() {
         2,
         "range-bearing EKF (hand Jacobians)",
     );
-    let ad = AutoDiff::new(RangeBearing::default(), d);
+    let ad = AutoDiff::new(d, RangeBearing::default());
     let mut ad = Ekf::new(d, ad, &x0, &P0, EkfUpdate::Extended).expect("ekf");
     compare(&mut ad, ekf_csv, 4, 2, "range-bearing EKF (AD Jacobians)");
     for (set, file) in [
@@ -221,10 +221,10 @@ fn pendulum_runs_equal_filterpy() {
             include_str!("../golden/nl_pendulum_ukf_cubature.csv"),
         ),
     ] {
-        let ad = AutoDiff::new(Pendulum::default(), d);
+        let ad = AutoDiff::new(d, Pendulum::default());
         let mut ukf = Ukf::new(d, ad, &x0, &P0, set).expect("ukf");
         compare(&mut ukf, file, 2, 1, &format!("pendulum UKF {set:?}"));
-        let ad = AutoDiff::new(Pendulum::default(), d);
+        let ad = AutoDiff::new(d, Pendulum::default());
         let mut sq = SqrtUkf::new(d, ad, &x0, &P0, set).expect("sqrt");
         compare(
             &mut sq,

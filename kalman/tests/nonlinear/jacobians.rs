@@ -32,7 +32,7 @@ fn autodiff_equals_hand_written_jacobians() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     for gamma in [0.0, 10.0] {
         let b = boom(gamma);
-        let mut ad = AutoDiff::new(b.clone(), DynDims::new(3, 2, 0).expect("dims"));
+        let mut ad = AutoDiff::new(DynDims::new(3, 2, 0).expect("dims"), b.clone());
         for _ in 0..200 {
             let x = [
                 rng.random_range(0.0..std::f64::consts::FRAC_PI_2),
@@ -51,11 +51,11 @@ fn autodiff_equals_hand_written_jacobians() {
         }
     }
     let mut ad = AutoDiff::new(
-        RangeBearing::default(),
         DynDims::new(4, 2, 0).expect("dims"),
+        RangeBearing::default(),
     );
     let mut hand = RangeBearingHand::default();
-    let mut pad = AutoDiff::new(Pendulum::default(), DynDims::new(2, 1, 0).expect("dims"));
+    let mut pad = AutoDiff::new(DynDims::new(2, 1, 0).expect("dims"), Pendulum::default());
     let mut phand = PendulumHand::default();
     for _ in 0..200 {
         let x: [f64; 4] = std::array::from_fn(|_| rng.random_range(-100.0..100.0));
@@ -103,7 +103,7 @@ fn central_differences_within_their_documented_bound() {
             &[[1.0, 0.0], [0.0, 1.0]],
         )
         .expect("model");
-        let mut cd = CentralDiff::new(model, DynDims::new(3, 2, 0).expect("dims"));
+        let mut cd = CentralDiff::new(DynDims::new(3, 2, 0).expect("dims"), model);
         let mut worst = 0.0_f64;
         for _ in 0..200 {
             let x = [

@@ -269,7 +269,7 @@ impl TrackingModel {
         let model = self.model()?;
         let mut ekf = Ekf::new(
             DIMS,
-            CentralDiff::new(model.clone(), DIMS),
+            CentralDiff::new(DIMS, model.clone()),
             &x0,
             &p0,
             EkfUpdate::Extended,

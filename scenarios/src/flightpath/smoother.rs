@@ -98,7 +98,7 @@ impl Linearised {
     fn new(model: FlightModel, dims: kalman::DynDims, nominal: Option<Mat<f64>>) -> Self {
         let n = model.n();
         Self {
-            ad: AutoDiff::new(model, dims),
+            ad: AutoDiff::new(dims, model),
             nominal,
             f_at: None,
             fbar: vec![0.0; n],
