@@ -17,7 +17,8 @@ pub const SYMMETRY_TOL: f64 = 1e-10;
 pub const PSD_TOL: f64 = 1e-10;
 
 /// Anything that can be read as a dense real matrix: faer `Mat`/`MatRef`, row-major nested
-/// arrays `[[f64; C]; R]`, nalgebra matrices (feature `nalgebra`).
+/// arrays `[[f64; C]; R]` and vectors `Vec<Vec<f64>>`, nalgebra matrices (feature
+/// `nalgebra`).
 ///
 /// # Example
 /// ```
@@ -71,6 +72,46 @@ impl<const R: usize, const C: usize> MatrixInput for [[f64; C]; R] {
     }
     fn at(&self, i: usize, j: usize) -> f64 {
         self[i][j]
+    }
+}
+
+/// Row-major nested vectors, one `Vec` per row. A row shorter than the longest reads as NaN
+/// where it has no entry, so every loader refuses a ragged matrix as a non-finite entry at
+/// the first missing position (naming the matrix, the row and the column).
+///
+/// ```
+/// use kalman::{DynDims, Error, Model};
+/// let d = DynDims::new(2, 1, 0)?;
+/// let f = vec![vec![1.0, 0.1], vec![0.0, 1.0]];
+/// let h = vec![vec![1.0, 0.0]];
+/// let q = vec![vec![1e-4, 0.0], vec![0.0, 1e-3]];
+/// assert!(Model::new(d, &f, &h, &q, &vec![vec![0.01]]).is_ok());
+/// let ragged = vec![vec![1.0, 0.1], vec![0.0]];
+/// let err = Model::new(d, &ragged, &h, &q, &vec![vec![0.01]]).unwrap_err();
+/// assert!(matches!(err, Error::NonFinite { name: "F", row: 1, col: 1, .. }));
+/// # Ok::<(), kalman::Error>(())
+/// ```
+impl MatrixInput for [Vec<f64>] {
+    fn nrows(&self) -> usize {
+        self.len()
+    }
+    fn ncols(&self) -> usize {
+        self.iter().map(Vec::len).max().unwrap_or(0)
+    }
+    fn at(&self, i: usize, j: usize) -> f64 {
+        self[i].get(j).copied().unwrap_or(f64::NAN)
+    }
+}
+
+impl MatrixInput for Vec<Vec<f64>> {
+    fn nrows(&self) -> usize {
+        self.as_slice().nrows()
+    }
+    fn ncols(&self) -> usize {
+        self.as_slice().ncols()
+    }
+    fn at(&self, i: usize, j: usize) -> f64 {
+        self.as_slice().at(i, j)
     }
 }
 
