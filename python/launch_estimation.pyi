@@ -402,6 +402,18 @@ def smooth(
     """Rauch-Tung-Striebel smoothing of the engine's filter: "x" (N, n), "P" (N, n, n).
     The forward pass is ``filter``'s (form, gate); with a gate also "rejected"."""
 
+def filter_batch(
+    F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: Array,
+    form: str = "joseph", covariances: bool = False,
+) -> FilterResult:
+    """Many independent series of one model in one call (``kalman::batch``: eight series
+    per vector register, groups on threads, the GIL released). zs is (series, steps, m), or
+    (series, steps) for m = 1, NaN for a missing entry; each series is filtered as
+    ``filter`` filters one, from the prior (x0, P0) of its first measurement, equal to it to
+    round-off. Returns "x" (series, steps, n), "P_last" (series, n, n), "log_likelihood"
+    (series,) and with covariances=True "P" (series, steps, n, n). No control input, no S;
+    form "joseph" or "standard". An error names the series it arose in."""
+
 def filter_continuous(
     A: Array, C: Array, W: Array, R: Array, x0: Array, P0: Array, t: _Series, zs: _Series,
     us: Optional[_Series] = None, B: Optional[Array] = None, form: str = "joseph",

@@ -65,6 +65,7 @@ mod ekf;
 mod engine;
 mod fit_fns;
 mod fixed_lag;
+mod fleet;
 mod imm;
 mod kf;
 mod kf_attrs;
@@ -124,6 +125,7 @@ fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<sigma::SimplexSigmaPoints>()?;
     m.add_function(wrap_pyfunction!(engine::filter, m)?)?;
     m.add_function(wrap_pyfunction!(engine::smooth, m)?)?;
+    m.add_function(wrap_pyfunction!(fleet::filter_batch, m)?)?;
     m.add_function(wrap_pyfunction!(engine::filter_continuous, m)?)?;
     m.add_function(wrap_pyfunction!(engine::smooth_continuous, m)?)?;
     m.add_function(wrap_pyfunction!(engine::dare, m)?)?;

@@ -152,6 +152,28 @@ def test_ctrl_c_in_a_long_batch_filter_raises_and_keeps_the_filter():
     assert out.strip().splitlines()[-1] == "KeyboardInterrupt unchanged", (out, err[-2000:])
 
 
+def test_ctrl_c_in_a_long_filter_batch_raises():
+    """A filter_batch of many chunks (seconds uninterrupted) stops at the next
+    chunk with KeyboardInterrupt."""
+    rc, out, err = child(
+        """
+        n = 6
+        F, H = np.eye(n) * 0.999, np.ones((1, n))
+        zs = np.broadcast_to(np.zeros((1, 1, 1)), (40000, 2000, 1))
+        print("calling", flush=True)
+        try:
+            le.filter_batch(F, H, np.eye(n), np.eye(1), np.zeros(n), np.eye(n), zs)
+            print("finished")
+        except KeyboardInterrupt:
+            print("KeyboardInterrupt")
+        """,
+        interrupt_after_line="calling",
+        timeout=60,
+    )
+    assert rc == 0, err[-2000:]
+    assert out.strip().splitlines()[-1] == "KeyboardInterrupt", (out, err[-2000:])
+
+
 @pytest.mark.parametrize("which", ["ukf", "ekf"])
 def test_ctrl_c_inside_a_callable_raises(which):
     rc, out, err = child(
