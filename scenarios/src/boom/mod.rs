@@ -33,8 +33,7 @@ pub mod tracking_report;
 use std::path::Path;
 
 use crate::campaign::Scenario;
-use crate::campaign::records::RecordFile;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::montecarlo::Shard;
 use parameters::BoomParams;
 use records::NoiseRecord;
@@ -51,22 +50,6 @@ impl Scenario for Boom {
     type Summary = Computed;
     type Json = BoomSummary;
 
-    fn set_runs(params: &mut BoomParams, runs: usize) -> Result<()> {
-        if runs == 0 {
-            return Err(Error::Usage("--runs must be ≥ 1".into()));
-        }
-        params.tracking.runs = runs;
-        Ok(())
-    }
-
-    fn validate(params: &BoomParams, source: &Path) -> Result<()> {
-        params.validate(source)
-    }
-
-    fn record_files(params: &BoomParams) -> Vec<RecordFile> {
-        records::record_files(params)
-    }
-
     fn simulate(
         params: &BoomParams,
         seed: u64,
@@ -74,14 +57,6 @@ impl Scenario for Boom {
         threads: Option<usize>,
     ) -> Result<Vec<NoiseRecord>> {
         simulation::simulate_noise_runs(params, seed, shard, threads)
-    }
-
-    fn to_tables(records: &Vec<NoiseRecord>) -> Vec<Vec<Vec<f64>>> {
-        records::to_tables(records)
-    }
-
-    fn from_tables(_params: &BoomParams, tables: Vec<Vec<Vec<f64>>>) -> Result<Vec<NoiseRecord>> {
-        records::from_tables(tables)
     }
 
     fn summarise(
@@ -108,6 +83,7 @@ impl Scenario for Boom {
 mod tests {
     use super::parameters::BoomParams;
     use super::simulation::Meter;
+    use crate::campaign::ScenarioParams;
     use crate::montecarlo::run_rng;
     use std::path::Path;
     use wls::boom::{AngleUnit, ErrorVariant, TrajectoryPoint};

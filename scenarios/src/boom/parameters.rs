@@ -11,6 +11,7 @@ use wls::boom::{
     Level, Limits, RateWeight, RotationProfile,
 };
 
+use crate::campaign::ScenarioParams;
 use crate::error::{Error, Result};
 
 /// The estimators, serialised by the names the summary uses: the paper's three and the
@@ -273,12 +274,16 @@ impl Default for BoomParams {
     }
 }
 
-impl BoomParams {
+impl ScenarioParams for BoomParams {
+    fn set_runs(&mut self, runs: usize) {
+        self.tracking.runs = runs;
+    }
+
     /// Checks every value, naming the key of the first bad one.
     ///
     /// # Errors
     /// [`Error::Invalid`] for `path` naming the key and the rule broken.
-    pub fn validate(&self, path: &Path) -> Result<()> {
+    fn validate(&self, path: &Path) -> Result<()> {
         let bad = |key: &str, value: f64, rule: &str| {
             Err(Error::invalid(path, format!("`{key}` = {value}: {rule}")))
         };
@@ -380,7 +385,9 @@ impl BoomParams {
         }
         Ok(())
     }
+}
 
+impl BoomParams {
     /// The wls rotation profile.
     pub(super) fn rotation_profile(&self) -> RotationProfile {
         RotationProfile {

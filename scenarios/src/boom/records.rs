@@ -4,8 +4,7 @@
 //! campaign's ground truth: the `noise_mc` rows of the summary are recomputed from them.
 
 use super::parameters::{BoomParams, Method};
-use crate::campaign::records::RecordFile;
-use crate::error::{Error, Result};
+use crate::campaign::records::Row;
 
 /// The methods of the Monte Carlo, in column order.
 pub const NOISE_METHODS: [Method; 4] = [Method::Wls, Method::Ekf, Method::Ukf, Method::Urts];
@@ -36,50 +35,36 @@ const HEADER: [&str; 10] = [
     "urts_rms_eps_deg_s2",
 ];
 
-/// The one record file, `runs_noise.csv`, keyed by (γ index, run).
-pub fn record_files(p: &BoomParams) -> Vec<RecordFile> {
-    vec![RecordFile {
-        name: "runs_noise.csv".into(),
-        header: HEADER.to_vec(),
-        grid: vec![p.case_gammas_deg.len(), p.tracking.runs],
-    }]
-}
+/// One row of `runs_noise.csv`, keyed by (γ index, run).
+impl Row for NoiseRecord {
+    type Params = BoomParams;
 
-/// The rows of `runs_noise.csv` (the records are in key order).
-pub fn to_tables(records: &[NoiseRecord]) -> Vec<Vec<Vec<f64>>> {
-    vec![
-        records
-            .iter()
-            .map(|r| {
-                let mut row = vec![r.gamma_index as f64, r.run as f64];
-                for (a, e) in r.rms {
-                    row.extend([a, e]);
-                }
-                row
-            })
-            .collect(),
-    ]
-}
+    const FILE: &'static str = "runs_noise.csv";
 
-/// The records from the rows of `runs_noise.csv` (keys checked by the campaign).
-///
-/// # Errors
-/// [`Error::Invalid`] for a table or row of the wrong shape.
-pub fn from_tables(tables: Vec<Vec<Vec<f64>>>) -> Result<Vec<NoiseRecord>> {
-    let [rows]: [Vec<Vec<f64>>; 1] = tables.try_into().map_err(|t: Vec<_>| {
-        Error::invalid("runs_noise.csv", format!("{} tables, expected 1", t.len()))
-    })?;
-    rows.into_iter()
-        .map(|row| match row.as_slice() {
-            &[g, run, a0, e0, a1, e1, a2, e2, a3, e3] => Ok(NoiseRecord {
-                gamma_index: g as usize,
-                run: run as usize,
-                rms: [(a0, e0), (a1, e1), (a2, e2), (a3, e3)],
-            }),
-            _ => Err(Error::invalid(
-                "runs_noise.csv",
-                format!("a row of {} fields, expected {}", row.len(), HEADER.len()),
-            )),
+    fn header() -> Vec<&'static str> {
+        HEADER.to_vec()
+    }
+
+    fn grid(p: &BoomParams) -> Vec<usize> {
+        vec![p.case_gammas_deg.len(), p.tracking.runs]
+    }
+
+    fn to_row(&self) -> Vec<f64> {
+        let mut row = vec![self.gamma_index as f64, self.run as f64];
+        for (a, e) in self.rms {
+            row.extend([a, e]);
+        }
+        row
+    }
+
+    fn from_row(row: &[f64]) -> Option<Self> {
+        let &[g, run, a0, e0, a1, e1, a2, e2, a3, e3] = row else {
+            return None;
+        };
+        Some(NoiseRecord {
+            gamma_index: g as usize,
+            run: run as usize,
+            rms: [(a0, e0), (a1, e1), (a2, e2), (a3, e3)],
         })
-        .collect()
+    }
 }

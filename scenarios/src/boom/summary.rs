@@ -15,6 +15,7 @@ use super::parameters::{BoomParams, EstimatorParams, LimitParams, Method};
 use super::records::{NOISE_METHODS, NoiseRecord};
 use super::simulation::{Meter, TurnStats, readings, replay, stats, tracked_runs, wls_err};
 use super::tracking::{TrackingModel, jerk_intensity};
+use crate::campaign::ScenarioParams;
 use crate::error::{Error, Result};
 use crate::montecarlo::{par_runs, run_rng};
 

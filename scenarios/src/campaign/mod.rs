@@ -22,7 +22,7 @@ use crate::config;
 use crate::error::{Error, Result};
 use crate::montecarlo::Shard;
 use crate::output;
-use records::{FileCheck, RecordFile};
+use records::{FileCheck, RecordFile, RunRecords};
 
 /// What every paper scenario is asked to do: the command line's shared options.
 #[derive(Debug, Clone)]
@@ -50,6 +50,21 @@ impl Campaign {
     }
 }
 
+/// The parameter struct of a paper scenario, as the campaign loads, overrides and checks it.
+pub trait ScenarioParams:
+    Serialize + DeserializeOwned + Default + Clone + PartialEq + std::fmt::Debug
+{
+    /// Sets the Monte Carlo runs per point to `runs` (already checked by
+    /// [`Scenario::set_runs`]).
+    fn set_runs(&mut self, runs: usize);
+
+    /// Checks every value; `source` names the file in the error.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] naming `source`, the key and the rule broken.
+    fn validate(&self, source: &Path) -> Result<()>;
+}
+
 /// One paper scenario: the steps the campaign runs, in order.
 ///
 /// `run` = [`Scenario::simulate`] the shard's runs → write their records →
@@ -61,28 +76,39 @@ pub trait Scenario {
     /// The subcommand, the output folder under `reports/`, and `summary.json`'s `scenario`.
     const NAME: &'static str;
     /// The parameter struct a `--config` TOML file overrides (`deny_unknown_fields`).
-    type Params: Serialize + DeserializeOwned + Default + Clone + PartialEq + std::fmt::Debug;
+    type Params: ScenarioParams;
     /// The per-run records of a campaign or of one shard.
-    type Records;
+    type Records: RunRecords<Self::Params>;
     /// Everything the outputs show, computed from the parameters and the records.
     type Summary;
     /// What `summary.json` holds (usually the summary itself, or part of it).
     type Json: Serialize;
 
-    /// Applies `--runs` to the parameters.
+    /// Applies `--runs` to the parameters: at least one run, unless the scenario says more.
     ///
     /// # Errors
     /// [`Error::Usage`] if the scenario cannot run that many.
-    fn set_runs(params: &mut Self::Params, runs: usize) -> Result<()>;
+    fn set_runs(params: &mut Self::Params, runs: usize) -> Result<()> {
+        if runs == 0 {
+            return Err(Error::Usage("--runs must be ≥ 1".into()));
+        }
+        params.set_runs(runs);
+        Ok(())
+    }
 
-    /// Checks every value; `source` names the file in the error.
+    /// Checks every value; `source` names the file in the error ([`ScenarioParams::validate`]).
     ///
     /// # Errors
     /// [`Error::Invalid`] naming `source`, the key and the rule broken.
-    fn validate(params: &Self::Params, source: &Path) -> Result<()>;
+    fn validate(params: &Self::Params, source: &Path) -> Result<()> {
+        params.validate(source)
+    }
 
-    /// The record files of a campaign with these parameters (none for a deterministic one).
-    fn record_files(params: &Self::Params) -> Vec<RecordFile>;
+    /// The record files of a campaign with these parameters (none for a deterministic one;
+    /// [`RunRecords::record_files`]).
+    fn record_files(params: &Self::Params) -> Vec<RecordFile> {
+        Self::Records::record_files(params)
+    }
 
     /// Simulates the runs of `shard`; run `i` draws from `montecarlo::run_rng(seed, i)`.
     ///
@@ -95,14 +121,20 @@ pub trait Scenario {
         threads: Option<usize>,
     ) -> Result<Self::Records>;
 
-    /// The rows of each record file, in [`Scenario::record_files`] order, keys first.
-    fn to_tables(records: &Self::Records) -> Vec<Vec<Vec<f64>>>;
+    /// The rows of each record file, in [`Scenario::record_files`] order, keys first
+    /// ([`RunRecords::to_tables`]).
+    fn to_tables(records: &Self::Records) -> Vec<Vec<Vec<f64>>> {
+        records.to_tables()
+    }
 
-    /// The records back from the rows of each record file (checked and in key order).
+    /// The records back from the rows of each record file (checked and in key order;
+    /// [`RunRecords::from_tables`]).
     ///
     /// # Errors
     /// [`Error::Invalid`] if the rows do not fit the parameters.
-    fn from_tables(params: &Self::Params, tables: Vec<Vec<Vec<f64>>>) -> Result<Self::Records>;
+    fn from_tables(params: &Self::Params, tables: Vec<Vec<Vec<f64>>>) -> Result<Self::Records> {
+        Self::Records::from_tables(params, tables)
+    }
 
     /// Computes every number the outputs show.
     ///

@@ -48,6 +48,76 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 
 pub use crate::output::csv_text;
 
+/// The per-run records of a scenario, as the campaign writes them to their record files and
+/// reads them back; `P` is the scenario's parameter struct.
+pub trait RunRecords<P>: Sized {
+    /// The record files of a campaign with parameters `params` (none for a deterministic
+    /// one).
+    fn record_files(params: &P) -> Vec<RecordFile>;
+
+    /// The rows of each record file, in [`RunRecords::record_files`] order, keys first.
+    fn to_tables(&self) -> Vec<Vec<Vec<f64>>>;
+
+    /// The records back from the rows of each record file (keys checked by the campaign).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] if the tables or their rows do not fit the parameters.
+    fn from_tables(params: &P, tables: Vec<Vec<Vec<f64>>>) -> Result<Self>;
+}
+
+/// A record that is one row of a scenario's only record file: a `Vec` of them is the
+/// scenario's [`RunRecords`], one table of one row per record, in key order.
+pub trait Row: Sized {
+    /// The scenario's parameter struct.
+    type Params;
+
+    /// The record file's name.
+    const FILE: &'static str;
+
+    /// The record file's columns, keys first.
+    fn header() -> Vec<&'static str>;
+
+    /// The extent of each key column for the parameters `params` (the run last).
+    fn grid(params: &Self::Params) -> Vec<usize>;
+
+    /// The record's row, in [`Row::header`] order.
+    fn to_row(&self) -> Vec<f64>;
+
+    /// The record of `row`, or `None` if `row` does not have the header's width.
+    fn from_row(row: &[f64]) -> Option<Self>;
+}
+
+impl<R: Row> RunRecords<R::Params> for Vec<R> {
+    fn record_files(params: &R::Params) -> Vec<RecordFile> {
+        vec![RecordFile {
+            name: R::FILE.into(),
+            header: R::header(),
+            grid: R::grid(params),
+        }]
+    }
+
+    fn to_tables(&self) -> Vec<Vec<Vec<f64>>> {
+        vec![self.iter().map(R::to_row).collect()]
+    }
+
+    fn from_tables(_params: &R::Params, tables: Vec<Vec<Vec<f64>>>) -> Result<Self> {
+        let [rows]: [Vec<Vec<f64>>; 1] = tables.try_into().map_err(|t: Vec<_>| {
+            Error::invalid(R::FILE, format!("{} tables, expected 1", t.len()))
+        })?;
+        let width = R::header().len();
+        rows.into_iter()
+            .map(|row| {
+                R::from_row(&row).ok_or_else(|| {
+                    Error::invalid(
+                        R::FILE,
+                        format!("a row of {} fields, expected {width}", row.len()),
+                    )
+                })
+            })
+            .collect()
+    }
+}
+
 /// The check of a record file's text.
 pub fn check_of(name: &str, text: &str) -> FileCheck {
     FileCheck {

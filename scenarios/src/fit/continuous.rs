@@ -289,26 +289,14 @@ fn summary(map: &SampledMap, fit: &ParametricFit, distinct: usize) -> Result<ser
                     .collect(),
             )
         });
-    let correlation = fit.correlation.as_ref().map_or(
-        serde_json::Value::Null,
-        |c| json!({"names": fit.names, "matrix": super::faer_rows(c)}),
+    let mut summary = summary_keys!(
+        fit,
+        names: fit.names,
+        estimates: estimates,
+        std_errors: std_errors
     );
-    let unidentified = super::unidentified_json(&fit.unidentified);
-    Ok(json!({
-        "loglik": fit.loglik,
-        "method": "mle",
-        "time": "continuous",
-        "distinct_intervals": distinct,
-        "iterations": fit.iterations,
-        "converged": fit.converged,
-        "message": fit.message,
-        "estimates": estimates,
-        "std_errors": std_errors,
-        "correlation": correlation,
-        "unidentified": unidentified,
-        "aic": fit.aic,
-        "bic": fit.bic,
-        "n_params": fit.theta.len(),
-        "n_obs": fit.n_obs,
-    }))
+    summary.insert("method".into(), json!("mle"));
+    summary.insert("time".into(), json!("continuous"));
+    summary.insert("distinct_intervals".into(), json!(distinct));
+    Ok(serde_json::Value::Object(summary))
 }

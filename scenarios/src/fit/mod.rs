@@ -26,6 +26,45 @@
 //! A fit that does not converge is an error (exit code 1) unless `--allow-unconverged`.
 #![allow(non_snake_case)]
 
+/// The summary keys every fit writes, as a JSON object: `loglik`, `iterations`,
+/// `converged`, `message`, `estimates`, `std_errors`, `correlation` (with the parameters'
+/// `names`), `unidentified`, `aic`, `bic`, `n_params`, `n_obs`. `$fit` is the result of
+/// either kind of fit (`kalman::fit::Fit` of a discrete model, `kalman::fit::ParametricFit`
+/// of a continuous one), which hold these numbers under the same field names; the caller
+/// inserts the keys of its own kind.
+macro_rules! summary_keys {
+    ($fit:expr, names: $names:expr, estimates: $estimates:expr, std_errors: $std_errors:expr) => {{
+        let fit = $fit;
+        let correlation = fit
+            .correlation
+            .as_ref()
+            .map_or(serde_json::Value::Null, |c| {
+                serde_json::json!({"names": $names, "matrix": $crate::fit::faer_rows(c)})
+            });
+        let mut keys = serde_json::Map::new();
+        for (key, value) in [
+            ("loglik", serde_json::json!(fit.loglik)),
+            ("iterations", serde_json::json!(fit.iterations)),
+            ("converged", serde_json::json!(fit.converged)),
+            ("message", serde_json::json!(fit.message)),
+            ("estimates", serde_json::json!($estimates)),
+            ("std_errors", serde_json::json!($std_errors)),
+            ("correlation", correlation),
+            (
+                "unidentified",
+                serde_json::json!($crate::fit::unidentified_json(&fit.unidentified)),
+            ),
+            ("aic", serde_json::json!(fit.aic)),
+            ("bic", serde_json::json!(fit.bic)),
+            ("n_params", serde_json::json!(fit.theta.len())),
+            ("n_obs", serde_json::json!(fit.n_obs)),
+        ] {
+            keys.insert(key.to_string(), value);
+        }
+        keys
+    }};
+}
+
 mod continuous;
 pub mod shaping;
 
@@ -258,29 +297,22 @@ fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_js
         .into_iter()
         .map(|(n, v)| (n, json!(v)))
         .collect();
-    let names = kalman::fit::ParamMap::names(map);
-    let correlation = fit.correlation.as_ref().map_or(
-        serde_json::Value::Null,
-        |c| json!({"names": names, "matrix": faer_rows(c)}),
+    let mut summary = summary_keys!(
+        fit,
+        names: kalman::fit::ParamMap::names(map),
+        estimates: estimates,
+        std_errors: std_errors
     );
-    let unidentified = unidentified_json(&fit.unidentified);
-    Ok(json!({
-        "loglik": fit.loglik,
-        "method": match args.method { FitMethod::Mle => "mle", FitMethod::Em => "em" },
-        "iterations": fit.iterations,
-        "converged": fit.converged,
-        "message": fit.message,
-        "estimates": estimates,
-        "std_errors": std_errors,
-        "correlation": correlation,
-        "unidentified": unidentified,
-        "boundary": fit.boundary,
-        "aic": fit.aic,
-        "bic": fit.bic,
-        "n_params": fit.theta.len(),
-        "n_obs": fit.n_obs,
-        "diffuse": args.diffuse,
-    }))
+    summary.insert(
+        "method".into(),
+        json!(match args.method {
+            FitMethod::Mle => "mle",
+            FitMethod::Em => "em",
+        }),
+    );
+    summary.insert("boundary".into(), json!(fit.boundary));
+    summary.insert("diffuse".into(), json!(args.diffuse));
+    Ok(serde_json::Value::Object(summary))
 }
 
 /// The rows of the data CSV `data`, each spaced `dt` after the one before (the discrete

@@ -26,8 +26,7 @@ pub mod userflight;
 use std::path::Path;
 
 use crate::campaign::Scenario;
-use crate::campaign::records::RecordFile;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::montecarlo::Shard;
 use parameters::FlightPathParams;
 use records::RunRecord;
@@ -44,22 +43,6 @@ impl Scenario for FlightPath {
     type Summary = Computed;
     type Json = FlightPathSummary;
 
-    fn set_runs(params: &mut FlightPathParams, runs: usize) -> Result<()> {
-        if runs == 0 {
-            return Err(Error::Usage("--runs must be ≥ 1".into()));
-        }
-        params.runs = runs;
-        Ok(())
-    }
-
-    fn validate(params: &FlightPathParams, source: &Path) -> Result<()> {
-        params.validate(source)
-    }
-
-    fn record_files(params: &FlightPathParams) -> Vec<RecordFile> {
-        records::record_files(params)
-    }
-
     fn simulate(
         params: &FlightPathParams,
         seed: u64,
@@ -67,17 +50,6 @@ impl Scenario for FlightPath {
         threads: Option<usize>,
     ) -> Result<Vec<RunRecord>> {
         simulation::simulate_runs(params, seed, shard, threads)
-    }
-
-    fn to_tables(records: &Vec<RunRecord>) -> Vec<Vec<Vec<f64>>> {
-        records::to_tables(records)
-    }
-
-    fn from_tables(
-        _params: &FlightPathParams,
-        tables: Vec<Vec<Vec<f64>>>,
-    ) -> Result<Vec<RunRecord>> {
-        records::from_tables(tables)
     }
 
     fn summarise(

@@ -7,6 +7,7 @@ use std::path::Path;
 use sensors::flight::FlightConfig;
 use serde::{Deserialize, Serialize};
 
+use crate::campaign::ScenarioParams;
 use crate::error::{Error, Result};
 
 /// Every parameter of the scenario.
@@ -73,13 +74,17 @@ impl Default for FlightPathParams {
     }
 }
 
-impl FlightPathParams {
+impl ScenarioParams for FlightPathParams {
+    fn set_runs(&mut self, runs: usize) {
+        self.runs = runs;
+    }
+
     /// Checks every value, naming the key of the first bad one (the flight's own values are
     /// checked by the simulation, naming theirs).
     ///
     /// # Errors
     /// [`Error::Invalid`] for `path`, naming the key and the rule.
-    pub fn validate(&self, path: &Path) -> Result<()> {
+    fn validate(&self, path: &Path) -> Result<()> {
         let bad = |key: &str, value: f64, rule: &str| {
             Err(Error::invalid(path, format!("`{key}` = {value}: {rule}")))
         };
@@ -123,7 +128,9 @@ impl FlightPathParams {
         }
         Ok(())
     }
+}
 
+impl FlightPathParams {
     /// The prior standard deviations of the 12 instrument errors, SI, in state order.
     pub fn error_prior_si(&self) -> [f64; 12] {
         let d2r = std::f64::consts::PI / 180.0;

@@ -7,8 +7,7 @@ use std::sync::OnceLock;
 
 use super::model::N_ERR;
 use super::parameters::FlightPathParams;
-use crate::campaign::records::RecordFile;
-use crate::error::{Error, Result};
+use crate::campaign::records::Row;
 
 /// The instrument errors: name, display unit, factor from SI to that unit.
 pub const ERRORS: [(&str, &str, f64); N_ERR] = [
@@ -49,97 +48,81 @@ pub struct RunRecord {
     pub rejected: [f64; 3],
 }
 
-/// Columns of `runs.csv`: the run, then per method and error the estimate and standard
-/// deviation (SI), the trajectory RMS, the NEES and the gated counts.
-fn header() -> Vec<&'static str> {
-    static HEADER: OnceLock<Vec<&'static str>> = OnceLock::new();
-    HEADER
-        .get_or_init(|| {
-            let mut h: Vec<String> = vec!["run".into()];
-            for what in ["fs_estimate", "fs_std", "oe_estimate", "oe_std"] {
-                for (name, _, _) in ERRORS {
-                    h.push(format!("{what}_{name}"));
-                }
-            }
-            for what in ["filtered_rms", "smoothed_rms"] {
-                for g in ["position", "velocity", "attitude"] {
-                    h.push(format!("{what}_{g}"));
-                }
-            }
-            h.push("nees_smoothed".into());
-            for s in ["air_data", "ahrs", "gnss"] {
-                h.push(format!("rejected_{s}"));
-            }
-            h.into_iter()
-                .map(|s| &*Box::leak(s.into_boxed_str()))
-                .collect()
-        })
-        .clone()
-}
-
 /// Fields per row.
 const WIDTH: usize = 1 + 4 * N_ERR + 6 + 1 + 3;
 
-/// The one record file, `runs.csv`, keyed by run.
-pub fn record_files(p: &FlightPathParams) -> Vec<RecordFile> {
-    vec![RecordFile {
-        name: "runs.csv".into(),
-        header: header(),
-        grid: vec![p.runs],
-    }]
-}
+/// One row of `runs.csv`, keyed by run.
+impl Row for RunRecord {
+    type Params = FlightPathParams;
 
-/// The rows of `runs.csv`.
-pub fn to_tables(records: &[RunRecord]) -> Vec<Vec<Vec<f64>>> {
-    vec![
-        records
-            .iter()
-            .map(|r| {
-                let mut row = Vec::with_capacity(WIDTH);
-                row.push(r.run as f64);
-                for a in [&r.fs_estimate, &r.fs_std, &r.oe_estimate, &r.oe_std] {
-                    row.extend_from_slice(a);
+    const FILE: &'static str = "runs.csv";
+
+    /// Columns of `runs.csv`: the run, then per method and error the estimate and standard
+    /// deviation (SI), the trajectory RMS, the NEES and the gated counts.
+    fn header() -> Vec<&'static str> {
+        static HEADER: OnceLock<Vec<&'static str>> = OnceLock::new();
+        HEADER
+            .get_or_init(|| {
+                let mut h: Vec<String> = vec!["run".into()];
+                for what in ["fs_estimate", "fs_std", "oe_estimate", "oe_std"] {
+                    for (name, _, _) in ERRORS {
+                        h.push(format!("{what}_{name}"));
+                    }
                 }
-                row.extend_from_slice(&r.filtered_rms);
-                row.extend_from_slice(&r.smoothed_rms);
-                row.push(r.nees_smoothed);
-                row.extend_from_slice(&r.rejected);
-                row
+                for what in ["filtered_rms", "smoothed_rms"] {
+                    for g in ["position", "velocity", "attitude"] {
+                        h.push(format!("{what}_{g}"));
+                    }
+                }
+                h.push("nees_smoothed".into());
+                for s in ["air_data", "ahrs", "gnss"] {
+                    h.push(format!("rejected_{s}"));
+                }
+                h.into_iter()
+                    .map(|s| &*Box::leak(s.into_boxed_str()))
+                    .collect()
             })
-            .collect(),
-    ]
-}
+            .clone()
+    }
 
-/// The records from the rows of `runs.csv` (keys checked by the campaign).
-///
-/// # Errors
-/// [`Error::Invalid`] for a table or row of the wrong shape.
-pub fn from_tables(tables: Vec<Vec<Vec<f64>>>) -> Result<Vec<RunRecord>> {
-    let [rows]: [Vec<Vec<f64>>; 1] = tables.try_into().map_err(|t: Vec<_>| {
-        Error::invalid("runs.csv", format!("{} tables, expected 1", t.len()))
-    })?;
-    rows.into_iter()
-        .map(|row| {
-            if row.len() != WIDTH {
-                return Err(Error::invalid(
-                    "runs.csv",
-                    format!("a row of {} fields, expected {WIDTH}", row.len()),
-                ));
-            }
-            let take =
-                |i: usize| -> [f64; N_ERR] { std::array::from_fn(|j| row[1 + i * N_ERR + j]) };
-            let b = 1 + 4 * N_ERR;
-            Ok(RunRecord {
-                run: row[0] as usize,
-                fs_estimate: take(0),
-                fs_std: take(1),
-                oe_estimate: take(2),
-                oe_std: take(3),
-                filtered_rms: [row[b], row[b + 1], row[b + 2]],
-                smoothed_rms: [row[b + 3], row[b + 4], row[b + 5]],
-                nees_smoothed: row[b + 6],
-                rejected: [row[b + 7], row[b + 8], row[b + 9]],
-            })
+    fn grid(p: &FlightPathParams) -> Vec<usize> {
+        vec![p.runs]
+    }
+
+    fn to_row(&self) -> Vec<f64> {
+        let mut row = Vec::with_capacity(WIDTH);
+        row.push(self.run as f64);
+        for a in [
+            &self.fs_estimate,
+            &self.fs_std,
+            &self.oe_estimate,
+            &self.oe_std,
+        ] {
+            row.extend_from_slice(a);
+        }
+        row.extend_from_slice(&self.filtered_rms);
+        row.extend_from_slice(&self.smoothed_rms);
+        row.push(self.nees_smoothed);
+        row.extend_from_slice(&self.rejected);
+        row
+    }
+
+    fn from_row(row: &[f64]) -> Option<Self> {
+        if row.len() != WIDTH {
+            return None;
+        }
+        let take = |i: usize| -> [f64; N_ERR] { std::array::from_fn(|j| row[1 + i * N_ERR + j]) };
+        let b = 1 + 4 * N_ERR;
+        Some(RunRecord {
+            run: row[0] as usize,
+            fs_estimate: take(0),
+            fs_std: take(1),
+            oe_estimate: take(2),
+            oe_std: take(3),
+            filtered_rms: [row[b], row[b + 1], row[b + 2]],
+            smoothed_rms: [row[b + 3], row[b + 4], row[b + 5]],
+            nees_smoothed: row[b + 6],
+            rejected: [row[b + 7], row[b + 8], row[b + 9]],
         })
-        .collect()
+    }
 }

@@ -21,6 +21,7 @@ use super::estimate::{self, Estimates};
 use super::parameters::FlightPathParams;
 use super::report::{record_plots, table};
 use super::summary::{ParameterRow, parameter_rows};
+use crate::campaign::ScenarioParams;
 use crate::config;
 use crate::error::{Error, Result};
 use crate::output;

@@ -27,8 +27,7 @@ pub mod summary;
 
 use std::path::Path;
 
-use crate::campaign::Scenario;
-use crate::campaign::records::RecordFile;
+use crate::campaign::{Scenario, ScenarioParams};
 use crate::error::{Error, Result};
 use crate::montecarlo::Shard;
 use parameters::FuelingParams;
@@ -52,17 +51,8 @@ impl Scenario for Fueling {
                 "--runs {runs}: the fueling scenario needs at least 2 runs per point"
             )));
         }
-        params.runs_per_point = runs;
-        params.sweep_runs_per_point = runs;
+        params.set_runs(runs);
         Ok(())
-    }
-
-    fn validate(params: &FuelingParams, source: &Path) -> Result<()> {
-        params.validate(source)
-    }
-
-    fn record_files(params: &FuelingParams) -> Vec<RecordFile> {
-        records::record_files(params)
     }
 
     fn simulate(
@@ -72,17 +62,6 @@ impl Scenario for Fueling {
         threads: Option<usize>,
     ) -> Result<Vec<SweepRecords>> {
         simulation::simulate(params, seed, shard, threads)
-    }
-
-    fn to_tables(records: &Vec<SweepRecords>) -> Vec<Vec<Vec<f64>>> {
-        records::to_tables(records)
-    }
-
-    fn from_tables(
-        params: &FuelingParams,
-        tables: Vec<Vec<Vec<f64>>>,
-    ) -> Result<Vec<SweepRecords>> {
-        records::from_tables(params, tables)
     }
 
     fn summarise(

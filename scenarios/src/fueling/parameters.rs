@@ -7,6 +7,7 @@ use std::path::Path;
 use model::{FuelParams, FuelParamsStated, Realisation};
 use serde::{Deserialize, Serialize};
 
+use crate::campaign::ScenarioParams;
 use crate::error::{Error, Result};
 
 /// How the filters' model is discretised (`model::Realisation`).
@@ -139,12 +140,17 @@ impl Default for FuelingParams {
     }
 }
 
-impl FuelingParams {
+impl ScenarioParams for FuelingParams {
+    fn set_runs(&mut self, runs: usize) {
+        self.runs_per_point = runs;
+        self.sweep_runs_per_point = runs;
+    }
+
     /// Checks every value, naming the key (`source` names the file in the error).
     ///
     /// # Errors
     /// [`Error::Invalid`] naming the key and the rule broken.
-    pub fn validate(&self, source: &Path) -> Result<()> {
+    fn validate(&self, source: &Path) -> Result<()> {
         let bad = |key: &str, rule: &str, value: String| {
             Err(Error::invalid(
                 source,
@@ -256,7 +262,9 @@ impl FuelingParams {
             })?;
         Ok(())
     }
+}
 
+impl FuelingParams {
     /// The world at amplitude `amplitude_deg`, with one swept value overriding its base.
     pub fn world(&self, amplitude_deg: f64, swept: Swept) -> World {
         let (mut period_s, mut fill_rate_mm_s, mut damper_time_s, mut step_mm) =

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::campaign::records::RecordFile;
+use crate::campaign::records::{RecordFile, RunRecords};
 use crate::error::{Error, Result};
 
 use super::parameters::FuelingParams;
@@ -82,84 +82,80 @@ const RUNS_HEADER: [&str; 7] = [
     "kf2_midstep_m",
 ];
 
-/// One record file per sweep, in [`FuelingParams::sweeps`] order: keys (point, run).
-pub fn record_files(params: &FuelingParams) -> Vec<RecordFile> {
-    params
-        .sweeps()
-        .iter()
-        .map(|sweep| RecordFile {
-            name: format!("runs_{}.csv", sweep.id),
-            header: RUNS_HEADER.to_vec(),
-            grid: vec![sweep.points.len(), sweep.runs],
-        })
-        .collect()
-}
-
-/// The rows of each sweep's record file: `point, run`, then the outcome.
-pub fn to_tables(records: &[SweepRecords]) -> Vec<Vec<Vec<f64>>> {
-    records
-        .iter()
-        .map(|rec| {
-            rec.records
-                .iter()
-                .enumerate()
-                .flat_map(|(p, runs)| {
-                    runs.iter().map(move |(run, o)| {
-                        let mut row = vec![p as f64, *run as f64];
-                        row.extend_from_slice(o);
-                        row
-                    })
-                })
-                .collect()
-        })
-        .collect()
-}
-
-/// The records of every sweep from the rows of its file (keys checked by the campaign).
-///
-/// # Errors
-/// [`Error::Invalid`] if the number of tables or a row's width does not fit the sweeps.
-pub fn from_tables(
-    params: &FuelingParams,
-    tables: Vec<Vec<Vec<f64>>>,
-) -> Result<Vec<SweepRecords>> {
-    let sweeps = params.sweeps();
-    if tables.len() != sweeps.len() {
-        return Err(Error::invalid(
-            "runs_*.csv",
-            format!("{} record files for {} sweeps", tables.len(), sweeps.len()),
-        ));
-    }
-    sweeps
-        .iter()
-        .zip(tables)
-        .map(|(sweep, rows)| {
-            let mut records = vec![Vec::new(); sweep.points.len()];
-            for row in rows {
-                let [p, run, o @ ..] = row.as_slice() else {
-                    return Err(Error::invalid(
-                        format!("runs_{}.csv", sweep.id),
-                        format!("a row of {} fields", row.len()),
-                    ));
-                };
-                let outcome: Outcome = o.try_into().map_err(|_| {
-                    Error::invalid(
-                        format!("runs_{}.csv", sweep.id),
-                        format!("a row of {} fields, expected 7", row.len()),
-                    )
-                })?;
-                let slot = records.get_mut(*p as usize).ok_or_else(|| {
-                    Error::invalid(
-                        format!("runs_{}.csv", sweep.id),
-                        format!("point {p} outside the sweep"),
-                    )
-                })?;
-                slot.push((*run as usize, outcome));
-            }
-            Ok(SweepRecords {
-                id: sweep.id.to_string(),
-                records,
+/// One record file per sweep, `runs_<sweep>.csv`, in [`FuelingParams::sweeps`] order: keys
+/// (point, run), then the outcome.
+impl RunRecords<FuelingParams> for Vec<SweepRecords> {
+    fn record_files(params: &FuelingParams) -> Vec<RecordFile> {
+        params
+            .sweeps()
+            .iter()
+            .map(|sweep| RecordFile {
+                name: format!("runs_{}.csv", sweep.id),
+                header: RUNS_HEADER.to_vec(),
+                grid: vec![sweep.points.len(), sweep.runs],
             })
-        })
-        .collect()
+            .collect()
+    }
+
+    fn to_tables(&self) -> Vec<Vec<Vec<f64>>> {
+        self.iter()
+            .map(|rec| {
+                rec.records
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(p, runs)| {
+                        runs.iter().map(move |(run, o)| {
+                            let mut row = vec![p as f64, *run as f64];
+                            row.extend_from_slice(o);
+                            row
+                        })
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The records of every sweep from the rows of its file; [`Error::Invalid`] if the number
+    /// of tables or a row's width does not fit the sweeps.
+    fn from_tables(params: &FuelingParams, tables: Vec<Vec<Vec<f64>>>) -> Result<Self> {
+        let sweeps = params.sweeps();
+        if tables.len() != sweeps.len() {
+            return Err(Error::invalid(
+                "runs_*.csv",
+                format!("{} record files for {} sweeps", tables.len(), sweeps.len()),
+            ));
+        }
+        sweeps
+            .iter()
+            .zip(tables)
+            .map(|(sweep, rows)| {
+                let mut records = vec![Vec::new(); sweep.points.len()];
+                for row in rows {
+                    let [p, run, o @ ..] = row.as_slice() else {
+                        return Err(Error::invalid(
+                            format!("runs_{}.csv", sweep.id),
+                            format!("a row of {} fields", row.len()),
+                        ));
+                    };
+                    let outcome: Outcome = o.try_into().map_err(|_| {
+                        Error::invalid(
+                            format!("runs_{}.csv", sweep.id),
+                            format!("a row of {} fields, expected 7", row.len()),
+                        )
+                    })?;
+                    let slot = records.get_mut(*p as usize).ok_or_else(|| {
+                        Error::invalid(
+                            format!("runs_{}.csv", sweep.id),
+                            format!("point {p} outside the sweep"),
+                        )
+                    })?;
+                    slot.push((*run as usize, outcome));
+                }
+                Ok(SweepRecords {
+                    id: sweep.id.to_string(),
+                    records,
+                })
+            })
+            .collect()
+    }
 }

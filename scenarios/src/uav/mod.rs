@@ -31,8 +31,7 @@ pub mod summary;
 use std::path::Path;
 
 use crate::campaign::Scenario;
-use crate::campaign::records::RecordFile;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::montecarlo::Shard;
 use parameters::UavParams;
 use records::RunRecord;
@@ -49,22 +48,6 @@ impl Scenario for Uav {
     type Summary = Computed;
     type Json = UavSummary;
 
-    fn set_runs(params: &mut UavParams, runs: usize) -> Result<()> {
-        if runs == 0 {
-            return Err(Error::Usage("--runs must be ≥ 1".into()));
-        }
-        params.runs = runs;
-        Ok(())
-    }
-
-    fn validate(params: &UavParams, source: &Path) -> Result<()> {
-        params.validate(source)
-    }
-
-    fn record_files(params: &UavParams) -> Vec<RecordFile> {
-        records::record_files(params)
-    }
-
     fn simulate(
         params: &UavParams,
         seed: u64,
@@ -72,14 +55,6 @@ impl Scenario for Uav {
         threads: Option<usize>,
     ) -> Result<Vec<RunRecord>> {
         simulation::simulate_runs(params, seed, shard, threads)
-    }
-
-    fn to_tables(records: &Vec<RunRecord>) -> Vec<Vec<Vec<f64>>> {
-        records::to_tables(records)
-    }
-
-    fn from_tables(_params: &UavParams, tables: Vec<Vec<Vec<f64>>>) -> Result<Vec<RunRecord>> {
-        records::from_tables(tables)
     }
 
     fn summarise(

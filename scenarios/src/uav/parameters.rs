@@ -5,6 +5,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use crate::campaign::ScenarioParams;
 use crate::error::{Error, Result};
 
 /// Every parameter of the scenario: SPEC U's defaults, overridable by `--config`.
@@ -69,12 +70,16 @@ impl Default for UavParams {
     }
 }
 
-impl UavParams {
+impl ScenarioParams for UavParams {
+    fn set_runs(&mut self, runs: usize) {
+        self.runs = runs;
+    }
+
     /// Checks every value, naming the key of the first bad one.
     ///
     /// # Errors
     /// [`Error::Invalid`] for `path`, naming the key and the rule.
-    pub fn validate(&self, path: &Path) -> Result<()> {
+    fn validate(&self, path: &Path) -> Result<()> {
         let bad = |key: &str, value: f64, rule: &str| {
             Err(Error::invalid(path, format!("`{key}` = {value}: {rule}")))
         };

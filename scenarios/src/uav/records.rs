@@ -5,8 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::parameters::UavParams;
-use crate::campaign::records::RecordFile;
-use crate::error::{Error, Result};
+use crate::campaign::records::Row;
 
 /// The statistics of one run (after the burn-in).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -32,54 +31,40 @@ const RUNS_HEADER: [&str; 5] = [
     "mean_nis",
 ];
 
-/// The one record file, `runs.csv`, keyed by run.
-pub fn record_files(p: &UavParams) -> Vec<RecordFile> {
-    vec![RecordFile {
-        name: "runs.csv".into(),
-        header: RUNS_HEADER.to_vec(),
-        grid: vec![p.runs],
-    }]
-}
+/// One row of `runs.csv`, keyed by run.
+impl Row for RunRecord {
+    type Params = UavParams;
 
-/// The rows of `runs.csv`.
-pub fn to_tables(records: &[RunRecord]) -> Vec<Vec<Vec<f64>>> {
-    vec![
-        records
-            .iter()
-            .map(|r| {
-                vec![
-                    r.run as f64,
-                    r.rms_estimation_error,
-                    r.rms_measurement_error,
-                    r.ljung_box_q,
-                    r.mean_nis,
-                ]
-            })
-            .collect(),
-    ]
-}
+    const FILE: &'static str = "runs.csv";
 
-/// The records from the rows of `runs.csv` (keys checked by the campaign).
-///
-/// # Errors
-/// [`Error::Invalid`] for a table or row of the wrong shape.
-pub fn from_tables(tables: Vec<Vec<Vec<f64>>>) -> Result<Vec<RunRecord>> {
-    let [rows]: [Vec<Vec<f64>>; 1] = tables.try_into().map_err(|t: Vec<_>| {
-        Error::invalid("runs.csv", format!("{} tables, expected 1", t.len()))
-    })?;
-    rows.into_iter()
-        .map(|row| match row.as_slice() {
-            &[run, est, meas, q, nis] => Ok(RunRecord {
-                run: run as usize,
-                rms_estimation_error: est,
-                rms_measurement_error: meas,
-                ljung_box_q: q,
-                mean_nis: nis,
-            }),
-            _ => Err(Error::invalid(
-                "runs.csv",
-                format!("a row of {} fields, expected 5", row.len()),
-            )),
+    fn header() -> Vec<&'static str> {
+        RUNS_HEADER.to_vec()
+    }
+
+    fn grid(p: &UavParams) -> Vec<usize> {
+        vec![p.runs]
+    }
+
+    fn to_row(&self) -> Vec<f64> {
+        vec![
+            self.run as f64,
+            self.rms_estimation_error,
+            self.rms_measurement_error,
+            self.ljung_box_q,
+            self.mean_nis,
+        ]
+    }
+
+    fn from_row(row: &[f64]) -> Option<Self> {
+        let &[run, est, meas, q, nis] = row else {
+            return None;
+        };
+        Some(RunRecord {
+            run: run as usize,
+            rms_estimation_error: est,
+            rms_measurement_error: meas,
+            ljung_box_q: q,
+            mean_nis: nis,
         })
-        .collect()
+    }
 }
