@@ -402,6 +402,21 @@ def smooth(
     """Rauch-Tung-Striebel smoothing of the engine's filter: "x" (N, n), "P" (N, n, n).
     The forward pass is ``filter``'s (form, gate); with a gate also "rejected"."""
 
+def particle_filter(
+    zs: Any, initial: Any, transition: Any, log_likelihood: Any, particles: int = 1000,
+    resampling: str = "systematic", ess_threshold: float = 0.5, seed: int = 0,
+) -> dict[str, Any]:
+    """The bootstrap particle filter (``kalman::particle``) over callables vectorised over
+    the particles: initial(N, rng) -> (N, n) draws of the prior of the first measurement;
+    transition(X, k, rng) -> (N, n) successors of the particles X of step k;
+    log_likelihood(X, z, k) -> (N,) values of ln g_k(z | x) (-inf: impossible). rng is a
+    numpy.random.Generator seeded from the filter's stream, so a seed repeats a run.
+    Resamples ("systematic", "stratified", "residual", "multinomial") when the effective
+    sample size falls below ess_threshold * N (1: every step). Returns "x" (steps, n), "P"
+    (steps, n, n), "ess", "resampled", "log_likelihood" (the log of an unbiased likelihood
+    estimate), "particles" (N, n) and "log_weights" (N,) of the last step. A callable's
+    exception propagates unchanged; a NaN or wrongly shaped value is a ValueError."""
+
 def filter_batch(
     F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: Array,
     form: str = "joseph", covariances: bool = False,

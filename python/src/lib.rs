@@ -74,6 +74,7 @@ mod kf_core;
 mod linalg;
 mod model_fns;
 mod nonlinear;
+mod particle_fns;
 mod pass;
 mod series;
 mod sigma;
@@ -136,6 +137,7 @@ fn launch_estimation(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(wls_fns::wls, m)?)?;
     m.add_function(wrap_pyfunction!(nonlinear::ekf, m)?)?;
     m.add_function(wrap_pyfunction!(nonlinear::ukf, m)?)?;
+    m.add_function(wrap_pyfunction!(particle_fns::particle_filter, m)?)?;
     m.add_function(wrap_pyfunction!(fit_fns::fit, m)?)?;
     m.add_function(wrap_pyfunction!(fit_fns::fit_callable, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_test, m)?)?;

@@ -5,9 +5,7 @@ use faer::Mat;
 use rand::RngExt;
 
 use super::resample::{deterministic_copies, normalise};
-use super::{
-    BLOCK, History, ParticleModel, ParticleOptions, Proposal, Purpose, Resampling, Trigger, stream,
-};
+use super::{History, ParticleOptions, Propagate, Proposal, Purpose, Resampling, Trigger, stream};
 use crate::Error;
 
 /// A bootstrap or auxiliary particle filter over a [`ParticleModel`] (see the
@@ -45,7 +43,7 @@ use crate::Error;
 /// # Ok(())
 /// # }
 /// ```
-pub struct ParticleFilter<M: ParticleModel> {
+pub struct ParticleFilter<M: Propagate> {
     model: M,
     options: ParticleOptions,
     n: usize,
@@ -78,7 +76,7 @@ pub struct ParticleFilter<M: ParticleModel> {
     history: Option<ParticleHistory>,
 }
 
-impl<M: ParticleModel> std::fmt::Debug for ParticleFilter<M> {
+impl<M: Propagate> std::fmt::Debug for ParticleFilter<M> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ParticleFilter")
             .field("n", &self.n)
@@ -157,31 +155,6 @@ impl ParticleHistory {
     }
 }
 
-/// Runs `body(block, particles, values)` over the blocks of [`BLOCK`] particles, on rayon's
-/// threads with the feature `parallel`.
-fn blocks<F>(particles: &mut [f64], values: &mut [f64], n: usize, body: F)
-where
-    F: Fn(usize, &mut [f64], &mut [f64]) + Sync + Send,
-{
-    #[cfg(feature = "parallel")]
-    if values.len() > BLOCK {
-        use rayon::prelude::*;
-        particles
-            .par_chunks_mut(BLOCK * n)
-            .zip(values.par_chunks_mut(BLOCK))
-            .enumerate()
-            .for_each(|(b, (p, v))| body(b, p, v));
-        return;
-    }
-    for (b, (p, v)) in particles
-        .chunks_mut(BLOCK * n)
-        .zip(values.chunks_mut(BLOCK))
-        .enumerate()
-    {
-        body(b, p, v);
-    }
-}
-
 /// The first NaN or +∞ log-weight, as the model's error.
 fn check_log(values: &[f64], function: &'static str, step: usize) -> Result<(), Error> {
     match values
@@ -214,14 +187,14 @@ fn check_states(
     }
 }
 
-impl<M: ParticleModel> ParticleFilter<M> {
+impl<M: Propagate> ParticleFilter<M> {
     /// Draws N particles from the model's prior, with equal weights.
     ///
     /// # Errors
     /// [`Error::Dimension`] for n = 0 or N = 0, [`Error::InvalidOption`] for an ESS fraction
     /// outside (0, 1], [`Error::ModelNonFinite`] (function `"sample_initial"`, index the
     /// particle) for a prior draw that is not finite.
-    pub fn new(model: M, options: ParticleOptions) -> Result<Self, Error> {
+    pub fn new(mut model: M, options: ParticleOptions) -> Result<Self, Error> {
         options.check()?;
         let n = model.state_dim();
         if n == 0 {
@@ -234,13 +207,7 @@ impl<M: ParticleModel> ParticleFilter<M> {
         let count = options.particles;
         let mut particles = vec![0.0; count * n];
         let mut work = vec![0.0; count];
-        let seed = options.seed;
-        blocks(&mut particles, &mut work, n, |b, chunk, _| {
-            let mut rng = stream(seed, Purpose::Initial, 0, b);
-            for x in chunk.chunks_mut(n) {
-                model.sample_initial(&mut rng, x);
-            }
-        });
+        model.draw_initial(options.seed, &mut particles, &mut work);
         check_states(&particles, n, "sample_initial", 0)?;
         let ln_n = (count as f64).ln();
         let mut filter = Self {
@@ -310,41 +277,29 @@ impl<M: ParticleModel> ParticleFilter<M> {
             uniforms,
             ..
         } = self;
-        let model = &*model;
         if k == 0 {
             // No propagation: weight the prior's draws.
-            let (base, particles) = (&*base, &*particles);
             next.copy_from_slice(particles);
-            blocks(next, work, n, |b, chunk, vals| {
-                for (jj, (x, v)) in chunk.chunks(n).zip(vals.iter_mut()).enumerate() {
-                    let like = if present {
-                        model.log_likelihood(k, x, z)
-                    } else {
-                        0.0
-                    };
-                    *v = base[b * BLOCK + jj] + like;
-                }
-            });
+            if present {
+                model.weigh(k, next, z, work);
+            } else {
+                work.fill(0.0);
+            }
+            for (v, b) in work.iter_mut().zip(base.iter()) {
+                *v += *b;
+            }
             check_log(work, "log_likelihood", k)?;
         } else {
             // First stage.
             let auxiliary = self.options.proposal == Proposal::Auxiliary && present;
             if auxiliary {
                 points.resize(count * n, 0.0);
-                if !model.lookahead(k - 1, &particles[..n], &mut points[..n]) {
+                if !model.lookahead(k, particles, z, points, first) {
                     return Err(Error::MissingFunction {
                         algorithm: "the auxiliary particle filter",
                         function: "lookahead",
                     });
                 }
-                let particles = &*particles;
-                blocks(points, first, n, |b, chunk, vals| {
-                    for (jj, (mu, v)) in chunk.chunks_mut(n).zip(vals.iter_mut()).enumerate() {
-                        let i = b * BLOCK + jj;
-                        model.lookahead(k - 1, &particles[i * n..(i + 1) * n], mu);
-                        *v = model.log_likelihood(k, mu, z);
-                    }
-                });
                 check_log(first, "log_likelihood at the look-ahead point", k)?;
                 for ((w, f), l) in work.iter_mut().zip(first.iter()).zip(log_w.iter()) {
                     *w = l + f;
@@ -389,21 +344,12 @@ impl<M: ParticleModel> ParticleFilter<M> {
                 base.copy_from_slice(work);
             }
             // Propagation and weighting.
-            let (particles, ancestors, base, first) = (&*particles, &*ancestors, &*base, &*first);
-            blocks(next, work, n, |b, chunk, vals| {
-                let mut rng = stream(seed, Purpose::Propagate, k, b);
-                for (jj, (x, v)) in chunk.chunks_mut(n).zip(vals.iter_mut()).enumerate() {
-                    let j = b * BLOCK + jj;
-                    let a = ancestors[j];
-                    model.sample_transition(k - 1, &particles[a * n..(a + 1) * n], &mut rng, x);
-                    let like = if present {
-                        model.log_likelihood(k, x, z) - first[a]
-                    } else {
-                        0.0
-                    };
-                    *v = base[j] + like;
-                }
-            });
+            let zk = present.then_some(z);
+            model.propagate(k, seed, particles, ancestors, next, zk, work);
+            for ((v, b), a) in work.iter_mut().zip(base.iter()).zip(ancestors.iter()) {
+                let like = if present { *v - first[*a] } else { 0.0 };
+                *v = b + like;
+            }
             check_states(next, n, "sample_transition", k)?;
             check_log(work, "log_likelihood", k)?;
         }
@@ -499,6 +445,12 @@ impl<M: ParticleModel> ParticleFilter<M> {
     /// The model.
     pub fn model(&self) -> &M {
         &self.model
+    }
+
+    /// The model, to change between steps (a time-varying parameter, or to read back what a
+    /// model recorded).
+    pub fn model_mut(&mut self) -> &mut M {
+        &mut self.model
     }
 
     /// The options.

@@ -78,10 +78,12 @@
 //!   2004 ([`ffbsi`]).
 
 mod filter;
+mod propagate;
 mod resample;
 mod smoother;
 
 pub use filter::{ParticleFilter, ParticleHistory};
+pub use propagate::{PopulationModel, Propagate, Vectorised};
 pub use resample::{Resampling, effective_sample_size};
 pub use smoother::{ParticleSmoothed, ffbsi};
 

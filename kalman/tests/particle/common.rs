@@ -2,7 +2,7 @@
 //! filter and RTS smoother (the scalar recursions written out), and a simulated record.
 
 use kalman::particle::rand::RngExt;
-use kalman::particle::{ParticleModel, ParticleRng};
+use kalman::particle::{ParticleModel, ParticleRng, PopulationModel};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -50,6 +50,28 @@ impl ParticleModel for Linear {
     fn lookahead(&self, _k: usize, x: &[f64], point: &mut [f64]) -> bool {
         point[0] = self.a * x[0];
         true
+    }
+}
+
+/// The same model evaluated on the whole population at once (for `Vectorised`).
+impl PopulationModel for Linear {
+    fn state_dim(&self) -> usize {
+        1
+    }
+    fn sample_initial_all(&mut self, rng: &mut ParticleRng, xs: &mut [f64]) {
+        for x in xs {
+            *x = self.p0.sqrt() * rng.sample::<f64, _>(StandardNormal);
+        }
+    }
+    fn sample_transition_all(&mut self, _k: usize, rng: &mut ParticleRng, xs: &mut [f64]) {
+        for x in xs {
+            *x = self.a * *x + self.q.sqrt() * rng.sample::<f64, _>(StandardNormal);
+        }
+    }
+    fn log_likelihood_all(&mut self, _k: usize, xs: &[f64], z: &[f64], out: &mut [f64]) {
+        for (o, x) in out.iter_mut().zip(xs) {
+            *o = normal_log_density(z[0] - x, self.r);
+        }
     }
 }
 

@@ -3,7 +3,8 @@
 //! FFBSi matches the RTS smoother to Monte Carlo error.
 
 use kalman::particle::{
-    History, ParticleFilter, ParticleOptions, Proposal, Resampling, Trigger, ffbsi,
+    History, ParticleFilter, ParticleOptions, Propagate, Proposal, Resampling, Trigger, Vectorised,
+    ffbsi,
 };
 
 use super::common::{MODEL, kalman, record, rts};
@@ -11,11 +12,21 @@ use super::common::{MODEL, kalman, record, rts};
 /// Mean over runs and steps of the squared errors of the particle mean and variance against
 /// the Kalman filter's, in units of P_{k|k} and P_{k|k}².
 fn squared_errors(options: ParticleOptions, zs: &[f64], runs: u64) -> (f64, f64) {
+    squared_errors_of(MODEL, options, zs, runs)
+}
+
+/// [`squared_errors`] of the filter over `model` (the model per particle or vectorised).
+fn squared_errors_of<M: Propagate + Copy>(
+    model: M,
+    options: ParticleOptions,
+    zs: &[f64],
+    runs: u64,
+) -> (f64, f64) {
     let exact = kalman(&MODEL, zs);
     let (mut em, mut ev, mut count) = (0.0, 0.0, 0.0);
     for run in 0..runs {
         let mut pf = ParticleFilter::new(
-            MODEL,
+            model,
             ParticleOptions {
                 seed: 1000 + run,
                 ..options
@@ -71,6 +82,39 @@ fn means_and_variances_converge_at_the_root_n_rate() {
             3200.0 * large_m
         );
     }
+}
+
+/// The model vectorised over the population (one call per step, one random stream): the
+/// same rates as per particle, under the same bounds as above.
+#[test]
+fn a_vectorised_model_converges_at_the_same_rate() {
+    let zs = record(&MODEL, 25, 11);
+    let options = |particles| ParticleOptions {
+        particles,
+        ..ParticleOptions::default()
+    };
+    let (small, _) = squared_errors_of(Vectorised(MODEL), options(200), &zs, 40);
+    let (large, _) = squared_errors_of(Vectorised(MODEL), options(3200), &zs, 40);
+    let slope = (large / small).ln() / 16f64.ln();
+    assert!(
+        (slope + 1.0).abs() < 0.25,
+        "slope {slope} ({small:e} → {large:e})"
+    );
+    assert!(3200.0 * large < 5.0, "N·e = {}", 3200.0 * large);
+    // It has no look-ahead point: the auxiliary filter refuses it at its first propagation.
+    let aux = ParticleOptions {
+        proposal: Proposal::Auxiliary,
+        ..options(100)
+    };
+    let mut pf = ParticleFilter::new(Vectorised(MODEL), aux).expect("valid options");
+    pf.step(&[0.1]).expect("first step");
+    assert!(matches!(
+        pf.step(&[0.2]),
+        Err(kalman::Error::MissingFunction {
+            function: "lookahead",
+            ..
+        })
+    ));
 }
 
 #[test]
