@@ -8,8 +8,8 @@
 
 use kalman::batch::{BatchFilter, LANES};
 use kalman::{DynDims, Model};
-use numpy::ndarray::{Axis, s};
 use numpy::PyArrayMethods;
+use numpy::ndarray::{Axis, s};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -89,10 +89,9 @@ fn run_batch<'py>(
         let out = py
             .detach(|| batch.run(&x0v, &P0, &z, end - start))
             .map_err(|e| match e {
-                kalman::Error::InSeries { series, error } => value_error(format!(
-                    "filter_batch: series {}: {error}",
-                    start + series
-                )),
+                kalman::Error::InSeries { series, error } => {
+                    value_error(format!("filter_batch: series {}: {error}", start + series))
+                }
                 e => err(e),
             })?;
         let copy = |a: &Bound<'py, numpy::PyArrayDyn<f64>>, per: usize, src: &[f64]| {
