@@ -8,7 +8,8 @@ use super::resample::{deterministic_copies, normalise};
 use super::{History, ParticleOptions, Propagate, Proposal, Purpose, Resampling, Trigger, stream};
 use crate::Error;
 
-/// A bootstrap or auxiliary particle filter over a [`ParticleModel`] (see the
+/// A bootstrap or auxiliary particle filter over a [`super::ParticleModel`] (or a
+/// [`super::PopulationModel`] through [`super::Vectorised`]; see the
 /// [module documentation](super) for the recursion, the likelihood estimate and the random
 /// streams).
 ///
@@ -250,7 +251,7 @@ impl<M: Propagate> ParticleFilter<M> {
     /// finite (`"sample_transition"`) or a log-likelihood is NaN or +∞ (`"log_likelihood"`,
     /// `"log_likelihood at the look-ahead point"`); [`Error::ParticleCollapse`] when every
     /// particle's likelihood (or look-ahead likelihood) is zero; [`Error::MissingFunction`]
-    /// for the auxiliary filter over a model without [`ParticleModel::lookahead`]. The
+    /// for the auxiliary filter over a model without [`super::ParticleModel::lookahead`]. The
     /// filter is then as it was before the step.
     pub fn step(&mut self, z: &[f64]) -> Result<(), Error> {
         let k = self.steps;
