@@ -4,6 +4,7 @@
 use faer::Mat;
 use rand::RngExt;
 
+use super::propagate::Generation;
 use super::resample::{deterministic_copies, normalise};
 use super::{History, ParticleOptions, Propagate, Proposal, Purpose, Resampling, Trigger, stream};
 use crate::Error;
@@ -346,7 +347,14 @@ impl<M: Propagate> ParticleFilter<M> {
             }
             // Propagation and weighting.
             let zk = present.then_some(z);
-            model.propagate(k, seed, particles, ancestors, next, zk, work);
+            let g = Generation {
+                k,
+                seed,
+                from: particles,
+                ancestors,
+                z: zk,
+            };
+            model.propagate(g, next, work);
             for ((v, b), a) in work.iter_mut().zip(base.iter()).zip(ancestors.iter()) {
                 let like = if present { *v - first[*a] } else { 0.0 };
                 *v = b + like;

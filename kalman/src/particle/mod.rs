@@ -83,6 +83,8 @@ mod resample;
 mod smoother;
 
 pub use filter::{ParticleFilter, ParticleHistory};
+#[doc(hidden)]
+pub use propagate::Generation;
 pub use propagate::{PopulationModel, Propagate, Vectorised};
 pub use resample::{Resampling, effective_sample_size};
 pub use smoother::{ParticleSmoothed, ffbsi};

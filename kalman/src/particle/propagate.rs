@@ -57,6 +57,18 @@ pub trait PopulationModel {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Vectorised<P>(pub P);
 
+/// What one propagation reads: the step k, the filter's seed, the particles of step k − 1,
+/// the ancestor of each new particle, and the measurement of step k (None: only propagate).
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug)]
+pub struct Generation<'a> {
+    pub k: usize,
+    pub seed: u64,
+    pub from: &'a [f64],
+    pub ancestors: &'a [usize],
+    pub z: Option<&'a [f64]>,
+}
+
 /// What a [`super::ParticleFilter`] needs of its model: implemented for every
 /// [`ParticleModel`] and for [`Vectorised`] over a [`PopulationModel`]; not meant to be
 /// implemented elsewhere.
@@ -71,17 +83,7 @@ pub trait Propagate {
     fn weigh(&mut self, k: usize, xs: &mut [f64], z: &[f64], out: &mut [f64]);
     /// `to_j ~ f_{k−1}(· | from_{a_j})`, and with `z` `out[j] = ln g_k(z | to_j)`.
     #[doc(hidden)]
-    #[allow(clippy::too_many_arguments)]
-    fn propagate(
-        &mut self,
-        k: usize,
-        seed: u64,
-        from: &[f64],
-        ancestors: &[usize],
-        to: &mut [f64],
-        z: Option<&[f64]>,
-        out: &mut [f64],
-    );
+    fn propagate(&mut self, g: Generation<'_>, to: &mut [f64], out: &mut [f64]);
     /// The look-ahead points `μ^i` of `x_k` given the particles `from` into `points` and
     /// `first[i] = ln g_k(z | μ^i)`; false when the model has no look-ahead point.
     #[doc(hidden)]
@@ -144,16 +146,14 @@ impl<M: ParticleModel> Propagate for M {
         });
     }
 
-    fn propagate(
-        &mut self,
-        k: usize,
-        seed: u64,
-        from: &[f64],
-        ancestors: &[usize],
-        to: &mut [f64],
-        z: Option<&[f64]>,
-        out: &mut [f64],
-    ) {
+    fn propagate(&mut self, g: Generation<'_>, to: &mut [f64], out: &mut [f64]) {
+        let Generation {
+            k,
+            seed,
+            from,
+            ancestors,
+            z,
+        } = g;
         let (model, n) = (&*self, ParticleModel::state_dim(self));
         blocks(to, out, n, |b, chunk, vals| {
             let mut rng = stream(seed, Purpose::Propagate, k, b);
@@ -202,24 +202,15 @@ impl<P: PopulationModel> Propagate for Vectorised<P> {
         self.0.log_likelihood_all(k, xs, z, out);
     }
 
-    fn propagate(
-        &mut self,
-        k: usize,
-        seed: u64,
-        from: &[f64],
-        ancestors: &[usize],
-        to: &mut [f64],
-        z: Option<&[f64]>,
-        out: &mut [f64],
-    ) {
+    fn propagate(&mut self, g: Generation<'_>, to: &mut [f64], out: &mut [f64]) {
         let n = self.0.state_dim();
-        for (x, &a) in to.chunks_mut(n).zip(ancestors) {
-            x.copy_from_slice(&from[a * n..(a + 1) * n]);
+        for (x, &a) in to.chunks_mut(n).zip(g.ancestors) {
+            x.copy_from_slice(&g.from[a * n..(a + 1) * n]);
         }
         self.0
-            .sample_transition_all(k - 1, &mut stream(seed, Purpose::Propagate, k, 0), to);
-        match z {
-            Some(z) => self.0.log_likelihood_all(k, to, z, out),
+            .sample_transition_all(g.k - 1, &mut stream(g.seed, Purpose::Propagate, g.k, 0), to);
+        match g.z {
+            Some(z) => self.0.log_likelihood_all(g.k, to, z, out),
             None => out.fill(0.0),
         }
     }
