@@ -519,10 +519,11 @@ def ekf(
 def ukf(
     f: Any, h: Any, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
     us: Optional[_Series] = None, points: str = "merwe", alpha: float = 1e-3,
-    beta: float = 2.0, kappa: float = 0.0,
+    beta: float = 2.0, kappa: float = 0.0, form: str = "plain",
 ) -> FilterResult:
     """Unscented Kalman filter (Merwe's scaled sigma points or "cubature") over callables
-    f(x, u, k) and h(x, k). Returns the same keys as ``filter``."""
+    f(x, u, k) and h(x, k); form="sqrt" runs the square-root UKF (Cholesky factors carried
+    instead of covariances). Returns the same keys as ``filter``."""
 
 def fit(
     F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,

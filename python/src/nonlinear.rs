@@ -7,7 +7,7 @@
 use std::cell::RefCell;
 
 use kalman::DynDims;
-use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, Ukf};
+use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, SqrtUkf, Ukf};
 use numpy::{PyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -45,6 +45,7 @@ fn call_into<'py>(
 enum Kind {
     Ekf(EkfUpdate),
     Ukf(SigmaPoints),
+    SqrtUkf(SigmaPoints),
 }
 
 /// The work of [`ekf`] and [`ukf`]: the arguments `(f, h, Q, R, x0, P0, zs)` and `us` as the
@@ -134,6 +135,9 @@ fn run<'py>(
             drive!(Ekf::new(dims, CentralDiff::new(dims, model), &x0v, &P0, update).map_err(err)?)
         }
         Kind::Ukf(points) => drive!(Ukf::new(dims, model, &x0v, &P0, points).map_err(err)?),
+        Kind::SqrtUkf(points) => {
+            drive!(SqrtUkf::new(dims, model, &x0v, &P0, points).map_err(err)?)
+        }
     }
     rec.into_dict(py)
 }
@@ -167,12 +171,15 @@ fn run_ekf<'py>(
 }
 
 py_function! {
-    /// ukf(f, h, Q, R, x0, P0, zs, us=None, points="merwe", alpha=1e-3, beta=2.0, kappa=0.0)
-    /// → dict as `filter`: the unscented Kalman filter with Merwe's scaled sigma points or
-    /// the cubature rule (points="cubature").
+    /// ukf(f, h, Q, R, x0, P0, zs, us=None, points="merwe", alpha=1e-3, beta=2.0, kappa=0.0,
+    /// form="plain") → dict as `filter`: the unscented Kalman filter with Merwe's scaled
+    /// sigma points or the cubature rule (points="cubature"); form="sqrt" runs the
+    /// square-root UKF (the same filter carrying Cholesky factors, for covariances too
+    /// ill-conditioned to form and factor).
     fn ukf(
         f, h, Q, R, x0, P0, zs; us = None;
-        points: &str = "merwe", alpha: f64 = 1e-3, beta: f64 = 2.0, kappa: f64 = 0.0
+        points: &str = "merwe", alpha: f64 = 1e-3, beta: f64 = 2.0, kappa: f64 = 0.0,
+        form: &str = "plain"
     ) => run_ukf
 }
 
@@ -185,6 +192,7 @@ fn run_ukf<'py>(
     alpha: f64,
     beta: f64,
     kappa: f64,
+    form: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let points = match points {
         "merwe" => SigmaPoints::Merwe { alpha, beta, kappa },
@@ -195,5 +203,14 @@ fn run_ukf<'py>(
             )));
         }
     };
-    run(Kind::Ukf(points), "ukf", py, args, us)
+    let kind = match form {
+        "plain" => Kind::Ukf(points),
+        "sqrt" => Kind::SqrtUkf(points),
+        other => {
+            return Err(value_error(format!(
+                "form = {other:?}; expected \"plain\" or \"sqrt\""
+            )));
+        }
+    };
+    run(kind, "ukf", py, args, us)
 }
