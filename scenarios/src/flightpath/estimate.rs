@@ -115,6 +115,22 @@ pub fn both(
     Ok(Estimates { pass, output_error })
 }
 
+/// The unscented filter–smoother on `data` (one pass, [`smoother::run_unscented`]) from
+/// the same prior and gate as [`both`]'s; the smoothed covariance is kept at `keep_cov`.
+///
+/// # Errors
+/// As [`smoother::run_unscented`].
+pub fn unscented(
+    data: &FlightData,
+    grid: &Grid,
+    noise: &Noise,
+    p: &FlightPathParams,
+    keep_cov: &[usize],
+) -> Result<Pass> {
+    let s = settings(data, grid, noise, p);
+    smoother::run_unscented(&consumed(data, grid), &s, keep_cov)
+}
+
 /// The output-error fit of the instrument errors and the initial kinematic state on the
 /// gated measurements (every entry of x0 free), from the smoothed x_{0|N} as the starting
 /// point (the optimum does not depend on it; a start near it saves Gauss–Newton passes).

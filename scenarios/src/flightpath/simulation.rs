@@ -114,6 +114,40 @@ pub fn nees(e: &[f64], p: &Mat<f64>) -> f64 {
     (0..n).map(|i| e[i] * sol[(i, 0)]).sum()
 }
 
+/// One simulated flight as the estimators take it.
+#[derive(Debug, Clone)]
+pub struct Flight {
+    /// The record.
+    pub data: FlightData,
+    /// Its grid.
+    pub grid: Grid,
+    /// The truth on the grid.
+    pub truth: Vec<TruthPoint>,
+    /// The filter's noise model.
+    pub noise: super::model::Noise,
+}
+
+/// Run `run` of the campaign seeded `seed`, simulated.
+///
+/// # Errors
+/// A bad flight configuration.
+pub fn flight(p: &FlightPathParams, seed: u64, run: usize) -> Result<Flight> {
+    let mut rng = run_rng(seed, run as u64);
+    let rec = simulate(&p.flight, &mut rng).map_err(|source| Error::Sensors {
+        context: "flightpath flight",
+        source,
+    })?;
+    let data = flight_data(&rec);
+    let grid = data.grid();
+    let truth = truth_on_grid(&rec, &grid)?;
+    Ok(Flight {
+        data,
+        grid,
+        truth,
+        noise: noise_model(&p.flight.noise_si(), p.flight.imu.rate_hz),
+    })
+}
+
 /// One run: the flight, both estimators, and its numbers (with the full estimates for the
 /// nominal run's plots).
 ///
@@ -124,15 +158,12 @@ pub fn run_one(
     seed: u64,
     run: usize,
 ) -> Result<(RunRecord, Estimates, Vec<TruthPoint>)> {
-    let mut rng = run_rng(seed, run as u64);
-    let rec = simulate(&p.flight, &mut rng).map_err(|source| Error::Sensors {
-        context: "flightpath flight",
-        source,
-    })?;
-    let data = flight_data(&rec);
-    let noise = noise_model(&p.flight.noise_si(), p.flight.imu.rate_hz);
-    let grid = data.grid();
-    let truth = truth_on_grid(&rec, &grid)?;
+    let Flight {
+        data,
+        grid,
+        truth,
+        noise,
+    } = flight(p, seed, run)?;
     let mid = grid.t.len() / 2;
     let est = estimate::both(&data, &grid, &noise, p, &[mid])?;
     let errors = p.flight.errors.si();

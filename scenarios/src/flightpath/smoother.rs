@@ -28,7 +28,12 @@
 //! can lock a channel out for good.
 
 use faer::Mat;
-use kalman::nonlinear::{AutoDiff, Ekf, EkfUpdate, Jacobians, NonlinearModel, NonlinearRts};
+use faer::MatRef;
+use kalman::DynDims;
+use kalman::nonlinear::{
+    AutoDiff, Ekf, EkfUpdate, ForwardPass, Jacobians, NonlinearModel, NonlinearRts, SigmaPoints,
+    Ukf,
+};
 
 use super::data::Grid;
 use super::model::{FlightModel, M, Noise};
@@ -234,21 +239,88 @@ pub fn run_about(
     nominal: Option<Mat<f64>>,
 ) -> Result<Pass> {
     let model = FlightModel::new(grid, &s.noise, s.augmented);
-    let n = model.n();
-    let big_n = grid.t.len();
-    let dims = kalman::DynDims::new(n, M, 0).map_err(kal("flightpath filter"))?;
-    let mut p0 = Mat::<f64>::zeros(n, n);
-    for i in 0..n {
-        p0[(i, i)] = s.prior_std[i] * s.prior_std[i];
-    }
-    let mut ekf = Ekf::new(
+    let dims = kalman::DynDims::new(model.n(), M, 0).map_err(kal("flightpath filter"))?;
+    let ekf = Ekf::new(
         dims,
         Linearised::new(model, dims, nominal),
         &s.x0,
-        &p0,
+        &prior(s),
         EkfUpdate::Extended,
     )
     .map_err(kal("flightpath filter: prior"))?;
+    forward_backward(ekf, grid, s, keep_cov)
+}
+
+/// The gated unscented Kalman filter (cubature points: every weight positive, so no
+/// covariance is formed by a subtraction) and the unscented RTS smoother over `grid`, on the
+/// model itself; the gate linearises h at the prediction as [`run`]'s does. One pass, not
+/// iterated: a comparison with the extended smoother's first pass.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_unscented(grid: &Grid, s: &Settings, keep_cov: &[usize]) -> Result<Pass> {
+    let model = FlightModel::new(grid, &s.noise, s.augmented);
+    let dims = kalman::DynDims::new(model.n(), M, 0).map_err(kal("flightpath filter"))?;
+    let ukf = Ukf::new(
+        dims,
+        Linearised::new(model, dims, None),
+        &s.x0,
+        &prior(s),
+        SigmaPoints::Cubature,
+    )
+    .map_err(kal("flightpath unscented filter: prior"))?;
+    forward_backward(ukf, grid, s, keep_cov)
+}
+
+/// The prior covariance: diagonal, from the settings' standard deviations.
+fn prior(s: &Settings) -> Mat<f64> {
+    let n = s.prior_std.len();
+    Mat::from_fn(n, n, |i, j| {
+        if i == j {
+            s.prior_std[i] * s.prior_std[i]
+        } else {
+            0.0
+        }
+    })
+}
+
+/// The two filters the pass runs, as it uses them.
+trait Forward: ForwardPass {
+    fn prediction(&self) -> (&[f64], MatRef<'_, f64>);
+    fn estimate(&self) -> (&[f64], MatRef<'_, f64>);
+    fn linearised(&mut self) -> &mut Linearised;
+    fn advance(&mut self, z: &[f64]) -> std::result::Result<(), kalman::Error>;
+}
+
+macro_rules! forward {
+    ($($filter:ident),+) => {$(
+        impl Forward for $filter<DynDims, Linearised> {
+            fn prediction(&self) -> (&[f64], MatRef<'_, f64>) {
+                (self.predicted_state(), self.predicted_covariance())
+            }
+            fn estimate(&self) -> (&[f64], MatRef<'_, f64>) {
+                (self.state(), self.covariance())
+            }
+            fn linearised(&mut self) -> &mut Linearised {
+                self.model_mut()
+            }
+            fn advance(&mut self, z: &[f64]) -> std::result::Result<(), kalman::Error> {
+                self.step(z, None).map(|_| ())
+            }
+        }
+    )+};
+}
+forward!(Ekf, Ukf);
+
+/// The gated forward pass of `filter` over `grid`, recorded, and the RTS smoother over it.
+fn forward_backward(
+    mut filter: impl Forward,
+    grid: &Grid,
+    s: &Settings,
+    keep_cov: &[usize],
+) -> Result<Pass> {
+    let n = s.prior_std.len();
+    let big_n = grid.t.len();
     let mut rts = NonlinearRts::new();
     rts.reserve(n, big_n);
     let mut filtered = Mat::<f64>::zeros(n, big_n);
@@ -262,8 +334,8 @@ pub fn run_about(
     // Consecutive rejections per channel.
     let mut run = [0usize; M];
     for k in 0..big_n {
-        xp.copy_from_slice(ekf.predicted_state());
-        let pm = ekf.predicted_covariance();
+        let (x_pred, pm) = filter.prediction();
+        xp.copy_from_slice(x_pred);
         for j in 0..n {
             for i in 0..n {
                 pp[i + j * n] = pm[(i, j)];
@@ -271,7 +343,7 @@ pub fn run_about(
         }
         let z = &mut gated[k];
         if z.iter().any(|v| v.is_finite()) {
-            let ad = ekf.model_mut();
+            let ad = filter.linearised();
             ad.h(&xp, k, &mut zh);
             ad.h_jacobian(&xp, k, &mut hj);
             ad.r(k, &mut r);
@@ -301,16 +373,16 @@ pub fn run_about(
                 }
             }
         }
-        ekf.model_mut().set_point(&xp);
-        ekf.step(z, None).map_err(kal("flightpath EKF"))?;
-        rts.record(&ekf).map_err(kal("flightpath smoother"))?;
-        let (x, p) = (ekf.state(), ekf.covariance());
+        filter.linearised().set_point(&xp);
+        filter.advance(z).map_err(kal("flightpath filter step"))?;
+        rts.record(&filter).map_err(kal("flightpath smoother"))?;
+        let (x, p) = filter.estimate();
         for i in 0..n {
             filtered[(i, k)] = x[i];
             filtered_var[(i, k)] = p[(i, i)];
         }
     }
-    drop(ekf);
+    drop(filter);
     let mut smoothed_var = Mat::<f64>::zeros(n, big_n);
     let mut smoothed_cov_at = vec![Mat::<f64>::zeros(n, n); keep_cov.len()];
     let means = rts

@@ -5,11 +5,11 @@
 
 use serde::Serialize;
 
-use super::estimate::Estimates;
+use super::estimate::{self, Estimates};
 use super::model::{N_ERR, N_KIN};
 use super::parameters::FlightPathParams;
 use super::records::{ERRORS, RunRecord};
-use super::simulation::run_one;
+use super::simulation::{Flight, flight, nees, rms_groups, smoothed_error, true_state};
 use crate::error::Result;
 use sensors::flight::TruthPoint;
 
@@ -136,6 +136,24 @@ pub struct Verdict {
     pub text: String,
 }
 
+/// The unscented filter–smoother (cubature points, one pass) on the nominal run, beside
+/// the iterated extended one.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct UnscentedNominal {
+    /// RMS error of the filtered trajectory: position (m), velocity (m/s), attitude (deg).
+    pub filtered_rms: [f64; 3],
+    /// RMS error of the smoothed trajectory, the same units.
+    pub smoothed_rms: [f64; 3],
+    /// The iterated extended smoother's smoothed RMS on the same run, the same units.
+    pub extended_smoothed_rms: [f64; 3],
+    /// Largest |estimate − truth|/σ over the twelve instrument errors.
+    pub max_normalised_error: f64,
+    /// The smoothed NEES of the whole state at mid-record.
+    pub nees_mid: f64,
+    /// Its χ²(21) 95 % band for one run.
+    pub nees_band: [f64; 2],
+}
+
 /// `summary.json`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FlightPathSummary {
@@ -157,6 +175,8 @@ pub struct FlightPathSummary {
     pub nominal_output_error_iterations: usize,
     /// The output-error correlation matrix of the errors on the nominal run (row-major).
     pub nominal_output_error_correlation: Vec<Vec<f64>>,
+    /// The unscented filter–smoother on the nominal run.
+    pub nominal_unscented: UnscentedNominal,
     /// The verdict.
     pub verdict: Verdict,
 }
@@ -225,11 +245,15 @@ fn honesty(z: &[[f64; N_ERR]]) -> (Vec<McEntry>, Pooled) {
 /// from the seed for the nominal table and plots).
 ///
 /// # Errors
-/// As [`run_one`].
+/// As [`flight`] and the estimators.
 pub fn summarise(p: &FlightPathParams, seed: u64, records: &[RunRecord]) -> Result<Computed> {
-    let (_, nominal, truth) = run_one(p, seed, 0)?;
-    let t = truth.iter().map(|tp| tp.t).collect();
+    let fl = flight(p, seed, 0)?;
+    let mid = fl.grid.t.len() / 2;
+    let nominal = estimate::both(&fl.data, &fl.grid, &fl.noise, p, &[mid])?;
     let errors = p.flight.errors.si();
+    let nominal_unscented = unscented_nominal(p, &fl, &nominal, &errors)?;
+    let truth = fl.truth;
+    let t = truth.iter().map(|tp| tp.t).collect();
     let parameters = parameter_rows(&nominal, Some(&errors));
     let z = |est: &dyn Fn(&RunRecord) -> EstStd| -> Vec<[f64; N_ERR]> {
         records
@@ -334,6 +358,7 @@ pub fn summarise(p: &FlightPathParams, seed: u64, records: &[RunRecord]) -> Resu
         nominal_output_error_correlation: oe.map_or_else(Vec::new, |o| {
             o.correlation.chunks(N_ERR).map(<[f64]>::to_vec).collect()
         }),
+        nominal_unscented,
         verdict,
     };
     Ok(Computed {
@@ -342,6 +367,41 @@ pub fn summarise(p: &FlightPathParams, seed: u64, records: &[RunRecord]) -> Resu
         t,
         truth,
         normalised: [zf, zo],
+    })
+}
+
+/// The unscented filter–smoother on the nominal flight `fl`, against its truth and beside
+/// the extended smoother's estimates `nominal`.
+fn unscented_nominal(
+    p: &FlightPathParams,
+    fl: &Flight,
+    nominal: &Estimates,
+    errors: &[f64; N_ERR],
+) -> Result<UnscentedNominal> {
+    let mid = fl.grid.t.len() / 2;
+    let pass = estimate::unscented(&fl.data, &fl.grid, &fl.noise, p, &[mid])?;
+    let display = |v: [f64; 3]| [v[0], v[1], v[2].to_degrees()];
+    let max_normalised_error = (0..N_ERR)
+        .map(|j| {
+            (pass.smoothed[(N_KIN + j, 0)] - errors[j]).abs()
+                / pass.smoothed_var[(N_KIN + j, 0)].sqrt()
+        })
+        .fold(0.0, f64::max);
+    let x_true = true_state(&fl.truth[mid], errors);
+    let dof = N_KIN + N_ERR;
+    Ok(UnscentedNominal {
+        filtered_rms: display(rms_groups(&pass.filtered, &fl.truth)),
+        smoothed_rms: display(rms_groups(&pass.smoothed, &fl.truth)),
+        extended_smoothed_rms: display(rms_groups(&nominal.pass.smoothed, &fl.truth)),
+        max_normalised_error,
+        nees_mid: nees(
+            &smoothed_error(&pass, mid, &x_true),
+            &pass.smoothed_cov_at[0],
+        ),
+        nees_band: [
+            kalman::chi2_quantile(0.025, dof),
+            kalman::chi2_quantile(0.975, dof),
+        ],
     })
 }
 
