@@ -10,8 +10,8 @@ use std::cell::RefCell;
 
 use kalman::faer::Mat;
 use kalman::fit::{
-    EmOptions, Fit, FitError, FnMap, Free, FreeSpec, MleOptions, ParamMap, Series, StandardMap,
-    Structure, System, em, mle,
+    EmOptions, Fit, FitError, FnMap, Free, FreeSpec, Interrupt, MleOptions, ParamMap, Series,
+    StandardMap, Structure, System, em, mle,
 };
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -34,12 +34,21 @@ fn structure(s: &str, name: &str) -> PyResult<Structure> {
 }
 
 /// A fit error as a `ValueError`; a parameterisation error (a bad free name) without the
-/// library's "parameter vector:" prefix.
+/// library's "parameter vector:" prefix; an interrupted fit (Ctrl-C) as `KeyboardInterrupt`.
 fn fit_err(context: &str) -> impl Fn(FitError) -> PyErr + '_ {
     move |e| match e {
         FitError::Parameters(m) => value_error(format!("{context}: {m}")),
+        FitError::Interrupted => {
+            pyo3::exceptions::PyKeyboardInterrupt::new_err(format!("{context} interrupted"))
+        }
         e => value_error(format!("{context}: {e}")),
     }
+}
+
+/// The fits' interruption check: whether a signal handler (Ctrl-C's) raised, run with the
+/// interpreter taken back for the moment it takes (the fits run with it released).
+fn signalled() -> bool {
+    Python::attach(|py| py.check_signals().is_err())
 }
 
 py_function! {
@@ -175,14 +184,20 @@ fn run_fit<'py>(
     let method = method.unwrap_or(if spec.is_some() { "mle" } else { "em" });
     let result = match method {
         "em" => {
-            let mut opts = EmOptions::default();
+            let mut opts = EmOptions {
+                interrupt: Some(Interrupt(signalled)),
+                ..EmOptions::default()
+            };
             if let Some(k) = max_iter {
                 opts.max_iter = k;
             }
             py.detach(|| em(&map, &data, &opts)).map_err(&err)?
         }
         "mle" => {
-            let mut opts = MleOptions::default();
+            let mut opts = MleOptions {
+                interrupt: Some(Interrupt(signalled)),
+                ..MleOptions::default()
+            };
             if let Some(k) = max_iter {
                 opts.max_iter = k as u64;
             }
@@ -470,7 +485,10 @@ fn run_fit_callable<'py>(
         })
     };
     let map = FnMap::new(len, system).with_log_variances(log_variances.unwrap_or_default());
-    let mut opts = MleOptions::default();
+    let mut opts = MleOptions {
+        interrupt: Some(Interrupt(signalled)),
+        ..MleOptions::default()
+    };
     if let Some(k) = max_iter {
         opts.max_iter = k as u64;
     }

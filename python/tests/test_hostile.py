@@ -152,6 +152,30 @@ def test_ctrl_c_in_a_long_batch_filter_raises_and_keeps_the_filter():
     assert out.strip().splitlines()[-1] == "KeyboardInterrupt unchanged", (out, err[-2000:])
 
 
+@pytest.mark.parametrize("method", ["em", "mle"])
+def test_ctrl_c_in_a_long_fit_raises(method):
+    """A fit of minutes (a long record, a tight tolerance) stops at its next iteration or
+    likelihood evaluation with KeyboardInterrupt."""
+    rc, out, err = child(
+        f"""
+        rng = np.random.default_rng(1)
+        zs = np.cumsum(rng.standard_normal(400000)) + rng.standard_normal(400000)
+        one = np.eye(1)
+        print("calling", flush=True)
+        try:
+            le.fit(one, one, one, one, np.zeros(1), one * 10, zs, method="{method}",
+                   max_iter=100000)
+            print("finished")
+        except KeyboardInterrupt:
+            print("KeyboardInterrupt")
+        """,
+        interrupt_after_line="calling",
+        timeout=60,
+    )
+    assert rc == 0, err[-2000:]
+    assert out.strip().splitlines()[-1] == "KeyboardInterrupt", (out, err[-2000:])
+
+
 def test_ctrl_c_in_a_long_filter_batch_raises():
     """A filter_batch of many chunks (seconds uninterrupted) stops at the next
     chunk with KeyboardInterrupt."""

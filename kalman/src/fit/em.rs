@@ -23,7 +23,7 @@ use super::{FitError, LN_2PI, ParamMap, Series, StandardMap, Structure};
 /// let map = StandardMap::new(base.clone(), free)?;
 /// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2];
 /// let data = Series::new(&z, 1)?;
-/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000 })?;
+/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000, ..EmOptions::default() })?;
 /// // EM never lowers the likelihood: the optimum is at least as likely as the start.
 /// assert!(fit.loglik >= log_likelihood(&base, &data, CovarianceForm::Joseph)? - 1e-9);
 /// # Ok(())
@@ -35,6 +35,9 @@ pub struct EmOptions {
     pub tol: f64,
     /// Iteration cap (the fit is flagged unconverged when it is reached).
     pub max_iter: usize,
+    /// Called before every iteration; `true` stops the fit with [`FitError::Interrupted`]
+    /// (a user's Ctrl-C, a deadline). `None` never stops it.
+    pub interrupt: Option<super::Interrupt>,
 }
 
 impl Default for EmOptions {
@@ -42,6 +45,7 @@ impl Default for EmOptions {
         Self {
             tol: 1e-10,
             max_iter: 10_000,
+            interrupt: None,
         }
     }
 }
@@ -469,7 +473,7 @@ fn to_mat(v: &[f64], n: usize) -> Mat<f64> {
 /// let map = StandardMap::new(base.clone(), free)?;
 /// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2];
 /// let data = Series::new(&z, 1)?;
-/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000 })?;
+/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000, ..EmOptions::default() })?;
 /// // EM never lowers the likelihood: the optimum is at least as likely as the start.
 /// assert!(fit.loglik >= log_likelihood(&base, &data, CovarianceForm::Joseph)? - 1e-9);
 /// # Ok(())
@@ -528,6 +532,9 @@ pub fn em_with_progress(
     let mut iterations = 0;
     let mut converged = false;
     while iterations < opts.max_iter {
+        if opts.interrupt.is_some_and(|stop| stop.fired()) {
+            return Err(FitError::Interrupted);
+        }
         let (ll, next) = em_step(map, &theta, data)?;
         progress(iterations, ll);
         if ll - prev <= opts.tol * (1.0 + ll.abs()) {

@@ -51,4 +51,34 @@ pub enum FitError {
     /// The optimiser failed.
     #[error("optimiser failed: {0}")]
     Optimiser(String),
+    /// The options' `interrupt` check asked the fit to stop.
+    #[error("the fit was interrupted")]
+    Interrupted,
+}
+
+/// A check a long fit calls between its iterations (see `EmOptions::interrupt` and
+/// `MleOptions::interrupt`): `true` stops it with [`FitError::Interrupted`]. A plain
+/// function, so the options stay `Copy`; it reaches its state through statics or, as the
+/// Python module does, through the interpreter's own signal flag.
+///
+/// ```
+/// use kalman::fit::Interrupt;
+/// fn never() -> bool { false }
+/// assert!(!Interrupt(never).fired());
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct Interrupt(pub fn() -> bool);
+
+impl Interrupt {
+    /// Runs the check.
+    pub fn fired(&self) -> bool {
+        (self.0)()
+    }
+}
+
+impl PartialEq for Interrupt {
+    /// The same function (by address, as `std::ptr::fn_addr_eq` compares them).
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::fn_addr_eq(self.0, other.0)
+    }
 }

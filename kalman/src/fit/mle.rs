@@ -21,6 +21,9 @@ pub struct MleOptions {
     /// Convergence: the largest gradient entry of `ln L` at the optimum, in log-likelihood
     /// units per unit of θ (θ holds log-variances, so this is a relative scale).
     pub grad_tol: f64,
+    /// Called before every evaluation of the likelihood; `true` stops the fit with
+    /// [`FitError::Interrupted`] (a user's Ctrl-C, a deadline). `None` never stops it.
+    pub interrupt: Option<super::Interrupt>,
 }
 
 impl Default for MleOptions {
@@ -28,6 +31,7 @@ impl Default for MleOptions {
         Self {
             max_iter: 500,
             grad_tol: 1e-4,
+            interrupt: None,
         }
     }
 }
@@ -72,6 +76,9 @@ impl<M: ParamMap + ?Sized> Objective for Records<'_, M> {
 struct Memo<'o, O: Objective + ?Sized> {
     objective: &'o O,
     kept: RefCell<Vec<Evaluation>>,
+    /// The options' interruption check, and whether it has fired.
+    interrupt: Option<super::Interrupt>,
+    interrupted: std::cell::Cell<bool>,
 }
 
 /// θ with `ln L` and `∇ ln L` there.
@@ -81,15 +88,31 @@ type Evaluation = (Vec<f64>, f64, Vec<f64>);
 const MEMO: usize = 4;
 
 impl<'o, O: Objective + ?Sized> Memo<'o, O> {
-    fn new(objective: &'o O) -> Self {
+    fn new(objective: &'o O, interrupt: Option<super::Interrupt>) -> Self {
         Self {
             objective,
             kept: RefCell::new(Vec::with_capacity(MEMO)),
+            interrupt,
+            interrupted: std::cell::Cell::new(false),
+        }
+    }
+
+    /// [`FitError::Interrupted`] once the interruption check has fired (the optimisers
+    /// take a failed evaluation for a bad trial point, so each stage asks here).
+    fn check(&self) -> Result<(), FitError> {
+        if self.interrupted.get() {
+            Err(FitError::Interrupted)
+        } else {
+            Ok(())
         }
     }
 
     /// `(ln L, ∇ ln L)` at `p`, from the memo when `p` was evaluated lately.
     fn eval(&self, p: &[f64]) -> Result<(f64, Vec<f64>), FitError> {
+        if self.interrupted.get() || self.interrupt.is_some_and(|stop| stop.fired()) {
+            self.interrupted.set(true);
+            return Err(FitError::Interrupted);
+        }
         if let Some((_, ll, g)) = self.kept.borrow().iter().find(|(t, _, _)| t == p) {
             return Ok((*ll, g.clone()));
         }
@@ -428,12 +451,13 @@ pub(crate) fn optimise<O: Objective + ?Sized>(
     opts: &MleOptions,
 ) -> Result<(Vec<f64>, usize, bool, String), FitError> {
     // The likelihood must be defined at the start.
-    let memo = Memo::new(objective);
+    let memo = Memo::new(objective, opts.interrupt);
     memo.eval(&theta0)?;
     let scale = 1.0 / n_obs as f64;
     let mk = || Problem::new(&memo, scale);
     let mut notes = Vec::new();
     let (theta0, warm) = warm_up(&memo, theta0, n_obs as f64)?;
+    memo.check()?;
     let mut iterations = warm;
     if warm > 0 {
         notes.push(format!(
@@ -446,6 +470,7 @@ pub(crate) fn optimise<O: Objective + ?Sized>(
             t
         }
         Err(e) => {
+            memo.check()?;
             notes.push(format!("L-BFGS failed ({e}); Nelder–Mead fallback"));
             let k = theta0.len();
             let mut simplex = vec![theta0.clone()];
@@ -461,6 +486,7 @@ pub(crate) fn optimise<O: Objective + ?Sized>(
                 .configure(|st| st.max_iters(opts.max_iter * 20))
                 .run()
                 .map_err(|e| FitError::Optimiser(e.to_string()))?;
+            memo.check()?;
             iterations += res.state().get_iter() as usize;
             let t = res
                 .state()
@@ -476,7 +502,9 @@ pub(crate) fn optimise<O: Objective + ?Sized>(
             }
         }
     };
+    memo.check()?;
     let (theta, steps) = newton_polish(&memo, theta, opts.grad_tol)?;
+    memo.check()?;
     if steps > 0 {
         iterations += steps;
         notes.push(format!(
@@ -542,10 +570,13 @@ mod tests {
         let start: Vec<f64> = fit.theta.iter().map(|t| t + 0.3).collect();
         let (ll0, _) = log_likelihood_gradient(&map, &start, &data).expect("start");
         let (theta, steps) = newton_polish(
-            &Memo::new(&Records {
-                map: &map,
-                records: std::slice::from_ref(&data),
-            }),
+            &Memo::new(
+                &Records {
+                    map: &map,
+                    records: std::slice::from_ref(&data),
+                },
+                None,
+            ),
             start,
             1e-7,
         )

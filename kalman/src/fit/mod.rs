@@ -118,7 +118,7 @@ use faer::Mat;
 pub use diffuse::{diffuse_log_likelihood, diffuse_log_likelihood_gradient, mle_diffuse};
 pub use em::{EM_DECREMENT, EmOptions, check_identifiable, em, em_step, em_with_progress};
 pub use entries::{Entry, Matrix, Param, Transform};
-pub use error::FitError;
+pub use error::{FitError, Interrupt};
 #[cfg(all(feature = "autodiff", feature = "argmin"))]
 pub use filter_error::{
     AtTheta, MAX_FIXED_PARAMS, ParametricFit, ParametricModel, ekf_log_likelihood,

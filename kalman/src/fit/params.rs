@@ -126,7 +126,7 @@ fn central_differences<M: ParamMap + ?Sized>(
 /// let map = StandardMap::new(base.clone(), free)?;
 /// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2];
 /// let data = Series::new(&z, 1)?;
-/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000 })?;
+/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000, ..EmOptions::default() })?;
 /// // EM never lowers the likelihood: the optimum is at least as likely as the start.
 /// assert!(fit.loglik >= log_likelihood(&base, &data, CovarianceForm::Joseph)? - 1e-9);
 /// # Ok(())
@@ -173,7 +173,7 @@ impl Structure {
 /// let map = StandardMap::new(base.clone(), free)?;
 /// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2];
 /// let data = Series::new(&z, 1)?;
-/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000 })?;
+/// let fit = em(&map, &data, &EmOptions { tol: 1e-9, max_iter: 2000, ..EmOptions::default() })?;
 /// // EM never lowers the likelihood: the optimum is at least as likely as the start.
 /// assert!(fit.loglik >= log_likelihood(&base, &data, CovarianceForm::Joseph)? - 1e-9);
 /// # Ok(())

@@ -3,8 +3,8 @@
 
 use faer::Mat;
 use kalman::fit::{
-    Derivative, EmOptions, FitError, FnMap, Free, MleOptions, ParamMap, Series, StandardMap,
-    Structure, System, em, mle,
+    Derivative, EmOptions, FitError, FnMap, Free, Interrupt, MleOptions, ParamMap, Series,
+    StandardMap, Structure, System, em, mle,
 };
 
 use super::common::{binomial_band, llt, mle_from, mle_qr, rng, simulate_diag};
@@ -38,6 +38,61 @@ fn mle_and_em_reach_the_same_optimum_on_a_local_linear_trend() {
     // Information criteria follow from the log-likelihood and the 3 parameters.
     assert!((fm.aic - (6.0 - 2.0 * fm.loglik)).abs() < 1e-9);
     assert!((fm.bic - (3.0 * 400f64.ln() - 2.0 * fm.loglik)).abs() < 1e-9);
+}
+
+/// A fit whose interruption check fires stops with `FitError::Interrupted` (after the
+/// calls the check counts: EM before its fourth iteration, the MLE before its fourth
+/// likelihood evaluation, well short of convergence on this record), and a check that
+/// never fires changes nothing.
+#[test]
+fn an_interrupted_fit_stops_with_a_typed_error() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static EM_CALLS: AtomicUsize = AtomicUsize::new(0);
+    static MLE_CALLS: AtomicUsize = AtomicUsize::new(0);
+    fn em_stop() -> bool {
+        EM_CALLS.fetch_add(1, Ordering::SeqCst) >= 3
+    }
+    fn mle_stop() -> bool {
+        MLE_CALLS.fetch_add(1, Ordering::SeqCst) >= 3
+    }
+    fn never() -> bool {
+        false
+    }
+    let truth = llt(0.5, 0.01, 4.0, [0.0, 0.1], [1.0, 0.01]);
+    let z = simulate_diag(&truth, 400, &mut rng(21));
+    let data = Series::new(&z, 1).expect("series");
+    let base = llt(1.0, 1.0, 1.0, [z[0], 0.0], [10.0, 1.0]);
+    let free = Free {
+        q: Structure::Diag,
+        r: Structure::Diag,
+        ..Free::default()
+    };
+    let map = StandardMap::new(base, free).expect("map");
+    let em_opts = |f| EmOptions {
+        interrupt: Some(Interrupt(f)),
+        ..EmOptions::default()
+    };
+    assert_eq!(
+        em(&map, &data, &em_opts(em_stop)).map(|f| f.loglik),
+        Err(FitError::Interrupted)
+    );
+    assert_eq!(EM_CALLS.load(Ordering::SeqCst), 4);
+    let mle_opts = |f| MleOptions {
+        interrupt: Some(Interrupt(f)),
+        ..MleOptions::default()
+    };
+    let theta0 = vec![0.0; 3];
+    let err = mle(&map, theta0.clone(), &data, &mle_opts(mle_stop)).map(|f| f.loglik);
+    assert_eq!(err, Err(FitError::Interrupted));
+    assert_eq!(MLE_CALLS.load(Ordering::SeqCst), 4);
+    let plain = mle(&map, theta0.clone(), &data, &MleOptions::default()).expect("fit");
+    let checked = mle(&map, theta0, &data, &mle_opts(never)).expect("fit");
+    assert_eq!(plain.theta, checked.theta);
+    let em_plain = em(&map, &data, &EmOptions::default()).expect("em");
+    assert_eq!(
+        em(&map, &data, &em_opts(never)).expect("em").theta,
+        em_plain.theta
+    );
 }
 
 /// A random walk of variance q per step seen by two channels of variance r each, from
@@ -231,6 +286,7 @@ fn bad_input_is_a_typed_error() {
         &EmOptions {
             tol: 1e-12,
             max_iter: 2,
+            ..EmOptions::default()
         },
     )
     .expect("em");

@@ -61,6 +61,7 @@ fn an_em_stop_short_of_the_optimum_is_not_called_converged() {
         &EmOptions {
             tol: 1e-5,
             max_iter: 10_000,
+            ..EmOptions::default()
         },
     )
     .expect("em");

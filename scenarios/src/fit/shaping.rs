@@ -214,6 +214,7 @@ pub struct ShapingFit {
 pub const MLE_OPTIONS: MleOptions = MleOptions {
     max_iter: 500,
     grad_tol: 1e-3,
+    interrupt: None,
 };
 
 /// Maximum likelihood of `map` on `z` (one channel, NaN = missing) from natural parameters
