@@ -152,50 +152,45 @@ def test_ctrl_c_in_a_long_batch_filter_raises_and_keeps_the_filter():
     assert out.strip().splitlines()[-1] == "KeyboardInterrupt unchanged", (out, err[-2000:])
 
 
-@pytest.mark.parametrize("method", ["em", "mle"])
-def test_ctrl_c_in_a_long_fit_raises(method):
-    """A fit of minutes (a long record, a tight tolerance) stops at its next iteration or
-    likelihood evaluation with KeyboardInterrupt."""
-    rc, out, err = child(
-        f"""
-        rng = np.random.default_rng(1)
-        zs = np.cumsum(rng.standard_normal(400000)) + rng.standard_normal(400000)
-        one = np.eye(1)
-        print("calling", flush=True)
-        try:
-            le.fit(one, one, one, one, np.zeros(1), one * 10, zs, method="{method}",
-                   max_iter=100000)
-            print("finished")
-        except KeyboardInterrupt:
-            print("KeyboardInterrupt")
-        """,
-        interrupt_after_line="calling",
-        timeout=60,
+def assert_interrupted(setup, call):
+    """Runs `setup`, then `call` (one line, seconds or more uninterrupted) in a child
+    interpreter, Ctrl-C sent once the call has begun: the call raises KeyboardInterrupt."""
+    code = (
+        textwrap.dedent(setup)
+        + 'print("calling", flush=True)\n'
+        + f"try:\n    {call}\n    print('finished')\n"
+        + "except KeyboardInterrupt:\n    print('KeyboardInterrupt')\n"
     )
+    rc, out, err = child(code, interrupt_after_line="calling", timeout=60)
     assert rc == 0, err[-2000:]
     assert out.strip().splitlines()[-1] == "KeyboardInterrupt", (out, err[-2000:])
 
 
+@pytest.mark.parametrize("method", ["em", "mle"])
+def test_ctrl_c_in_a_long_fit_raises(method):
+    """A fit of minutes (a long record, a tight tolerance) stops at its next iteration or
+    likelihood evaluation."""
+    assert_interrupted(
+        """
+        rng = np.random.default_rng(1)
+        zs = np.cumsum(rng.standard_normal(400000)) + rng.standard_normal(400000)
+        one = np.eye(1)
+        """,
+        f"le.fit(one, one, one, one, np.zeros(1), one * 10, zs, method='{method}', "
+        "max_iter=100000)",
+    )
+
+
 def test_ctrl_c_in_a_long_filter_batch_raises():
-    """A filter_batch of many chunks (seconds uninterrupted) stops at the next
-    chunk with KeyboardInterrupt."""
-    rc, out, err = child(
+    """A filter_batch of many chunks (seconds uninterrupted) stops at the next chunk."""
+    assert_interrupted(
         """
         n = 6
         F, H = np.eye(n) * 0.999, np.ones((1, n))
         zs = np.broadcast_to(np.zeros((1, 1, 1)), (40000, 2000, 1))
-        print("calling", flush=True)
-        try:
-            le.filter_batch(F, H, np.eye(n), np.eye(1), np.zeros(n), np.eye(n), zs)
-            print("finished")
-        except KeyboardInterrupt:
-            print("KeyboardInterrupt")
         """,
-        interrupt_after_line="calling",
-        timeout=60,
+        "le.filter_batch(F, H, np.eye(n), np.eye(1), np.zeros(n), np.eye(n), zs)",
     )
-    assert rc == 0, err[-2000:]
-    assert out.strip().splitlines()[-1] == "KeyboardInterrupt", (out, err[-2000:])
 
 
 @pytest.mark.parametrize("which", ["ukf", "ekf"])

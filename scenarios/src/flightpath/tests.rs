@@ -48,6 +48,26 @@ fn simulated(p: &FlightPathParams, seed: u64, run: u64) -> Simulated {
     }
 }
 
+/// The smoothed trajectory's RMS error below the filtered one's in every group.
+fn assert_smoothed_beats_filtered(
+    pass: &smoother::Pass,
+    truth: &[sensors::flight::TruthPoint],
+    run: u64,
+) {
+    let (f, sm) = (
+        rms_groups(&pass.filtered, truth),
+        rms_groups(&pass.smoothed, truth),
+    );
+    for g in 0..3 {
+        assert!(
+            sm[g] < f[g],
+            "run {run}, group {g}: smoothed {} ≥ filtered {}",
+            sm[g],
+            f[g]
+        );
+    }
+}
+
 /// The iterated filter–smoother as the scenario runs it: the smoothed trajectory beats the
 /// filtered one in every group on every run, and the
 /// smoothed NEES of the whole state at mid-record, averaged over 2 runs of the default
@@ -65,18 +85,7 @@ fn smoothed_beats_filtered_and_nees_is_in_band() {
         let its = super::estimate::SMOOTHER_ITERATIONS;
         let pass =
             super::estimate::filter_smoother(&grid, &s, its, &[mid]).expect("filter–smoother");
-        let (f, sm) = (
-            rms_groups(&pass.filtered, &truth),
-            rms_groups(&pass.smoothed, &truth),
-        );
-        for g in 0..3 {
-            assert!(
-                sm[g] < f[g],
-                "run {run}, group {g}: smoothed {} ≥ filtered {}",
-                sm[g],
-                f[g]
-            );
-        }
+        assert_smoothed_beats_filtered(&pass, &truth, run);
         // The gate rejects every planted wild point (3 per sensor, 3 entries each) and at
         // most a handful of genuine entries (p = 1e-4 of ~2000–9000 per sensor).
         for (k, &rej) in pass.rejected.iter().enumerate() {
@@ -330,18 +339,7 @@ fn the_unscented_smoother_is_honest_in_one_pass() {
         let sim = simulated(&p, 11, run);
         let (truth, grid, s, mid) = (sim.truth, sim.grid, sim.settings, sim.mid);
         let pass = smoother::run_unscented(&grid, &s, &[mid]).expect("unscented pass");
-        let (f, sm) = (
-            rms_groups(&pass.filtered, &truth),
-            rms_groups(&pass.smoothed, &truth),
-        );
-        for g in 0..3 {
-            assert!(
-                sm[g] < f[g],
-                "run {run}, group {g}: smoothed {} ≥ filtered {}",
-                sm[g],
-                f[g]
-            );
-        }
+        assert_smoothed_beats_filtered(&pass, &truth, run);
         for (q, &j) in sq.iter_mut().zip(&flow) {
             let z = (pass.smoothed[(j, 0)] - errors[j - N_KIN]) / pass.smoothed_var[(j, 0)].sqrt();
             *q += z * z;
