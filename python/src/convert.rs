@@ -268,7 +268,7 @@ pub(crate) fn read_vector(
         return Err(value_error(format!(
             "{name} has shape {}, expected ({len}, 1) or ({len},){}",
             shape_str(view.shape()),
-            if missing_ok {
+            if missing_ok && len != 1 {
                 format!(" or (1, {len})")
             } else {
                 String::new()

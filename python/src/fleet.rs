@@ -51,7 +51,8 @@ fn run_batch<'py>(
     crate::convert::read_vector(x0, "x0", n, true, false, &mut x0v)?;
     let P0 = mat(P0, "P0")?;
 
-    let arr = float_array(zs, "zs")?;
+    let zs = crate::imm::as_array(zs, "zs")?;
+    let arr = float_array(&zs, "zs")?;
     let ro = arr.readonly();
     let view = ro.as_array();
     let view = match (view.ndim(), m) {

@@ -64,7 +64,13 @@ impl<'py> Bank<'py> {
             )));
         }
         let shape = |f: &Bound<'py, PyAny>, i: usize| -> PyResult<Vec<usize>> {
-            let x = f.getattr("x")?;
+            let x = f.getattr("x").map_err(|_| {
+                type_error(format!(
+                    "filters[{i}] is a {} without an x: an IMMEstimator takes filters with \
+                     FilterPy's interface (x, P, predict, update, likelihood)",
+                    type_name(f)
+                ))
+            })?;
             let a = x.cast::<PyUntypedArray>().map_err(|_| {
                 type_error(format!(
                     "filters[{i}].x must be a numpy.ndarray, not {}",
@@ -223,7 +229,7 @@ fn transition(obj: &Bound<'_, PyAny>, r: usize) -> PyResult<Vec<f64>> {
 }
 
 /// `obj` as a NumPy array (a sequence converted), for reading.
-fn as_array<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+pub(crate) fn as_array<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py, PyAny>> {
     if obj.cast::<PyUntypedArray>().is_ok() {
         return Ok(obj.clone());
     }

@@ -87,8 +87,11 @@ def test_bad_input_names_what_is_wrong():
         le.filter_batch(**md, zs=zs, form="sqrt")
     with pytest.raises(ValueError, match="P0"):
         le.filter_batch(**dict(md, P0=-np.eye(2)), zs=zs)
-    with pytest.raises(TypeError):
+    with pytest.raises((TypeError, ValueError)):
         le.filter_batch(**md, zs="nope")
+    # Nested lists are read as the array they spell.
+    listed = le.filter_batch(**md, zs=zs[:3, :, 0].tolist())
+    np.testing.assert_array_equal(listed["x"], le.filter_batch(**md, zs=zs[:3])["x"])
     empty = le.filter_batch(**md, zs=np.zeros((0, 5, 1)))
     assert empty["x"].shape == (0, 5, 2) and empty["log_likelihood"].shape == (0,)
 

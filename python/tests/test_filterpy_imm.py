@@ -170,6 +170,7 @@ def assert_unchanged(imm, before):
     "filters, mu, M, message",
     [
         ("one", (0.5, 0.5), TRANS, "sequence of filters"),
+        ("ints", (0.5, 0.5), TRANS, r"filters\[0\] is a int without an x"),
         ([], (0.5, 0.5), TRANS, "at least two"),
         (None, (0.5, 0.5), TRANS, "sequence of filters"),
         ("misshapen", (0.5, 0.5), TRANS, "same state dimension"),
@@ -191,6 +192,8 @@ def test_bad_construction_names_the_argument(filters, mu, M, message):
         filters = [le.KalmanFilter(3, 1), le.KalmanFilter(2, 1)]
     elif filters == "one":
         filters = 1
+    elif filters == "ints":
+        filters = [1, 2]
     with pytest.raises((ValueError, TypeError), match=message):
         le.IMMEstimator(filters, mu, M)
 
