@@ -9,7 +9,7 @@ use super::data::FlightData;
 use super::model::{FlightModel, M, N_ERR, N_KIN};
 use super::parameters::FlightPathParams;
 use super::simulation::{
-    flight_data, nees, noise_model, rms_groups, smoothed_error, true_state, truth_on_grid,
+    flight, flight_data, nees, noise_model, rms_groups, smoothed_error, true_state, truth_on_grid,
 };
 use super::smoother::{self, Settings};
 use super::userflight::{flight_csv, read_flight};
@@ -33,17 +33,12 @@ struct Simulated {
 
 /// Run `run` of the campaign seeded `seed` under `p`, as [`Simulated`].
 fn simulated(p: &FlightPathParams, seed: u64, run: u64) -> Simulated {
-    let rec = sensors::flight::simulate(&p.flight, &mut crate::montecarlo::run_rng(seed, run))
-        .expect("flight");
-    let data = flight_data(&rec);
-    let grid = data.grid();
-    let truth = truth_on_grid(&rec, &grid).expect("truth");
-    let noise = noise_model(&p.flight.noise_si(), p.flight.imu.rate_hz);
-    let settings = super::estimate::settings(&data, &grid, &noise, p);
+    let fl = flight(p, seed, run as usize).expect("flight");
+    let settings = super::estimate::settings(&fl.data, &fl.grid, &fl.noise, p);
     Simulated {
-        truth,
-        mid: grid.t.len() / 2,
-        grid: super::estimate::consumed(&data, &grid),
+        mid: fl.grid.t.len() / 2,
+        grid: super::estimate::consumed(&fl.data, &fl.grid),
+        truth: fl.truth,
         settings,
     }
 }
