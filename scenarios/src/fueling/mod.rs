@@ -17,6 +17,7 @@ pub mod calibration;
 pub mod calibration_report;
 pub mod learned;
 pub mod parameters;
+pub mod particle;
 mod plots;
 pub mod records;
 pub mod report;
@@ -31,7 +32,7 @@ use crate::campaign::{Scenario, ScenarioParams};
 use crate::error::{Error, Result};
 use crate::montecarlo::Shard;
 use parameters::FuelingParams;
-use records::SweepRecords;
+use records::FuelingRecords;
 use summary::Summary;
 
 /// The fueling scenario, as the campaign runs it.
@@ -41,7 +42,7 @@ pub struct Fueling;
 impl Scenario for Fueling {
     const NAME: &'static str = "fueling";
     type Params = FuelingParams;
-    type Records = Vec<SweepRecords>;
+    type Records = FuelingRecords;
     type Summary = Summary;
     type Json = Summary;
 
@@ -60,7 +61,7 @@ impl Scenario for Fueling {
         seed: u64,
         shard: Shard,
         threads: Option<usize>,
-    ) -> Result<Vec<SweepRecords>> {
+    ) -> Result<FuelingRecords> {
         simulation::simulate(params, seed, shard, threads)
     }
 
@@ -68,7 +69,7 @@ impl Scenario for Fueling {
         params: &FuelingParams,
         seed: u64,
         shard: Shard,
-        records: &Vec<SweepRecords>,
+        records: &FuelingRecords,
         threads: Option<usize>,
     ) -> Result<Summary> {
         let mut summary = summary::summarise(params, seed, shard, records)?;

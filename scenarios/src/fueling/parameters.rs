@@ -7,6 +7,7 @@ use std::path::Path;
 use model::{FuelParams, FuelParamsStated, Realisation};
 use serde::{Deserialize, Serialize};
 
+use super::particle::ParticleConfig;
 use crate::campaign::ScenarioParams;
 use crate::error::{Error, Result};
 
@@ -101,6 +102,9 @@ pub struct FuelingParams {
     pub invariance_periods_s: Vec<f64>,
     /// The search over the unstated parameters (`[calibration]`, see `calibration`).
     pub calibration: CalibrationConfig,
+    /// The exact-likelihood particle filter in the amplitude sweep (`[particle]`, see
+    /// `particle`).
+    pub particle: ParticleConfig,
 }
 
 impl Default for FuelingParams {
@@ -136,6 +140,7 @@ impl Default for FuelingParams {
             invariance_amplitudes_deg: vec![0.25, 0.5, 0.75, 1.0],
             invariance_periods_s: vec![6.0, 10.0, 14.0],
             calibration: CalibrationConfig::default(),
+            particle: ParticleConfig::default(),
         }
     }
 }
@@ -249,6 +254,21 @@ impl ScenarioParams for FuelingParams {
             );
         }
         self.calibration.check(source)?;
+        let pf = self.particle;
+        if pf.runs > 0 && !(16..=1 << 20).contains(&pf.particles) {
+            return bad(
+                "particle.particles",
+                "must be in 16 ..= 1048576 (or set `particle.runs` = 0)",
+                pf.particles.to_string(),
+            );
+        }
+        if pf.runs == 1 {
+            return bad(
+                "particle.runs",
+                "needs at least 2 runs (a standard deviation), or 0 for none",
+                "1".into(),
+            );
+        }
         // Let the model check the combination (e.g. an overflowing discretisation).
         let world = self.world(self.max_amplitude_deg, Swept::Nothing);
         world

@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 use crate::campaign::records::{RecordFile, RunRecords};
 use crate::error::{Error, Result};
 
-use super::parameters::FuelingParams;
+use super::parameters::{FuelingParams, Sweep};
+use super::particle::{self, ParticleRecords};
 
 /// The strategies, in the order of every per-run record and table.
 pub const STRATEGIES: [&str; 5] = ["relay", "kf1", "kf2", "kf2_cross", "kf2_midstep"];
@@ -82,11 +83,21 @@ const RUNS_HEADER: [&str; 7] = [
     "kf2_midstep_m",
 ];
 
+/// Every per-run record of a fueling campaign (or of one shard of it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FuelingRecords {
+    /// The sweeps', in [`FuelingParams::sweeps`] order.
+    pub sweeps: Vec<SweepRecords>,
+    /// The particle filter's in the amplitude sweep (no points when it is off).
+    pub particle: ParticleRecords,
+}
+
 /// One record file per sweep, `runs_<sweep>.csv`, in [`FuelingParams::sweeps`] order: keys
-/// (point, run), then the outcome.
-impl RunRecords<FuelingParams> for Vec<SweepRecords> {
+/// (point, run), then the outcome; then `runs_particle.csv` unless the particle filter is
+/// off.
+impl RunRecords<FuelingParams> for FuelingRecords {
     fn record_files(params: &FuelingParams) -> Vec<RecordFile> {
-        params
+        let mut files: Vec<RecordFile> = params
             .sweeps()
             .iter()
             .map(|sweep| RecordFile {
@@ -94,68 +105,91 @@ impl RunRecords<FuelingParams> for Vec<SweepRecords> {
                 header: RUNS_HEADER.to_vec(),
                 grid: vec![sweep.points.len(), sweep.runs],
             })
-            .collect()
+            .collect();
+        files.extend(particle::record_files(params));
+        files
     }
 
     fn to_tables(&self) -> Vec<Vec<Vec<f64>>> {
-        self.iter()
-            .map(|rec| {
-                rec.records
-                    .iter()
-                    .enumerate()
-                    .flat_map(|(p, runs)| {
-                        runs.iter().map(move |(run, o)| {
-                            let mut row = vec![p as f64, *run as f64];
-                            row.extend_from_slice(o);
-                            row
-                        })
-                    })
-                    .collect()
-            })
-            .collect()
+        let mut tables = sweep_tables(&self.sweeps);
+        tables.extend(self.particle.to_tables());
+        tables
     }
 
     /// The records of every sweep from the rows of its file; [`Error::Invalid`] if the number
     /// of tables or a row's width does not fit the sweeps.
-    fn from_tables(params: &FuelingParams, tables: Vec<Vec<Vec<f64>>>) -> Result<Self> {
+    fn from_tables(params: &FuelingParams, mut tables: Vec<Vec<Vec<f64>>>) -> Result<Self> {
         let sweeps = params.sweeps();
-        if tables.len() != sweeps.len() {
-            return Err(Error::invalid(
-                "runs_*.csv",
-                format!("{} record files for {} sweeps", tables.len(), sweeps.len()),
-            ));
-        }
-        sweeps
-            .iter()
-            .zip(tables)
-            .map(|(sweep, rows)| {
-                let mut records = vec![Vec::new(); sweep.points.len()];
-                for row in rows {
-                    let [p, run, o @ ..] = row.as_slice() else {
-                        return Err(Error::invalid(
-                            format!("runs_{}.csv", sweep.id),
-                            format!("a row of {} fields", row.len()),
-                        ));
-                    };
-                    let outcome: Outcome = o.try_into().map_err(|_| {
-                        Error::invalid(
-                            format!("runs_{}.csv", sweep.id),
-                            format!("a row of {} fields, expected 7", row.len()),
-                        )
-                    })?;
-                    let slot = records.get_mut(*p as usize).ok_or_else(|| {
-                        Error::invalid(
-                            format!("runs_{}.csv", sweep.id),
-                            format!("point {p} outside the sweep"),
-                        )
-                    })?;
-                    slot.push((*run as usize, outcome));
-                }
-                Ok(SweepRecords {
-                    id: sweep.id.to_string(),
-                    records,
-                })
-            })
-            .collect()
+        let particle = if particle::runs(params) > 0 && tables.len() == sweeps.len() + 1 {
+            tables
+                .pop()
+                .map(|rows| ParticleRecords::from_table(params, rows))
+        } else {
+            None
+        };
+        Ok(FuelingRecords {
+            sweeps: sweeps_from_tables(&sweeps, tables)?,
+            particle: particle.transpose()?.unwrap_or_default(),
+        })
     }
+}
+
+fn sweep_tables(sweeps: &[SweepRecords]) -> Vec<Vec<Vec<f64>>> {
+    sweeps
+        .iter()
+        .map(|rec| {
+            rec.records
+                .iter()
+                .enumerate()
+                .flat_map(|(p, runs)| {
+                    runs.iter().map(move |(run, o)| {
+                        let mut row = vec![p as f64, *run as f64];
+                        row.extend_from_slice(o);
+                        row
+                    })
+                })
+                .collect()
+        })
+        .collect()
+}
+
+fn sweeps_from_tables(sweeps: &[Sweep], tables: Vec<Vec<Vec<f64>>>) -> Result<Vec<SweepRecords>> {
+    if tables.len() != sweeps.len() {
+        return Err(Error::invalid(
+            "runs_*.csv",
+            format!("{} record files for {} sweeps", tables.len(), sweeps.len()),
+        ));
+    }
+    sweeps
+        .iter()
+        .zip(tables)
+        .map(|(sweep, rows)| {
+            let mut records = vec![Vec::new(); sweep.points.len()];
+            for row in rows {
+                let [p, run, o @ ..] = row.as_slice() else {
+                    return Err(Error::invalid(
+                        format!("runs_{}.csv", sweep.id),
+                        format!("a row of {} fields", row.len()),
+                    ));
+                };
+                let outcome: Outcome = o.try_into().map_err(|_| {
+                    Error::invalid(
+                        format!("runs_{}.csv", sweep.id),
+                        format!("a row of {} fields, expected 7", row.len()),
+                    )
+                })?;
+                let slot = records.get_mut(*p as usize).ok_or_else(|| {
+                    Error::invalid(
+                        format!("runs_{}.csv", sweep.id),
+                        format!("point {p} outside the sweep"),
+                    )
+                })?;
+                slot.push((*run as usize, outcome));
+            }
+            Ok(SweepRecords {
+                id: sweep.id.to_string(),
+                records,
+            })
+        })
+        .collect()
 }

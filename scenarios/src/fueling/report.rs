@@ -239,6 +239,32 @@ fn findings(sm: &Summary) -> String {
             }
         );
     }
+    if let Some(c) = &sm.particle
+        && let Some(e) = c.entries.last()
+    {
+        let v = &c.verdict;
+        let list = |a: &[f64]| {
+            if a.is_empty() {
+                "none".to_string()
+            } else {
+                a.iter()
+                    .map(|x| format!("{x}°"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        };
+        let _ = writeln!(
+            s,
+            "1. Beyond the paper: a particle filter that reads the quantizer exactly (the \
+             reading's interval, not white noise) has {} of the two-channel KF's random error \
+             at {}°; its random error is lower beyond the 95 % interval at {} and higher at {} \
+             (*the quantizer's exact likelihood* below).",
+            ci(&e.particle_to_kf2),
+            e.amplitude_deg,
+            list(&v.better_deg),
+            list(&v.worse_deg)
+        );
+    }
     let _ = writeln!(
         s,
         "1. Beyond the paper: modelling the cross-covariance S gives {} (the paper's filter \
@@ -569,6 +595,9 @@ pub fn report_md(sm: &Summary) -> String {
     }
     if let Some(l) = &sm.learned {
         s.push_str(&calibration_report::learned_section(l));
+    }
+    if let Some(c) = &sm.particle {
+        s.push_str(&calibration_report::particle_section(c));
     }
 
     // --- Fig. 1

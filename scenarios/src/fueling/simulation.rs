@@ -14,7 +14,8 @@ use model::{Channels, FuelModel, FuelParams, Realisation};
 use rand::{Rng, RngExt};
 
 use super::parameters::{FuelingParams, World};
-use super::records::{Outcome, SweepRecords};
+use super::particle;
+use super::records::{FuelingRecords, Outcome, SweepRecords};
 use crate::error::{Error, Result};
 use crate::montecarlo::{Shard, par_runs, run_rng};
 use sensors::{
@@ -210,82 +211,10 @@ impl Point {
     /// # Errors
     /// A message if a sensor or filter rejects its configuration (never for valid worlds).
     pub fn run<R: Rng + Clone>(&self, rng: &mut R) -> Result<Outcome> {
-        let w = &self.world;
-        let p = &w.fuel;
-        let dt = p.dt;
-        let axis = RollingAxisConfig {
-            max_amplitude_deg: p.max_tilt_amplitude.to_degrees(),
-            period_s: p.rolling_period,
-            irregularity_per_s: p.mu,
-        };
-        let mut platform = PlatformMotion::new(
-            &PlatformMotionConfig {
-                roll: axis,
-                pitch: axis,
-            },
-            dt,
-        )
-        .map_err(|source| Error::Sensors {
-            context: "platform motion",
-            source,
-        })?;
-        let mut velocity = ExpCorrelated::new(
-            &ExpCorrelatedConfig {
-                std_dev: p.d_c.sqrt(),
-                correlation_time_s: p.t_a,
-            },
-            dt,
-        )
-        .map_err(|source| Error::Sensors {
-            context: "fill-velocity fluctuation",
-            source,
-        })?;
-        let sensor_cfg = LevelSensorConfig {
-            step_m: p.delta,
-            damper_time_constant_s: p.t_y,
-            sensor_radius_m: p.sensor_radius,
-            sensor_angle_deg: p.phi.to_degrees(),
-            ..LevelSensorConfig::default()
-        };
-        let mut sensor = LevelSensor::new(&sensor_cfg, dt).map_err(|source| Error::Sensors {
-            context: "level sensor",
-            source,
-        })?;
-        let mut sensor_mid = LevelSensor::new(
-            &LevelSensorConfig {
-                mid_step_compensation: true,
-                ..sensor_cfg
-            },
-            dt,
-        )
-        .map_err(|source| Error::Sensors {
-            context: "compensated level sensor",
-            source,
-        })?;
-        let mut gyro = Gyro::new(
-            &GyroConfig {
-                sample_period_s: dt,
-                noise_std_deg: p.gyro_noise_var.sqrt().to_degrees(),
-                ..GyroConfig::default()
-            },
-            dt,
-        )
-        .map_err(|source| Error::Sensors {
-            context: "gyro",
-            source,
-        })?;
-
-        // Drawn first, and always, so that the rest of the stream is the same either way.
-        let phase: f64 = rng.random();
-        let target = if w.random_target_phase {
-            w.target + phase * p.delta
-        } else {
-            w.target
-        };
+        let p = &self.world.fuel;
+        let (mut truth, target) = Truth::start(&self.world, rng)?;
         // A reading on the mark H* must count as reaching it despite rounding in δ·n.
         let relay_target = target - 1e-9 * p.delta;
-        let mut level = target - p.v_c * w.warmup;
-        let mut v_prev = 0.0;
         let mut levels: Vec<f64> = Vec::with_capacity(self.max_steps + self.delay_steps + 1);
         let mut stop: [Option<usize>; 5] = [None; 5];
         let mut kf1: Option<ScheduledFilter<'_, FixedDims<7, 1, 1>>> = None;
@@ -295,19 +224,8 @@ impl Point {
         let u = [1.0];
         let mut last_needed = usize::MAX;
         for k in 0..self.max_steps + self.delay_steps {
-            let attitude = platform.next(rng);
-            let v = velocity.next(rng);
-            if k > 0 {
-                // Level integrates V_c + ΔV; trapezoid over the step (ΔV is smooth: T_a ≫ Δt).
-                level += (p.v_c + 0.5 * (v + v_prev)) * dt;
-            }
-            v_prev = v;
+            let Sample { level, z1, z2, mid } = truth.next(rng);
             levels.push(level);
-            // The compensated sensor sees the same threshold noise as the plain one.
-            let mid = sensor_mid.step(level, attitude, &mut rng.clone()).reading;
-            let z2 = sensor.step(level, attitude, rng).reading;
-            let tilt = gyro.step(attitude, rng).tilt_toward(p.phi);
-            let z1 = p.sensor_radius * tilt;
             if k >= last_needed {
                 break;
             }
@@ -354,12 +272,174 @@ impl Point {
                 }
             }
         }
-        Ok(std::array::from_fn(|i| match stop[i] {
-            Some(k) => levels
-                .get(k + self.delay_steps)
-                .map_or(f64::NAN, |h| h - target),
-            None => f64::NAN,
+        Ok(std::array::from_fn(|i| {
+            stop[i].map_or(f64::NAN, |k| self.error_after(&levels, k, target))
         }))
+    }
+
+    /// The fuelling error of a stop command at step `k`: the level the valve delay later,
+    /// less H* (NaN if the run ended before).
+    pub(super) fn error_after(&self, levels: &[f64], k: usize, target: f64) -> f64 {
+        levels
+            .get(k + self.delay_steps)
+            .map_or(f64::NAN, |h| h - target)
+    }
+
+    /// Steps simulated at most for a stop command, and the valve delay in steps.
+    pub(super) fn steps(&self) -> (usize, usize) {
+        (self.max_steps, self.delay_steps)
+    }
+}
+
+/// What the strategies see at one step of the truth world.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Sample {
+    /// The true tank level (on the axis), m.
+    pub level: f64,
+    /// The gyro's tilt toward the sensor times R, m.
+    pub z1: f64,
+    /// The level sensor's reading, m.
+    pub z2: f64,
+    /// The mid-step-compensated sensor's reading, m.
+    pub mid: f64,
+}
+
+/// The truth world of one run (tank level, platform rolling, the two level sensors and the
+/// gyro), stepped every Δt. Every strategy is fed from it, and it draws from the run's
+/// stream in one fixed order, so every strategy of a run sees the same world.
+pub(super) struct Truth {
+    platform: PlatformMotion,
+    velocity: ExpCorrelated,
+    sensor: LevelSensor,
+    sensor_mid: LevelSensor,
+    gyro: Gyro,
+    level: f64,
+    v_prev: f64,
+    started: bool,
+    v_c: f64,
+    dt: f64,
+    radius: f64,
+    phi: f64,
+}
+
+impl Truth {
+    /// The world of `w` at its start, with H* drawn from `rng` (first, and always, so that
+    /// the rest of the stream is the same either way); returns it with H*.
+    ///
+    /// # Errors
+    /// [`Error::Sensors`] if a sensor rejects its configuration (never for valid worlds).
+    pub(super) fn start<R: Rng>(w: &World, rng: &mut R) -> Result<(Self, f64)> {
+        let p = &w.fuel;
+        let dt = p.dt;
+        let axis = RollingAxisConfig {
+            max_amplitude_deg: p.max_tilt_amplitude.to_degrees(),
+            period_s: p.rolling_period,
+            irregularity_per_s: p.mu,
+        };
+        let platform = PlatformMotion::new(
+            &PlatformMotionConfig {
+                roll: axis,
+                pitch: axis,
+            },
+            dt,
+        )
+        .map_err(|source| Error::Sensors {
+            context: "platform motion",
+            source,
+        })?;
+        let velocity = ExpCorrelated::new(
+            &ExpCorrelatedConfig {
+                std_dev: p.d_c.sqrt(),
+                correlation_time_s: p.t_a,
+            },
+            dt,
+        )
+        .map_err(|source| Error::Sensors {
+            context: "fill-velocity fluctuation",
+            source,
+        })?;
+        let sensor_cfg = LevelSensorConfig {
+            step_m: p.delta,
+            damper_time_constant_s: p.t_y,
+            sensor_radius_m: p.sensor_radius,
+            sensor_angle_deg: p.phi.to_degrees(),
+            ..LevelSensorConfig::default()
+        };
+        let sensor = LevelSensor::new(&sensor_cfg, dt).map_err(|source| Error::Sensors {
+            context: "level sensor",
+            source,
+        })?;
+        let sensor_mid = LevelSensor::new(
+            &LevelSensorConfig {
+                mid_step_compensation: true,
+                ..sensor_cfg
+            },
+            dt,
+        )
+        .map_err(|source| Error::Sensors {
+            context: "compensated level sensor",
+            source,
+        })?;
+        let gyro = Gyro::new(
+            &GyroConfig {
+                sample_period_s: dt,
+                noise_std_deg: p.gyro_noise_var.sqrt().to_degrees(),
+                ..GyroConfig::default()
+            },
+            dt,
+        )
+        .map_err(|source| Error::Sensors {
+            context: "gyro",
+            source,
+        })?;
+        let phase: f64 = rng.random();
+        let target = if w.random_target_phase {
+            w.target + phase * p.delta
+        } else {
+            w.target
+        };
+        Ok((
+            Truth {
+                platform,
+                velocity,
+                sensor,
+                sensor_mid,
+                gyro,
+                level: target - p.v_c * w.warmup,
+                v_prev: 0.0,
+                started: false,
+                v_c: p.v_c,
+                dt,
+                radius: p.sensor_radius,
+                phi: p.phi,
+            },
+            target,
+        ))
+    }
+
+    /// The next sample (the first call gives the start).
+    pub(super) fn next<R: Rng + Clone>(&mut self, rng: &mut R) -> Sample {
+        let attitude = self.platform.next(rng);
+        let v = self.velocity.next(rng);
+        if self.started {
+            // Level integrates V_c + ΔV; trapezoid over the step (ΔV is smooth: T_a ≫ Δt).
+            self.level += (self.v_c + 0.5 * (v + self.v_prev)) * self.dt;
+        }
+        self.started = true;
+        self.v_prev = v;
+        // The compensated sensor sees the same threshold noise as the plain one.
+        let mid = self
+            .sensor_mid
+            .step(self.level, attitude, &mut rng.clone())
+            .reading;
+        let z2 = self.sensor.step(self.level, attitude, rng).reading;
+        let tilt = self.gyro.step(attitude, rng).tilt_toward(self.phi);
+        Sample {
+            level: self.level,
+            z1: self.radius * tilt,
+            z2,
+            mid,
+        }
     }
 }
 
@@ -397,7 +477,7 @@ fn step_level<const M: usize>(
     Ok(f.state().iter().zip(&s.level_row).map(|(x, g)| x * g).sum())
 }
 
-/// Runs the campaign's slice of every sweep.
+/// Runs the campaign's slice of every sweep, and of the particle filter's runs.
 ///
 /// # Errors
 /// [`Error::Kalman`] / [`Error::Sensors`] if a filter or sensor rejects a point (never for
@@ -407,7 +487,7 @@ pub fn simulate(
     seed: u64,
     shard: Shard,
     threads: Option<usize>,
-) -> Result<Vec<SweepRecords>> {
+) -> Result<FuelingRecords> {
     let sweeps = params.sweeps();
     let mut points: Vec<Point> = Vec::new();
     // (point index into `points`, run index), in output order.
@@ -434,17 +514,22 @@ pub fn simulate(
     for o in outcomes {
         flat.push(o?);
     }
-    Ok(sweeps
-        .iter()
-        .zip(layout)
-        .map(|(sweep, ranges)| SweepRecords {
-            id: sweep.id.to_string(),
-            records: ranges
-                .into_iter()
-                .map(|r| r.map(|j| (jobs[j].1, flat[j])).collect())
-                .collect(),
-        })
-        .collect())
+    let amplitude_points = sweeps.first().map_or(0, |s| s.points.len());
+    let particle = particle::simulate(params, &points[..amplitude_points], seed, shard, threads)?;
+    Ok(FuelingRecords {
+        sweeps: sweeps
+            .iter()
+            .zip(layout)
+            .map(|(sweep, ranges)| SweepRecords {
+                id: sweep.id.to_string(),
+                records: ranges
+                    .into_iter()
+                    .map(|r| r.map(|j| (jobs[j].1, flat[j])).collect())
+                    .collect(),
+            })
+            .collect(),
+        particle,
+    })
 }
 
 #[cfg(test)]

@@ -9,8 +9,9 @@ use serde::{Deserialize, Serialize};
 
 use super::calibration::Calibration;
 use super::parameters::{FuelingParams, Sweep, Swept};
+use super::particle::{self, ParticleComparison};
 pub use super::records::PerStrategy;
-use super::records::SweepRecords;
+use super::records::{FuelingRecords, SweepRecords};
 use super::statistics::{self, Margins};
 use crate::error::{Error, Result};
 use crate::montecarlo::Shard;
@@ -125,6 +126,10 @@ pub struct Summary {
     pub runs_without_stop: PerStrategy<usize>,
     /// Ratio intervals and tail quantiles (`statistics`).
     pub margins: Margins,
+    /// The exact-likelihood particle filter against the two-channel KF in the amplitude
+    /// sweep (absent when off).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub particle: Option<ParticleComparison>,
     /// The search over the unstated parameters (absent when off, and in a shard).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub calibration: Option<Calibration>,
@@ -150,7 +155,8 @@ pub struct NyquistNull {
     pub paper: f64,
 }
 
-fn stat(values: impl Iterator<Item = f64>) -> Stat {
+/// Mean and sample standard deviation of the finite values, metres in, mm out.
+pub(super) fn stat(values: impl Iterator<Item = f64>) -> Stat {
     let v: Vec<f64> = values.filter(|x| x.is_finite()).map(|x| x * 1e3).collect();
     let n = v.len() as f64;
     if v.is_empty() {
@@ -211,8 +217,9 @@ pub fn summarise(
     p: &FuelingParams,
     seed: u64,
     shard: Shard,
-    records: &[SweepRecords],
+    all_records: &FuelingRecords,
 ) -> Result<Summary> {
+    let records = all_records.sweeps.as_slice();
     let sweeps = p.sweeps();
     if sweeps.len() != records.len()
         || sweeps
@@ -282,6 +289,7 @@ pub fn summarise(
             .count()
     });
     let invariance_entries = all[6].clone();
+    let particle = particle::compare(p, &all_records.particle, &records[0])?;
     let margins = statistics::margins(&sweeps, records, top_i, seed);
     let nyquist_null = level_nyquist_power(p, top_x, p.realisation.to_model())
         .filter(|&ours| ours < NYQUIST_NULL)
@@ -320,6 +328,7 @@ pub fn summarise(
         },
         runs_without_stop,
         margins,
+        particle,
         calibration: None,
         learned: None,
         invariance_entries,

@@ -265,6 +265,9 @@ fn bad_configuration_exits_2_naming_the_key() {
         ("damper_time_s = \"two\"\n", "damper_time_s"),
         ("calibration.runs_per_set = 1\n", "calibration.runs_per_set"),
         ("calibration.search = \"longer\"\n", "longer"),
+        ("particle.particles = 3\n", "particle.particles"),
+        ("particle.runs = 1\n", "particle.runs"),
+        ("particle.paticles = 300\n", "paticles"),
     ] {
         std::fs::write(dir.join("bad.toml"), text).expect("write config");
         let out = run(&dir, &argv("fueling --config bad.toml --out out"));
