@@ -11,11 +11,10 @@ use std::path::Path;
 use super::calibration::{Calibration, Evaluation, Gap};
 use super::learned::{Learned, LearnedBack};
 use super::parameters::FuelingParams;
-use super::particle::ParticleComparison;
 use super::records::{STRATEGIES, STRATEGY_LABELS};
 use super::search::{BOX, Scale, get};
 use super::statistics::RatioCi;
-use super::summary::Summary;
+use super::summary::{ParticleComparison, Summary};
 use crate::error::{Error, Result};
 
 fn f2(x: f64) -> String {

@@ -62,7 +62,10 @@ impl Scenario for Fueling {
         shard: Shard,
         threads: Option<usize>,
     ) -> Result<FuelingRecords> {
-        simulation::simulate(params, seed, shard, threads)
+        Ok(FuelingRecords {
+            sweeps: simulation::simulate(params, seed, shard, threads)?,
+            particle: particle::simulate(params, seed, shard, threads)?,
+        })
     }
 
     fn summarise(

@@ -7,7 +7,6 @@ use std::path::Path;
 use model::{FuelParams, FuelParamsStated, Realisation};
 use serde::{Deserialize, Serialize};
 
-use super::particle::ParticleConfig;
 use crate::campaign::ScenarioParams;
 use crate::error::{Error, Result};
 
@@ -453,6 +452,27 @@ pub struct World {
     pub valve_delay: f64,
     /// How the filters' model is discretised.
     pub realisation: Realisation,
+}
+
+/// The `[particle]` table of the fueling configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ParticleConfig {
+    /// Runs per amplitude point (the first this many of the sweep's; 0 turns the strategy
+    /// off; capped at `runs_per_point`).
+    pub runs: usize,
+    /// Particles N (≥ 16).
+    pub particles: usize,
+}
+
+impl Default for ParticleConfig {
+    /// 200 runs per amplitude point, 256 particles.
+    fn default() -> Self {
+        Self {
+            runs: 200,
+            particles: 256,
+        }
+    }
 }
 
 /// How thorough the search is; the sizes it sets can each be overridden.

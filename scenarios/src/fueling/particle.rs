@@ -31,7 +31,7 @@
 //! Restarts are counted per run and reported.
 //!
 //! **Records.** `runs_particle.csv`: (point, run) over the amplitude sweep's points and its
-//! first [`ParticleConfig::runs`] runs, the fuelling error and the restarts. Run i sees the
+//! first [`ParticleConfig::runs`](super::parameters::ParticleConfig::runs) runs, the fuelling error and the restarts. Run i sees the
 //! same world as run i of the amplitude sweep (the same stream), so the comparison with the
 //! other strategies is paired; the filter's own draws come from a stream of their own.
 
@@ -41,37 +41,12 @@ use kalman::particle::{
 use rand::{Rng, RngExt};
 use rand_distr::StandardNormal;
 use sensors::{FirstOrderLag, LagInput, Quantizer, Rounding};
-use serde::{Deserialize, Serialize};
 
-use super::parameters::FuelingParams;
-use super::records::SweepRecords;
+use super::parameters::{FuelingParams, Swept};
+use super::records::{ParticleOutcome, ParticleRecords, particle_runs};
 use super::simulation::{Point, Sample, Truth};
-use super::statistics::{RatioCi, std_ratio};
-use super::summary::{Stat, stat};
-use crate::campaign::records::RecordFile;
 use crate::error::{Error, Result};
 use crate::montecarlo::{Shard, par_runs, run_rng, run_seed};
-
-/// The `[particle]` table of the fueling configuration.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct ParticleConfig {
-    /// Runs per amplitude point (the first this many of the sweep's; 0 turns the strategy
-    /// off; capped at `runs_per_point`).
-    pub runs: usize,
-    /// Particles N (≥ 16).
-    pub particles: usize,
-}
-
-impl Default for ParticleConfig {
-    /// 200 runs per amplitude point, 256 particles.
-    fn default() -> Self {
-        Self {
-            runs: 200,
-            particles: 256,
-        }
-    }
-}
 
 /// The level's random walk per step in the filter's model, in quantization steps δ: the
 /// diversity resampling needs (with the world's own noise alone, the particles' levels
@@ -215,9 +190,6 @@ impl ParticleModel for QuantizedLevel {
     }
 }
 
-/// One run's particle filter: the fuelling error (NaN: never stopped) and the restarts.
-pub type ParticleOutcome = [f64; 2];
-
 /// Runs the particle-filter strategy on the world of `point` with the world's stream `rng`
 /// and the filter's own `seed`.
 ///
@@ -309,93 +281,25 @@ pub fn run<R: Rng + Clone>(
     ])
 }
 
-/// Per-run outcomes: `records[point]` holds `(run index, outcome)` in run order.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct ParticleRecords {
-    /// Outcomes per amplitude point.
-    pub records: Vec<Vec<(usize, ParticleOutcome)>>,
-}
-
-/// Columns of `runs_particle.csv`.
-const HEADER: [&str; 4] = ["point", "run", "particle_m", "restarts"];
-
-/// The record file's name.
-pub const FILE: &str = "runs_particle.csv";
-
-/// Runs per amplitude point of the strategy under `params` (0: off).
-pub fn runs(params: &FuelingParams) -> usize {
-    params.particle.runs.min(params.runs_per_point)
-}
-
-/// The record file of a campaign with `params` (none when the strategy is off).
-pub fn record_files(params: &FuelingParams) -> Vec<RecordFile> {
-    let runs = runs(params);
-    if runs == 0 {
-        return Vec::new();
-    }
-    vec![RecordFile {
-        name: FILE.to_string(),
-        header: HEADER.to_vec(),
-        grid: vec![params.amplitudes_deg.len(), runs],
-    }]
-}
-
-impl ParticleRecords {
-    /// The rows of the record file (no table when the strategy is off: no points).
-    pub fn to_tables(&self) -> Vec<Vec<Vec<f64>>> {
-        if self.records.is_empty() {
-            return Vec::new();
-        }
-        vec![
-            self.records
-                .iter()
-                .enumerate()
-                .flat_map(|(p, runs)| {
-                    runs.iter()
-                        .map(move |(run, o)| vec![p as f64, *run as f64, o[0], o[1]])
-                })
-                .collect(),
-        ]
-    }
-
-    /// The records from the rows of the record file.
-    ///
-    /// # Errors
-    /// [`Error::Invalid`] naming the file for a row of the wrong width or a point outside
-    /// the sweep.
-    pub fn from_table(params: &FuelingParams, rows: Vec<Vec<f64>>) -> Result<Self> {
-        let mut records = vec![Vec::new(); params.amplitudes_deg.len()];
-        for row in rows {
-            let [p, run, error, restarts] = row.as_slice() else {
-                return Err(Error::invalid(
-                    FILE,
-                    format!("a row of {} fields, expected 4", row.len()),
-                ));
-            };
-            let slot = records
-                .get_mut(*p as usize)
-                .ok_or_else(|| Error::invalid(FILE, format!("point {p} outside the sweep")))?;
-            slot.push((*run as usize, [*error, *restarts]));
-        }
-        Ok(Self { records })
-    }
-}
-
 /// Runs the strategy over the campaign's slice of its runs at every amplitude point.
 ///
 /// # Errors
 /// As [`run`]; [`Error::Threads`] if the worker pool cannot start.
 pub fn simulate(
     params: &FuelingParams,
-    points: &[Point],
     seed: u64,
     shard: Shard,
     threads: Option<usize>,
 ) -> Result<ParticleRecords> {
-    let runs = runs(params);
+    let runs = particle_runs(params);
     if runs == 0 {
         return Ok(ParticleRecords::default());
     }
+    let points = params
+        .amplitudes_deg
+        .iter()
+        .map(|&a| Point::new(params.world(a, Swept::Nothing)))
+        .collect::<Result<Vec<Point>>>()?;
     let jobs: Vec<(usize, usize)> = (0..points.len())
         .flat_map(|p| shard.runs(runs).map(move |r| (p, r)))
         .collect();
@@ -414,118 +318,6 @@ pub fn simulate(
         records[p].push((r, o?));
     }
     Ok(ParticleRecords { records })
-}
-
-/// The particle filter against the paper's two-channel KF at one amplitude, on the same runs.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ParticleEntry {
-    /// The amplitude, degrees.
-    pub amplitude_deg: f64,
-    /// The particle filter's fuelling error, mm.
-    pub particle: Stat,
-    /// The two-channel KF's on the same runs, mm.
-    pub kf2: Stat,
-    /// std(particle filter)/std(relay logic), on the runs where both stopped.
-    pub particle_to_relay: RatioCi,
-    /// std(two-channel KF)/std(relay logic), on the same runs.
-    pub kf2_to_relay: RatioCi,
-    /// std(particle filter)/std(two-channel KF): below 1, the particle filter is better.
-    pub particle_to_kf2: RatioCi,
-    /// Runs in which the particle filter never stopped.
-    pub runs_without_stop: usize,
-    /// Runs in which it restarted at least once (see the module documentation).
-    pub runs_restarted: usize,
-}
-
-/// Where the particle filter's random error differs from the two-channel KF's beyond the
-/// 95 % interval of their ratio.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ParticleVerdict {
-    /// Amplitudes at which the whole interval of std(PF)/std(KF) is below 1, degrees.
-    pub better_deg: Vec<f64>,
-    /// Amplitudes at which it is above 1.
-    pub worse_deg: Vec<f64>,
-    /// Amplitudes at which it contains 1 (no difference shown).
-    pub undecided_deg: Vec<f64>,
-}
-
-/// `summary.json`'s `particle`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ParticleComparison {
-    /// Particles N.
-    pub particles: usize,
-    /// Runs per amplitude (the first this many of the sweep's).
-    pub runs: usize,
-    /// One entry per amplitude of the sweep.
-    pub entries: Vec<ParticleEntry>,
-    /// The verdict.
-    pub verdict: ParticleVerdict,
-}
-
-/// The comparison from the particle filter's records and the amplitude sweep's (`None` when
-/// the strategy is off).
-///
-/// # Errors
-/// [`Error::Invalid`] naming the record file if a particle run has no counterpart in the
-/// amplitude sweep.
-pub fn compare(
-    params: &FuelingParams,
-    records: &ParticleRecords,
-    amplitude: &SweepRecords,
-) -> Result<Option<ParticleComparison>> {
-    if records.records.is_empty() {
-        return Ok(None);
-    }
-    let mut entries = Vec::with_capacity(records.records.len());
-    for ((a, runs), sweep) in params
-        .amplitudes_deg
-        .iter()
-        .zip(&records.records)
-        .zip(&amplitude.records)
-    {
-        let mut pf = Vec::with_capacity(runs.len());
-        let mut relay = Vec::with_capacity(runs.len());
-        let mut kf2 = Vec::with_capacity(runs.len());
-        for (run, o) in runs {
-            let (_, other) = sweep.iter().find(|(r, _)| r == run).ok_or_else(|| {
-                Error::invalid(
-                    FILE,
-                    format!("run {run} at {a}° is not in runs_amplitude.csv"),
-                )
-            })?;
-            pf.push(o[0]);
-            relay.push(other[0]);
-            kf2.push(other[2]);
-        }
-        entries.push(ParticleEntry {
-            amplitude_deg: *a,
-            particle: stat(pf.iter().copied()),
-            kf2: stat(kf2.iter().copied()),
-            particle_to_relay: std_ratio(&pf, &relay),
-            kf2_to_relay: std_ratio(&kf2, &relay),
-            particle_to_kf2: std_ratio(&pf, &kf2),
-            runs_without_stop: pf.iter().filter(|e| !e.is_finite()).count(),
-            runs_restarted: runs.iter().filter(|(_, o)| o[1] > 0.0).count(),
-        });
-    }
-    let at = |f: &dyn Fn(&RatioCi) -> bool| -> Vec<f64> {
-        entries
-            .iter()
-            .filter(|e| f(&e.particle_to_kf2))
-            .map(|e| e.amplitude_deg)
-            .collect()
-    };
-    let verdict = ParticleVerdict {
-        better_deg: at(&|r| r.hi < 1.0),
-        worse_deg: at(&|r| r.lo > 1.0),
-        undecided_deg: at(&|r| !(r.hi < 1.0 || r.lo > 1.0)),
-    };
-    Ok(Some(ParticleComparison {
-        particles: params.particle.particles,
-        runs: runs(params),
-        entries,
-        verdict,
-    }))
 }
 
 #[cfg(test)]

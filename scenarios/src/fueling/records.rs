@@ -1,6 +1,8 @@
 //! Per-run records of the fueling scenario: each run's fuelling error per strategy, one
 //! `runs_<sweep>.csv` per sweep (`point, run`, then one column per strategy, metres at full
-//! precision). They are the campaign's ground truth: everything else is recomputed from them.
+//! precision), and `runs_particle.csv` for the particle filter's runs of the amplitude sweep
+//! (`point, run`, its error and its restarts). They are the campaign's ground truth:
+//! everything else is recomputed from them.
 
 use serde::{Deserialize, Serialize};
 
@@ -8,7 +10,6 @@ use crate::campaign::records::{RecordFile, RunRecords};
 use crate::error::{Error, Result};
 
 use super::parameters::{FuelingParams, Sweep};
-use super::particle::{self, ParticleRecords};
 
 /// The strategies, in the order of every per-run record and table.
 pub const STRATEGIES: [&str; 5] = ["relay", "kf1", "kf2", "kf2_cross", "kf2_midstep"];
@@ -106,7 +107,7 @@ impl RunRecords<FuelingParams> for FuelingRecords {
                 grid: vec![sweep.points.len(), sweep.runs],
             })
             .collect();
-        files.extend(particle::record_files(params));
+        files.extend(particle_record_files(params));
         files
     }
 
@@ -120,16 +121,28 @@ impl RunRecords<FuelingParams> for FuelingRecords {
     /// of tables or a row's width does not fit the sweeps.
     fn from_tables(params: &FuelingParams, mut tables: Vec<Vec<Vec<f64>>>) -> Result<Self> {
         let sweeps = params.sweeps();
-        let particle = if particle::runs(params) > 0 && tables.len() == sweeps.len() + 1 {
+        let particle = if particle_runs(params) > 0 {
+            if tables.len() != sweeps.len() + 1 {
+                return Err(Error::invalid(
+                    PARTICLE_FILE,
+                    format!(
+                        "{} record files for {} sweeps and the particle filter's",
+                        tables.len(),
+                        sweeps.len()
+                    ),
+                ));
+            }
             tables
                 .pop()
                 .map(|rows| ParticleRecords::from_table(params, rows))
+                .transpose()?
+                .unwrap_or_default()
         } else {
-            None
+            ParticleRecords::default()
         };
         Ok(FuelingRecords {
             sweeps: sweeps_from_tables(&sweeps, tables)?,
-            particle: particle.transpose()?.unwrap_or_default(),
+            particle,
         })
     }
 }
@@ -192,4 +205,79 @@ fn sweeps_from_tables(sweeps: &[Sweep], tables: Vec<Vec<Vec<f64>>>) -> Result<Ve
             })
         })
         .collect()
+}
+
+/// One run's particle filter: the fuelling error (NaN: never stopped) and the restarts.
+pub type ParticleOutcome = [f64; 2];
+
+/// Per-run outcomes: `records[point]` holds `(run index, outcome)` in run order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ParticleRecords {
+    /// Outcomes per amplitude point.
+    pub records: Vec<Vec<(usize, ParticleOutcome)>>,
+}
+
+/// Columns of `runs_particle.csv`.
+const PARTICLE_HEADER: [&str; 4] = ["point", "run", "particle_m", "restarts"];
+
+/// The record file's name.
+pub const PARTICLE_FILE: &str = "runs_particle.csv";
+
+/// Runs per amplitude point of the strategy under `params` (0: off).
+pub fn particle_runs(params: &FuelingParams) -> usize {
+    params.particle.runs.min(params.runs_per_point)
+}
+
+/// The record file of a campaign with `params` (none when the strategy is off).
+pub fn particle_record_files(params: &FuelingParams) -> Vec<RecordFile> {
+    let runs = particle_runs(params);
+    if runs == 0 {
+        return Vec::new();
+    }
+    vec![RecordFile {
+        name: PARTICLE_FILE.to_string(),
+        header: PARTICLE_HEADER.to_vec(),
+        grid: vec![params.amplitudes_deg.len(), runs],
+    }]
+}
+
+impl ParticleRecords {
+    /// The rows of the record file (no table when the strategy is off: no points).
+    pub fn to_tables(&self) -> Vec<Vec<Vec<f64>>> {
+        if self.records.is_empty() {
+            return Vec::new();
+        }
+        vec![
+            self.records
+                .iter()
+                .enumerate()
+                .flat_map(|(p, runs)| {
+                    runs.iter()
+                        .map(move |(run, o)| vec![p as f64, *run as f64, o[0], o[1]])
+                })
+                .collect(),
+        ]
+    }
+
+    /// The records from the rows of the record file.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] naming the file for a row of the wrong width or a point outside
+    /// the sweep.
+    pub fn from_table(params: &FuelingParams, rows: Vec<Vec<f64>>) -> Result<Self> {
+        let mut records = vec![Vec::new(); params.amplitudes_deg.len()];
+        for row in rows {
+            let [p, run, error, restarts] = row.as_slice() else {
+                return Err(Error::invalid(
+                    PARTICLE_FILE,
+                    format!("a row of {} fields, expected 4", row.len()),
+                ));
+            };
+            let slot = records.get_mut(*p as usize).ok_or_else(|| {
+                Error::invalid(PARTICLE_FILE, format!("point {p} outside the sweep"))
+            })?;
+            slot.push((*run as usize, [*error, *restarts]));
+        }
+        Ok(Self { records })
+    }
 }

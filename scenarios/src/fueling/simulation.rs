@@ -14,8 +14,7 @@ use model::{Channels, FuelModel, FuelParams, Realisation};
 use rand::{Rng, RngExt};
 
 use super::parameters::{FuelingParams, World};
-use super::particle;
-use super::records::{FuelingRecords, Outcome, SweepRecords};
+use super::records::{Outcome, SweepRecords};
 use crate::error::{Error, Result};
 use crate::montecarlo::{Shard, par_runs, run_rng};
 use sensors::{
@@ -477,7 +476,7 @@ fn step_level<const M: usize>(
     Ok(f.state().iter().zip(&s.level_row).map(|(x, g)| x * g).sum())
 }
 
-/// Runs the campaign's slice of every sweep, and of the particle filter's runs.
+/// Runs the campaign's slice of every sweep.
 ///
 /// # Errors
 /// [`Error::Kalman`] / [`Error::Sensors`] if a filter or sensor rejects a point (never for
@@ -487,7 +486,7 @@ pub fn simulate(
     seed: u64,
     shard: Shard,
     threads: Option<usize>,
-) -> Result<FuelingRecords> {
+) -> Result<Vec<SweepRecords>> {
     let sweeps = params.sweeps();
     let mut points: Vec<Point> = Vec::new();
     // (point index into `points`, run index), in output order.
@@ -514,22 +513,17 @@ pub fn simulate(
     for o in outcomes {
         flat.push(o?);
     }
-    let amplitude_points = sweeps.first().map_or(0, |s| s.points.len());
-    let particle = particle::simulate(params, &points[..amplitude_points], seed, shard, threads)?;
-    Ok(FuelingRecords {
-        sweeps: sweeps
-            .iter()
-            .zip(layout)
-            .map(|(sweep, ranges)| SweepRecords {
-                id: sweep.id.to_string(),
-                records: ranges
-                    .into_iter()
-                    .map(|r| r.map(|j| (jobs[j].1, flat[j])).collect())
-                    .collect(),
-            })
-            .collect(),
-        particle,
-    })
+    Ok(sweeps
+        .iter()
+        .zip(layout)
+        .map(|(sweep, ranges)| SweepRecords {
+            id: sweep.id.to_string(),
+            records: ranges
+                .into_iter()
+                .map(|r| r.map(|j| (jobs[j].1, flat[j])).collect())
+                .collect(),
+        })
+        .collect())
 }
 
 #[cfg(test)]

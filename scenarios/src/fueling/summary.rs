@@ -9,10 +9,9 @@ use serde::{Deserialize, Serialize};
 
 use super::calibration::Calibration;
 use super::parameters::{FuelingParams, Sweep, Swept};
-use super::particle::{self, ParticleComparison};
 pub use super::records::PerStrategy;
-use super::records::{FuelingRecords, SweepRecords};
-use super::statistics::{self, Margins};
+use super::records::{FuelingRecords, PARTICLE_FILE, ParticleRecords, SweepRecords, particle_runs};
+use super::statistics::{self, Margins, RatioCi, std_ratio};
 use crate::error::{Error, Result};
 use crate::montecarlo::Shard;
 
@@ -156,7 +155,7 @@ pub struct NyquistNull {
 }
 
 /// Mean and sample standard deviation of the finite values, metres in, mm out.
-pub(super) fn stat(values: impl Iterator<Item = f64>) -> Stat {
+fn stat(values: impl Iterator<Item = f64>) -> Stat {
     let v: Vec<f64> = values.filter(|x| x.is_finite()).map(|x| x * 1e3).collect();
     let n = v.len() as f64;
     if v.is_empty() {
@@ -289,7 +288,7 @@ pub fn summarise(
             .count()
     });
     let invariance_entries = all[6].clone();
-    let particle = particle::compare(p, &all_records.particle, &records[0])?;
+    let particle = compare_particle(p, &all_records.particle, &records[0])?;
     let margins = statistics::margins(&sweeps, records, top_i, seed);
     let nyquist_null = level_nyquist_power(p, top_x, p.realisation.to_model())
         .filter(|&ours| ours < NYQUIST_NULL)
@@ -334,6 +333,118 @@ pub fn summarise(
         invariance_entries,
         nyquist_null,
     })
+}
+
+/// The particle filter against the paper's two-channel KF at one amplitude, on the same runs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParticleEntry {
+    /// The amplitude, degrees.
+    pub amplitude_deg: f64,
+    /// The particle filter's fuelling error, mm.
+    pub particle: Stat,
+    /// The two-channel KF's on the same runs, mm.
+    pub kf2: Stat,
+    /// std(particle filter)/std(relay logic), on the runs where both stopped.
+    pub particle_to_relay: RatioCi,
+    /// std(two-channel KF)/std(relay logic), on the same runs.
+    pub kf2_to_relay: RatioCi,
+    /// std(particle filter)/std(two-channel KF): below 1, the particle filter is better.
+    pub particle_to_kf2: RatioCi,
+    /// Runs in which the particle filter never stopped.
+    pub runs_without_stop: usize,
+    /// Runs in which it restarted at least once (see the module documentation).
+    pub runs_restarted: usize,
+}
+
+/// Where the particle filter's random error differs from the two-channel KF's beyond the
+/// 95 % interval of their ratio.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParticleVerdict {
+    /// Amplitudes at which the whole interval of std(PF)/std(KF) is below 1, degrees.
+    pub better_deg: Vec<f64>,
+    /// Amplitudes at which it is above 1.
+    pub worse_deg: Vec<f64>,
+    /// Amplitudes at which it contains 1 (no difference shown).
+    pub undecided_deg: Vec<f64>,
+}
+
+/// `summary.json`'s `particle`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ParticleComparison {
+    /// Particles N.
+    pub particles: usize,
+    /// Runs per amplitude (the first this many of the sweep's).
+    pub runs: usize,
+    /// One entry per amplitude of the sweep.
+    pub entries: Vec<ParticleEntry>,
+    /// The verdict.
+    pub verdict: ParticleVerdict,
+}
+
+/// The comparison from the particle filter's records and the amplitude sweep's (`None` when
+/// the strategy is off).
+///
+/// # Errors
+/// [`Error::Invalid`] naming the record file if a particle run has no counterpart in the
+/// amplitude sweep.
+pub fn compare_particle(
+    params: &FuelingParams,
+    records: &ParticleRecords,
+    amplitude: &SweepRecords,
+) -> Result<Option<ParticleComparison>> {
+    if records.records.is_empty() {
+        return Ok(None);
+    }
+    let mut entries = Vec::with_capacity(records.records.len());
+    for ((a, runs), sweep) in params
+        .amplitudes_deg
+        .iter()
+        .zip(&records.records)
+        .zip(&amplitude.records)
+    {
+        let mut pf = Vec::with_capacity(runs.len());
+        let mut relay = Vec::with_capacity(runs.len());
+        let mut kf2 = Vec::with_capacity(runs.len());
+        for (run, o) in runs {
+            let (_, other) = sweep.iter().find(|(r, _)| r == run).ok_or_else(|| {
+                Error::invalid(
+                    PARTICLE_FILE,
+                    format!("run {run} at {a}° is not in runs_amplitude.csv"),
+                )
+            })?;
+            pf.push(o[0]);
+            relay.push(other[0]);
+            kf2.push(other[2]);
+        }
+        entries.push(ParticleEntry {
+            amplitude_deg: *a,
+            particle: stat(pf.iter().copied()),
+            kf2: stat(kf2.iter().copied()),
+            particle_to_relay: std_ratio(&pf, &relay),
+            kf2_to_relay: std_ratio(&kf2, &relay),
+            particle_to_kf2: std_ratio(&pf, &kf2),
+            runs_without_stop: pf.iter().filter(|e| !e.is_finite()).count(),
+            runs_restarted: runs.iter().filter(|(_, o)| o[1] > 0.0).count(),
+        });
+    }
+    let at = |f: &dyn Fn(&RatioCi) -> bool| -> Vec<f64> {
+        entries
+            .iter()
+            .filter(|e| f(&e.particle_to_kf2))
+            .map(|e| e.amplitude_deg)
+            .collect()
+    };
+    let verdict = ParticleVerdict {
+        better_deg: at(&|r| r.hi < 1.0),
+        worse_deg: at(&|r| r.lo > 1.0),
+        undecided_deg: at(&|r| !(r.hi < 1.0 || r.lo > 1.0)),
+    };
+    Ok(Some(ParticleComparison {
+        particles: params.particle.particles,
+        runs: particle_runs(params),
+        entries,
+        verdict,
+    }))
 }
 
 /// Nyquist power of a measurement channel of the filters' model, relative to the
