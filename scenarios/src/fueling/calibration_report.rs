@@ -539,7 +539,8 @@ pub fn learned_section(l: &LearnedBack) -> String {
     s
 }
 
-fn list_deg(v: &[f64]) -> String {
+/// `0.5°, 1°` for a list of amplitudes.
+pub(super) fn list_deg(v: &[f64]) -> String {
     v.iter()
         .map(|a| format!("{a}°"))
         .collect::<Vec<_>>()

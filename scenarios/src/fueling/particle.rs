@@ -42,7 +42,7 @@ use rand::{Rng, RngExt};
 use rand_distr::StandardNormal;
 use sensors::{FirstOrderLag, LagInput, Quantizer, Rounding};
 
-use super::parameters::{FuelingParams, Swept};
+use super::parameters::FuelingParams;
 use super::records::{ParticleOutcome, ParticleRecords, particle_runs};
 use super::simulation::{Point, Sample, Truth};
 use crate::error::{Error, Result};
@@ -212,7 +212,7 @@ pub fn run<R: Rng + Clone>(
         seed,
         ..ParticleOptions::default()
     };
-    let kalman = |source| Error::Kalman {
+    let pf_error = |source| Error::Kalman {
         context: "particle filter",
         source,
     };
@@ -235,7 +235,7 @@ pub fn run<R: Rng + Clone>(
                 f.model_mut().tilt_next = tilt;
                 match f.step(&[z2]) {
                     Err(kalman::Error::ParticleCollapse { .. }) => false,
-                    other => other.map(|()| true).map_err(kalman)?,
+                    other => other.map(|()| true).map_err(pf_error)?,
                 }
             }
             None => false,
@@ -265,8 +265,8 @@ pub fn run<R: Rng + Clone>(
                     ..options
                 },
             )
-            .map_err(kalman)?;
-            f.step(&[z2]).map_err(kalman)?;
+            .map_err(pf_error)?;
+            f.step(&[z2]).map_err(pf_error)?;
             filter = Some(f);
         }
         if let Some(f) = &filter
@@ -295,10 +295,13 @@ pub fn simulate(
     if runs == 0 {
         return Ok(ParticleRecords::default());
     }
+    // The amplitude sweep's own worlds (the first sweep).
     let points = params
-        .amplitudes_deg
+        .sweeps()
+        .first()
+        .map_or(&[][..], |s| s.points.as_slice())
         .iter()
-        .map(|&a| Point::new(params.world(a, Swept::Nothing)))
+        .map(|(_, world)| Point::new(*world))
         .collect::<Result<Vec<Point>>>()?;
     let jobs: Vec<(usize, usize)> = (0..points.len())
         .flat_map(|p| shard.runs(runs).map(move |r| (p, r)))

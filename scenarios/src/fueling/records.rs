@@ -148,22 +148,7 @@ impl RunRecords<FuelingParams> for FuelingRecords {
 }
 
 fn sweep_tables(sweeps: &[SweepRecords]) -> Vec<Vec<Vec<f64>>> {
-    sweeps
-        .iter()
-        .map(|rec| {
-            rec.records
-                .iter()
-                .enumerate()
-                .flat_map(|(p, runs)| {
-                    runs.iter().map(move |(run, o)| {
-                        let mut row = vec![p as f64, *run as f64];
-                        row.extend_from_slice(o);
-                        row
-                    })
-                })
-                .collect()
-        })
-        .collect()
+    sweeps.iter().map(|rec| point_rows(&rec.records)).collect()
 }
 
 fn sweeps_from_tables(sweeps: &[Sweep], tables: Vec<Vec<Vec<f64>>>) -> Result<Vec<SweepRecords>> {
@@ -177,34 +162,64 @@ fn sweeps_from_tables(sweeps: &[Sweep], tables: Vec<Vec<Vec<f64>>>) -> Result<Ve
         .iter()
         .zip(tables)
         .map(|(sweep, rows)| {
-            let mut records = vec![Vec::new(); sweep.points.len()];
-            for row in rows {
-                let [p, run, o @ ..] = row.as_slice() else {
-                    return Err(Error::invalid(
-                        format!("runs_{}.csv", sweep.id),
-                        format!("a row of {} fields", row.len()),
-                    ));
-                };
-                let outcome: Outcome = o.try_into().map_err(|_| {
-                    Error::invalid(
-                        format!("runs_{}.csv", sweep.id),
-                        format!("a row of {} fields, expected 7", row.len()),
-                    )
-                })?;
-                let slot = records.get_mut(*p as usize).ok_or_else(|| {
-                    Error::invalid(
-                        format!("runs_{}.csv", sweep.id),
-                        format!("point {p} outside the sweep"),
-                    )
-                })?;
-                slot.push((*run as usize, outcome));
-            }
             Ok(SweepRecords {
                 id: sweep.id.to_string(),
-                records,
+                records: from_point_rows(
+                    &format!("runs_{}.csv", sweep.id),
+                    sweep.points.len(),
+                    rows,
+                )?,
             })
         })
         .collect()
+}
+
+/// Records per point: `(run, values)` in run order.
+type PointRecords<const K: usize> = Vec<Vec<(usize, [f64; K])>>;
+
+/// The rows `point, run, values…` of per-point records, in point and then record order.
+fn point_rows<const K: usize>(records: &[Vec<(usize, [f64; K])>]) -> Vec<Vec<f64>> {
+    records
+        .iter()
+        .enumerate()
+        .flat_map(|(p, runs)| {
+            runs.iter().map(move |(run, o)| {
+                let mut row = vec![p as f64, *run as f64];
+                row.extend_from_slice(o);
+                row
+            })
+        })
+        .collect()
+}
+
+/// Per-point records of `points` points from the rows `point, run, values…` of `file`.
+///
+/// # Errors
+/// [`Error::Invalid`] naming `file` for a row of the wrong width or a point outside
+/// `0..points`.
+fn from_point_rows<const K: usize>(
+    file: &str,
+    points: usize,
+    rows: Vec<Vec<f64>>,
+) -> Result<PointRecords<K>> {
+    let mut records = vec![Vec::new(); points];
+    for row in rows {
+        let width = || {
+            Error::invalid(
+                file,
+                format!("a row of {} fields, expected {}", row.len(), K + 2),
+            )
+        };
+        let [p, run, o @ ..] = row.as_slice() else {
+            return Err(width());
+        };
+        let values: [f64; K] = o.try_into().map_err(|_| width())?;
+        let slot = records
+            .get_mut(*p as usize)
+            .ok_or_else(|| Error::invalid(file, format!("point {p} outside the sweep")))?;
+        slot.push((*run as usize, values));
+    }
+    Ok(records)
 }
 
 /// One run's particle filter: the fuelling error (NaN: never stopped) and the restarts.
@@ -247,16 +262,7 @@ impl ParticleRecords {
         if self.records.is_empty() {
             return Vec::new();
         }
-        vec![
-            self.records
-                .iter()
-                .enumerate()
-                .flat_map(|(p, runs)| {
-                    runs.iter()
-                        .map(move |(run, o)| vec![p as f64, *run as f64, o[0], o[1]])
-                })
-                .collect(),
-        ]
+        vec![point_rows(&self.records)]
     }
 
     /// The records from the rows of the record file.
@@ -265,19 +271,8 @@ impl ParticleRecords {
     /// [`Error::Invalid`] naming the file for a row of the wrong width or a point outside
     /// the sweep.
     pub fn from_table(params: &FuelingParams, rows: Vec<Vec<f64>>) -> Result<Self> {
-        let mut records = vec![Vec::new(); params.amplitudes_deg.len()];
-        for row in rows {
-            let [p, run, error, restarts] = row.as_slice() else {
-                return Err(Error::invalid(
-                    PARTICLE_FILE,
-                    format!("a row of {} fields, expected 4", row.len()),
-                ));
-            };
-            let slot = records.get_mut(*p as usize).ok_or_else(|| {
-                Error::invalid(PARTICLE_FILE, format!("point {p} outside the sweep"))
-            })?;
-            slot.push((*run as usize, [*error, *restarts]));
-        }
-        Ok(Self { records })
+        Ok(Self {
+            records: from_point_rows(PARTICLE_FILE, params.amplitudes_deg.len(), rows)?,
+        })
     }
 }

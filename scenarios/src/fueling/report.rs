@@ -247,10 +247,7 @@ fn findings(sm: &Summary) -> String {
             if a.is_empty() {
                 "none".to_string()
             } else {
-                a.iter()
-                    .map(|x| format!("{x}°"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                calibration_report::list_deg(a)
             }
         };
         let _ = writeln!(
