@@ -303,19 +303,26 @@ pub(crate) fn cholesky<T: Real>(a: &mut [T], n: usize, tol: f64) -> bool {
 /// upper triangle is not read).
 #[inline(always)]
 pub(crate) fn cholesky_solve<T: Real>(l: &[T], n: usize, b: &mut [T]) {
+    cholesky_solve_strided(l, n, b, 1);
+}
+
+/// [`cholesky_solve`] for a right-hand side whose entry i is `b[i·stride]` (a column of a
+/// row-major matrix).
+#[inline(always)]
+pub(crate) fn cholesky_solve_strided<T: Real>(l: &[T], n: usize, b: &mut [T], stride: usize) {
     for i in 0..n {
-        let mut v = b[i];
+        let mut v = b[i * stride];
         for c in 0..i {
-            v -= l[i + c * n] * b[c];
+            v -= l[i + c * n] * b[c * stride];
         }
-        b[i] = v / l[i + i * n];
+        b[i * stride] = v / l[i + i * n];
     }
     for i in (0..n).rev() {
-        let mut v = b[i];
+        let mut v = b[i * stride];
         for r in i + 1..n {
-            v -= l[r + i * n] * b[r];
+            v -= l[r + i * n] * b[r * stride];
         }
-        b[i] = v / l[i + i * n];
+        b[i * stride] = v / l[i + i * n];
     }
 }
 

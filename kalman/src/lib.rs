@@ -166,6 +166,7 @@ mod consistency;
 pub mod continuous;
 #[cfg(feature = "nalgebra")]
 mod convert;
+pub mod dense;
 pub mod diagnostics;
 mod error;
 mod expm;

@@ -9,6 +9,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
+use crate::fit::System;
 use crate::{Dims, Error, Model};
 
 /// Options of a random problem.
@@ -39,10 +40,9 @@ impl Default for ProblemOptions {
     }
 }
 
-/// A random consistent filter problem and a simulated measurement stream with its truth.
-///
-/// The matrices are named as in the crate doc and read like the accessors of [`Model`]
-/// (`f` is F, `p0` is P₀).
+/// A random consistent filter problem and a simulated measurement stream with its truth:
+/// the model and prior as a [`System`] (the fitting code's model type, so a problem is also
+/// a fitting problem), the cross-covariance S the fit does not carry, and the data.
 ///
 /// # Example
 /// ```
@@ -50,7 +50,7 @@ impl Default for ProblemOptions {
 /// use kalman::strategies::{FilterProblem, ProblemOptions};
 ///
 /// let p = FilterProblem::generate(3, 2, ProblemOptions::default(), 7);
-/// assert_eq!((p.n(), p.m(), p.z.len()), (3, 2, 20));
+/// assert_eq!((p.system.n(), p.system.m(), p.z.len()), (3, 2, 20));
 /// // Its model passes the engine's validation on the dynamic path.
 /// let model = p.model(DynDims::new(3, 2, 0)?)?;
 /// assert_eq!(model.f().nrows(), 3);
@@ -58,22 +58,10 @@ impl Default for ProblemOptions {
 /// ```
 #[derive(Clone, Debug)]
 pub struct FilterProblem {
-    /// Transition F (n×n, spectral norm ≤ 0.98).
-    pub f: Mat<f64>,
-    /// Measurement matrix H (m×n).
-    pub h: Mat<f64>,
-    /// Process noise covariance Q (n×n).
-    pub q: Mat<f64>,
-    /// Measurement noise covariance R (m×m).
-    pub r: Mat<f64>,
+    /// F (n×n, spectral norm ≤ 0.98), H, Q, R, B and the prior (x₀, P₀).
+    pub system: System,
     /// Cross-covariance S (n×m, present when `correlated`).
     pub s: Option<Mat<f64>>,
-    /// Control matrix B (n×p).
-    pub b: Mat<f64>,
-    /// Prior mean x₀.
-    pub x0: Vec<f64>,
-    /// Prior covariance P₀.
-    pub p0: Mat<f64>,
     /// True states `x_0 … x_{T−1}` (x_0 drawn from the prior).
     pub truth: Vec<Vec<f64>>,
     /// Measurements `z_0 … z_{T−1}` (NaN = missing).
@@ -168,31 +156,20 @@ impl FilterProblem {
             x = next;
         }
         FilterProblem {
-            f: F,
-            h: H,
-            q: Q,
-            r: R,
+            system: System {
+                f: F,
+                h: H,
+                q: Q,
+                r: R,
+                b: B,
+                x0,
+                p0: P0,
+            },
             s: S,
-            b: B,
-            x0,
-            p0: P0,
             truth,
             z: zs,
             u: us,
         }
-    }
-
-    /// Number of states.
-    pub fn n(&self) -> usize {
-        self.f.nrows()
-    }
-    /// Number of measurements.
-    pub fn m(&self) -> usize {
-        self.h.nrows()
-    }
-    /// Number of control inputs.
-    pub fn p(&self) -> usize {
-        self.b.ncols()
     }
 
     /// The validated model on storage path `dims` (whose n, m, p must match).
@@ -200,14 +177,11 @@ impl FilterProblem {
     /// # Errors
     /// As [`Model::new`].
     pub fn model<D: Dims>(&self, dims: D) -> Result<Model<D>, Error> {
-        let mut model = Model::new(dims, &self.f, &self.h, &self.q, &self.r)?;
-        if let Some(s) = &self.s {
-            model = model.with_cross_covariance(s)?;
+        let model = self.system.model_on(dims)?;
+        match &self.s {
+            Some(s) => model.with_cross_covariance(s),
+            None => Ok(model),
         }
-        if self.p() > 0 {
-            model = model.with_control(&self.b)?;
-        }
-        Ok(model)
     }
 }
 

@@ -54,6 +54,13 @@ impl Notation {
         validate::shape("B", b, n, b.ncols(), self.input_rule)
     }
 
+    /// The input matrix B (n×p) with the zero feed-through D (m×p) that goes with it.
+    fn input(&self, n: usize, m: usize, b: DMatrix<f64>) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+        self.check_input(n, &b)?;
+        let d = DMatrix::zeros(m, b.ncols());
+        Ok((b, d))
+    }
+
     /// The feed-through D is m×p.
     fn check_feedthrough(&self, m: usize, p: usize, d: &DMatrix<f64>) -> Result<()> {
         validate::shape("D", d, m, p, self.feedthrough_rule)
@@ -170,9 +177,7 @@ impl ContinuousSs {
     /// # Ok::<(), model::Error>(())
     /// ```
     pub fn with_input(mut self, b: DMatrix<f64>) -> Result<Self> {
-        CONTINUOUS.check_input(self.a.nrows(), &b)?;
-        self.d = DMatrix::zeros(self.c.nrows(), b.ncols());
-        self.b = b;
+        (self.b, self.d) = CONTINUOUS.input(self.a.nrows(), self.c.nrows(), b)?;
         Ok(self)
     }
 
@@ -352,7 +357,8 @@ impl DiscreteSs {
     }
 
     /// Sets the control input `B·u_k` (n×p) with a zero feed-through `D` (m×p), replacing
-    /// any earlier input; [`DiscreteSs::with_feedthrough`] sets a non-zero `D` afterwards.
+    /// any earlier input, as [`ContinuousSs::with_input`] does for the continuous model;
+    /// [`DiscreteSs::with_feedthrough`] sets a non-zero `D` afterwards.
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] when `B` has not as many rows as `F`,
@@ -363,37 +369,28 @@ impl DiscreteSs {
     /// use model::DiscreteSs;
     /// use model::nalgebra::dmatrix;
     ///
+    /// // A sampled double integrator driven by a piecewise-constant acceleration, Δt = 0.1 s,
+    /// // whose position sensor also reads half of the commanded acceleration.
     /// let dt = 0.1;
     /// let d = DiscreteSs::autonomous(dmatrix![1.0, dt; 0.0, 1.0], dmatrix![1.0, 0.0], dt)?
     ///     .with_input(dmatrix![dt * dt / 2.0; dt])?;
     /// assert_eq!((d.n_inputs(), d.d().shape()), (1, (1, 1)));
+    /// assert!(d.clone().with_feedthrough(dmatrix![1.0, 1.0]).is_err()); // D must be 1×1
+    /// let d = d.with_feedthrough(dmatrix![0.5])?;
+    /// assert!((d.d()[(0, 0)] - 0.5).abs() < 1e-15);
     /// # Ok::<(), model::Error>(())
     /// ```
     pub fn with_input(mut self, b: DMatrix<f64>) -> Result<Self> {
-        DISCRETE.check_input(self.f.nrows(), &b)?;
-        self.d = DMatrix::zeros(self.h.nrows(), b.ncols());
-        self.b = b;
+        (self.b, self.d) = DISCRETE.input(self.f.nrows(), self.h.nrows(), b)?;
         Ok(self)
     }
 
-    /// Sets the control feed-through `D` (m×p, p from the input set before).
+    /// Sets the control feed-through `D` (m×p, p from the input set before); the example of
+    /// [`DiscreteSs::with_input`] shows both.
     ///
     /// # Errors
     /// [`Error::DimensionMismatch`] when `D` is not (rows of H)×(columns of B),
     /// [`Error::NonFiniteMatrix`] for NaN/∞.
-    ///
-    /// # Example
-    /// ```
-    /// use model::DiscreteSs;
-    /// use model::nalgebra::dmatrix;
-    ///
-    /// let d = DiscreteSs::autonomous(dmatrix![0.5], dmatrix![1.0], 1.0)?
-    ///     .with_input(dmatrix![1.0])?
-    ///     .with_feedthrough(dmatrix![2.0])?;
-    /// assert!((d.d()[(0, 0)] - 2.0).abs() < 1e-15);
-    /// assert!(d.with_feedthrough(dmatrix![1.0, 1.0]).is_err()); // must be 1×1
-    /// # Ok::<(), model::Error>(())
-    /// ```
     pub fn with_feedthrough(mut self, d: DMatrix<f64>) -> Result<Self> {
         DISCRETE.check_feedthrough(self.h.nrows(), self.b.ncols(), &d)?;
         self.d = d;

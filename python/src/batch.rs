@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
 use crate::convert::{
-    array3_out, check_psd, copy_finite, entries, float_array, shape_str, value_error, zeros,
+    array3_out, check_covariance, copy_finite, entries, float_array, shape_str, value_error, zeros,
 };
 use crate::kf_core::{Core, Steps, UpdateError, rts};
 use crate::linalg::add_mul_vec;
@@ -731,7 +731,7 @@ pub(crate) fn rts_smoother<'py>(
     let mut ps = zeros(size, what)?;
     copy_finite(&pa.readonly().as_array(), "Ps", &mut ps)?;
     for (k, pk) in ps.chunks_exact(n * n).enumerate() {
-        check_psd(&format!("Ps[{k}]"), pk, n)?;
+        check_covariance(&format!("Ps[{k}]"), pk, n)?;
     }
     let (pp, gains) = (zeros(size, what)?, zeros(size, what)?);
     let along = Along { name: "Xs", steps };

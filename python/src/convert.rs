@@ -298,36 +298,32 @@ fn check_entries(name: &str, v: &[f64], missing_ok: bool) -> PyResult<()> {
     Ok(())
 }
 
-/// Refuses a matrix that is not symmetric positive semi-definite (tolerances relative to
-/// its largest entry, so the verdict does not depend on units).
-pub(crate) fn check_psd(name: &str, a: &[f64], n: usize) -> PyResult<()> {
-    let scale = a.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-    for i in 0..n {
-        for j in 0..i {
+/// Refuses a matrix that is not symmetric positive semi-definite by the workspace's rule
+/// ([`kalman::dense::check_covariance`]: symmetric within `SYMMETRY_TOL` of its largest
+/// entry, no eigenvalue below `−PSD_TOL` of its largest one, so the verdict does not depend
+/// on units).
+pub(crate) fn check_covariance(name: &str, a: &[f64], n: usize) -> PyResult<()> {
+    // The workspace's one rule (kalman's tolerances), on the row-major buffer read
+    // column-major: a symmetric matrix reads the same, and the worst pair is swapped back.
+    match kalman::dense::check_covariance("A", a, n) {
+        Ok(()) => Ok(()),
+        Err(kalman::Error::NotSymmetric { row, col, .. }) => {
+            let (i, j) = (col, row);
             let (u, l) = (a[i * n + j], a[j * n + i]);
-            if (u - l).abs() > 1e-9 * scale {
-                return Err(value_error(format!(
-                    "{name} is not symmetric: {name}[{i}, {j}] = {u} but {name}[{j}, {i}] = {l}"
-                )));
-            }
+            Err(value_error(format!(
+                "{name} is not symmetric: {name}[{i}, {j}] = {u} but {name}[{j}, {i}] = {l}"
+            )))
         }
+        Err(kalman::Error::NotPositiveSemidefinite {
+            min_eigenvalue,
+            tol,
+            ..
+        }) => Err(value_error(format!(
+            "{name} is not positive semi-definite: its smallest eigenvalue {min_eigenvalue:.3e} \
+             is below −{tol:.3e}"
+        ))),
+        Err(e) => Err(value_error(format!("{name} could not be checked: {e}"))),
     }
-    if scale == 0.0 {
-        return Ok(());
-    }
-    // Cholesky of A + δI with δ a small multiple of the scale: a PSD matrix always
-    // factors, a matrix with an eigenvalue below −δ never does.
-    let delta = 1e-9 * scale * n as f64;
-    let mut l = a.to_vec();
-    for i in 0..n {
-        l[i * n + i] += delta;
-    }
-    if !crate::linalg::cholesky(&mut l, n) {
-        return Err(value_error(format!(
-            "{name} is not positive semi-definite (it has an eigenvalue below −{delta:.3e})"
-        )));
-    }
-    Ok(())
 }
 
 /// A new `(rows, cols)` float64 array holding a copy of `data` (row-major).

@@ -233,7 +233,7 @@ fn named_std_errors<'py>(
     map: &StandardMap,
     fit: &Fit,
 ) -> PyResult<Option<Bound<'py, PyDict>>> {
-    let Some(cov) = &fit.covariance else {
+    let Some(cov) = &fit.uncertainty.covariance else {
         return Ok(None);
     };
     let se = map
@@ -283,11 +283,12 @@ fn result_dict<'py>(
     o.set_item(
         "std_errors",
         result
+            .uncertainty
             .std_errors
             .as_ref()
             .map(|v| PyArray1::from_slice(py, v)),
     )?;
-    let correlation = match &result.correlation {
+    let correlation = match &result.uncertainty.correlation {
         Some(c) => {
             let d = PyDict::new(py);
             d.set_item("names", PyList::new(py, names)?)?;

@@ -19,8 +19,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyType;
 
 use crate::convert::{
-    check_psd, float_array, matrix_out, read_matrix, read_vector, scalar, shape_str, type_error,
-    type_name, value_error, vector_out,
+    check_covariance, float_array, matrix_out, read_matrix, read_vector, scalar, shape_str,
+    type_error, type_name, value_error, vector_out,
 };
 use crate::guard;
 use crate::kf_core::{Core, UpdateError};
@@ -381,7 +381,7 @@ impl KalmanFilter {
                 let square = r == c && a != A::M;
                 read_matrix(value, name, r, c, square, &mut buf)?;
                 if matches!(a, A::P | A::Q | A::R) {
-                    check_psd(name, &buf, r)?;
+                    check_covariance(name, &buf, r)?;
                 }
                 match a {
                     A::P => self.core.P = buf,
@@ -450,7 +450,7 @@ impl KalmanFilter {
                 let mut buf = vec![0.0; r * c];
                 read_matrix(o, name, r, c, r == c, &mut buf)?;
                 if psd {
-                    check_psd(name, &buf, r)?;
+                    check_covariance(name, &buf, r)?;
                 }
                 Ok(Some(buf))
             }

@@ -9,7 +9,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 
 use crate::batch::PerStepArgs;
-use crate::convert::{check_psd, read_matrix, read_vector, scalar, type_error, value_error, zeros};
+use crate::convert::{
+    check_covariance, read_matrix, read_vector, scalar, type_error, value_error, zeros,
+};
 use crate::kf_attrs::{A, KalmanFilter, UPDATED};
 use crate::kf_core::UpdateError;
 
@@ -204,7 +206,7 @@ impl KalmanFilter {
             }
             Some(v) => read_matrix(v, "R_i", r, r, true, &mut R)?,
         }
-        check_psd("R_i", &R, r)?;
+        check_covariance("R_i", &R, r)?;
         let mut H = zeros(r * n, "H_i")?;
         match H_i.filter(|v| !v.is_none()) {
             None => H.copy_from_slice(&self.core.H[start * n..(start + r) * n]),

@@ -51,33 +51,6 @@ pub(crate) fn add_mul_vec(a: &[f64], x: &[f64], y: &mut [f64]) {
     }
 }
 
-/// Cholesky factor in place (lower triangle holds L, the strict upper triangle is zeroed);
-/// `false` if `a` is not (numerically) positive definite.
-pub(crate) fn cholesky(a: &mut [f64], n: usize) -> bool {
-    for j in 0..n {
-        let mut d = a[j * n + j];
-        for k in 0..j {
-            d -= a[j * n + k] * a[j * n + k];
-        }
-        if d.is_nan() || d <= 0.0 {
-            return false;
-        }
-        let d = d.sqrt();
-        a[j * n + j] = d;
-        for i in j + 1..n {
-            let mut s = a[i * n + j];
-            for k in 0..j {
-                s -= a[i * n + k] * a[j * n + k];
-            }
-            a[i * n + j] = s / d;
-        }
-        for k in j + 1..n {
-            a[j * n + k] = 0.0;
-        }
-    }
-    true
-}
-
 /// How a square matrix was factored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Kind {
@@ -131,7 +104,9 @@ impl Factor {
         }
         let lu = &mut self.lu[..n * n];
         lu.copy_from_slice(&a[..n * n]);
-        if cholesky(lu, n) {
+        // A symmetric A reads the same column-major: the factor is kalman's, with L in the
+        // column-major lower triangle.
+        if kalman::dense::cholesky(lu, n, 0.0) {
             self.kind = Kind::Cholesky;
             return true;
         }
@@ -171,24 +146,7 @@ impl Factor {
         let n = self.n;
         let lu = &self.lu[..n * n];
         match self.kind {
-            Kind::Cholesky => {
-                for col in 0..c {
-                    for i in 0..n {
-                        let mut s = b[i * c + col];
-                        for k in 0..i {
-                            s -= lu[i * n + k] * b[k * c + col];
-                        }
-                        b[i * c + col] = s / lu[i * n + i];
-                    }
-                    for i in (0..n).rev() {
-                        let mut s = b[i * c + col];
-                        for k in i + 1..n {
-                            s -= lu[k * n + i] * b[k * c + col];
-                        }
-                        b[i * c + col] = s / lu[i * n + i];
-                    }
-                }
-            }
+            Kind::Cholesky => kalman::dense::cholesky_solve_columns(lu, n, b, c),
             Kind::Lu => {
                 for k in 0..n {
                     let p = self.piv[k];

@@ -9,8 +9,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyString;
 
 use crate::convert::{
-    check_psd, entries, float_array, read_matrix, read_vector, shape_str, type_error, type_name,
-    value_error, zeros,
+    check_covariance, entries, float_array, read_matrix, read_vector, shape_str, type_error,
+    type_name, value_error, zeros,
 };
 
 /// What a None item of a series stands for, and whether NaN entries pass.
@@ -213,7 +213,7 @@ pub(crate) fn read_steps(
             let scalar_identity = rows == cols && spec.rule != Rule::Control;
             read_matrix(&item, &step, rows, cols, scalar_identity, &mut buf)?;
             if spec.rule == Rule::Covariance {
-                check_psd(&step, &buf, rows)?;
+                check_covariance(&step, &buf, rows)?;
             }
             out.extend_from_slice(&buf);
         }
@@ -258,7 +258,7 @@ fn read_array(obj: &Bound<'_, PyAny>, spec: &Spec<'_>, along: Along<'_>) -> PyRe
             *o = v;
         }
         if spec.rule == Rule::Covariance {
-            check_psd(&format!("{name}[{k}]"), chunk, rows)?;
+            check_covariance(&format!("{name}[{k}]"), chunk, rows)?;
         }
     }
     Ok(out)

@@ -201,7 +201,9 @@ fn upper_factor(
     match sqrt {
         None => {
             let mut l = a.to_vec();
-            if !crate::linalg::cholesky(&mut l, n) {
+            // P is symmetric, so its row-major buffer is its column-major one: kalman's factor
+            // leaves L in the column-major lower triangle, U = Lᵀ in the row-major upper one.
+            if !kalman::dense::cholesky(&mut l, n, 0.0) {
                 let err = py.import("numpy.linalg")?.getattr("LinAlgError")?;
                 return Err(PyErr::from_value(err.call1((
                     "the scaled covariance is not positive definite: its Cholesky factor (the \
@@ -210,7 +212,7 @@ fn upper_factor(
             }
             for i in 0..n {
                 for j in 0..n {
-                    u[i * n + j] = l[j * n + i];
+                    u[i * n + j] = if j >= i { l[i * n + j] } else { 0.0 };
                 }
             }
         }

@@ -17,7 +17,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{check_psd, read_matrix, read_vector, scalar, value_error, zeros};
+use crate::convert::{check_covariance, read_matrix, read_vector, scalar, value_error, zeros};
 use crate::linalg::Factor;
 use crate::sigma::{Rule, dict_of, item, native, np_attr};
 
@@ -117,18 +117,18 @@ pub(crate) fn read_noise(obj: &Bound<'_, PyAny>, name: &str, dim: usize) -> PyRe
             return Err(value_error(format!("{name} is {v}; it must be finite")));
         }
         let out = crate::convert::filled(entries(dim, dim, name)?, v, name)?;
-        check_psd(name, &out, dim)?;
+        check_covariance(name, &out, dim)?;
         return Ok(out);
     }
     if exact_shape(obj, &[dim, dim]) {
         let mut out = zeros(entries(dim, dim, name)?, name)?;
         if let Some(r) = fast_read(obj, &[dim, dim], name, &mut out) {
             r?;
-            check_psd(name, &out, dim)?;
+            check_covariance(name, &out, dim)?;
             return Ok(out);
         }
         read_matrix(obj, name, dim, dim, false, &mut out)?;
-        check_psd(name, &out, dim)?;
+        check_covariance(name, &out, dim)?;
         return Ok(out);
     }
     let np = crate::sigma::numpy(obj.py())?;
@@ -148,7 +148,7 @@ pub(crate) fn read_noise(obj: &Bound<'_, PyAny>, name: &str, dim: usize) -> PyRe
         })?;
     let mut out = zeros(entries(dim, dim, name)?, name)?;
     read_matrix(&b, name, dim, dim, false, &mut out)?;
-    check_psd(name, &out, dim)?;
+    check_covariance(name, &out, dim)?;
     Ok(out)
 }
 

@@ -129,6 +129,20 @@ pub struct Figure<'a> {
     pub notes: &'a [String],
 }
 
+impl<'a> Figure<'a> {
+    /// A figure against time (`t [s]` on a linear x axis) with a linear y axis and no notes;
+    /// struct-update syntax changes the rest: `Figure { notes: &notes, ..Figure::over_time(…) }`.
+    pub fn over_time(title: &'a str, y_label: &'a str) -> Self {
+        Figure {
+            title,
+            x_label: "t [s]",
+            y_label,
+            y_scale: Scale::Linear,
+            notes: &[],
+        }
+    }
+}
+
 const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),

@@ -558,7 +558,7 @@ pub fn em_with_progress(
     };
     let mut fit = finish(map, theta, data, Method::Em, iterations, converged, message)?;
     if fit.converged
-        && let Some(cov) = &fit.covariance
+        && let Some(cov) = &fit.uncertainty.covariance
     {
         let (_, g) = log_likelihood_gradient(map, &fit.theta, data)?;
         let k = g.len();

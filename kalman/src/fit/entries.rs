@@ -268,24 +268,19 @@ pub(crate) fn check(params: &[Param], base: &System, taken: &[Matrix]) -> Result
         }
         for e in &p.entries {
             let (r, c) = e.matrix.shape(base);
+            let entry = format!("{}[{},{}]", e.matrix.name(), e.row, e.col);
             if e.row >= r || e.col >= c {
+                let matrix = e.matrix.name();
                 return bad(format!(
-                    "{}: entry {}[{},{}] is outside the {r}×{c} matrix {}",
-                    p.name,
-                    e.matrix.name(),
-                    e.row,
-                    e.col,
-                    e.matrix.name()
+                    "{}: entry {entry} is outside the {r}×{c} matrix {matrix}",
+                    p.name
                 ));
             }
             if !e.coefficient.is_finite() || e.coefficient == 0.0 {
+                let value = e.coefficient;
                 return bad(format!(
-                    "{}: the coefficient of {}[{},{}] is {} (must be finite and non-zero)",
-                    p.name,
-                    e.matrix.name(),
-                    e.row,
-                    e.col,
-                    e.coefficient
+                    "{}: the coefficient of {entry} is {value} (must be finite and non-zero)",
+                    p.name
                 ));
             }
             if taken.contains(&e.matrix) {

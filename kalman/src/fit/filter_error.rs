@@ -61,9 +61,7 @@
 use faer::Mat;
 use num_dual::{Dual, Dual64};
 
-use super::info::{
-    aic, bic, central_information, correlation, explain_unidentified, spd_inverse, std_errors_of,
-};
+use super::info::{Uncertainty, aic, bic, central_information};
 use super::mle::{MleOptions, Objective, optimise};
 use super::{FitError, LN_2PI, Series};
 use crate::kernels::{cholesky, symmetrise};
@@ -259,16 +257,8 @@ pub struct ParametricFit {
     pub converged: bool,
     /// What happened, in words.
     pub message: String,
-    /// The observed information `−∇² ln L` at the optimum.
-    pub information: Mat<f64>,
-    /// Its inverse (the Cramér–Rao bound of θ), `None` when it is not positive definite.
-    pub covariance: Option<Mat<f64>>,
-    /// The standard errors of θ.
-    pub std_errors: Option<Vec<f64>>,
-    /// The correlation matrix of θ.
-    pub correlation: Option<Mat<f64>>,
-    /// The directions of θ the data do not identify, named (as [`super::Fit::unidentified`]).
-    pub unidentified: Vec<Vec<(String, f64)>>,
+    /// The observed information and what it says about θ (as [`super::Fit::uncertainty`]).
+    pub uncertainty: Uncertainty,
     /// Observed scalar measurements.
     pub n_obs: usize,
     /// Akaike's information criterion.
@@ -308,17 +298,11 @@ pub fn filter_error<M: ParametricModel>(
     let (theta, iterations, converged, mut message) = optimise(&objective, theta0, n_obs, opts)?;
     let (loglik, _) = objective.loglik_gradient(&theta)?;
     let information = objective.information(&theta)?;
-    let covariance = spd_inverse(&information);
     let names = model.names();
-    let unidentified =
-        explain_unidentified(&information, covariance.as_ref(), &names, &mut message);
+    let uncertainty = Uncertainty::new(information, &names, &mut message);
     let k = theta.len();
     Ok(ParametricFit {
-        std_errors: covariance.as_ref().map(std_errors_of),
-        correlation: covariance.as_ref().and_then(correlation),
-        covariance,
-        unidentified,
-        information,
+        uncertainty,
         names,
         loglik,
         iterations,

@@ -39,6 +39,40 @@ pub struct Fit {
     /// optimum is on the edge of the parameter space and their standard errors are not
     /// meaningful.
     pub boundary: Vec<String>,
+    /// The observed information and what it says about θ.
+    pub uncertainty: Uncertainty,
+    /// Number of observed scalar measurements.
+    pub n_obs: usize,
+    /// Akaike's information criterion `2k − 2 ln L`.
+    pub aic: f64,
+    /// The Bayesian information criterion `k ln(n_obs) − 2 ln L`.
+    pub bic: f64,
+}
+
+/// What the observed information at an optimum says about θ: its inverse, the standard
+/// errors and correlations, or, when it is singular, the directions the data do not identify.
+/// [`Fit`] and [`super::ParametricFit`] carry one.
+///
+/// ```
+/// use kalman::fit::{EmOptions, Free, Series, StandardMap, Structure, System, em};
+/// # fn main() -> Result<(), kalman::fit::FitError> {
+/// let base = System::new(&[[1.0]], &[[1.0]], &[[1.0]], &[[1.0]], &[0.0], &[[10.0]])?;
+/// let free = Free { q: Structure::Scalar, r: Structure::Scalar, ..Free::default() };
+/// let map = StandardMap::new(base, free)?;
+/// let z = [0.3, 1.1, 0.8, 1.9, 2.4, 2.2, 3.1, 3.9, 3.5, 4.2, 4.0, 4.9, 5.6, 5.1];
+/// let fit = em(&map, &Series::new(&z, 1)?, &EmOptions::default())?;
+/// let u = &fit.uncertainty;
+/// if let (Some(cov), Some(se)) = (&u.covariance, &u.std_errors) {
+///     // The standard errors are the square roots of the covariance's diagonal.
+///     assert!((se[0] * se[0] - cov[(0, 0)]).abs() <= 1e-12 * cov[(0, 0)]);
+/// } else {
+///     assert!(!u.unidentified.is_empty()); // a singular information names its directions
+/// }
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Clone, Debug)]
+pub struct Uncertainty {
     /// The observed information `−∇² ln L` at the optimum (`n_params`²).
     pub information: Mat<f64>,
     /// The covariance of θ, the inverse of the observed information, or `None` when that
@@ -56,12 +90,23 @@ pub struct Fit {
     /// magnitude at least 0.2), largest first. Empty when the information is positive
     /// definite.
     pub unidentified: Vec<Vec<(String, f64)>>,
-    /// Number of observed scalar measurements.
-    pub n_obs: usize,
-    /// Akaike's information criterion `2k − 2 ln L`.
-    pub aic: f64,
-    /// The Bayesian information criterion `k ln(n_obs) − 2 ln L`.
-    pub bic: f64,
+}
+
+impl Uncertainty {
+    /// The covariance, standard errors and correlation of θ from the observed information
+    /// `information` of the parameters `names`; a singular information's directions are also
+    /// said in `message`.
+    pub(crate) fn new(information: Mat<f64>, names: &[String], message: &mut String) -> Self {
+        let covariance = spd_inverse(&information);
+        let unidentified = explain_unidentified(&information, covariance.as_ref(), names, message);
+        Self {
+            std_errors: covariance.as_ref().map(std_errors_of),
+            correlation: covariance.as_ref().and_then(correlation),
+            covariance,
+            unidentified,
+            information,
+        }
+    }
 }
 
 /// Akaike's information criterion `2k − 2 ln L` for `k` free parameters.
@@ -349,8 +394,6 @@ pub(crate) fn assemble<M: ParamMap + ?Sized>(
         mut message,
     } = run;
     let system = map.system(&theta)?;
-    let covariance = spd_inverse(&information);
-    let std_errors = covariance.as_ref().map(std_errors_of);
     // A variance below 1e-8 of the data's variance is numerically zero: the boundary.
     let scale = records.iter().map(data_scale).sum::<f64>() / records.len().max(1) as f64;
     let floor = (1e-8 * scale).ln();
@@ -367,9 +410,7 @@ pub(crate) fn assemble<M: ParamMap + ?Sized>(
             boundary.join(", ")
         ));
     }
-    let unidentified =
-        explain_unidentified(&information, covariance.as_ref(), &names, &mut message);
-    let correlation = covariance.as_ref().and_then(correlation);
+    let uncertainty = Uncertainty::new(information, &names, &mut message);
     let n_obs = records.iter().map(Series::observed).sum();
     let k = theta.len();
     Ok(Fit {
@@ -380,11 +421,7 @@ pub(crate) fn assemble<M: ParamMap + ?Sized>(
         converged,
         message,
         boundary,
-        information,
-        covariance,
-        std_errors,
-        correlation,
-        unidentified,
+        uncertainty,
         n_obs,
         aic: aic(loglik, k),
         bic: bic(loglik, k, n_obs),

@@ -586,7 +586,7 @@ mod tests {
         assert!((1..=6).contains(&steps), "{steps} steps");
         assert!(ll > ll0, "{ll} ≤ {ll0}");
         // The same optimum L-BFGS found, to well within its standard errors.
-        let se = fit.std_errors.expect("standard errors");
+        let se = fit.uncertainty.std_errors.expect("standard errors");
         for i in 0..2 {
             assert!((theta[i] - fit.theta[i]).abs() < 1e-2 * se[i], "θ{i}");
         }

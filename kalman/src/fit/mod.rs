@@ -125,7 +125,7 @@ pub use filter_error::{
     ekf_log_likelihood_gradient, filter_error,
 };
 pub use free_names::{FreeSpec, white_acceleration_q};
-pub use info::{Fit, Method, NULL_EIGENVALUE, aic, bic, observed_information};
+pub use info::{Fit, Method, NULL_EIGENVALUE, Uncertainty, aic, bic, observed_information};
 #[cfg(feature = "argmin")]
 pub use mle::{MleOptions, mle, mle_records};
 #[cfg(feature = "autodiff")]
@@ -249,13 +249,15 @@ impl System {
     /// # Errors
     /// As [`Model::new`] (e.g. an indefinite `Q`).
     pub fn model(&self) -> Result<Model<DynDims>, crate::Error> {
-        let model = Model::new(
-            DynDims::new(self.n(), self.m(), self.p())?,
-            &self.f,
-            &self.h,
-            &self.q,
-            &self.r,
-        )?;
+        self.model_on(DynDims::new(self.n(), self.m(), self.p())?)
+    }
+
+    /// [`System::model`] on the storage path `dims` (whose n, m, p must match).
+    ///
+    /// # Errors
+    /// As [`Model::new`].
+    pub fn model_on<D: crate::Dims>(&self, dims: D) -> Result<Model<D>, crate::Error> {
+        let model = Model::new(dims, &self.f, &self.h, &self.q, &self.r)?;
         if self.p() > 0 {
             model.with_control(&self.b)
         } else {

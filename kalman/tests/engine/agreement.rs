@@ -48,7 +48,7 @@ fn rel_observed(a: faer::MatRef<'_, f64>, b: &reference::M, z: &[f64]) -> f64 {
 /// observed entries) the innovation covariance over all steps.
 pub fn deviation<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> f64 {
     let model = p.model(dims).expect("valid model");
-    let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("valid prior");
+    let mut f = Filter::new(model, &p.system.x0, &p.system.p0, form).expect("valid prior");
     let reference = reference::run(p);
     let mut worst = 0.0_f64;
     for ((z, u), r) in p.z.iter().zip(&p.u).zip(&reference) {
@@ -85,7 +85,11 @@ fn dyn_matches_reference_on_seeded_models() {
             };
             let p = FilterProblem::generate(3 + seed as usize, 1 + seed as usize % 3, opts, seed);
             for form in FORMS {
-                let dev = deviation(&p, DynDims::new(p.n(), p.m(), 2).expect("dims"), form);
+                let dev = deviation(
+                    &p,
+                    DynDims::new(p.system.n(), p.system.m(), 2).expect("dims"),
+                    form,
+                );
                 assert!(
                     dev < 1e-10,
                     "seed {seed} {form:?} S={correlated} miss={missing}: {dev:e}"

@@ -11,7 +11,7 @@ use crate::common::counting::allocations;
 /// are outside the count).
 fn count<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> usize {
     let model = p.model(dims).expect("model");
-    let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
+    let mut f = Filter::new(model, &p.system.x0, &p.system.p0, form).expect("filter");
     let _ = f.step(&p.z[0], Some(&p.u[0]));
     let before = allocations();
     for (z, u) in p.z.iter().zip(&p.u).skip(1) {
@@ -20,7 +20,7 @@ fn count<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> usize {
     }
     // An all-missing (predict-only) step too.
     let nan = [f64::NAN; 16];
-    let _ = f.step(&nan[..p.m()], Some(&p.u[0]));
+    let _ = f.step(&nan[..p.system.m()], Some(&p.u[0]));
     allocations() - before
 }
 

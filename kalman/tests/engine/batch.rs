@@ -37,11 +37,13 @@ fn deviation(n: usize, m: usize, count: usize, seed: u64, form: CovarianceForm) 
     let batch = BatchFilter::new(&model, form)
         .expect("batch")
         .with_covariances(true);
-    let out = batch.run(&p.x0, &p.p0, &zs, count).expect("batch run");
+    let out = batch
+        .run(&p.system.x0, &p.system.p0, &zs, count)
+        .expect("batch run");
     assert_eq!((out.series, out.steps, out.n), (count, opts.steps, n));
     let mut worst = 0.0_f64;
     for (s, record) in records.iter().enumerate() {
-        let mut kf = Filter::new(model.clone(), &p.x0, &p.p0, form).expect("filter");
+        let mut kf = Filter::new(model.clone(), &p.system.x0, &p.system.p0, form).expect("filter");
         let mut loglik = 0.0;
         for k in 0..opts.steps {
             let info = kf.step(&record[k * m..(k + 1) * m], None).expect("step");

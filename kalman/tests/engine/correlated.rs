@@ -23,7 +23,7 @@ fn opts() -> ProblemOptions {
 /// model is fixed by seed 7; only the streams change), with the filter's P_{T|T−1}.
 fn errors(ignore_s: bool) -> (Vec<Vec<f64>>, faer::Mat<f64>, Nees) {
     let base = FilterProblem::generate(3, 2, opts(), 7);
-    let n = base.n();
+    let n = base.system.n();
     let mut errs = Vec::new();
     let mut P = faer::Mat::zeros(n, n);
     let mut nees = Nees::new(n);
@@ -32,16 +32,22 @@ fn errors(ignore_s: bool) -> (Vec<Vec<f64>>, faer::Mat<f64>, Nees) {
         let (zs, truth) = simulate(&base, 1000 + run as u64);
         let mut model = Model::new(
             DynDims::new(n, 2, 0).expect("dims"),
-            &base.f,
-            &base.h,
-            &base.q,
-            &base.r,
+            &base.system.f,
+            &base.system.h,
+            &base.system.q,
+            &base.system.r,
         )
         .expect("model");
         if let Some(S) = base.s.as_ref().filter(|_| !ignore_s) {
             model = model.with_cross_covariance(S).expect("S");
         }
-        let mut f = Filter::new(model, &base.x0, &base.p0, CovarianceForm::Joseph).expect("filter");
+        let mut f = Filter::new(
+            model,
+            &base.system.x0,
+            &base.system.p0,
+            CovarianceForm::Joseph,
+        )
+        .expect("filter");
         for z in &zs[..STEPS - 1] {
             f.step(z, None).expect("step");
         }
@@ -59,12 +65,12 @@ fn errors(ignore_s: bool) -> (Vec<Vec<f64>>, faer::Mat<f64>, Nees) {
 /// construction as the generator: [v; w] = G η with G a factor of [[R, Sᵀ], [S, Q]]).
 fn simulate(base: &FilterProblem, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
     use rand::{RngExt, SeedableRng};
-    let (n, m) = (base.n(), base.m());
+    let (n, m) = (base.system.n(), base.system.m());
     let d = n + m;
     let S = base.s.as_ref().expect("correlated");
     let W = faer::Mat::from_fn(d, d, |i, j| match (i < m, j < m) {
-        (true, true) => base.r[(i, j)],
-        (false, false) => base.q[(i - m, j - m)],
+        (true, true) => base.system.r[(i, j)],
+        (false, false) => base.system.q[(i - m, j - m)],
         (false, true) => S[(i - m, j)],
         (true, false) => S[(j - m, i)],
     });
@@ -74,6 +80,7 @@ fn simulate(base: &FilterProblem, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
         .L()
         .to_owned();
     let L0 = base
+        .system
         .p0
         .llt(faer::Side::Lower)
         .expect("P0 PD")
@@ -83,7 +90,7 @@ fn simulate(base: &FilterProblem, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
     let mut normal = || rng.sample::<f64, _>(rand_distr::StandardNormal);
     let eta: Vec<f64> = (0..n).map(|_| normal()).collect();
     let mut x: Vec<f64> = (0..n)
-        .map(|i| base.x0[i] + (0..n).map(|j| L0[(i, j)] * eta[j]).sum::<f64>())
+        .map(|i| base.system.x0[i] + (0..n).map(|j| L0[(i, j)] * eta[j]).sum::<f64>())
         .collect();
     let (mut zs, mut xs) = (Vec::new(), Vec::new());
     for _ in 0..STEPS {
@@ -93,11 +100,11 @@ fn simulate(base: &FilterProblem, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
             .collect();
         zs.push(
             (0..m)
-                .map(|i| (0..n).map(|j| base.h[(i, j)] * x[j]).sum::<f64>() + noise[i])
+                .map(|i| (0..n).map(|j| base.system.h[(i, j)] * x[j]).sum::<f64>() + noise[i])
                 .collect(),
         );
         let next = (0..n)
-            .map(|i| (0..n).map(|j| base.f[(i, j)] * x[j]).sum::<f64>() + noise[m + i])
+            .map(|i| (0..n).map(|j| base.system.f[(i, j)] * x[j]).sum::<f64>() + noise[m + i])
             .collect();
         xs.push(x);
         x = next;
@@ -169,7 +176,7 @@ fn current_and_delayed_forms_agree() {
         let model = p
             .model(DynDims::new(4, 2, 0).expect("dims"))
             .expect("model");
-        let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
+        let mut f = Filter::new(model, &p.system.x0, &p.system.p0, form).expect("filter");
         for z in &p.z {
             f.step(z, None).expect("step");
             let sig = f.innovation_covariance().to_owned();
@@ -178,7 +185,7 @@ fn current_and_delayed_forms_agree() {
             for i in 0..4 {
                 let mut v = 0.0;
                 for j in 0..4 {
-                    v += p.f[(i, j)] * f.state()[j];
+                    v += p.system.f[(i, j)] * f.state()[j];
                 }
                 for l in 0..2 {
                     v += S[(i, l)] * w[(l, 0)];

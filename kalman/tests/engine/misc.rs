@@ -10,20 +10,26 @@ fn nalgebra_matrices_build_the_same_model() {
     let p = FilterProblem::generate(4, 2, ProblemOptions::default(), 21);
     let to_na =
         |a: &faer::Mat<f64>| nalgebra::DMatrix::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)]);
-    let F: nalgebra::SMatrix<f64, 4, 4> = nalgebra::SMatrix::from_fn(|i, j| p.f[(i, j)]);
+    let F: nalgebra::SMatrix<f64, 4, 4> = nalgebra::SMatrix::from_fn(|i, j| p.system.f[(i, j)]);
     let model = Model::new(
         FixedDims::<4, 2, 0>::new(),
         &F,
-        &to_na(&p.h),
-        &to_na(&p.q),
-        &to_na(&p.r),
+        &to_na(&p.system.h),
+        &to_na(&p.system.q),
+        &to_na(&p.system.r),
     )
     .expect("model");
-    let mut a = Filter::new(model, &p.x0, &to_na(&p.p0), CovarianceForm::Joseph).expect("filter");
+    let mut a = Filter::new(
+        model,
+        &p.system.x0,
+        &to_na(&p.system.p0),
+        CovarianceForm::Joseph,
+    )
+    .expect("filter");
     let mut b = Filter::new(
         p.model(FixedDims::<4, 2, 0>::new()).expect("model"),
-        &p.x0,
-        &p.p0,
+        &p.system.x0,
+        &p.system.p0,
         CovarianceForm::Joseph,
     )
     .expect("filter");
@@ -44,8 +50,8 @@ fn nalgebra_matrices_build_the_same_model() {
         DynDims::new(4, 2, 0).expect("dims"),
         &F,
         &bad,
-        &to_na(&p.q),
-        &to_na(&p.r),
+        &to_na(&p.system.q),
+        &to_na(&p.system.r),
     )
     .err();
     assert!(
@@ -65,8 +71,13 @@ fn time_varying_models_step_by_step() {
     let models: Vec<Model<DynDims>> = (0..p.z.len())
         .map(|k| if k % 2 == 0 { m0.clone() } else { m1.clone() })
         .collect();
-    let mut by_source =
-        Filter::new(m0.clone(), &p.x0, &p.p0, CovarianceForm::Joseph).expect("filter");
+    let mut by_source = Filter::new(
+        m0.clone(),
+        &p.system.x0,
+        &p.system.p0,
+        CovarianceForm::Joseph,
+    )
+    .expect("filter");
     let mut by_hand = by_source.clone();
     let mut constant = by_source.clone();
     for (k, z) in p.z.iter().enumerate() {
@@ -102,8 +113,8 @@ fn reset_restarts_from_a_new_prior() {
     let mut f = Filter::new(
         p.model(DynDims::new(3, 1, 0).expect("dims"))
             .expect("model"),
-        &p.x0,
-        &p.p0,
+        &p.system.x0,
+        &p.system.p0,
         CovarianceForm::SquareRoot,
     )
     .expect("filter");
@@ -116,7 +127,7 @@ fn reset_restarts_from_a_new_prior() {
     // The last step's record is the one the step returned (step 1, one measured channel).
     assert_eq!(f.last_step(), info);
     assert_eq!((info.step, info.observed), (1, 1));
-    f.reset(&p.x0, &p.p0).expect("reset");
+    f.reset(&p.system.x0, &p.system.p0).expect("reset");
     assert_eq!(f.steps(), 0);
     // A reset keeps the covariance form the filter was built with.
     assert_eq!(f.form(), CovarianceForm::SquareRoot);
@@ -153,7 +164,7 @@ fn after_first_step(p: &FilterProblem, form: CovarianceForm) -> Filter<DynDims> 
     let model = p
         .model(DynDims::new(4, 3, 0).expect("dims"))
         .expect("model");
-    let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
+    let mut f = Filter::new(model, &p.system.x0, &p.system.p0, form).expect("filter");
     f.step(&p.z[0], None).expect("step");
     f
 }
@@ -210,7 +221,7 @@ fn a_step_with_every_entry_missing_is_a_pure_prediction() {
         // The square-root form holds P as a factor: equal to round-off.
         let d = (f.covariance() - &P).norm_l2();
         assert!(d <= 1e-12 * P.norm_l2(), "{form:?}: {d:e}");
-        let pred = &p.f * &P * p.f.transpose() + &p.q;
+        let pred = &p.system.f * &P * p.system.f.transpose() + &p.system.q;
         let d = (f.predicted_covariance() - &pred).norm_l2();
         assert!(d <= 1e-12 * pred.norm_l2(), "{form:?}: {d:e}");
     }

@@ -18,8 +18,8 @@ fn nis_of_a_consistent_filter_is_in_the_95_percent_band() {
     for form in FORMS {
         let mut f = Filter::new(
             p.model(FixedDims::<4, 3, 0>::new()).expect("model"),
-            &p.x0,
-            &p.p0,
+            &p.system.x0,
+            &p.system.p0,
             form,
         )
         .expect("filter");
@@ -62,8 +62,8 @@ fn log_likelihood_is_the_gaussian_density_of_the_innovation() {
     let mut f = Filter::new(
         p.model(DynDims::new(3, 2, 0).expect("dims"))
             .expect("model"),
-        &p.x0,
-        &p.p0,
+        &p.system.x0,
+        &p.system.p0,
         CovarianceForm::Joseph,
     )
     .expect("filter");

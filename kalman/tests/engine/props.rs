@@ -8,12 +8,12 @@ use proptest::prelude::*;
 /// Per-step (x_{k|k}, P_{k|k}, x_{k+1|k}, P_{k+1|k}) of a run, flattened.
 fn run<D: Dims>(p: &FilterProblem, dims: D, form: CovarianceForm) -> Vec<Vec<f64>> {
     let model = p.model(dims).expect("model");
-    let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
+    let mut f = Filter::new(model, &p.system.x0, &p.system.p0, form).expect("filter");
     let mut out = Vec::new();
     for (z, u) in p.z.iter().zip(&p.u) {
         f.step(z, Some(u)).expect("step");
         let mut v = f.state().to_vec();
-        let n = p.n();
+        let n = p.system.n();
         for (P, x) in [
             (f.covariance(), None),
             (f.predicted_covariance(), Some(f.predicted_state())),
@@ -99,7 +99,7 @@ proptest! {
             problem(1..=12, 1..=6, opts(true, true, 0.0)),
         ]
     ) {
-        let (n, m) = (p.n(), p.m());
+        let (n, m) = (p.system.n(), p.system.m());
         let dims = DynDims::new(n, m, 1).expect("dims");
         let joseph = run(&p, dims, CovarianceForm::Joseph);
         // 1e-9 relative between forms: the same quantities through different arithmetic
@@ -124,10 +124,10 @@ proptest! {
         }
         for form in [CovarianceForm::Joseph, CovarianceForm::Standard, CovarianceForm::SquareRoot] {
             let model = p.model(dims).expect("model");
-            let mut f = Filter::new(model, &p.x0, &p.p0, form).expect("filter");
+            let mut f = Filter::new(model, &p.system.x0, &p.system.p0, form).expect("filter");
             for (z, u) in p.z.iter().zip(&p.u) {
                 let prior = f.predicted_covariance();
-                let scale: f64 = (0..p.n()).map(|i| prior[(i, i)]).sum();
+                let scale: f64 = (0..p.system.n()).map(|i| prior[(i, i)]).sum();
                 f.step(z, Some(u)).expect("step");
                 check_sym_psd(f.covariance(), scale)?;
                 check_sym_psd(f.predicted_covariance(), 0.0)?;

@@ -90,22 +90,22 @@ pub struct RefStep {
 }
 
 pub fn run(p: &kalman::strategies::FilterProblem) -> Vec<RefStep> {
-    let (n, m) = (p.n(), p.m());
-    let F = from_faer(p.f.as_ref());
-    let H = from_faer(p.h.as_ref());
-    let Q = from_faer(p.q.as_ref());
-    let R = from_faer(p.r.as_ref());
+    let (n, m) = (p.system.n(), p.system.m());
+    let F = from_faer(p.system.f.as_ref());
+    let H = from_faer(p.system.h.as_ref());
+    let Q = from_faer(p.system.q.as_ref());
+    let R = from_faer(p.system.r.as_ref());
     let S =
         p.s.as_ref()
             .map_or(vec![vec![0.0; m]; n], |s| from_faer(s.as_ref()));
-    let B = from_faer(p.b.as_ref());
-    let mut x = p.x0.clone();
-    let mut P = from_faer(p.p0.as_ref());
+    let B = from_faer(p.system.b.as_ref());
+    let mut x = p.system.x0.clone();
+    let mut P = from_faer(p.system.p0.as_ref());
     let mut out = Vec::new();
     for (z, u) in p.z.iter().zip(&p.u) {
         let obs: Vec<usize> = (0..m).filter(|&i| !z[i].is_nan()).collect();
         let Bu: Vec<f64> = (0..n)
-            .map(|i| (0..p.p()).map(|l| B[i][l] * u[l]).sum())
+            .map(|i| (0..p.system.p()).map(|l| B[i][l] * u[l]).sum())
             .collect();
         let Fx: Vec<f64> = (0..n)
             .map(|i| (0..n).map(|j| F[i][j] * x[j]).sum())

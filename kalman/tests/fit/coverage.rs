@@ -23,7 +23,7 @@ fn wald_intervals_of_free_entries_cover_the_truth() {
         assert!(fit.converged, "record {run}: {}", fit.message);
         let values = map.param_values(&fit.theta).expect("values");
         // A record whose information is singular gives no interval: it counts as a miss.
-        let Some(cov) = fit.covariance.as_ref() else {
+        let Some(cov) = fit.uncertainty.covariance.as_ref() else {
             continue;
         };
         let se = map.matrix_std_errors(&fit.theta, cov).expect("se").params;

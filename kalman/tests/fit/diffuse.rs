@@ -156,7 +156,7 @@ fn the_diffuse_mle_reaches_durbin_and_koopmans_table_from_far_off() {
         assert!((r - eps).abs() <= 1e-4 * eps, "σ²_ε {r} vs {eps}");
         assert!((q - eta).abs() <= 1e-4 * eta, "σ²_η {q} vs {eta}");
         assert!(fit.loglik >= best - 1e-6, "{} vs {best}", fit.loglik);
-        assert!(fit.std_errors.is_some() && fit.correlation.is_some());
+        assert!(fit.uncertainty.std_errors.is_some() && fit.uncertainty.correlation.is_some());
     }
 }
 

@@ -97,7 +97,7 @@ fn ar2_with_measurement_error_matches_statsmodels_sarimax() {
         fit.loglik
     );
     let values = map.param_values(&fit.theta).expect("values");
-    let cov = fit.covariance.as_ref().expect("covariance");
+    let cov = fit.uncertainty.covariance.as_ref().expect("covariance");
     let se = map.matrix_std_errors(&fit.theta, cov).expect("se").params;
     for (i, (ours, theirs)) in NAMES.iter().enumerate() {
         assert_eq!(values[i].0, *ours);
@@ -129,7 +129,7 @@ fn ar2_with_measurement_error_matches_statsmodels_sarimax() {
     assert!((fit.system.f[(0, 1)] - 1.0).abs() == 0.0 && fit.system.f[(1, 1)].abs() == 0.0);
     assert!(fit.system.q[(1, 1)].abs() == 0.0 && fit.system.h[(0, 1)].abs() == 0.0);
     // And the correlation matrix: symmetric, unit diagonal, φ1 and φ2 negatively correlated.
-    let r = fit.correlation.as_ref().expect("correlation");
+    let r = fit.uncertainty.correlation.as_ref().expect("correlation");
     for i in 0..4 {
         assert!((r[(i, i)] - 1.0).abs() < 1e-15);
         for j in 0..4 {
@@ -313,9 +313,14 @@ fn a_direction_the_data_do_not_identify_is_named() {
         .expect("series");
     let opts = MleOptions::default();
     let fit = mle(&map, map.theta_of(&base, Some(&data)), &data, &opts).expect("mle");
-    assert!(fit.covariance.is_none() && fit.std_errors.is_none());
-    assert_eq!(fit.unidentified.len(), 1, "{:?}", fit.unidentified);
-    let dir = &fit.unidentified[0];
+    assert!(fit.uncertainty.covariance.is_none() && fit.uncertainty.std_errors.is_none());
+    assert_eq!(
+        fit.uncertainty.unidentified.len(),
+        1,
+        "{:?}",
+        fit.uncertainty.unidentified
+    );
+    let dir = &fit.uncertainty.unidentified[0];
     assert_eq!(dir.len(), 1, "{dir:?}");
     assert_eq!(dir[0].0, "B[0,0]");
     assert!((dir[0].1 - 1.0).abs() < 1e-12, "{dir:?}");

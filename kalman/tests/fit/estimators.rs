@@ -159,7 +159,7 @@ fn wald_intervals_of_q_and_r_cover_at_the_nominal_rate() {
         let base =
             System::new(&[[1.0]], &[[1.0]], &[[0.5]], &[[0.5]], &[0.0], &[[1.0]]).expect("base");
         let (_, fit) = mle_qr(&base, Structure::Scalar, Structure::Scalar, &data);
-        let se = fit.std_errors.expect("standard errors");
+        let se = fit.uncertainty.std_errors.expect("standard errors");
         cover[0] += usize::from(wald_covers(fit.theta[0], se[0], q.ln()));
         cover[1] += usize::from(wald_covers(fit.theta[1], se[1], r.ln()));
     }
@@ -230,7 +230,7 @@ fn wald_intervals_of_a_shaping_filter_cover_at_the_nominal_rate() {
         )
         .expect("mle");
         assert!(fit.converged, "{}", fit.message);
-        let se = fit.std_errors.expect("standard errors");
+        let se = fit.uncertainty.std_errors.expect("standard errors");
         for i in 0..2 {
             cover[i] += usize::from(wald_covers(fit.theta[i], se[i], truth_theta[i]));
         }

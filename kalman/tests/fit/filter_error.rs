@@ -225,7 +225,7 @@ fn fit_pendulum(seed: u64, len: usize) -> kalman::fit::ParametricFit {
 fn a_pendulums_damping_and_length_are_recovered_within_their_bounds() {
     let fit = fit_pendulum(21, 600);
     assert!(fit.converged, "{}", fit.message);
-    let se = fit.std_errors.clone().expect("standard errors");
+    let se = fit.uncertainty.std_errors.clone().expect("standard errors");
     for i in 0..2 {
         let z = (fit.theta[i] - TRUTH[i]) / se[i];
         assert!(
@@ -236,7 +236,7 @@ fn a_pendulums_damping_and_length_are_recovered_within_their_bounds() {
             se[i]
         );
     }
-    let corr = fit.correlation.expect("correlation");
+    let corr = fit.uncertainty.correlation.expect("correlation");
     assert!((corr[(0, 1)] - corr[(1, 0)]).abs() < 1e-15 && corr[(0, 1)].abs() < 1.0);
 }
 
@@ -253,7 +253,7 @@ fn the_bounds_cover_at_their_rate() {
     for seed in 0..runs {
         let fit = fit_pendulum(1000 + seed, 300);
         assert!(fit.converged, "seed {seed}: {}", fit.message);
-        let se = fit.std_errors.expect("standard errors");
+        let se = fit.uncertainty.std_errors.expect("standard errors");
         for i in 0..2 {
             let z = (fit.theta[i] - TRUTH[i]) / se[i];
             sq += z * z;

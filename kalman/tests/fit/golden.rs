@@ -35,7 +35,7 @@ fn likelihood_and_mle_match_statsmodels_unobserved_components() {
     // The MLE.
     let base = llt(1.0, 1.0, 1.0, x0, p0);
     let (map, fit) = mle_qr(&base, Structure::Diag, Structure::Diag, &data);
-    let cov = fit.covariance.as_ref().expect("covariance");
+    let cov = fit.uncertainty.covariance.as_ref().expect("covariance");
     let se = map.matrix_std_errors(&fit.theta, cov).expect("se");
     let (Some(seq), Some(ser)) = (se.q, se.r) else {
         panic!("Q and R are free")

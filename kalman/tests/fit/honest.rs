@@ -65,7 +65,7 @@ fn an_em_stop_short_of_the_optimum_is_not_called_converged() {
         },
     )
     .expect("em");
-    let cov = loose.covariance.as_ref().expect("covariance");
+    let cov = loose.uncertainty.covariance.as_ref().expect("covariance");
     let d = decrement(&loose.theta, cov);
     assert!(
         d > EM_DECREMENT,
@@ -79,7 +79,10 @@ fn an_em_stop_short_of_the_optimum_is_not_called_converged() {
     );
     let tight = em(&map, &data, &EmOptions::default()).expect("em");
     assert!(tight.converged, "{}", tight.message);
-    let d = decrement(&tight.theta, tight.covariance.as_ref().expect("covariance"));
+    let d = decrement(
+        &tight.theta,
+        tight.uncertainty.covariance.as_ref().expect("covariance"),
+    );
     assert!(d <= EM_DECREMENT, "decrement {d}");
     assert!(tight.loglik > loose.loglik);
 }

@@ -51,10 +51,10 @@ fn a_pooled_fit_sums_the_records_and_beats_each_alone() {
     assert!(total.iter().all(|v| v.abs() <= opts.grad_tol), "{total:?}");
     assert!(largest_single > 100.0 * opts.grad_tol, "{largest_single}");
     // Pooling 550 samples sharpens each bound below every single record's.
-    let se = pooled.std_errors.as_ref().expect("se");
+    let se = pooled.uncertainty.std_errors.as_ref().expect("se");
     for d in &records {
         let alone = mle(&map, map.theta_of(&start, None), d, &opts).expect("mle");
-        let se1 = alone.std_errors.as_ref().expect("se");
+        let se1 = alone.uncertainty.std_errors.as_ref().expect("se");
         for i in 0..3 {
             assert!(se[i] < se1[i], "θ{i}: pooled {} vs alone {}", se[i], se1[i]);
         }
@@ -62,7 +62,10 @@ fn a_pooled_fit_sums_the_records_and_beats_each_alone() {
     // The truth within three standard errors (seeded: deterministic).
     let values = map.param_values(&pooled.theta).expect("values");
     let ses = map
-        .matrix_std_errors(&pooled.theta, pooled.covariance.as_ref().expect("cov"))
+        .matrix_std_errors(
+            &pooled.theta,
+            pooled.uncertainty.covariance.as_ref().expect("cov"),
+        )
         .expect("se")
         .params;
     for (i, want) in [0.8, 0.5, 1.0].iter().enumerate() {
@@ -128,7 +131,7 @@ fn each_record_can_start_from_its_own_prior() {
         "{} vs {sum}",
         own.loglik
     );
-    let se = own.std_errors.as_ref().expect("bounds");
+    let se = own.uncertainty.std_errors.as_ref().expect("bounds");
     for (j, truth) in [(0, q), (1, r)] {
         assert!(
             (own.theta[j] - f64::ln(truth)).abs() < 3.0 * se[j],

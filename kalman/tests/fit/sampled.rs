@@ -192,7 +192,7 @@ fn the_intensity_and_the_sensor_variance_are_recovered() {
         .fit(&Series::new(&z, 1).expect("series"), &MleOptions::default())
         .expect("fit");
     assert!(fit.converged, "{}", fit.message);
-    let se = fit.std_errors.as_ref().expect("bounds");
+    let se = fit.uncertainty.std_errors.as_ref().expect("bounds");
     for (j, truth) in [(0, q), (1, r)] {
         let err = fit.theta[j] - f64::ln(truth);
         assert!(
@@ -376,7 +376,7 @@ fn a_drift_entry_is_fitted_through_the_exponential() {
     assert_gradient_is_the_slope(&map, theta, &data);
     let fit = map.fit(&data, &MleOptions::default()).expect("fit");
     assert!(fit.converged, "{}", fit.message);
-    let se = fit.std_errors.as_ref().expect("bounds");
+    let se = fit.uncertainty.std_errors.as_ref().expect("bounds");
     for (j, truth) in [(0, a), (1, q.ln()), (2, r.ln())] {
         assert!(
             (fit.theta[j] - truth).abs() < 3.0 * se[j],

@@ -56,10 +56,10 @@ fn linear_case<D: NlDims>(p: &FilterProblem, d: D) {
         },
     ];
     for u in updates {
-        let mut f = Ekf::new(d, Linear::new(p), &p.x0, &p.p0, u).expect("ekf");
+        let mut f = Ekf::new(d, Linear::new(p), &p.system.x0, &p.system.p0, u).expect("ekf");
         assert_eq!(count(&mut f, &p.z, &p.u), 0, "EKF {u:?} hand");
         let cd = CentralDiff::new(d, Linear::new(p));
-        let mut f = Ekf::new(d, cd, &p.x0, &p.p0, u).expect("ekf");
+        let mut f = Ekf::new(d, cd, &p.system.x0, &p.system.p0, u).expect("ekf");
         assert_eq!(
             count(&mut f, &p.z, &p.u),
             0,
@@ -72,9 +72,9 @@ fn linear_case<D: NlDims>(p: &FilterProblem, d: D) {
         SigmaPoints::julier(1.0),
         SigmaPoints::Simplex,
     ] {
-        let mut f = Ukf::new(d, Linear::new(p), &p.x0, &p.p0, s).expect("ukf");
+        let mut f = Ukf::new(d, Linear::new(p), &p.system.x0, &p.system.p0, s).expect("ukf");
         assert_eq!(count(&mut f, &p.z, &p.u), 0, "UKF {s:?}");
-        let mut f = SqrtUkf::new(d, Linear::new(p), &p.x0, &p.p0, s).expect("sqrt");
+        let mut f = SqrtUkf::new(d, Linear::new(p), &p.system.x0, &p.system.p0, s).expect("sqrt");
         assert_eq!(count(&mut f, &p.z, &p.u), 0, "square-root UKF {s:?}");
     }
 }
@@ -167,11 +167,18 @@ fn no_allocation_per_fixed_lag_step() {
     };
     let p = FilterProblem::generate(5, 2, opts, 43);
     let d = DynDims::new(5, 2, 1).expect("dims");
-    let mut ukf = Ukf::new(d, Linear::new(&p), &p.x0, &p.p0, SigmaPoints::Cubature).expect("ukf");
+    let mut ukf = Ukf::new(
+        d,
+        Linear::new(&p),
+        &p.system.x0,
+        &p.system.p0,
+        SigmaPoints::Cubature,
+    )
+    .expect("ukf");
     let mut lin = kalman::Filter::new(
         p.model(d).expect("model"),
-        &p.x0,
-        &p.p0,
+        &p.system.x0,
+        &p.system.p0,
         kalman::CovarianceForm::Joseph,
     )
     .expect("filter");

@@ -71,15 +71,22 @@ enum Which {
 
 fn check<D: NlDims>(p: &FilterProblem, dims: D, which: &Which) {
     let model = p.model(dims).expect("model");
-    let mut lin = Filter::new(model, &p.x0, &p.p0, CovarianceForm::Joseph).expect("filter");
+    let mut lin =
+        Filter::new(model, &p.system.x0, &p.system.p0, CovarianceForm::Joseph).expect("filter");
     let mut lin_s = RtsSmoother::new();
     let mut nl_s = NonlinearRts::new();
     let nl = Linear::new(p);
     let (mut ekf, mut ukf, mut sqrt) = (None, None, None);
     match which {
-        Which::Ekf(u) => ekf = Some(Ekf::new(dims, nl, &p.x0, &p.p0, *u).expect("ekf")),
-        Which::Ukf(s) => ukf = Some(Ukf::new(dims, nl, &p.x0, &p.p0, *s).expect("ukf")),
-        Which::Sqrt(s) => sqrt = Some(SqrtUkf::new(dims, nl, &p.x0, &p.p0, *s).expect("sqrt")),
+        Which::Ekf(u) => {
+            ekf = Some(Ekf::new(dims, nl, &p.system.x0, &p.system.p0, *u).expect("ekf"))
+        }
+        Which::Ukf(s) => {
+            ukf = Some(Ukf::new(dims, nl, &p.system.x0, &p.system.p0, *s).expect("ukf"))
+        }
+        Which::Sqrt(s) => {
+            sqrt = Some(SqrtUkf::new(dims, nl, &p.system.x0, &p.system.p0, *s).expect("sqrt"))
+        }
     }
     for (k, (z, u)) in p.z.iter().zip(&p.u).enumerate() {
         let a = lin.step(z, Some(u)).expect("linear step");
@@ -144,11 +151,11 @@ fn check<D: NlDims>(p: &FilterProblem, dims: D, which: &Which) {
         nl_s.smooth().expect("nonlinear smooth"),
     );
     for k in 0..p.z.len() {
-        let a: Vec<f64> = (0..p.n()).map(|i| ls.means[(i, k)]).collect();
-        let b: Vec<f64> = (0..p.n()).map(|i| ns.means[(i, k)]).collect();
+        let a: Vec<f64> = (0..p.system.n()).map(|i| ls.means[(i, k)]).collect();
+        let b: Vec<f64> = (0..p.system.n()).map(|i| ns.means[(i, k)]).collect();
         // The backward pass divides by P_{k+1|k}: allow 10× the forward tolerance.
         let scale = a.iter().fold(1.0_f64, |s, v| s.max(v.abs()));
-        for i in 0..p.n() {
+        for i in 0..p.system.n() {
             assert!(
                 (a[i] - b[i]).abs() <= 10.0 * TOL * scale,
                 "smoothed x[{i}] step {k}"
@@ -212,8 +219,8 @@ fn iterated_ekf_needs_two_linearisations_on_a_linear_model() {
     let mut f = Ekf::new(
         DynDims::new(4, 2, 1).expect("dims"),
         Linear::new(&p),
-        &p.x0,
-        &p.p0,
+        &p.system.x0,
+        &p.system.p0,
         EkfUpdate::Iterated {
             max_iterations: 10,
             tolerance: 1e-9,

@@ -32,14 +32,14 @@ pub struct Linear {
 impl Linear {
     pub fn new(p: &FilterProblem) -> Self {
         Self {
-            n: p.n(),
-            m: p.m(),
-            p: p.p(),
-            F: col_major(&p.f),
-            H: col_major(&p.h),
-            B: col_major(&p.b),
-            Q: col_major(&p.q),
-            R: col_major(&p.r),
+            n: p.system.n(),
+            m: p.system.m(),
+            p: p.system.p(),
+            F: col_major(&p.system.f),
+            H: col_major(&p.system.h),
+            B: col_major(&p.system.b),
+            Q: col_major(&p.system.q),
+            R: col_major(&p.system.r),
         }
     }
 }

@@ -154,11 +154,8 @@ pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result
             line_plot(
                 &dir.join(&file),
                 &Figure {
-                    title: &title,
-                    x_label: "t [s]",
-                    y_label: &y_label,
-                    y_scale: Scale::Linear,
                     notes: &notes,
+                    ..Figure::over_time(&title, &y_label)
                 },
                 &series,
             )?;
@@ -189,15 +186,15 @@ pub fn write_outputs(c: &Computed, dir: &Path, tracking_section: &str) -> Result
     line_plot(
         &dir.join("nominal.svg"),
         &Figure {
-            title: "Nominal turn (paper Fig. 2): α/100, ε and dε of eq. (4) at Δa",
-            x_label: "t [s]",
-            y_label: "α/100 [°]; ε, dε [°/s²]",
-            y_scale: Scale::Linear,
             notes: &[
                 "dε of eq. (4) is drawn at 2 °/s² where it is larger (it grows without \
                       bound as α → 90°)."
                     .to_string(),
             ],
+            ..Figure::over_time(
+                "Nominal turn (paper Fig. 2): α/100, ε and dε of eq. (4) at Δa",
+                "α/100 [°]; ε, dε [°/s²]",
+            )
         },
         &[
             Series::line("α_n / 100, °", col(1, 0.01, f64::INFINITY)),

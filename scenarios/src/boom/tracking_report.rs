@@ -117,11 +117,8 @@ fn tracking_outputs(c: &Computed, dir: &Path) -> Result<Vec<String>> {
             line_plot(
                 &dir.join(&file),
                 &Figure {
-                    title: &title,
-                    x_label: "t [s]",
-                    y_label: &y_label,
                     y_scale: Scale::Log,
-                    notes: &[],
+                    ..Figure::over_time(&title, &y_label)
                 },
                 &series,
             )?;

@@ -272,6 +272,7 @@ fn summary(map: &SampledMap, fit: &ParametricFit, distinct: usize) -> Result<ser
         values.iter().map(|(n, v)| (n.clone(), json!(v))).collect();
     // The standard error of v(θ) by the delta method: |dv/dθ|·σ_θ.
     let std_errors = fit
+        .uncertainty
         .std_errors
         .as_ref()
         .map_or(serde_json::Value::Null, |se| {

@@ -36,7 +36,7 @@ macro_rules! summary_keys {
     ($fit:expr, names: $names:expr, estimates: $estimates:expr, std_errors: $std_errors:expr) => {{
         let fit = $fit;
         let correlation = fit
-            .correlation
+            .uncertainty.correlation
             .as_ref()
             .map_or(serde_json::Value::Null, |c| {
                 serde_json::json!({"names": $names, "matrix": $crate::fit::faer_rows(c)})
@@ -52,7 +52,7 @@ macro_rules! summary_keys {
             ("correlation", correlation),
             (
                 "unidentified",
-                serde_json::json!($crate::fit::unidentified_json(&fit.unidentified)),
+                serde_json::json!($crate::fit::unidentified_json(&fit.uncertainty.unidentified)),
             ),
             ("aic", serde_json::json!(fit.aic)),
             ("bic", serde_json::json!(fit.bic)),
@@ -250,7 +250,7 @@ fn fitted_file(model: &DiscreteModel, sys: &System) -> DiscreteFile {
 }
 
 fn summary_json(args: &FitArgs, map: &StandardMap, fit: &Fit) -> Result<serde_json::Value> {
-    let std_errors = match &fit.covariance {
+    let std_errors = match &fit.uncertainty.covariance {
         Some(cov) => {
             let se = map
                 .matrix_std_errors(&fit.theta, cov)

@@ -231,6 +231,7 @@ pub fn fit_mle(map: &ShapingMap, z: &[f64], start: &[f64], r0: f64) -> Result<Sh
     let fit = mle(map, map.theta_of(start, r0), &data, &MLE_OPTIONS).map_err(err)?;
     let values: Vec<f64> = fit.theta.iter().map(|t| t.exp()).collect();
     let std_errors = fit
+        .uncertainty
         .std_errors
         .as_ref()
         .map(|se| se.iter().zip(&values).map(|(s, v)| s * v).collect());

@@ -184,11 +184,8 @@ pub fn record_plots(
         }
         let notes = ["prediction residuals z − h(x_{k|k−1}) before the gate, divided by the measurement σ; wild points stand out".to_string()];
         let f = Figure {
-            title: name,
-            x_label: "t [s]",
-            y_label: "residual / σ [-]",
-            y_scale: Scale::Linear,
             notes: &notes,
+            ..Figure::over_time(name, "residual / σ [-]")
         };
         line_plot(&dir.join(file), &f, &series)?;
         files.push((file.into(), name.to_lowercase()));
@@ -239,11 +236,8 @@ pub fn record_plots(
         line_plot(
             &dir.join(&file),
             &Figure {
-                title: &title,
-                x_label: "t [s]",
-                y_label: &y,
-                y_scale: Scale::Linear,
                 notes: &notes,
+                ..Figure::over_time(&title, &y)
             },
             &series,
         )?;

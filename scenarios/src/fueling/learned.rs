@@ -273,7 +273,11 @@ pub fn learn_back(p: &FuelingParams, seed: u64) -> Result<LearnedBack> {
     let map = fill_map(dt, w.t_y, w.delta, z[0]);
     let start = vec![(0.5 * w.d_c).ln(), (0.5 * w.t_a).ln()];
     let ffit = mle(&map, start, &data, &crate::fit::shaping::MLE_OPTIONS).map_err(compute)?;
-    let fse = ffit.std_errors.clone().unwrap_or_else(|| vec![f64::NAN; 2]);
+    let fse = ffit
+        .uncertainty
+        .std_errors
+        .clone()
+        .unwrap_or_else(|| vec![f64::NAN; 2]);
     let (fv, ft) = (ffit.theta[0].exp(), ffit.theta[1].exp());
     let fill = vec![
         Learned::new(
@@ -334,7 +338,7 @@ mod tests {
         )
         .expect("fit");
         assert!(fit.converged, "{}", fit.message);
-        let se = fit.std_errors.expect("standard errors");
+        let se = fit.uncertainty.std_errors.expect("standard errors");
         for (i, truth) in [var.ln(), t_a.ln()].iter().enumerate() {
             // 4 s.e.: a 6e-5 event for a Gaussian estimate.
             assert!(

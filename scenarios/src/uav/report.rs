@@ -67,17 +67,7 @@ pub fn write_outputs(c: &Computed, dir: &Path) -> Result<()> {
             .collect()
     };
     let fig = |file: &str, title: &str, y: &str, ss: Vec<Series>| -> Result<()> {
-        line_plot(
-            &dir.join(file),
-            &Figure {
-                title,
-                x_label: "t [s]",
-                y_label: y,
-                y_scale: Scale::Linear,
-                notes: &[],
-            },
-            &ss,
-        )
+        line_plot(&dir.join(file), &Figure::over_time(title, y), &ss)
     };
     // The node signals that are columns of the signal record: (file, title, y label,
     // [(series label, column)]).
@@ -229,13 +219,10 @@ pub fn write_outputs(c: &Computed, dir: &Path) -> Result<()> {
     )?;
     line_plot(
         &dir.join("gain_transient.svg"),
-        &Figure {
-            title: "Kalman–Bucy gain K_c(t) (Riccati ODE) vs discrete K_k/Δt",
-            x_label: "t [s]",
-            y_label: "gain [1/s]",
-            y_scale: Scale::Linear,
-            notes: &[],
-        },
+        &Figure::over_time(
+            "Kalman–Bucy gain K_c(t) (Riccati ODE) vs discrete K_k/Δt",
+            "gain [1/s]",
+        ),
         &[
             Series::line("K_c position (ODE)", cont(0)),
             Series::line("K_c velocity (ODE)", cont(1)),
