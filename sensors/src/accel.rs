@@ -2,6 +2,8 @@
 //! projection at the sensor's position on the arc, tangential ε·r, optional centripetal ω²·r,
 //! misalignment, constant ±Δa bias, noise, range saturation and the a_z mounting check.
 
+use std::f64::consts::FRAC_PI_2;
+
 use nalgebra::{Rotation3, Vector3};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -32,7 +34,8 @@ pub enum BiasVariant {
     Minus,
 }
 
-/// Accelerometer configuration (angles in degrees here, radians inside). Defaults: the boom paper's
+/// Accelerometer configuration (the offset angle in radians, as the estimator takes it; the
+/// misalignment in degrees). Defaults: the boom paper's
 /// sensor (r = 25 m, range 10 m/s², Δa = 0.02 m/s², g = 9.8 m/s²), ideally mounted at γ = 0,
 /// no bias, no noise, centripetal term off (as in the paper).
 ///
@@ -42,12 +45,12 @@ pub enum BiasVariant {
 ///
 /// // Mounted 10° lower along the arc, with 0.005 m/s² noise on every axis.
 /// let cfg = AccelerometerConfig {
-///     sensor_offset_angle_deg: 10.0,
+///     sensor_offset_angle: 10f64.to_radians(),
 ///     noise_std_mps2: 0.005,
 ///     ..AccelerometerConfig::default()
 /// };
 /// let sensor = Accelerometer::new(&cfg)?;
-/// assert!((sensor.offset_angle() - 10f64.to_radians()).abs() < 1e-15);
+/// assert_eq!(sensor.sensor_offset_angle(), 10f64.to_radians());
 /// # Ok::<(), sensors::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -55,9 +58,9 @@ pub enum BiasVariant {
 pub struct AccelerometerConfig {
     /// Distance r from the boom pivot, m (> 0; default 25).
     pub sensor_radius_m: f64,
-    /// Offset angle γ along the arc (sensor mounted lower by γ), degrees, in [−90, 90]
+    /// Offset angle γ along the arc (sensor mounted lower by γ), rad, in [−π/2, π/2]
     /// (default 0).
-    pub sensor_offset_angle_deg: f64,
+    pub sensor_offset_angle: f64,
     /// Misalignment of the sensor axes, degrees: rotations about the ideal x (radial), y
     /// (tangential) and z (pivot axis) axes, applied as R = R_z·R_y·R_x (default zeros).
     pub misalignment_deg: [f64; 3],
@@ -82,7 +85,7 @@ impl Default for AccelerometerConfig {
     fn default() -> Self {
         Self {
             sensor_radius_m: 25.0,
-            sensor_offset_angle_deg: 0.0,
+            sensor_offset_angle: 0.0,
             misalignment_deg: [0.0; 3],
             gravity_mps2: 9.8,
             centripetal: false,
@@ -166,7 +169,7 @@ impl Accelerometer {
     ///
     /// # Errors
     /// [`Error`] naming the field: r, g, range or tolerance not positive; γ outside
-    /// [−90°, 90°]; Δa or noise negative; misalignment outside [−180°, 180°]; any NaN.
+    /// [−π/2, π/2]; Δa or noise negative; misalignment outside [−180°, 180°]; any NaN.
     pub fn new(config: &AccelerometerConfig) -> Result<Self, Error> {
         let [mx, my, mz] = config.misalignment_deg;
         let mx = in_range("misalignment_deg[0]", mx, -180.0, 180.0)?.to_radians();
@@ -181,12 +184,11 @@ impl Accelerometer {
         Ok(Self {
             radius: positive("sensor_radius_m", config.sensor_radius_m)?,
             gamma: in_range(
-                "sensor_offset_angle_deg",
-                config.sensor_offset_angle_deg,
-                -90.0,
-                90.0,
-            )?
-            .to_radians(),
+                "sensor_offset_angle",
+                config.sensor_offset_angle,
+                -FRAC_PI_2,
+                FRAC_PI_2,
+            )?,
             g: positive("gravity_mps2", config.gravity_mps2)?,
             centripetal: config.centripetal,
             to_sensor: Rotation3::from_euler_angles(mx, my, mz).inverse(),
@@ -197,7 +199,7 @@ impl Accelerometer {
         })
     }
     /// Offset angle γ, rad.
-    pub fn offset_angle(&self) -> f64 {
+    pub fn sensor_offset_angle(&self) -> f64 {
         self.gamma
     }
     /// Radius r, m.

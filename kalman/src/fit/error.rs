@@ -2,6 +2,12 @@
 //! parameterisation.
 
 /// Errors of likelihood evaluation and fitting.
+///
+/// The crate's second error type, for a reason: a fit fails in ways no filter step can
+/// (nothing free, a direction the data do not identify, an optimiser that stops, an
+/// interruption), with messages naming parameters built at run time, while the filter steps'
+/// [`crate::Error`] names its matrices by static names. A filter's own error reaches a fit
+/// unchanged as [`FitError::Model`], so a caller of the fitting API matches one type.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum FitError {

@@ -44,7 +44,7 @@ pub struct Riccati<E> {
 }
 
 /// The kind of a [`Riccati`] problem: which equation it is and what [`Riccati::solve`]
-/// returns. Sealed (its hidden `FORM` has a type outside the public API): its
+/// returns. Sealed (its hidden `SPEC` has a type outside the public API): its
 /// implementations are the four kinds [`FilterDare`](super::FilterDare),
 /// [`LqrDare`](super::LqrDare), [`FilterCare`](super::FilterCare) and
 /// [`LqrCare`](super::LqrCare).
@@ -66,102 +66,94 @@ pub trait Equation {
     /// The result of [`Riccati::solve`]: [`SteadyState`](super::SteadyState),
     /// [`Lqr`](super::Lqr) or [`ContinuousSteadyState`](super::ContinuousSteadyState).
     type Solution: Finish;
-    /// Which of the four equations.
+    /// All the builder needs to know of the equation.
     #[doc(hidden)]
-    const FORM: Form;
+    const SPEC: Spec;
+}
+
+/// What the builder needs to know of one equation: the names of its matrices (a, c, q, r)
+/// as the equation writes them and as errors name them, how its second matrix meets the
+/// state (a measurement matrix for a filter equation, an input matrix for an LQR, solved as
+/// the dual filter equation), its time axis, and its name and pairs in the solver's errors
+/// (without and with a cross term).
+#[derive(Debug, Clone, Copy)]
+pub struct Spec {
+    matrices: [&'static str; 4],
+    coupling: Coupling,
+    time: Time,
+    equation: &'static str,
+    pairs: [&'static str; 2],
+    cross_pairs: [&'static str; 2],
 }
 
 /// Declares the kinds of equation: for each, a marker type (never constructed) with its
-/// [`Equation`] implementation, its solution type and its [`Form`].
+/// [`Equation`] implementation, its solution type and its [`Spec`].
 macro_rules! kinds {
-    ($($(#[$doc:meta])* $kind:ident -> $solution:ty;)*) => {$(
+    ($($(#[$doc:meta])* $kind:ident -> $solution:ty = $spec:expr;)*) => {$(
         $(#[$doc])*
         #[derive(Debug, Clone, Copy)]
         pub enum $kind {}
 
         impl Equation for $kind {
             type Solution = $solution;
-            const FORM: Form = Form::$kind;
+            const SPEC: Spec = $spec;
         }
     )*};
 }
 
 kinds! {
     /// The kind of [`Dare`](super::Dare): the filter DARE, solved as written.
-    FilterDare -> SteadyState;
+    FilterDare -> SteadyState = Spec {
+        matrices: ["F", "H", "Q", "R"],
+        coupling: Coupling::Measurement,
+        time: Time::Discrete,
+        equation: "filter DARE",
+        pairs: ["(F, H)", "(F, Q^{1/2})"],
+        cross_pairs: ["(F, H)", "(F - S R^-1 H, (Q - S R^-1 S^T)^{1/2})"],
+    };
     /// The kind of [`Dlqr`](super::Dlqr): the discrete LQR, solved as its dual filter DARE.
-    LqrDare -> Lqr;
+    LqrDare -> Lqr = Spec {
+        matrices: ["A", "B", "Q", "R"],
+        coupling: Coupling::Input,
+        time: Time::Discrete,
+        equation: "LQR DARE",
+        pairs: ["(A, B)", "(Q^{1/2}, A)"],
+        cross_pairs: ["(A, B)", "((Q - N R^-1 N^T)^{1/2}, A - B R^-1 N^T)"],
+    };
     /// The kind of [`Care`](super::Care): the filter CARE, solved as written.
-    FilterCare -> ContinuousSteadyState;
+    FilterCare -> ContinuousSteadyState = Spec {
+        matrices: ["A", "H", "Q", "R"],
+        coupling: Coupling::Measurement,
+        time: Time::Continuous,
+        equation: "filter CARE",
+        pairs: ["(A, H)", "(A, Q^{1/2})"],
+        cross_pairs: ["(A, H)", "(A, Q^{1/2})"],
+    };
     /// The kind of [`Clqr`](super::Clqr): the continuous LQR, solved as its dual filter
     /// CARE.
-    LqrCare -> Lqr;
+    LqrCare -> Lqr = Spec {
+        matrices: ["A", "B", "Q", "R"],
+        coupling: Coupling::Input,
+        time: Time::Continuous,
+        equation: "LQR CARE",
+        pairs: ["(A, B)", "(Q^{1/2}, A)"],
+        cross_pairs: ["(A, B)", "(Q^{1/2}, A)"],
+    };
 }
 
-/// The four equations, and all the builder needs to know of each: the names of its
-/// matrices and of its pairs in errors, how its second matrix meets the state, its time
-/// axis.
-#[derive(Debug, Clone, Copy)]
-pub enum Form {
-    FilterDare,
-    LqrDare,
-    FilterCare,
-    LqrCare,
-}
-
-impl Form {
-    /// Names of (a, c, q, r) as the equation writes them, as errors name them.
-    fn matrices(self) -> [&'static str; 4] {
-        match self {
-            Form::FilterDare => ["F", "H", "Q", "R"],
-            Form::FilterCare => ["A", "H", "Q", "R"],
-            Form::LqrDare | Form::LqrCare => ["A", "B", "Q", "R"],
-        }
-    }
-
-    /// The filter equations couple through a measurement matrix (unknown P); the LQR
-    /// through an input matrix, solved as the dual filter equation (unknown X).
-    fn coupling(self) -> Coupling {
-        match self {
-            Form::FilterDare | Form::FilterCare => Coupling::Measurement,
-            Form::LqrDare | Form::LqrCare => Coupling::Input,
-        }
-    }
-
-    fn time(self) -> Time {
-        match self {
-            Form::FilterDare | Form::LqrDare => Time::Discrete,
-            Form::FilterCare | Form::LqrCare => Time::Continuous,
-        }
-    }
-
+impl Spec {
     /// The equation and its pairs in the solver's errors (`cross`: a cross term was given).
     /// The LQR's pairs are those of its dual read back: detectability of (Aᵀ, Bᵀ) is
     /// stabilisability of (A, B), and stabilisability of (Aᵀ, Q^{1/2}) is detectability of
     /// (Q^{1/2}, A).
     fn names(self, cross: bool) -> Names {
-        let (equation, detect, stab) = match (self, cross) {
-            (Form::FilterDare, false) => ("filter DARE", "(F, H)", "(F, Q^{1/2})"),
-            (Form::FilterDare, true) => (
-                "filter DARE",
-                "(F, H)",
-                "(F - S R^-1 H, (Q - S R^-1 S^T)^{1/2})",
-            ),
-            (Form::LqrDare, false) => ("LQR DARE", "(A, B)", "(Q^{1/2}, A)"),
-            (Form::LqrDare, true) => (
-                "LQR DARE",
-                "(A, B)",
-                "((Q - N R^-1 N^T)^{1/2}, A - B R^-1 N^T)",
-            ),
-            (Form::FilterCare, _) => ("filter CARE", "(A, H)", "(A, Q^{1/2})"),
-            (Form::LqrCare, _) => ("LQR CARE", "(A, B)", "(Q^{1/2}, A)"),
-        };
-        let (detect, stab) = match self.coupling() {
+        let [detect, stab] = if cross { self.cross_pairs } else { self.pairs };
+        let (detect, stab) = match self.coupling {
             Coupling::Measurement => (Pair::Detect(detect), Pair::Stab(stab)),
             Coupling::Input => (Pair::Stab(detect), Pair::Detect(stab)),
         };
         Names {
-            equation,
+            equation: self.equation,
             detect,
             stab,
         }
@@ -203,7 +195,7 @@ impl<E: Equation> Riccati<E> {
         r: impl MatrixInput,
     ) -> Result<Self, Error> {
         Ok(Self {
-            inputs: Inputs::new(E::FORM.matrices(), E::FORM.coupling(), [&a, &c, &q, &r])?,
+            inputs: Inputs::new(E::SPEC.matrices, E::SPEC.coupling, [&a, &c, &q, &r])?,
             options: RiccatiOptions::default(),
             equation: PhantomData,
         })
@@ -253,12 +245,12 @@ impl<E: Equation> Riccati<E> {
     /// ```
     pub fn solve(&self) -> Result<E::Solution, Error> {
         let form = self.filter_form();
-        let names = E::FORM.names(form.S.is_some());
-        let solved = match E::FORM.time() {
+        let names = E::SPEC.names(form.S.is_some());
+        let solved = match E::SPEC.time {
             Time::Discrete => discrete_dual(&form, &self.options, &names)?,
             Time::Continuous => continuous_dual(&form, &self.options, &names)?,
         };
-        E::Solution::finish(&self.inputs, E::FORM.time(), solved)
+        E::Solution::finish(&self.inputs, E::SPEC.time, solved)
     }
 
     /// Relative residual ‖Res(X)‖_F / ‖X‖_F of a candidate solution X (P for the filter
@@ -282,13 +274,13 @@ impl<E: Equation> Riccati<E> {
     /// # Ok::<(), kalman::Error>(())
     /// ```
     pub fn residual(&self, candidate: impl MatrixInput) -> Result<f64, Error> {
-        let unknown = match E::FORM.coupling() {
+        let unknown = match E::SPEC.coupling {
             Coupling::Measurement => "P",
             Coupling::Input => "X",
         };
         let candidate = self.inputs.candidate(unknown, &candidate)?;
         let form = self.filter_form();
-        Ok(match E::FORM.time() {
+        Ok(match E::SPEC.time {
             Time::Discrete => discrete_residual(&form, candidate.as_ref()),
             Time::Continuous => continuous_residual(&form, candidate.as_ref()),
         })
@@ -298,7 +290,7 @@ impl<E: Equation> Riccati<E> {
     /// the dual for an LQR.
     fn filter_form(&self) -> FilterForm<'_> {
         let ([a, c, q, r], cross) = self.inputs.views();
-        let (F, H) = match E::FORM.coupling() {
+        let (F, H) = match E::SPEC.coupling {
             Coupling::Measurement => (a, c),
             Coupling::Input => (a.transpose(), c.transpose()),
         };

@@ -48,7 +48,7 @@ impl Meter {
     pub(super) fn check(&self, gammas_deg: &[f64]) -> Result<()> {
         for &g in gammas_deg {
             sensors::Accelerometer::new(&sensors::AccelerometerConfig {
-                sensor_offset_angle_deg: g,
+                sensor_offset_angle: g.to_radians(),
                 ..self.base
             })
             .map_err(|source| Error::Sensors {
@@ -67,7 +67,7 @@ impl Meter {
         let fresh = !matches!(&self.cache, Some((k, c, _)) if *k == gamma.to_bits() && c == v);
         if fresh {
             let cfg = sensors::AccelerometerConfig {
-                sensor_offset_angle_deg: gamma.to_degrees(),
+                sensor_offset_angle: gamma,
                 bias: match v.sign {
                     Sign::Plus => sensors::BiasVariant::Plus,
                     Sign::Minus => sensors::BiasVariant::Minus,
@@ -211,7 +211,7 @@ pub(super) fn simulate_noise_runs(
         for (gi, (&gamma_deg, model)) in p.case_gammas_deg.iter().zip(&models).enumerate() {
             let mut meter = Meter::new(p, false, sigma, run_rng(stream, i as u64));
             let cfg = p.config(BoomMethod::Wls, gamma_deg, &p.estimator);
-            let gamma = gamma_deg.to_radians();
+            let gamma = cfg.sensor_offset_angle;
             let mut turns: [Vec<TurnRun>; 4] = Default::default();
             for v in &variants {
                 let z = readings(&points, &mut meter, gamma, v);

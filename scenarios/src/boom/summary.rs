@@ -373,20 +373,20 @@ pub fn summarise(
     let quiet = || Meter::new(params, false, 0.0, run_rng(seed, 0));
     let mut case_runs = Vec::new();
     let mut cases = Vec::new();
-    for &gamma in &params.case_gammas_deg {
+    for &gamma_deg in &params.case_gammas_deg {
         for (method, wls_method) in [
             (Method::Direct, BoomMethod::Direct),
             (Method::Linear3, BoomMethod::Linear3),
             (Method::Wls, BoomMethod::Wls),
         ] {
-            let cfg = params.config(wls_method, gamma, &opt);
+            let cfg = params.config(wls_method, gamma_deg, &opt);
             let plus = turn(&cfg, &variants[0], quiet())?;
             let minus = turn(&cfg, &variants[1], quiet())?;
             for run in [&plus, &minus] {
-                let turn = TurnErrors::new(gamma, run, &stats(run));
+                let turn = TurnErrors::new(gamma_deg, run, &stats(run));
                 cases.push(CaseSummary { method, turn });
             }
-            case_runs.push((method, gamma, plus, minus));
+            case_runs.push((method, gamma_deg, plus, minus));
         }
     }
 
@@ -399,9 +399,9 @@ pub fn summarise(
     };
     let mut tracking_runs = Vec::new();
     let mut bias_free = Vec::new();
-    for &gamma in &params.case_gammas_deg {
-        let model = TrackingModel::new(params, gamma, false, 0.0, q)?;
-        let g = gamma.to_radians();
+    for &gamma_deg in &params.case_gammas_deg {
+        let model = TrackingModel::new(params, gamma_deg, false, 0.0, q)?;
+        let g = gamma_deg.to_radians();
         let mut by_variant = Vec::new();
         for v in &variants {
             let z = readings(&points, &mut quiet(), g, v);
@@ -417,13 +417,13 @@ pub fn summarise(
             .map(|((a, p), m)| (a, p, m))
         {
             for run in [&p, &m] {
-                let turn = TurnErrors::new(gamma, run, &stats(run));
+                let turn = TurnErrors::new(gamma_deg, run, &stats(run));
                 cases.push(CaseSummary { method, turn });
             }
-            tracking_runs.push((method, gamma, p, m));
+            tracking_runs.push((method, gamma_deg, p, m));
         }
         let z = readings(&points, &mut quiet(), g, &nominal_variant);
-        let wls_cfg = params.config(BoomMethod::Wls, gamma, &opt);
+        let wls_cfg = params.config(BoomMethod::Wls, gamma_deg, &opt);
         let wls_run = replay(&points, &wls_cfg, &z, &nominal_variant, limits)?;
         let [e, u, sm] = tracked_runs(&points, &model.track(&z)?, Sign::Nominal, limits);
         for (method, run) in [
@@ -435,7 +435,7 @@ pub fn summarise(
             let s = stats(&run);
             bias_free.push(BiasFreeRow {
                 method,
-                gamma_deg: gamma,
+                gamma_deg,
                 max_alpha_err_deg: s.max_alpha_deg,
                 max_eps_err_deg_s2: s.max_eps_deg,
                 undefined_from_alpha_deg: s.undefined_from_deg,

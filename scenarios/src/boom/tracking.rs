@@ -151,7 +151,7 @@ impl TrackingModel {
     ) -> Result<Self> {
         let sensor = sensors::Accelerometer::new(&sensors::AccelerometerConfig {
             sensor_radius_m: p.sensor_radius_m,
-            sensor_offset_angle_deg: gamma_deg,
+            sensor_offset_angle: gamma_deg.to_radians(),
             gravity_mps2: p.gravity_mps2,
             centripetal,
             bias: sensors::BiasVariant::None,
@@ -232,7 +232,7 @@ impl TrackingModel {
         let (g, r, gamma) = (
             self.sensor.gravity(),
             self.sensor.radius(),
-            self.sensor.offset_angle(),
+            self.sensor.sensor_offset_angle(),
         );
         let beta = (z0[0] / g).clamp(-1.0, 1.0).asin();
         let (s, c) = beta.sin_cos();

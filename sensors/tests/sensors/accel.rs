@@ -9,10 +9,10 @@ const R: f64 = 25.0;
 
 #[test]
 fn outputs_equal_spec_b_formulas() {
-    for gamma_deg in [0.0, 10.0, 20.0, -15.0] {
+    for gamma_deg in [0.0f64, 10.0, 20.0, -15.0] {
         for centripetal in [false, true] {
             let cfg = AccelerometerConfig {
-                sensor_offset_angle_deg: gamma_deg,
+                sensor_offset_angle: gamma_deg.to_radians(),
                 centripetal,
                 ..AccelerometerConfig::default()
             };

@@ -87,19 +87,19 @@ fn invalid_accelerometer_configuration_is_a_typed_error() {
             ..
         })
     ));
-    for bad in [90.5, -91.0, 180.0] {
+    for bad in [90.5f64, -91.0, 180.0] {
         assert!(matches!(
-            accel(|c| c.sensor_offset_angle_deg = bad),
-            Err(Error::OutOfRange { name: "sensor_offset_angle_deg", min, max, .. })
-                if (min + 90.0).abs() < 1e-12 && (max - 90.0).abs() < 1e-12
+            accel(|c| c.sensor_offset_angle = bad.to_radians()),
+            Err(Error::OutOfRange { name: "sensor_offset_angle", min, max, .. })
+                if (min + std::f64::consts::FRAC_PI_2).abs() < 1e-15 && (max - std::f64::consts::FRAC_PI_2).abs() < 1e-15
         ));
     }
-    assert!(accel(|c| c.sensor_offset_angle_deg = 90.0).is_ok());
-    assert!(accel(|c| c.sensor_offset_angle_deg = -90.0).is_ok());
+    assert!(accel(|c| c.sensor_offset_angle = 90f64.to_radians()).is_ok());
+    assert!(accel(|c| c.sensor_offset_angle = -90f64.to_radians()).is_ok());
     assert!(matches!(
-        accel(|c| c.sensor_offset_angle_deg = f64::NAN),
+        accel(|c| c.sensor_offset_angle = f64::NAN),
         Err(Error::NotFinite {
-            name: "sensor_offset_angle_deg",
+            name: "sensor_offset_angle",
             ..
         })
     ));
@@ -249,7 +249,7 @@ fn configurations_round_trip_through_serde_and_fill_defaults() {
     assert!((l.damper_time_constant_s - 2.0).abs() < 1e-15);
     assert!(serde_json::from_str::<LevelSensorConfig>(r#"{"stepm": 1}"#).is_err());
     let a = AccelerometerConfig {
-        sensor_offset_angle_deg: 10.0,
+        sensor_offset_angle: 10f64.to_radians(),
         bias: sensors::BiasVariant::Minus,
         ..AccelerometerConfig::default()
     };

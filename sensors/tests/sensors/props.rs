@@ -104,7 +104,7 @@ proptest! {
         seed in 0u64..1000,
     ) {
         let cfg = AccelerometerConfig {
-            sensor_offset_angle_deg: gamma_deg,
+            sensor_offset_angle: gamma_deg.to_radians(),
             centripetal: true,
             ..AccelerometerConfig::default()
         };
