@@ -38,3 +38,25 @@ def test_bad_input(outcomes, name):
     assert kind == exc.__name__, f"{name}: raised {kind} ({message}), expected {exc.__name__}"
     assert "\n" not in message, f"{name}: message is not one line: {message!r}"
     assert argument in message, f"{name}: message does not name {argument}: {message!r}"
+
+
+def test_an_assigned_covariance_meets_the_workspace_rule():
+    """The module judges an assigned covariance by the Rust crates' one rule: symmetric within
+    1e-10 of its largest entry, no eigenvalue below −1e-10 of its largest. Each matrix sits at
+    2× or 0.5× a tolerance (the factor 2 leaves room for the eigen-decomposition's round-off)."""
+    import launch_estimation as le
+    import numpy as np
+
+    tol, scale = 1e-10, 3.0
+    for factor, ok in [(2.0, False), (0.5, True)]:
+        d = factor * tol * scale
+        for q in (
+            np.array([[scale, 1.0 + d], [1.0, 2.0]]),
+            np.diag([scale, -d]),
+        ):
+            kf = le.KalmanFilter(2, 1)
+            if ok:
+                kf.Q = q
+            else:
+                with pytest.raises(ValueError, match="Q"):
+                    kf.Q = q

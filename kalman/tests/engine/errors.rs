@@ -226,3 +226,36 @@ fn covariance_checks_do_not_depend_on_units() {
         (kalman::SYMMETRY_TOL - 1e-10).abs() < 1e-25 && (kalman::PSD_TOL - 1e-10).abs() < 1e-25
     );
 }
+
+/// `kalman::dense::check_covariance` (the rule the Python module applies to an assigned
+/// covariance) gives `Model::new`'s verdict on Q on both sides of each tolerance: an
+/// asymmetry of 2·SYMMETRY_TOL and 0.5·SYMMETRY_TOL of the largest entry, an eigenvalue of
+/// −2·PSD_TOL and −0.5·PSD_TOL of the largest (the factor 2 leaves room for the round-off of
+/// the eigen-decomposition, ~1e-16 of the largest eigenvalue).
+#[test]
+fn the_slice_rule_is_the_models_rule() {
+    use kalman::{PSD_TOL, SYMMETRY_TOL, dense::check_covariance};
+    let scale = 3.0;
+    let mut cases: Vec<([[f64; 2]; 2], bool)> = Vec::new();
+    for (factor, ok) in [(2.0, false), (0.5, true)] {
+        let d = factor * SYMMETRY_TOL * scale;
+        cases.push(([[scale, 1.0 + d], [1.0, 2.0]], ok));
+        // diag(scale, −factor·PSD_TOL·scale): its smallest eigenvalue is exactly that.
+        cases.push(([[scale, 0.0], [0.0, -factor * PSD_TOL * scale]], ok));
+    }
+    for (q, ok) in cases {
+        let model = Model::new(dims(), &F, &H, &q, &R);
+        // Column-major, as `dense` takes it.
+        let slice = [q[0][0], q[1][0], q[0][1], q[1][1]];
+        let rule = check_covariance("Q", &slice, 2);
+        assert_eq!(model.is_ok(), ok, "{q:?}: {model:?}");
+        assert_eq!(rule.is_ok(), ok, "{q:?}: {rule:?}");
+        if let (Err(a), Err(b)) = (&model, &rule) {
+            assert_eq!(std::mem::discriminant(a), std::mem::discriminant(b));
+        }
+    }
+    assert!(matches!(
+        check_covariance("Q", &[1.0, 0.0, 0.0], 2),
+        Err(Error::Dimension { name: "Q", .. })
+    ));
+}
