@@ -71,89 +71,84 @@ pub trait Equation {
     const SPEC: Spec;
 }
 
-/// What the builder needs to know of one equation: the names of its matrices (a, c, q, r)
-/// as the equation writes them and as errors name them, how its second matrix meets the
-/// state (a measurement matrix for a filter equation, an input matrix for an LQR, solved as
-/// the dual filter equation), its time axis, and its name and pairs in the solver's errors
-/// (without and with a cross term).
+/// What the builder needs to know of one equation: how its second matrix meets the state (a
+/// measurement matrix for a filter equation; an input matrix for an LQR, solved as the dual
+/// filter equation) and its time axis. The names of its matrices and its labels in errors
+/// follow from the two.
 #[derive(Debug, Clone, Copy)]
 pub struct Spec {
-    matrices: [&'static str; 4],
     coupling: Coupling,
     time: Time,
-    equation: &'static str,
-    pairs: [&'static str; 2],
-    cross_pairs: [&'static str; 2],
 }
 
 /// Declares the kinds of equation: for each, a marker type (never constructed) with its
-/// [`Equation`] implementation, its solution type and its [`Spec`].
+/// [`Equation`] implementation, its solution type, its coupling and its time axis.
 macro_rules! kinds {
-    ($($(#[$doc:meta])* $kind:ident -> $solution:ty = $spec:expr;)*) => {$(
+    ($($(#[$doc:meta])* $kind:ident -> $solution:ty = ($coupling:ident, $time:ident);)*) => {$(
         $(#[$doc])*
         #[derive(Debug, Clone, Copy)]
         pub enum $kind {}
 
         impl Equation for $kind {
             type Solution = $solution;
-            const SPEC: Spec = $spec;
+            const SPEC: Spec = Spec {
+                coupling: Coupling::$coupling,
+                time: Time::$time,
+            };
         }
     )*};
 }
 
 kinds! {
     /// The kind of [`Dare`](super::Dare): the filter DARE, solved as written.
-    FilterDare -> SteadyState = Spec {
-        matrices: ["F", "H", "Q", "R"],
-        coupling: Coupling::Measurement,
-        time: Time::Discrete,
-        equation: "filter DARE",
-        pairs: ["(F, H)", "(F, Q^{1/2})"],
-        cross_pairs: ["(F, H)", "(F - S R^-1 H, (Q - S R^-1 S^T)^{1/2})"],
-    };
+    FilterDare -> SteadyState = (Measurement, Discrete);
     /// The kind of [`Dlqr`](super::Dlqr): the discrete LQR, solved as its dual filter DARE.
-    LqrDare -> Lqr = Spec {
-        matrices: ["A", "B", "Q", "R"],
-        coupling: Coupling::Input,
-        time: Time::Discrete,
-        equation: "LQR DARE",
-        pairs: ["(A, B)", "(Q^{1/2}, A)"],
-        cross_pairs: ["(A, B)", "((Q - N R^-1 N^T)^{1/2}, A - B R^-1 N^T)"],
-    };
+    LqrDare -> Lqr = (Input, Discrete);
     /// The kind of [`Care`](super::Care): the filter CARE, solved as written.
-    FilterCare -> ContinuousSteadyState = Spec {
-        matrices: ["A", "H", "Q", "R"],
-        coupling: Coupling::Measurement,
-        time: Time::Continuous,
-        equation: "filter CARE",
-        pairs: ["(A, H)", "(A, Q^{1/2})"],
-        cross_pairs: ["(A, H)", "(A, Q^{1/2})"],
-    };
+    FilterCare -> ContinuousSteadyState = (Measurement, Continuous);
     /// The kind of [`Clqr`](super::Clqr): the continuous LQR, solved as its dual filter
     /// CARE.
-    LqrCare -> Lqr = Spec {
-        matrices: ["A", "B", "Q", "R"],
-        coupling: Coupling::Input,
-        time: Time::Continuous,
-        equation: "LQR CARE",
-        pairs: ["(A, B)", "(Q^{1/2}, A)"],
-        cross_pairs: ["(A, B)", "(Q^{1/2}, A)"],
-    };
+    LqrCare -> Lqr = (Input, Continuous);
 }
 
 impl Spec {
+    /// Names of (a, c, q, r) as the equation writes them, as errors name them.
+    fn matrices(self) -> [&'static str; 4] {
+        match (self.coupling, self.time) {
+            (Coupling::Measurement, Time::Discrete) => ["F", "H", "Q", "R"],
+            (Coupling::Measurement, Time::Continuous) => ["A", "H", "Q", "R"],
+            (Coupling::Input, _) => ["A", "B", "Q", "R"],
+        }
+    }
+
     /// The equation and its pairs in the solver's errors (`cross`: a cross term was given).
     /// The LQR's pairs are those of its dual read back: detectability of (Aᵀ, Bᵀ) is
     /// stabilisability of (A, B), and stabilisability of (Aᵀ, Q^{1/2}) is detectability of
     /// (Q^{1/2}, A).
     fn names(self, cross: bool) -> Names {
-        let [detect, stab] = if cross { self.cross_pairs } else { self.pairs };
+        use {Coupling::*, Time::*};
+        let (equation, detect, stab) = match (self.coupling, self.time, cross) {
+            (Measurement, Discrete, false) => ("filter DARE", "(F, H)", "(F, Q^{1/2})"),
+            (Measurement, Discrete, true) => (
+                "filter DARE",
+                "(F, H)",
+                "(F - S R^-1 H, (Q - S R^-1 S^T)^{1/2})",
+            ),
+            (Input, Discrete, false) => ("LQR DARE", "(A, B)", "(Q^{1/2}, A)"),
+            (Input, Discrete, true) => (
+                "LQR DARE",
+                "(A, B)",
+                "((Q - N R^-1 N^T)^{1/2}, A - B R^-1 N^T)",
+            ),
+            (Measurement, Continuous, _) => ("filter CARE", "(A, H)", "(A, Q^{1/2})"),
+            (Input, Continuous, _) => ("LQR CARE", "(A, B)", "(Q^{1/2}, A)"),
+        };
         let (detect, stab) = match self.coupling {
-            Coupling::Measurement => (Pair::Detect(detect), Pair::Stab(stab)),
-            Coupling::Input => (Pair::Stab(detect), Pair::Detect(stab)),
+            Measurement => (Pair::Detect(detect), Pair::Stab(stab)),
+            Input => (Pair::Stab(detect), Pair::Detect(stab)),
         };
         Names {
-            equation: self.equation,
+            equation,
             detect,
             stab,
         }
@@ -195,7 +190,7 @@ impl<E: Equation> Riccati<E> {
         r: impl MatrixInput,
     ) -> Result<Self, Error> {
         Ok(Self {
-            inputs: Inputs::new(E::SPEC.matrices, E::SPEC.coupling, [&a, &c, &q, &r])?,
+            inputs: Inputs::new(E::SPEC.matrices(), E::SPEC.coupling, [&a, &c, &q, &r])?,
             options: RiccatiOptions::default(),
             equation: PhantomData,
         })
