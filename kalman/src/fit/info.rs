@@ -240,7 +240,7 @@ pub(crate) fn spd_inverse(a: &Mat<f64>) -> Option<Mat<f64>> {
 pub const NULL_EIGENVALUE: f64 = 1e-8;
 
 /// The directions of θ that `information` does not identify, named (see
-/// [`Fit::unidentified`]). With no eigenvalue below the threshold (a matrix that is only
+/// [`Uncertainty::unidentified`]). With no eigenvalue below the threshold (a matrix that is only
 /// just indefinite to its Cholesky factorisation) the smallest one's direction is given.
 pub(crate) fn unidentified(information: &Mat<f64>, names: &[String]) -> Vec<Vec<(String, f64)>> {
     let k = information.nrows();

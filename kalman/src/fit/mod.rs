@@ -59,8 +59,9 @@
 //! ([`mle_diffuse`], [`diffuse`]).
 //!
 //! The observed information gives the standard errors, the correlation matrix
-//! ([`Fit::correlation`]) and, when it is singular, the parameters spanning each direction
-//! the data do not identify ([`Fit::unidentified`], named in the message too).
+//! ([`Uncertainty::correlation`]) and, when it is singular, the parameters spanning each
+//! direction the data do not identify ([`Uncertainty::unidentified`], named in the message
+//! too).
 //!
 //! # Estimators
 //! - [`mle`] (feature `argmin`): L-BFGS on `−ln L` with the exact gradient, Nelder–Mead as a

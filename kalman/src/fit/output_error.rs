@@ -55,7 +55,7 @@
 //! on the rows observed at step k, a state, output or sensitivity that is not finite (named
 //! with the step where the integration diverged), and a Fisher information that is singular
 //! (the parameters spanning each direction the data do not identify are named, as
-//! [`super::Fit::unidentified`] names them for [`super::mle`]).
+//! [`super::Uncertainty::unidentified`] names them for [`super::mle`]).
 //!
 //! The bounds assume white measurement noise and an exact model. Real flight residuals are
 //! coloured (turbulence, unmodelled dynamics), and then the Cramér–Rao bounds are
