@@ -88,7 +88,5 @@ pub fn check_covariance(name: &'static str, a: &[f64], n: usize) -> Result<(), E
         });
     }
     let mut sym = a[..n * n].to_vec();
-    crate::model::check_symmetric(name, &mut sym, n)?;
-    let mut factor = vec![0.0; n * n];
-    crate::model::psd_factor(name, &sym, n, &mut factor)
+    crate::model::checked_factor(name, &mut sym, n, &mut vec![0.0; n * n])
 }

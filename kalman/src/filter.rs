@@ -7,9 +7,7 @@ use crate::kernels::LN_2PI;
 use faer::MatRef;
 
 use crate::Error;
-use crate::model::{
-    MatrixInput, Model, ModelSource, check_symmetric, check_vec, load, load_vec, psd_factor,
-};
+use crate::model::{MatrixInput, Model, ModelSource, check_vec, checked_factor, load, load_vec};
 use crate::storage::{Buf, Dims, DynDims};
 
 mod dense;
@@ -365,9 +363,8 @@ fn init_prior<D: Dims>(
     let mut P = D::Nn::zeros(n * n);
     load_vec("x0", x0, n, x.as_mut_slice())?;
     load("P0", P0, n, n, P.as_mut_slice())?;
-    check_symmetric("P0", P.as_mut_slice(), n)?;
     let mut L = vec![0.0; n * n];
-    psd_factor("P0", P.as_slice(), n, &mut L)?;
+    checked_factor("P0", P.as_mut_slice(), n, &mut L)?;
     if st.form == CovarianceForm::SquareRoot {
         st.lp.as_mut_slice()[..n * n].copy_from_slice(&L);
     }

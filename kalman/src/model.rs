@@ -277,6 +277,18 @@ pub(crate) fn check_symmetric(name: &'static str, a: &mut [f64], n: usize) -> Re
     Ok(())
 }
 
+/// The covariance rule: [`check_symmetric`] (which symmetrises `a` in place), then
+/// [`psd_factor`] writing a square factor of `a` into `factor`.
+pub(crate) fn checked_factor(
+    name: &'static str,
+    a: &mut [f64],
+    n: usize,
+    factor: &mut [f64],
+) -> Result<(), Error> {
+    check_symmetric(name, a, n)?;
+    psd_factor(name, a, n, factor)
+}
+
 /// Checks that the symmetric `a` is PSD within [`PSD_TOL`] and writes a square factor
 /// `G` with `G Gᵀ = a` into `factor` (leading dimension `n`): the Cholesky factor when `a`
 /// is positive definite, else `V·diag(√λ₊)` from its eigen-decomposition.

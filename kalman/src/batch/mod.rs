@@ -53,7 +53,7 @@
 
 use crate::kernels::LN_2PI;
 use crate::kernels::RANK_TOL;
-use crate::model::{MatrixInput, check_symmetric, load, load_vec, psd_factor};
+use crate::model::{MatrixInput, checked_factor, load, load_vec};
 use crate::{CovarianceForm, Dims, Error, Model};
 
 mod work;
@@ -194,8 +194,7 @@ impl BatchFilter {
         load_vec("x0", x0, n, &mut x)?;
         let mut p = vec![0.0; n * n];
         load("P0", p0, n, n, &mut p)?;
-        check_symmetric("P0", &mut p, n)?;
-        psd_factor("P0", &p, n, &mut vec![0.0; n * n])?;
+        checked_factor("P0", &mut p, n, &mut vec![0.0; n * n])?;
         let per_series = zs.len().checked_div(series).unwrap_or(0);
         if series * per_series != zs.len() || (m > 0 && per_series % m != 0) {
             return Err(Error::Shape {

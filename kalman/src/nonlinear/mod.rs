@@ -334,9 +334,8 @@ impl<D: NlDims> Core<D> {
         let mut pp = D::Nn::zeros(n * n);
         crate::model::load_vec("x0", x0, n, xp.as_mut_slice())?;
         crate::model::load("P0", P0, n, n, pp.as_mut_slice())?;
-        crate::model::check_symmetric("P0", pp.as_mut_slice(), n)?;
         let mut factor = vec![0.0; n * n];
-        crate::model::psd_factor("P0", pp.as_slice(), n, &mut factor)?;
+        crate::model::checked_factor("P0", pp.as_mut_slice(), n, &mut factor)?;
         Ok(Self {
             dims,
             k: 0,

@@ -3,7 +3,7 @@
 #![allow(non_snake_case)]
 
 use crate::Error;
-use crate::model::{MatrixInput, check_symmetric, load, psd_factor};
+use crate::model::{MatrixInput, checked_factor, load};
 use crate::storage::Dims;
 
 /// `out = a − b` entry by entry: the default residual and state difference.
@@ -269,8 +269,7 @@ fn load_cov(
     work: &mut [f64],
 ) -> Result<(), Error> {
     load(name, a, d, d, dst)?;
-    check_symmetric(name, dst, d)?;
-    psd_factor(name, dst, d, work)
+    checked_factor(name, dst, d, work)
 }
 
 impl<F, H> NonlinearModel for FnModel<F, H>
