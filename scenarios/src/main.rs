@@ -94,9 +94,23 @@ enum Command {
     Flightpath(FlightpathArgs),
     /// All the scenarios (the three papers and flightpath), plus reports/README.md linking them.
     All(CampaignArgs),
-    /// Combine shard directories (`--shard K/N` runs) into the summary of one whole run.
-    Merge {
+    /// Run a sharded campaign's closing stage (the fueling calibration's refinement and
+    /// learned-back fit) over its shard directories; give its output to `merge`.
+    Finish {
         /// Shard output directories of one scenario.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Where to write the stage's file.
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+    /// Combine shard directories (`--shard K/N` runs) and the output of `finish` into the
+    /// summary of one whole run (reads and formats only).
+    Merge {
+        /// Shard output directories of one scenario, and the output of `finish`.
         #[arg(required = true)]
         dirs: Vec<PathBuf>,
         /// Where to write the merged report.
@@ -137,6 +151,7 @@ fn check_directory_out(command: &Command) -> Result<(), Error> {
         Command::Flightpath(a) => ("flightpath", a.campaign.out.as_ref()),
         Command::All(a) => ("all", a.out.as_ref()),
         Command::Merge { out, .. } => ("merge", Some(out)),
+        Command::Finish { out, .. } => ("finish", Some(out)),
         Command::Filter(_) | Command::Discretize(_) | Command::SteadyState(_) | Command::Fit(_) => {
             return Ok(());
         }
@@ -148,7 +163,7 @@ fn check_directory_out(command: &Command) -> Result<(), Error> {
              filter, discretize and steady-state"
         )));
     }
-    if let Command::Merge { dirs, .. } = command
+    if let Command::Merge { dirs, .. } | Command::Finish { dirs, .. } = command
         && let Some(dir) = dirs
             .iter()
             .find(|d| scenarios::output::same_file(d.as_path(), out.as_path()))
@@ -276,6 +291,7 @@ fn main() -> ExitCode {
         },
         Command::All(a) => scenarios::papers::all(&a.campaign()),
         Command::Merge { dirs, out } => scenarios::papers::merge(&dirs, &out),
+        Command::Finish { dirs, out, threads } => scenarios::papers::finish(&dirs, &out, threads),
         Command::Filter(a) => scenarios::userdata::filter(&a),
         Command::Discretize(a) => scenarios::userdata::discretize(&a),
         Command::SteadyState(a) => scenarios::userdata::steady_state(&a),

@@ -49,6 +49,7 @@ impl Scenario for Boom {
     type Records = Vec<NoiseRecord>;
     type Summary = Computed;
     type Json = BoomSummary;
+    type Finish = ();
 
     fn simulate(
         params: &BoomParams,
@@ -64,6 +65,7 @@ impl Scenario for Boom {
         seed: u64,
         _shard: Shard,
         records: &Vec<NoiseRecord>,
+        _finish: Option<&()>,
         threads: Option<usize>,
     ) -> Result<Computed> {
         summary::summarise(params, seed, records, threads, Path::new("<parameters>"))

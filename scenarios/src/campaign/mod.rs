@@ -9,6 +9,12 @@
 //! once, from whichever shard holds it), and recomputes everything else from the records
 //! exactly as a single run does, so a merge of shards equals one run byte for byte in every
 //! file.
+//!
+//! **The closing stage.** Work that needs the whole campaign's records and costs more than
+//! reading them (the fueling calibration's refinement after its sharded design) is
+//! [`Scenario::finish`]: a whole run does it after its runs; a sharded campaign does it in
+//! `finish` over the shard directories, which writes [`FINISH_FILE`] (checked like a record
+//! file). `merge` reads that file beside the shards' records and computes nothing.
 
 pub mod records;
 
@@ -83,6 +89,8 @@ pub trait Scenario {
     type Summary;
     /// What `summary.json` holds (usually the summary itself, or part of it).
     type Json: Serialize;
+    /// The closing stage's result, as [`FINISH_FILE`] holds it (`()` for none).
+    type Finish: Serialize + DeserializeOwned + Default;
 
     /// Applies `--runs` to the parameters: at least one run, unless the scenario says more.
     ///
@@ -136,7 +144,27 @@ pub trait Scenario {
         Self::Records::from_tables(params, tables)
     }
 
-    /// Computes every number the outputs show.
+    /// Whether a campaign with these parameters has a closing stage ([`Scenario::finish`]).
+    fn has_finish(_params: &Self::Params) -> bool {
+        false
+    }
+
+    /// The closing stage: what needs the whole campaign's records (every shard's) and is too
+    /// costly to repeat in `merge`. Called only when [`Scenario::has_finish`].
+    ///
+    /// # Errors
+    /// A library error on valid parameters, or the worker pool failing to start.
+    fn finish(
+        _params: &Self::Params,
+        _seed: u64,
+        _records: &Self::Records,
+        _threads: Option<usize>,
+    ) -> Result<Self::Finish> {
+        Ok(Self::Finish::default())
+    }
+
+    /// Computes every number the outputs show from the records and, for a whole campaign
+    /// with a closing stage, its result (`None` in a shard); reads, does not simulate.
     ///
     /// # Errors
     /// A library error on valid parameters.
@@ -145,6 +173,7 @@ pub trait Scenario {
         seed: u64,
         shard: Shard,
         records: &Self::Records,
+        finish: Option<&Self::Finish>,
         threads: Option<usize>,
     ) -> Result<Self::Summary>;
 
@@ -178,8 +207,41 @@ struct Header<P> {
     params: P,
     #[serde(default)]
     shard: Option<String>,
+    /// `"finish"` for the output of `finish`.
+    #[serde(default)]
+    stage: Option<String>,
     #[serde(default)]
     records: Vec<FileCheck>,
+}
+
+/// The file of the closing stage's result (TOML: it keeps NaN and infinities, which JSON
+/// cannot), in a whole campaign's directory and in the output of `finish`.
+pub const FINISH_FILE: &str = "finish.toml";
+
+/// The `stage` of `finish`'s `summary.json`.
+const FINISH_STAGE: &str = "finish";
+
+/// `summary.json` of the output of `finish`: which campaign, and the check of its file.
+#[derive(Debug, Serialize)]
+struct FinishEnvelope<'a, P> {
+    scenario: &'static str,
+    seed: u64,
+    params: &'a P,
+    stage: &'static str,
+    records: Vec<FileCheck>,
+}
+
+/// The text of [`FINISH_FILE`] for `finish`.
+fn finish_text<S: Scenario>(finish: &S::Finish) -> Result<String> {
+    toml::to_string(finish).map_err(|source| Error::SerialiseToml {
+        dest: FINISH_FILE.to_string(),
+        source,
+    })
+}
+
+/// The closing stage's result from the text of `path`.
+fn parse_finish<S: Scenario>(path: &Path, text: &str) -> Result<S::Finish> {
+    config::parse_toml(path, text)
 }
 
 /// Loads, overrides and validates the parameters of `campaign`.
@@ -206,11 +268,24 @@ pub fn params<S: Scenario>(campaign: &Campaign) -> Result<S::Params> {
 pub fn run<S: Scenario>(campaign: &Campaign) -> Result<()> {
     let params = params::<S>(campaign)?;
     let records = S::simulate(&params, campaign.seed, campaign.shard, campaign.threads)?;
+    // A whole campaign closes itself; a shard leaves that to `finish`.
+    let finish = if campaign.shard == Shard::ALL && S::has_finish(&params) {
+        let value = S::finish(&params, campaign.seed, &records, campaign.threads)?;
+        Some(finish_text::<S>(&value)?)
+    } else {
+        None
+    };
+    // The summary reads the stage's result back from its text, as `merge` does.
+    let value = finish
+        .as_deref()
+        .map(|text| parse_finish::<S>(Path::new(FINISH_FILE), text))
+        .transpose()?;
     let summary = S::summarise(
         &params,
         campaign.seed,
         campaign.shard,
         &records,
+        value.as_ref(),
         campaign.threads,
     )?;
     write::<S>(
@@ -218,16 +293,19 @@ pub fn run<S: Scenario>(campaign: &Campaign) -> Result<()> {
         &params,
         campaign.shard,
         &records,
+        finish.as_deref(),
         &summary,
     )
 }
 
-/// Writes the record files, the outputs and `summary.json` (with the records' checks).
+/// Writes the record files, the closing stage's file, the outputs and `summary.json` (with
+/// the records' checks).
 fn write<S: Scenario>(
     dir: &Path,
     params: &S::Params,
     shard: Shard,
     records: &S::Records,
+    finish: Option<&str>,
     summary: &S::Summary,
 ) -> Result<()> {
     let mut checks = Vec::new();
@@ -235,6 +313,10 @@ fn write<S: Scenario>(
         let text = records::csv_text(&layout.header, &rows);
         output::write_atomic(&dir.join(&layout.name), text.as_bytes())?;
         checks.push(records::check_of(&layout.name, &text));
+    }
+    if let Some(text) = finish {
+        output::write_atomic(&dir.join(FINISH_FILE), text.as_bytes())?;
+        checks.push(records::check_of(FINISH_FILE, text));
     }
     S::write_outputs(summary, dir)?;
     let envelope = Envelope {
@@ -299,19 +381,30 @@ fn ranges(indices: &[usize]) -> String {
     out.join(", ")
 }
 
-/// Merges shard directories of scenario `S` into `out`: checks that they come from one
-/// campaign, reads and checks every record file, requires each run exactly once, and
-/// recomputes every output from the records.
+/// A campaign read back from its directories: the parameters and seed they share, the
+/// runs' records from the shard (or whole-run) directories, and the closing stage's file
+/// from the first directory that holds one.
+struct Gathered<S: Scenario> {
+    params: S::Params,
+    seed: u64,
+    records: S::Records,
+    /// The path and text of [`FINISH_FILE`], checked.
+    finish: Option<(PathBuf, String)>,
+}
+
+/// Reads the directories of one campaign of `S`: checks that they come from one campaign,
+/// reads and checks every record file of the run directories, requires each run exactly
+/// once, and finds the closing stage's file if one of them holds it.
 ///
 /// # Errors
-/// [`Error::Usage`] for no directory; [`Error::Invalid`] naming the directory or file for a
-/// shard of another scenario or campaign, a damaged record file, a run held twice, or runs
-/// that no directory holds; read and write errors. Nothing is written on error.
-pub fn merge<S: Scenario>(dirs: &[PathBuf], out: &Path) -> Result<()> {
+/// [`Error::Usage`] for no run directory; [`Error::Invalid`] naming the directory or file for
+/// a directory of another scenario or campaign, a damaged file, a run held twice, or runs
+/// that no directory holds; read errors.
+fn gather<S: Scenario>(dirs: &[PathBuf], command: &str) -> Result<Gathered<S>> {
     let Some(first_dir) = dirs.first() else {
-        return Err(Error::Usage(
-            "merge needs at least one shard directory".into(),
-        ));
+        return Err(Error::Usage(format!(
+            "{command} needs at least one shard directory"
+        )));
     };
     let mut headers: Vec<Header<S::Params>> = Vec::new();
     for dir in dirs {
@@ -340,6 +433,29 @@ pub fn merge<S: Scenario>(dirs: &[PathBuf], out: &Path) -> Result<()> {
     }
     let head = &headers[0];
     S::validate(&head.params, &first_dir.join("summary.json"))?;
+    let mut finish = None;
+    for (dir, h) in dirs.iter().zip(&headers) {
+        if let Some(check) = h.records.iter().find(|c| c.file == FINISH_FILE) {
+            let path = dir.join(FINISH_FILE);
+            let text = config::read_text(&path)?;
+            records::verify(&path, &text, check)?;
+            finish = Some((path, text));
+            break;
+        }
+    }
+    // The runs come from the shard and whole-run directories, not from `finish`'s.
+    let (dirs, headers): (Vec<&PathBuf>, Vec<&Header<S::Params>>) = dirs
+        .iter()
+        .zip(&headers)
+        .filter(|(_, h)| h.stage.as_deref() != Some(FINISH_STAGE))
+        .unzip();
+    if dirs.is_empty() {
+        return Err(Error::Usage(format!(
+            "{command}: every directory given is the output of `finish`; give the shard \
+             directories too"
+        )));
+    }
+    let dirs: Vec<PathBuf> = dirs.into_iter().cloned().collect();
     let layouts = S::record_files(&head.params);
     let mut tables = Vec::with_capacity(layouts.len());
     for layout in &layouts {
@@ -389,9 +505,9 @@ pub fn merge<S: Scenario>(dirs: &[PathBuf], out: &Path) -> Result<()> {
                 .filter_map(|h| h.shard.as_deref())
                 .collect::<Vec<_>>();
             return Err(Error::Usage(format!(
-                "merge of {} ({}): runs {} of the {total} in {} are in none of them: a shard \
-                 is missing",
-                list(dirs),
+                "{command} of {} ({}): runs {} of the {total} in {} are in none of them: a \
+                 shard is missing",
+                list(&dirs),
                 if shards.is_empty() {
                     "whole campaigns".to_string()
                 } else {
@@ -405,8 +521,81 @@ pub fn merge<S: Scenario>(dirs: &[PathBuf], out: &Path) -> Result<()> {
     }
     let params = head.params.clone();
     let records = S::from_tables(&params, tables)?;
-    let summary = S::summarise(&params, head.seed, Shard::ALL, &records, None)?;
-    write::<S>(out, &params, Shard::ALL, &records, &summary)
+    Ok(Gathered {
+        params,
+        seed: head.seed,
+        records,
+        finish,
+    })
+}
+
+/// Merges shard directories of scenario `S` into `out`: reads them as [`gather`] does, with
+/// the output of `finish` among them when the scenario has a closing stage, and writes the
+/// outputs of the whole campaign. Reads records and formats; computes no stage.
+///
+/// # Errors
+/// As [`gather`]; [`Error::Usage`] when the closing stage's file is in none of the
+/// directories; read and write errors. Nothing is written on error.
+pub fn merge<S: Scenario>(dirs: &[PathBuf], out: &Path) -> Result<()> {
+    let g = gather::<S>(dirs, "merge")?;
+    let finish = if S::has_finish(&g.params) {
+        let Some((path, text)) = g.finish else {
+            return Err(Error::Usage(format!(
+                "merge of {}: none of them holds {FINISH_FILE}, the {} campaign's closing \
+                 stage: run `scenarios finish <shard dirs> --out <dir>` and give that \
+                 directory to merge too",
+                list(dirs),
+                S::NAME
+            )));
+        };
+        let value = parse_finish::<S>(&path, &text)?;
+        Some((text, value))
+    } else {
+        None
+    };
+    let summary = S::summarise(
+        &g.params,
+        g.seed,
+        Shard::ALL,
+        &g.records,
+        finish.as_ref().map(|(_, v)| v),
+        None,
+    )?;
+    write::<S>(
+        out,
+        &g.params,
+        Shard::ALL,
+        &g.records,
+        finish.as_ref().map(|(t, _)| t.as_str()),
+        &summary,
+    )
+}
+
+/// Runs the closing stage of scenario `S` over its shard directories into `out`: reads and
+/// checks them as [`gather`] does, computes [`Scenario::finish`] and writes [`FINISH_FILE`]
+/// with a `summary.json` naming the campaign (nothing but the file when the scenario has no
+/// closing stage for these parameters, so every campaign can be closed alike).
+///
+/// # Errors
+/// As [`gather`] and [`Scenario::finish`]; write errors.
+pub fn finish<S: Scenario>(dirs: &[PathBuf], out: &Path, threads: Option<usize>) -> Result<()> {
+    let g = gather::<S>(dirs, "finish")?;
+    let mut checks = Vec::new();
+    if S::has_finish(&g.params) {
+        let text = finish_text::<S>(&S::finish(&g.params, g.seed, &g.records, threads)?)?;
+        output::write_atomic(&out.join(FINISH_FILE), text.as_bytes())?;
+        checks.push(records::check_of(FINISH_FILE, &text));
+    }
+    output::write_json(
+        &out.join("summary.json"),
+        &FinishEnvelope {
+            scenario: S::NAME,
+            seed: g.seed,
+            params: &g.params,
+            stage: FINISH_STAGE,
+            records: checks,
+        },
+    )
 }
 
 /// One entry of [`run_all`]: a scenario's name, its one-line title, and how to run it.

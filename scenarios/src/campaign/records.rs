@@ -127,19 +127,12 @@ pub fn check_of(name: &str, text: &str) -> FileCheck {
     }
 }
 
-/// Parses the record file `path` (its text `text`) against its layout and the check stored
-/// for it: the final newline, the row count and the checksum must all agree before a single
-/// number is read, and every row must have the header's width and integer keys inside the
-/// grid.
+/// Checks the text `text` of the file `path` against the check stored for it: the final
+/// newline, the row count (lines after the first) and the FNV-1a checksum.
 ///
 /// # Errors
-/// [`Error::Invalid`] naming `path` and, where it can, the line.
-pub fn parse(
-    path: &Path,
-    text: &str,
-    layout: &RecordFile,
-    check: &FileCheck,
-) -> Result<Vec<(Vec<usize>, Vec<f64>)>> {
+/// [`Error::Invalid`] naming `path` and what does not agree.
+pub fn verify(path: &Path, text: &str, check: &FileCheck) -> Result<()> {
     let bad = |message: String| Error::invalid(path, message);
     let lines = text.lines().count();
     if !text.ends_with('\n') {
@@ -161,6 +154,24 @@ pub fn parse(
             check.fnv1a
         )));
     }
+    Ok(())
+}
+
+/// Parses the record file `path` (its text `text`) against its layout and the check stored
+/// for it: the final newline, the row count and the checksum must all agree before a single
+/// number is read, and every row must have the header's width and integer keys inside the
+/// grid.
+///
+/// # Errors
+/// [`Error::Invalid`] naming `path` and, where it can, the line.
+pub fn parse(
+    path: &Path,
+    text: &str,
+    layout: &RecordFile,
+    check: &FileCheck,
+) -> Result<Vec<(Vec<usize>, Vec<f64>)>> {
+    let bad = |message: String| Error::invalid(path, message);
+    verify(path, text, check)?;
     let mut it = text.lines();
     let header = it.next().unwrap_or_default();
     let expected = layout.header.join(",");

@@ -42,6 +42,7 @@ impl Scenario for FlightPath {
     type Records = Vec<RunRecord>;
     type Summary = Computed;
     type Json = FlightPathSummary;
+    type Finish = ();
 
     fn simulate(
         params: &FlightPathParams,
@@ -57,6 +58,7 @@ impl Scenario for FlightPath {
         seed: u64,
         _shard: Shard,
         records: &Vec<RunRecord>,
+        _finish: Option<&()>,
         _threads: Option<usize>,
     ) -> Result<Computed> {
         summary::summarise(params, seed, records)

@@ -21,7 +21,7 @@ use sensors::{
     ExpCorrelated, ExpCorrelatedConfig, Gyro, GyroConfig, LevelSensor, LevelSensorConfig,
     PlatformMotion, PlatformMotionConfig, Process, RollingAxisConfig,
 };
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::parameters::{FuelingParams, Swept};
 use crate::error::{Error, Result};
@@ -38,10 +38,10 @@ pub const Z95: f64 = 1.959_963_984_540_054;
 /// One learned parameter. Every fit is on a log scale (`ln p`), so the 95 % Wald interval
 /// is `p̂·e^{±1.96·se(ln p̂)}` — the interval of the scale the information is computed on,
 /// mapped back, and positive as the parameter is.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Learned {
     /// Name with its unit.
-    pub name: &'static str,
+    pub name: String,
     /// The value used to simulate.
     pub truth: f64,
     /// The maximum-likelihood estimate.
@@ -66,7 +66,7 @@ impl Learned {
         classical: Option<f64>,
     ) -> Self {
         Self {
-            name,
+            name: name.to_string(),
             truth,
             estimate,
             std_error: estimate * log_se,
@@ -90,7 +90,7 @@ impl Learned {
 }
 
 /// The section's numbers.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LearnedBack {
     /// Samples in the record.
     pub samples: usize,

@@ -9,9 +9,10 @@
 //! slice of runs), [`records`] (per-run outcomes, `runs_<sweep>.csv`, full-precision `f64`:
 //! the ground truth), [`summary`] (every number, from the records alone) and [`report`]
 //! (CSV, SVG and `report.md`, formatting only). [`statistics`] gives every ratio its interval
-//! and every strategy its tail; [`calibration`] searches [`search`]'s box for the parameters the paper does not
-//! state (its own simulations, not sharded); [`learned`] fits the paper's model back to one
-//! simulated record (not sharded either). [`Fueling`] ties them to the campaign.
+//! and every strategy its tail; [`calibration`] searches [`search`]'s box for the parameters
+//! the paper does not state (its own simulations: the design sharded with the runs, the
+//! refinement in the closing stage, [`Closing`]); [`learned`] fits the paper's model back to
+//! one simulated record (in the closing stage too). [`Fueling`] ties them to the campaign.
 
 pub mod calibration;
 pub mod calibration_report;
@@ -28,12 +29,28 @@ pub mod summary;
 
 use std::path::Path;
 
+use serde::{Deserialize, Serialize};
+
 use crate::campaign::{Scenario, ScenarioParams};
 use crate::error::{Error, Result};
 use crate::montecarlo::Shard;
 use parameters::FuelingParams;
 use records::FuelingRecords;
 use summary::Summary;
+
+/// The paper's random-error ratios to relay logic (one-channel, two-channel) the
+/// calibration aims at.
+const PAPER: (f64, f64) = (summary::PAPER_KF1_RATIO, summary::PAPER_KF2_RATIO);
+
+/// The fueling campaign's closing stage ([`Scenario::finish`]): the calibration's
+/// refinement after its whole design, and the paper's model learned back from one record.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Closing {
+    /// The refinement, sensitivity and fresh evaluation (absent when the search is off).
+    pub calibration: Option<calibration::Refinement>,
+    /// The learned-back fit.
+    pub learned: Option<learned::LearnedBack>,
+}
 
 /// The fueling scenario, as the campaign runs it.
 #[derive(Debug, Clone, Copy)]
@@ -45,6 +62,7 @@ impl Scenario for Fueling {
     type Records = FuelingRecords;
     type Summary = Summary;
     type Json = Summary;
+    type Finish = Closing;
 
     fn set_runs(params: &mut FuelingParams, runs: usize) -> Result<()> {
         if runs < 2 {
@@ -65,6 +83,23 @@ impl Scenario for Fueling {
         Ok(FuelingRecords {
             sweeps: simulation::simulate(params, seed, shard, threads)?,
             particle: particle::simulate(params, seed, shard, threads)?,
+            design: calibration::design(params, seed, shard, threads, PAPER)?,
+        })
+    }
+
+    fn has_finish(_params: &FuelingParams) -> bool {
+        true
+    }
+
+    fn finish(
+        params: &FuelingParams,
+        seed: u64,
+        records: &FuelingRecords,
+        threads: Option<usize>,
+    ) -> Result<Closing> {
+        Ok(Closing {
+            calibration: calibration::refine(params, seed, &records.design, threads, PAPER)?,
+            learned: Some(learned::learn_back(params, seed)?),
         })
     }
 
@@ -73,19 +108,19 @@ impl Scenario for Fueling {
         seed: u64,
         shard: Shard,
         records: &FuelingRecords,
-        threads: Option<usize>,
+        finish: Option<&Closing>,
+        _threads: Option<usize>,
     ) -> Result<Summary> {
         let mut summary = summary::summarise(params, seed, shard, records)?;
-        // Not sharded: a function of (params, seed) alone, computed by a whole run and by
-        // `merge` alike, skipped by a shard (see `calibration`).
-        if shard == Shard::ALL {
-            summary.calibration = calibration::calibrate(
+        if let Some(f) = finish {
+            summary.calibration = calibration::assemble(
                 params,
                 seed,
-                threads,
-                (summary::PAPER_KF1_RATIO, summary::PAPER_KF2_RATIO),
+                &records.design,
+                f.calibration.as_ref(),
+                PAPER,
             )?;
-            summary.learned = Some(learned::learn_back(params, seed)?);
+            summary.learned.clone_from(&f.learned);
         }
         Ok(summary)
     }

@@ -303,8 +303,12 @@ pub fn simulate(
         .iter()
         .map(|(_, world)| Point::new(*world))
         .collect::<Result<Vec<Point>>>()?;
+    // The shard's runs of the amplitude sweep that the strategy also runs: each of its runs
+    // is in the shard that holds the sweep's run, so a shard compares like with like.
+    let sweep = shard.runs(params.sweeps().first().map_or(0, |s| s.runs));
+    let mine = sweep.start.min(runs)..sweep.end.min(runs);
     let jobs: Vec<(usize, usize)> = (0..points.len())
-        .flat_map(|p| shard.runs(runs).map(move |r| (p, r)))
+        .flat_map(|p| mine.clone().map(move |r| (p, r)))
         .collect();
     let stream = run_seed(seed, PARTICLE_STREAM);
     let outcomes = par_runs(0..jobs.len(), threads, "fueling (particle filter)", |j| {

@@ -1,14 +1,16 @@
 //! Per-run records of the fueling scenario: each run's fuelling error per strategy, one
 //! `runs_<sweep>.csv` per sweep (`point, run`, then one column per strategy, metres at full
 //! precision), and `runs_particle.csv` for the particle filter's runs of the amplitude sweep
-//! (`point, run`, its error and its restarts). They are the campaign's ground truth:
-//! everything else is recomputed from them.
+//! (`point, run`, its error and its restarts), and the calibration's design sets in
+//! `calibration_design.csv` ([`super::calibration::DesignRecord`]). They are the campaign's
+//! ground truth: everything else is recomputed from them.
 
 use serde::{Deserialize, Serialize};
 
 use crate::campaign::records::{RecordFile, RunRecords};
 use crate::error::{Error, Result};
 
+use super::calibration::{DESIGN_FILE, DesignRecord, design_from_table, design_record_files};
 use super::parameters::{FuelingParams, Sweep};
 
 /// The strategies, in the order of every per-run record and table.
@@ -91,6 +93,8 @@ pub struct FuelingRecords {
     pub sweeps: Vec<SweepRecords>,
     /// The particle filter's in the amplitude sweep (no points when it is off).
     pub particle: ParticleRecords,
+    /// The calibration's design sets, in set order (none when the search is off).
+    pub design: Vec<DesignRecord>,
 }
 
 /// One record file per sweep, `runs_<sweep>.csv`, in [`FuelingParams::sweeps`] order: keys
@@ -108,18 +112,30 @@ impl RunRecords<FuelingParams> for FuelingRecords {
             })
             .collect();
         files.extend(particle_record_files(params));
+        files.extend(design_record_files(params));
         files
     }
 
     fn to_tables(&self) -> Vec<Vec<Vec<f64>>> {
         let mut tables = sweep_tables(&self.sweeps);
         tables.extend(self.particle.to_tables());
+        if !self.design.is_empty() {
+            tables.push(self.design.iter().map(DesignRecord::to_row).collect());
+        }
         tables
     }
 
     /// The records of every sweep from the rows of its file; [`Error::Invalid`] if the number
     /// of tables or a row's width does not fit the sweeps.
     fn from_tables(params: &FuelingParams, mut tables: Vec<Vec<Vec<f64>>>) -> Result<Self> {
+        let design = if design_record_files(params).is_empty() {
+            Vec::new()
+        } else {
+            let rows = tables.pop().ok_or_else(|| {
+                Error::invalid(DESIGN_FILE, "no record file for the calibration's design")
+            })?;
+            design_from_table(rows)?
+        };
         let sweeps = params.sweeps();
         let particle = if particle_runs(params) > 0 {
             if tables.len() != sweeps.len() + 1 {
@@ -143,6 +159,7 @@ impl RunRecords<FuelingParams> for FuelingRecords {
         Ok(FuelingRecords {
             sweeps: sweeps_from_tables(&sweeps, tables)?,
             particle,
+            design,
         })
     }
 }

@@ -23,7 +23,7 @@
 //! range as estimated from this many runs, not the noise-free one.
 
 use rand::RngExt;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::parameters::Sweep;
 use super::records::{Outcome, PerStrategy, SweepRecords};
@@ -33,7 +33,7 @@ use crate::montecarlo::run_rng;
 pub const Z95: f64 = 1.959_963_984_540_054;
 
 /// A ratio with its delta-method standard error and 95 % confidence interval.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RatioCi {
     /// The ratio of the sample standard deviations.
     pub ratio: f64,

@@ -47,6 +47,7 @@ impl Scenario for Uav {
     type Records = Vec<RunRecord>;
     type Summary = Computed;
     type Json = UavSummary;
+    type Finish = ();
 
     fn simulate(
         params: &UavParams,
@@ -62,6 +63,7 @@ impl Scenario for Uav {
         seed: u64,
         _shard: Shard,
         records: &Vec<RunRecord>,
+        _finish: Option<&()>,
         _threads: Option<usize>,
     ) -> Result<Computed> {
         summary::summarise(params, seed, records)

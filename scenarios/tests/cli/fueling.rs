@@ -1,5 +1,5 @@
 //! `scenarios fueling` at reduced size through the built binary: the paper's orderings at 1°,
-//! byte-identical files for any `--threads` and for `--shard` + `merge`, damaged or missing
+//! byte-identical files for any `--threads` and for `--shard` + `finish` + `merge`, damaged or missing
 //! shards refused by name, and errors that name the offending configuration key.
 
 use std::path::Path;
@@ -134,10 +134,11 @@ fn exact_tustin_report_explains_the_filter_with_s() {
 #[test]
 fn threads_and_shards_give_the_same_files() {
     let dir = scratch("fu", "shards");
-    // A calibration of a few sets: it is not sharded, so a shard skips it and the merge must
-    // compute it exactly as the single run does.
+    // A calibration of a few sets: its design is sharded with the runs, its refinement is
+    // the closing stage (`finish`), and the merge reads both. The particle filter on fewer
+    // runs than the sweep: its runs sit in the shards that hold the sweep's.
     let tiny = "calibration.design_sets = 3\ncalibration.runs_per_set = 6\n\
-                calibration.refine_iterations = 2\n";
+                calibration.refine_iterations = 2\nparticle.runs = 10\n";
     let config = SMALL.replace("calibration.search = \"off\"\n", tiny);
     std::fs::write(dir.join("small.toml"), config).expect("write config");
     let with = |extra: &[&str]| {
@@ -160,12 +161,37 @@ fn threads_and_shards_give_the_same_files() {
     assert!(summary(&dir.join("t1"))["calibration"]["searched"].as_u64() > Some(3));
     assert!(summary(&dir.join("s1"))["calibration"].is_null());
     assert!(
-        !dir.join("s1/calibration.toml").exists(),
-        "a shard skips the calibration"
+        !dir.join("s1/calibration.toml").exists() && dir.join("s1/calibration_design.csv").exists(),
+        "a shard evaluates its design sets and leaves the refinement to the closing stage"
     );
-    ok(&dir, &argv("merge s1 s2 --out merged"));
+    // Without the closing stage the merge says what to run.
+    let err = fails(&dir, &argv("merge s1 s2 --out merged"));
+    assert!(
+        err.contains("finish.toml") && err.contains("scenarios finish"),
+        "{err}"
+    );
+    assert!(
+        !dir.join("merged").exists(),
+        "a failed merge writes nothing"
+    );
+    ok(&dir, &argv("finish s1 s2 --threads 1 --out fin"));
+    ok(&dir, &argv("merge s1 s2 fin --out merged"));
     // Every file of the merge, not only the summary, equals the single run's.
     assert_same_files(&dir.join("t1"), &dir.join("merged"));
+    // A damaged stage file is refused by name before anything is written.
+    copy_dir(&dir.join("fin"), &dir.join("fin_bad"));
+    let text = read(&dir.join("fin_bad/finish.toml")).replacen("runs_used = ", "runs_used = 1", 1);
+    std::fs::write(dir.join("fin_bad/finish.toml"), text).expect("damage");
+    let err = fails(&dir, &argv("merge s1 s2 fin_bad --out bad"));
+    assert!(
+        err.contains("finish.toml") && err.contains("changed"),
+        "{err}"
+    );
+    // The closing stage needs every shard, and is not a shard itself.
+    let err = fails(&dir, &argv("finish s1 --out fin2"));
+    assert!(err.contains("shard is missing"), "{err}");
+    let err = fails(&dir, &argv("merge fin --out bad"));
+    assert!(err.contains("shard directories"), "{err}");
     // calibration.toml is a configuration the scenario accepts, with the best set in it.
     let best = summary(&dir.join("t1"))["calibration"]["best"]["params"]["step_mm"]
         .as_f64()
@@ -250,7 +276,8 @@ fn a_damaged_record_is_refused_naming_the_file_and_line() {
     let err = fails(&dir, &argv("merge 1 flip --out bad"));
     assert!(err.contains(file) && err.contains("checksum"), "{err}");
     assert!(!dir.join("bad").exists(), "a failed merge writes nothing");
-    ok(&dir, &argv("merge 1 2 --out good"));
+    ok(&dir, &argv("finish 1 2 --out f"));
+    ok(&dir, &argv("merge 1 2 f --out good"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

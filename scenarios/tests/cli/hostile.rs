@@ -275,6 +275,8 @@ fn rows() -> Vec<Row> {
         row(&[], &["merge", "shard1", "--out", "shard1"], &["--out shard1", "is the shard directory shard1"]),
         row(&[], &["fueling", "--out", "-"], &["--out -", "fueling writes a directory"]),
         row(&[], &["merge", "shard1", "--out", "-"], &["--out -", "merge writes a directory"]),
+        row(&[], &["finish", "shard1", "--out", "shard1"], &["--out shard1", "is the shard directory shard1"]),
+        row(&[], &["finish", "shard1", "--out", "-"], &["--out -", "finish writes a directory"]),
         // --- Arguments.
         row(&[], &["discretize", "--model", "c.json", "--dt", "-1", "--method", "zoh", "--out", "d.json"], &["--dt -1", "must be finite and > 0"]),
         row(&[], &["discretize", "--model", "c.json", "--dt", "nan", "--method", "zoh", "--out", "d.json"], &["--dt nan", "must be finite and > 0"]),
@@ -315,6 +317,7 @@ fn rows() -> Vec<Row> {
         row(&[], &["merge", "shard1", "--out", "merged"], &["shard1/summary.json"]),
         with(Setup::Dir("shard2"), &["merge", "shard2", "--out", "merged"], &["shard2/summary.json", "cannot read"]),
         row(&[], &["merge", "missing-shard", "--out", "merged"], &["missing-shard/summary.json", "cannot read"]),
+        row(&[], &["finish", "missing-shard", "--out", "f"], &["missing-shard/summary.json", "cannot read"]),
     ]
 }
 
