@@ -103,6 +103,7 @@ where
     T: Send,
     F: Fn(usize) -> T + Sync + Send,
 {
+    count_simulation();
     let bar = if std::io::stderr().is_terminal() {
         let bar = indicatif::ProgressBar::new(runs.len() as u64);
         if let Ok(style) = indicatif::ProgressStyle::with_template(
@@ -130,6 +131,25 @@ where
     });
     bar.finish_and_clear();
     Ok(out)
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Simulations started on this thread, for the tests that show a step simulates nothing.
+    static STARTED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// Counts a simulation started on the calling thread ([`par_runs`], and a scenario's own
+/// single simulations); the count exists in the crate's tests only.
+pub(crate) fn count_simulation() {
+    #[cfg(test)]
+    STARTED.with(|c| c.set(c.get() + 1));
+}
+
+/// The simulations started on this thread so far ([`count_simulation`]).
+#[cfg(test)]
+pub(crate) fn simulations_started() -> usize {
+    STARTED.with(std::cell::Cell::get)
 }
 
 #[cfg(test)]

@@ -108,6 +108,7 @@ pub struct LearnedBack {
 
 /// The gyro's tilt toward the sensor and the level sensor's readings over one record.
 fn record(p: &FuelingParams, seed: u64) -> Result<(Vec<f64>, Vec<f64>)> {
+    crate::montecarlo::count_simulation();
     let w = p.world(p.max_amplitude_deg, Swept::Nothing).fuel;
     let sensor_err = |context| move |source| Error::Sensors { context, source };
     let axis = RollingAxisConfig {
