@@ -108,7 +108,7 @@ pub struct FuelParamsStated {
     /// T_y, s.
     pub t_y_s: f64,
     /// R, m.
-    pub r_m: f64,
+    pub sensor_radius_m: f64,
     /// φ, degrees.
     pub phi_deg: f64,
     /// 2π/β, s.
@@ -116,7 +116,7 @@ pub struct FuelParamsStated {
     /// μ, 1/s.
     pub mu_per_s: f64,
     /// A_max, degrees.
-    pub a_max_deg: f64,
+    pub max_tilt_amplitude_deg: f64,
     /// The gyro noise's standard deviation √`gyro_noise_var`, degrees.
     pub gyro_sigma_deg: f64,
 }
@@ -130,11 +130,11 @@ impl FuelParamsStated {
         v_c_mm_s: 10.0,
         delta_mm: 10.0,
         t_y_s: 2.0,
-        r_m: 1.5,
+        sensor_radius_m: 1.5,
         phi_deg: 30.0,
         rolling_period_s: 10.0,
         mu_per_s: 0.08,
-        a_max_deg: 1.0,
+        max_tilt_amplitude_deg: 1.0,
         gyro_sigma_deg: 0.0,
     };
 
@@ -147,11 +147,11 @@ impl FuelParamsStated {
             v_c: self.v_c_mm_s * 1e-3,
             delta: self.delta_mm * 1e-3,
             t_y: self.t_y_s,
-            sensor_radius: self.r_m,
+            sensor_radius: self.sensor_radius_m,
             phi: self.phi_deg.to_radians(),
             rolling_period: self.rolling_period_s,
             mu: self.mu_per_s,
-            max_tilt_amplitude: self.a_max_deg.to_radians(),
+            max_tilt_amplitude: self.max_tilt_amplitude_deg.to_radians(),
             gyro_noise_var: self.gyro_sigma_deg.to_radians().powi(2),
         }
     }

@@ -467,17 +467,20 @@ impl Process for IrregularRollingProcess {
 
 // ----------------------------------------------------------------------------------------------
 
-/// Configuration of a [`DampedCosineProcess`]. Defaults: the fuel-level paper's quantization noise
-/// at its assumed defaults (δ = 10 mm: σ = δ/√12; ξ = 1/T_a = 0.05 s⁻¹; γ_q = 2π·V_c/δ = 2π rad/s).
+/// Configuration of a [`DampedCosineProcess`]. Defaults: σ = 0.01/√12, ξ = 0.05 s⁻¹,
+/// γ = 2π rad/s, the fuel-level paper's quantization noise at its assumed defaults (the law,
+/// σ² = δ²/12, ξ = 1/T_a, γ = 2πV_c/δ, is `model::FuelParams`'s: `intensities`, `xi`,
+/// `gamma_q`).
 ///
 /// # Example
 /// ```
-/// use sensors::DampedCosineConfig;
+/// use sensors::{DampedCosineConfig, DampedCosineProcess};
 ///
-/// // A 10 mm point sensor, T_a = 20 s, filling at 10 mm/s: one mark a second, γ = 2π rad/s.
-/// let cfg = DampedCosineConfig::quantization_noise(0.01, 20.0, 0.01);
-/// assert!((cfg.frequency_rad_s - 2.0 * std::f64::consts::PI).abs() < 1e-12);
-/// assert!((cfg.std_dev - 0.01 / 12f64.sqrt()).abs() < 1e-15);
+/// // Correlation σ²·e^{−ξ|τ|}·cos γτ with one period a second, sampled every 0.1 s.
+/// let cfg = DampedCosineConfig { std_dev: 0.003, decay_per_s: 0.05, frequency_rad_s: 6.283 };
+/// let p = DampedCosineProcess::new(&cfg, 0.1)?;
+/// # let _ = p;
+/// # Ok::<(), sensors::Error>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -496,19 +499,6 @@ impl Default for DampedCosineConfig {
             std_dev: 0.01 / 12f64.sqrt(),
             decay_per_s: 0.05,
             frequency_rad_s: 2.0 * std::f64::consts::PI,
-        }
-    }
-}
-
-impl DampedCosineConfig {
-    /// The fuel-level paper's model of point-sensor quantization noise: D = δ²/12, ξ = 1/T_a,
-    /// γ_q = 2π/T_c with T_c = δ/V_c (step δ in m, T_a in s, mean fill rate V_c in m/s).
-    #[must_use]
-    pub fn quantization_noise(step_m: f64, velocity_time_s: f64, fill_rate_m_s: f64) -> Self {
-        Self {
-            std_dev: step_m / 12f64.sqrt(),
-            decay_per_s: 1.0 / velocity_time_s,
-            frequency_rad_s: 2.0 * std::f64::consts::PI * fill_rate_m_s / step_m,
         }
     }
 }

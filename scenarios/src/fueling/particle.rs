@@ -92,8 +92,10 @@ struct QuantizedLevel {
     dv_std: f64,
     v_c: f64,
     dt: f64,
-    radius: f64,
-    step: f64,
+    /// R, m (as `model::FuelParams` names it, like the fields above).
+    sensor_radius: f64,
+    /// δ, m.
+    delta: f64,
     lag: FirstOrderLag,
     quantizer: Quantizer,
     /// Standard deviation of the level's random walk per step, m (see the module
@@ -119,8 +121,8 @@ impl QuantizedLevel {
             dv_std: p.d_c.sqrt(),
             v_c: p.v_c,
             dt: p.dt,
-            radius: p.sensor_radius,
-            step: p.delta,
+            sensor_radius: p.sensor_radius,
+            delta: p.delta,
             lag: FirstOrderLag::new(p.t_y, p.dt, LagInput::PiecewiseLinear).map_err(sensors)?,
             quantizer: Quantizer::new("delta", p.delta, Rounding::Floor, 0.0).map_err(sensors)?,
             jitter: JITTER * p.delta,
@@ -144,8 +146,8 @@ impl QuantizedLevel {
 
     /// R tan α from the tilt channel's reading z₁ = R α.
     fn tilt_term(&self, z1: f64) -> f64 {
-        if self.radius > 0.0 {
-            self.radius * (z1 / self.radius).tan()
+        if self.sensor_radius > 0.0 {
+            self.sensor_radius * (z1 / self.sensor_radius).tan()
         } else {
             0.0
         }
@@ -164,7 +166,7 @@ impl ParticleModel for QuantizedLevel {
             lag,
             dv,
         } = self.prior;
-        let y = reading + self.step * rng.random::<f64>();
+        let y = reading + self.delta * rng.random::<f64>();
         let w: f64 = rng.sample(StandardNormal);
         x[DV] = dv.0 + dv.1 * w;
         x[U] = y + lag;
@@ -371,7 +373,7 @@ mod tests {
                 worst = worst.max((next[H] - s.level).abs());
                 // The reading agrees unless the damper level is within round-off of a mark.
                 let y = next[Y];
-                let to_mark = (y / model.step - (y / model.step).round()).abs() * model.step;
+                let to_mark = (y / model.delta - (y / model.delta).round()).abs() * model.delta;
                 if to_mark > 1e-9 {
                     assert_eq!(
                         model.quantizer.quantize(y).to_bits(),

@@ -104,12 +104,6 @@ fn damped_cosine_statistics() {
     };
     let p = DampedCosineProcess::new(&cfg, 0.2).expect("valid");
     check("damped cosine ξ=1", p, 200_000, &[1, 2, 3, 5, 8], 200, 9);
-    // The quantization-noise constructor reproduces the defaults.
-    let q = DampedCosineConfig::quantization_noise(0.01, 20.0, 0.01);
-    let d = DampedCosineConfig::default();
-    approx::assert_relative_eq!(q.std_dev, d.std_dev);
-    approx::assert_relative_eq!(q.decay_per_s, d.decay_per_s);
-    approx::assert_relative_eq!(q.frequency_rad_s, d.frequency_rad_s);
 }
 
 /// Bits of the first `n` samples of `p` under `seed`.
