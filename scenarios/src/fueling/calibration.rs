@@ -384,6 +384,9 @@ const SEARCH_STREAM: u64 = 1 << 62;
 const FRESH_STREAM: u64 = (1 << 62) + 1;
 const DESIGN_STREAM: u64 = (1 << 62) + 2;
 
+/// Design sets evaluated at once (their worlds are built together).
+const DESIGN_BATCH: usize = 32;
+
 /// Relative step of the sensitivity, in unit coordinates.
 const SENSITIVITY_STEP: f64 = 0.1;
 
@@ -602,12 +605,19 @@ pub fn design(
     let units = design_units(params, seed, plan);
     let sets = shard.runs(units.len());
     let ev = evaluator(params, threads, paper);
-    let (evaluations, runs_used) = ev.evaluate_counted(
-        &units[sets.clone()],
-        true,
-        run_seed(seed, SEARCH_STREAM),
-        plan.runs_per_set,
-    )?;
+    // A few sets at a time: each set's worlds hold their filters' gain schedules, so memory
+    // grows with the sets evaluated at once (each set's numbers do not depend on its batch).
+    let (mut evaluations, mut runs_used) = (Vec::new(), Vec::new());
+    for chunk in units[sets.clone()].chunks(DESIGN_BATCH) {
+        let (e, r) = ev.evaluate_counted(
+            chunk,
+            true,
+            run_seed(seed, SEARCH_STREAM),
+            plan.runs_per_set,
+        )?;
+        evaluations.extend(e);
+        runs_used.extend(r);
+    }
     Ok(sets
         .zip(evaluations.into_iter().zip(runs_used))
         .map(|(set, (mut evaluation, runs_used))| {
