@@ -531,13 +531,16 @@ fn gather<S: Scenario>(dirs: &[PathBuf], command: &str) -> Result<Gathered<S>> {
     })
 }
 
-/// Merges shard directories of scenario `S` into `out`: reads them as [`gather`] does, with
+/// Merges shard directories of scenario `S` into `out`: checks that they come from one
+/// campaign, reads and checks every record file, requires each run exactly once, with
 /// the output of `finish` among them when the scenario has a closing stage, and writes the
 /// outputs of the whole campaign. Reads records and formats; computes no stage.
 ///
 /// # Errors
-/// As [`gather`]; [`Error::Usage`] when the closing stage's file is in none of the
-/// directories; read and write errors. Nothing is written on error.
+/// [`Error::Usage`] for no shard directory; [`Error::Invalid`] naming the directory or file
+/// for a directory of another scenario or campaign, a damaged file, a run held twice, or
+/// runs that no directory holds; [`Error::Usage`] when the closing stage's file is in none
+/// of the directories; read and write errors. Nothing is written on error.
 pub fn merge<S: Scenario>(dirs: &[PathBuf], out: &Path) -> Result<()> {
     let g = gather::<S>(dirs, "merge")?;
     let finish = if S::has_finish(&g.params) {
@@ -574,12 +577,12 @@ pub fn merge<S: Scenario>(dirs: &[PathBuf], out: &Path) -> Result<()> {
 }
 
 /// Runs the closing stage of scenario `S` over its shard directories into `out`: reads and
-/// checks them as [`gather`] does, computes [`Scenario::finish`] and writes [`FINISH_FILE`]
+/// checks them as [`merge`] does, computes [`Scenario::finish`] and writes [`FINISH_FILE`]
 /// with a `summary.json` naming the campaign (nothing but the file when the scenario has no
 /// closing stage for these parameters, so every campaign can be closed alike).
 ///
 /// # Errors
-/// As [`gather`] and [`Scenario::finish`]; write errors.
+/// As [`merge`] (but for the closing stage's file) and [`Scenario::finish`]; write errors.
 pub fn finish<S: Scenario>(dirs: &[PathBuf], out: &Path, threads: Option<usize>) -> Result<()> {
     let g = gather::<S>(dirs, "finish")?;
     let mut checks = Vec::new();

@@ -8,7 +8,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::calibration::{Calibration, Evaluation, Gap};
+use super::calibration_records::{Calibration, Evaluation, Gap};
 use super::learned::{Learned, LearnedBack};
 use super::parameters::FuelingParams;
 use super::records::{STRATEGIES, STRATEGY_LABELS};
@@ -273,7 +273,8 @@ pub fn section(c: &Calibration, p: &FuelingParams) -> String {
     let mut sens: Vec<_> = c.sensitivity.iter().collect();
     let (r1, r2) = (b.search.kf1.ratio, b.search.kf2.ratio);
     sens.sort_by(|a, z| {
-        let key = |e: &&super::calibration::Sensitivity| swing(&e.kf1, r1).max(swing(&e.kf2, r2));
+        let key =
+            |e: &&super::calibration_records::Sensitivity| swing(&e.kf1, r1).max(swing(&e.kf2, r2));
         key(z).total_cmp(&key(a))
     });
     let _ = writeln!(
@@ -295,7 +296,7 @@ pub fn section(c: &Calibration, p: &FuelingParams) -> String {
             f2(e.kf2[1])
         );
     }
-    let top_of = |pick: fn(&super::calibration::Sensitivity) -> [f64; 2], at: f64| {
+    let top_of = |pick: fn(&super::calibration_records::Sensitivity) -> [f64; 2], at: f64| {
         let mut v: Vec<_> = c
             .sensitivity
             .iter()

@@ -15,6 +15,7 @@
 //! one simulated record (in the closing stage too). [`Fueling`] ties them to the campaign.
 
 pub mod calibration;
+pub mod calibration_records;
 pub mod calibration_report;
 pub mod learned;
 pub mod parameters;
@@ -47,7 +48,7 @@ const PAPER: (f64, f64) = (summary::PAPER_KF1_RATIO, summary::PAPER_KF2_RATIO);
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Closing {
     /// The refinement, sensitivity and fresh evaluation (absent when the search is off).
-    pub calibration: Option<calibration::Refinement>,
+    pub calibration: Option<calibration_records::Refinement>,
     /// The learned-back fit.
     pub learned: Option<learned::LearnedBack>,
 }
@@ -83,7 +84,10 @@ impl Scenario for Fueling {
         Ok(FuelingRecords {
             sweeps: simulation::simulate(params, seed, shard, threads)?,
             particle: particle::simulate(params, seed, shard, threads)?,
-            design: calibration::design(params, seed, shard, threads, PAPER)?,
+            design: calibration::design(params, seed, shard, threads, PAPER)?
+                .iter()
+                .map(calibration_records::DesignRecord::to_row)
+                .collect(),
         })
     }
 
@@ -98,7 +102,13 @@ impl Scenario for Fueling {
         threads: Option<usize>,
     ) -> Result<Closing> {
         Ok(Closing {
-            calibration: calibration::refine(params, seed, &records.design, threads, PAPER)?,
+            calibration: calibration::refine(
+                params,
+                seed,
+                &calibration_records::design_from_table(&records.design)?,
+                threads,
+                PAPER,
+            )?,
             learned: Some(learned::learn_back(params, seed)?),
         })
     }
@@ -116,7 +126,7 @@ impl Scenario for Fueling {
             summary.calibration = calibration::assemble(
                 params,
                 seed,
-                &records.design,
+                &calibration_records::design_from_table(&records.design)?,
                 f.calibration.as_ref(),
                 PAPER,
             )?;

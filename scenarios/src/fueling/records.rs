@@ -2,7 +2,7 @@
 //! `runs_<sweep>.csv` per sweep (`point, run`, then one column per strategy, metres at full
 //! precision), and `runs_particle.csv` for the particle filter's runs of the amplitude sweep
 //! (`point, run`, its error and its restarts), and the calibration's design sets in
-//! `calibration_design.csv` ([`super::calibration::DesignRecord`]). They are the campaign's
+//! `calibration_design.csv` (one row per set, its evaluation). They are the campaign's
 //! ground truth: everything else is recomputed from them.
 
 use serde::{Deserialize, Serialize};
@@ -10,8 +10,8 @@ use serde::{Deserialize, Serialize};
 use crate::campaign::records::{RecordFile, RunRecords};
 use crate::error::{Error, Result};
 
-use super::calibration::{DESIGN_FILE, DesignRecord, design_from_table, design_record_files};
 use super::parameters::{FuelingParams, Sweep};
+use super::search::BOX;
 
 /// The strategies, in the order of every per-run record and table.
 pub const STRATEGIES: [&str; 5] = ["relay", "kf1", "kf2", "kf2_cross", "kf2_midstep"];
@@ -93,8 +93,9 @@ pub struct FuelingRecords {
     pub sweeps: Vec<SweepRecords>,
     /// The particle filter's in the amplitude sweep (no points when it is off).
     pub particle: ParticleRecords,
-    /// The calibration's design sets, in set order (none when the search is off).
-    pub design: Vec<DesignRecord>,
+    /// The rows of the calibration's design, in set order (none when the search is off;
+    /// one row per set and its evaluation).
+    pub design: Vec<Vec<f64>>,
 }
 
 /// One record file per sweep, `runs_<sweep>.csv`, in [`FuelingParams::sweeps`] order: keys
@@ -120,7 +121,7 @@ impl RunRecords<FuelingParams> for FuelingRecords {
         let mut tables = sweep_tables(&self.sweeps);
         tables.extend(self.particle.to_tables());
         if !self.design.is_empty() {
-            tables.push(self.design.iter().map(DesignRecord::to_row).collect());
+            tables.push(self.design.clone());
         }
         tables
     }
@@ -134,7 +135,14 @@ impl RunRecords<FuelingParams> for FuelingRecords {
             let rows = tables.pop().ok_or_else(|| {
                 Error::invalid(DESIGN_FILE, "no record file for the calibration's design")
             })?;
-            design_from_table(rows)?
+            let width = DESIGN_COLUMNS.len() + BOX.len() + 1;
+            if let Some(row) = rows.iter().find(|r| r.len() != width) {
+                return Err(Error::invalid(
+                    DESIGN_FILE,
+                    format!("a row of {} fields, expected {width}", row.len()),
+                ));
+            }
+            rows
         };
         let sweeps = params.sweeps();
         let particle = if particle_runs(params) > 0 {
@@ -293,3 +301,42 @@ impl ParticleRecords {
         })
     }
 }
+
+/// The record file of the design: one row per set, the configured set first (set 0), then
+/// the Latin hypercube's sets (1 … `design_sets`).
+pub const DESIGN_FILE: &str = "calibration_design.csv";
+
+/// The record file of the design for `params` (none when the search is off).
+pub fn design_record_files(params: &FuelingParams) -> Vec<RecordFile> {
+    let Some(plan) = params.calibration.plan() else {
+        return Vec::new();
+    };
+    let mut header = vec!["set"];
+    header.extend(BOX.iter().map(|d| d.key));
+    header.extend(DESIGN_COLUMNS);
+    vec![RecordFile {
+        name: DESIGN_FILE.to_string(),
+        header,
+        grid: vec![plan.design_sets + 1],
+    }]
+}
+
+/// The columns of the design's record file after the set and the searched parameters.
+const DESIGN_COLUMNS: [&str; 16] = [
+    "kf1_ratio",
+    "kf1_se",
+    "kf1_lo",
+    "kf1_hi",
+    "kf1_runs",
+    "kf2_ratio",
+    "kf2_se",
+    "kf2_lo",
+    "kf2_hi",
+    "kf2_runs",
+    "relay_std_mm",
+    "spread",
+    "no_stop",
+    "cost",
+    "rejected",
+    "runs_used",
+];

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use super::calibration::Calibration;
+use super::calibration_records::Calibration;
 use super::parameters::{FuelingParams, Sweep, Swept};
 pub use super::records::PerStrategy;
 use super::records::{FuelingRecords, PARTICLE_FILE, ParticleRecords, SweepRecords, particle_runs};
