@@ -165,8 +165,9 @@ pub trait Scenario {
 
     /// Computes every number the outputs show from the records and, for a whole campaign
     /// with a closing stage, its result (`None` in a shard). No Monte Carlo run and no fit
-    /// belongs here (they are `simulate`'s and `finish`'s); the boom and flight-path
-    /// scenarios still compute their deterministic nominal cases here.
+    /// belongs here (they are `simulate`'s and `finish`'s); the uav scenario still replays
+    /// run 0 for its traces here, and the boom and flight-path scenarios compute their
+    /// deterministic nominal cases here.
     ///
     /// # Errors
     /// A library error on valid parameters.
