@@ -11,27 +11,13 @@ use crate::flightpath::FlightPath;
 use crate::fueling::Fueling;
 use crate::uav::Uav;
 
-/// Every scenario: name (subcommand and folder), title for `reports/README.md`, runner.
+/// Every scenario, in the order `all` runs them.
 pub const SCENARIOS: [Entry; 4] = [
-    (
-        "fueling",
-        "F — fuel level on a rocking sea platform",
-        campaign::run::<Fueling>,
-    ),
-    (
-        "uav",
-        "U — UAV control channel with a Kalman filter in the loop",
-        campaign::run::<Uav>,
-    ),
-    (
-        "boom",
-        "B — erector-boom angular acceleration (WLS, offset angle)",
-        campaign::run::<Boom>,
-    ),
-    (
-        "flightpath",
+    Entry::of::<Fueling>("F — fuel level on a rocking sea platform"),
+    Entry::of::<Uav>("U — UAV control channel with a Kalman filter in the loop"),
+    Entry::of::<Boom>("B — erector-boom angular acceleration (WLS, offset angle)"),
+    Entry::of::<FlightPath>(
         "Flight-path reconstruction: filter–smoother and output error on a simulated flight",
-        campaign::run::<FlightPath>,
     ),
 ];
 
@@ -50,12 +36,7 @@ pub fn all(campaign: &Campaign) -> Result<()> {
 /// # Errors
 /// As [`campaign::merge`]; [`Error::Invalid`] for an unknown scenario name.
 pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<()> {
-    match scenario(dirs, "merge")? {
-        "fueling" => campaign::merge::<Fueling>(dirs, out),
-        "uav" => campaign::merge::<Uav>(dirs, out),
-        "boom" => campaign::merge::<Boom>(dirs, out),
-        _ => campaign::merge::<FlightPath>(dirs, out),
-    }
+    (scenario(dirs, "merge")?.merge)(dirs, out)
 }
 
 /// Runs the closing stage of the campaign whose shard directories are `dirs` into `out`.
@@ -63,30 +44,21 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<()> {
 /// # Errors
 /// As [`campaign::finish`]; [`Error::Invalid`] for an unknown scenario name.
 pub fn finish(dirs: &[PathBuf], out: &Path, threads: Option<usize>) -> Result<()> {
-    match scenario(dirs, "finish")? {
-        "fueling" => campaign::finish::<Fueling>(dirs, out, threads),
-        "uav" => campaign::finish::<Uav>(dirs, out, threads),
-        "boom" => campaign::finish::<Boom>(dirs, out, threads),
-        _ => campaign::finish::<FlightPath>(dirs, out, threads),
-    }
+    (scenario(dirs, "finish")?.finish)(dirs, out, threads)
 }
 
-/// The scenario named in the first directory's `summary.json`, one of [`SCENARIOS`].
-fn scenario(dirs: &[PathBuf], command: &str) -> Result<&'static str> {
+/// The entry of the scenario named in the first directory's `summary.json`.
+fn scenario(dirs: &[PathBuf], command: &str) -> Result<&'static Entry> {
     let first = dirs
         .first()
         .ok_or_else(|| Error::Usage(format!("{command} needs at least one shard directory")))?;
     let name = campaign::scenario_of(first)?;
-    SCENARIOS
-        .iter()
-        .map(|(n, _, _)| *n)
-        .find(|n| *n == name)
-        .ok_or_else(|| {
-            Error::invalid(
-                first.join("summary.json"),
-                format!(
-                    "`scenario` is {name:?}, expected \"fueling\", \"uav\", \"boom\" or \"flightpath\""
-                ),
-            )
-        })
+    SCENARIOS.iter().find(|e| e.name == name).ok_or_else(|| {
+        Error::invalid(
+            first.join("summary.json"),
+            format!(
+                "`scenario` is {name:?}, expected \"fueling\", \"uav\", \"boom\" or \"flightpath\""
+            ),
+        )
+    })
 }

@@ -58,7 +58,7 @@ struct Evaluator<'a> {
     /// The first error met inside the optimiser (which cannot carry it out).
     error: RefCell<Option<Error>>,
     /// Every evaluation on the search streams with its unit coordinates (design, refinement).
-    log: RefCell<Vec<(Vec<f64>, Evaluation)>>,
+    log: RefCell<Vec<Refined>>,
     runs_used: Cell<usize>,
 }
 
@@ -221,7 +221,10 @@ impl Evaluator<'_> {
         let evals = self.evaluate(units, true, seed, runs)?;
         self.log
             .borrow_mut()
-            .extend(units.iter().cloned().zip(evals.iter().cloned()));
+            .extend(units.iter().zip(&evals).map(|(u, e)| Refined {
+                units: u.clone(),
+                evaluation: e.clone(),
+            }));
         Ok(evals)
     }
 }
@@ -273,8 +276,9 @@ const SENSITIVITY_STEP: f64 = 0.1;
 /// The paper's "≈" read as ± this on its two-decimal ratios.
 pub const TOLERANCE: f64 = 0.05;
 
-/// The search's settings for a campaign: the headline amplitude and the invariance corners.
-fn evaluator(params: &FuelingParams, threads: Option<usize>, target: (f64, f64)) -> Evaluator<'_> {
+/// The headline amplitude (the amplitude sweep's largest, degrees) and the invariance
+/// corners (amplitude °, period s) the search scores a set at.
+fn headline(params: &FuelingParams) -> (f64, Vec<(f64, f64)>) {
     let amplitude_deg = params
         .amplitudes_deg
         .iter()
@@ -291,6 +295,12 @@ fn evaluator(params: &FuelingParams, threads: Option<usize>, target: (f64, f64))
             corners.push((a, t));
         }
     }
+    (amplitude_deg, corners)
+}
+
+/// The evaluator of the search for a campaign with `params`, aiming at `target`.
+fn evaluator(params: &FuelingParams, threads: Option<usize>, target: (f64, f64)) -> Evaluator<'_> {
+    let (amplitude_deg, corners) = headline(params);
     Evaluator {
         base: params,
         amplitude_deg,
@@ -364,10 +374,10 @@ pub fn design(
 }
 
 /// The best evaluation of `log` (the first of the lowest cost).
-fn best_of(log: &[(Vec<f64>, Evaluation)]) -> Result<&(Vec<f64>, Evaluation)> {
+fn best_of(log: &[Refined]) -> Result<&Refined> {
     log.iter()
-        .fold(None::<&(Vec<f64>, Evaluation)>, |b, e| match b {
-            Some(b) if b.1.cost <= e.1.cost => Some(b),
+        .fold(None::<&Refined>, |b, e| match b {
+            Some(b) if b.evaluation.cost <= e.evaluation.cost => Some(b),
             _ => Some(e),
         })
         .ok_or(Error::NothingEvaluated {
@@ -377,21 +387,16 @@ fn best_of(log: &[(Vec<f64>, Evaluation)]) -> Result<&(Vec<f64>, Evaluation)> {
 
 /// The search log of a finished calibration: the design's sets (without the configured
 /// one) with their unit coordinates, then the refinement's evaluations.
-fn search_log(
-    units: &[Vec<f64>],
-    design: &[DesignRecord],
-    refined: &[Refined],
-) -> Vec<(Vec<f64>, Evaluation)> {
+fn search_log(units: &[Vec<f64>], design: &[DesignRecord], refined: &[Refined]) -> Vec<Refined> {
     units
         .iter()
         .zip(design)
         .skip(1)
-        .map(|(u, d)| (u.clone(), d.evaluation.clone()))
-        .chain(
-            refined
-                .iter()
-                .map(|r| (r.units.clone(), r.evaluation.clone())),
-        )
+        .map(|(u, d)| Refined {
+            units: u.clone(),
+            evaluation: d.evaluation.clone(),
+        })
+        .chain(refined.iter().cloned())
         .collect()
 }
 
@@ -499,14 +504,9 @@ pub fn refine(
             return Err(e);
         }
     }
-    let refined: Vec<Refined> = ev
-        .log
-        .take()
-        .into_iter()
-        .map(|(units, evaluation)| Refined { units, evaluation })
-        .collect();
+    let refined = ev.log.take();
     let log = search_log(&units, design, &refined);
-    let best_u = best_of(&log)?.0.clone();
+    let best_u = best_of(&log)?.units.clone();
     let sensitivity = ev.evaluate(&sensitivity_units(&best_u), false, search_seed, runs)?;
     let fresh = ev
         .evaluate(
@@ -561,9 +561,12 @@ pub fn assemble(
             d.evaluation.rejected = Some(rejection.message.clone());
         }
     }
-    let ev = evaluator(params, None, paper);
+    let (amplitude_deg, corners) = headline(params);
     let log = search_log(&units, &design, &r.refined);
-    let (best_u, best_eval) = best_of(&log)?.clone();
+    let Refined {
+        units: best_u,
+        evaluation: best_eval,
+    } = best_of(&log)?.clone();
     let sensitivity = BOX
         .iter()
         .zip(r.sensitivity.chunks(2))
@@ -611,9 +614,9 @@ pub fn assemble(
         runs_used: design.iter().map(|d| d.runs_used).sum::<usize>() + r.runs_used,
         search_seed: run_seed(seed, SEARCH_STREAM),
         fresh_seed: run_seed(seed, FRESH_STREAM),
-        amplitude_deg: ev.amplitude_deg,
-        corners: ev.corners,
-        invariance_weight: ev.weight,
+        amplitude_deg,
+        corners,
+        invariance_weight: params.calibration.invariance_weight,
         paper,
         bounds: BOX.to_vec(),
         defaults: design[0].evaluation.clone(),
@@ -630,7 +633,7 @@ pub fn assemble(
         sensitivity,
         verdict,
         best_params,
-        evaluations: log.into_iter().map(|(_, e)| e).collect(),
+        evaluations: log.into_iter().map(|r| r.evaluation).collect(),
     }))
 }
 

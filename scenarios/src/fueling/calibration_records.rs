@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::parameters::{FuelingParams, Search};
-use super::records::DESIGN_FILE;
+use super::records::{DESIGN_FILE, DESIGN_WIDTH};
 use super::search::{BOX, Dim};
 use super::statistics::RatioCi;
 use crate::error::{Error, Result};
@@ -168,7 +168,7 @@ impl DesignRecord {
     /// The record of `row`, or `None` if it does not have the header's width.
     pub fn from_row(row: &[f64]) -> Option<Self> {
         let [set, rest @ ..] = row else { return None };
-        if rest.len() != BOX.len() + 16 {
+        if row.len() != DESIGN_WIDTH {
             return None;
         }
         let (values, r) = rest.split_at(BOX.len());
@@ -206,7 +206,7 @@ pub fn design_from_table(rows: &[Vec<f64>]) -> Result<Vec<DesignRecord>> {
             DesignRecord::from_row(row).ok_or_else(|| {
                 Error::invalid(
                     DESIGN_FILE,
-                    format!("a row of {} fields, expected {}", row.len(), BOX.len() + 17),
+                    format!("a row of {} fields, expected {DESIGN_WIDTH}", row.len()),
                 )
             })
         })

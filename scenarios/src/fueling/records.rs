@@ -135,11 +135,10 @@ impl RunRecords<FuelingParams> for FuelingRecords {
             let rows = tables.pop().ok_or_else(|| {
                 Error::invalid(DESIGN_FILE, "no record file for the calibration's design")
             })?;
-            let width = DESIGN_COLUMNS.len() + BOX.len() + 1;
-            if let Some(row) = rows.iter().find(|r| r.len() != width) {
+            if let Some(row) = rows.iter().find(|r| r.len() != DESIGN_WIDTH) {
                 return Err(Error::invalid(
                     DESIGN_FILE,
-                    format!("a row of {} fields, expected {width}", row.len()),
+                    format!("a row of {} fields, expected {DESIGN_WIDTH}", row.len()),
                 ));
             }
             rows
@@ -320,6 +319,11 @@ pub fn design_record_files(params: &FuelingParams) -> Vec<RecordFile> {
         grid: vec![plan.design_sets + 1],
     }]
 }
+
+/// The fields of a row of the design's record file: the set, the searched parameters, then
+/// the evaluation's sixteen numbers (the ratios with their intervals, the relay's error, the
+/// spread, the no-stop fraction, the cost, the rejected flag and the runs used).
+pub const DESIGN_WIDTH: usize = 1 + BOX.len() + DESIGN_COLUMNS.len();
 
 /// The columns of the design's record file after the set and the searched parameters.
 const DESIGN_COLUMNS: [&str; 16] = [
