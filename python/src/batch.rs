@@ -231,23 +231,6 @@ impl Dim for Dyn {
     }
 }
 
-/// Runs `$body` with `$d` bound to `Const::<N>` for the listed N equal to `$value`, or to
-/// `Dyn($value)` for any other value: one compiled copy of the body per listed size.
-macro_rules! with_dim {
-    ($value:expr, [$($n:literal),+], |$d:ident| $body:expr) => {
-        match $value {
-            $($n => {
-                let $d = Const::<$n>;
-                $body
-            })+
-            v => {
-                let $d = Dyn(v);
-                $body
-            }
-        }
-    };
-}
-
 /// One `batch_filter` call: the filter, the per-step model, the series zs (N×m) and us
 /// (N×p), the step order, where the results go, and the check for a pending signal (true:
 /// stop), called every [`signal_interval`] steps.
@@ -286,9 +269,27 @@ enum Stop {
 
 /// The batch loop, compiled per state dimension up to 8 and measurement dimension up to 3.
 fn run(b: Batch<'_>) -> Result<(), Stop> {
-    with_dim!(b.core.n, [1, 2, 3, 4, 5, 6, 7, 8], |d| {
-        with_dim!(b.core.m, [1, 2, 3], |e| run_dim(d, e, b))
-    })
+    match b.core.n {
+        1 => run_n(Const::<1>, b),
+        2 => run_n(Const::<2>, b),
+        3 => run_n(Const::<3>, b),
+        4 => run_n(Const::<4>, b),
+        5 => run_n(Const::<5>, b),
+        6 => run_n(Const::<6>, b),
+        7 => run_n(Const::<7>, b),
+        8 => run_n(Const::<8>, b),
+        n => run_n(Dyn(n), b),
+    }
+}
+
+/// [`run`] for the state dimension `d`, dispatching on the measurement dimension.
+fn run_n<D: Dim>(d: D, b: Batch<'_>) -> Result<(), Stop> {
+    match b.core.m {
+        1 => run_dim(d, Const::<1>, b),
+        2 => run_dim(d, Const::<2>, b),
+        3 => run_dim(d, Const::<3>, b),
+        m => run_dim(d, Dyn(m), b),
+    }
 }
 
 /// The loop itself. Each step reads the previous step's output rows (the filter's own state

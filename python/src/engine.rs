@@ -15,6 +15,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{faer_out, mat, mat_or_scalar, value_error};
+use crate::guard;
 use crate::pass::{
     Pass, SAMPLER_CAPACITY, Timing, covariance_form, engine, gate_option, time_stamps,
 };
@@ -63,29 +64,79 @@ impl Output {
     }
 }
 
-py_function! {
-    /// filter(F, H, Q, R, x0, P0, zs, us=None, B=None, S=None, form="joseph", gate=None,
-    /// gate_rule="entries") → dict with "x", "P" (filtered, x_{k|k}), "x_pred", "P_pred"
-    /// (x_{k+1|k}), "log_likelihood", "nis" (NaN on a step with no measurement). (x0, P0) is
-    /// the prior of the first measurement; step k updates with zs[k] and predicts with
-    /// us[k]. S = E[w_k v_kᵀ] enters the prediction. With gate (a probability in (0, 1)),
-    /// each step's measurements are screened against the prior before the update
-    /// (gate_rule "entries": each entry's e_i²/Σ_ii against χ²(1); "vector": the step's
-    /// eᵀΣ⁺e against χ²(rank Σ)), the rejected ones are skipped like NaN entries, and
-    /// "rejected" is a dict of 1-d arrays "step", "channel" (int64), "value", "nis".
-    fn filter(F, H, Q, R, x0, P0, zs; us = None, B = None, S = None;
-              form: &str = "joseph", gate: Option<Bound<'py, PyAny>> = None, gate_rule: &str = "entries")
-        => run_discrete(Output::Filtered)
+/// filter(F, H, Q, R, x0, P0, zs, us=None, B=None, S=None, form="joseph", gate=None,
+/// gate_rule="entries") → dict with "x", "P" (filtered, x_{k|k}), "x_pred", "P_pred"
+/// (x_{k+1|k}), "log_likelihood", "nis" (NaN on a step with no measurement). (x0, P0) is
+/// the prior of the first measurement; step k updates with zs[k] and predicts with
+/// us[k]. S = E[w_k v_kᵀ] enters the prediction. With gate (a probability in (0, 1)),
+/// each step's measurements are screened against the prior before the update
+/// (gate_rule "entries": each entry's e_i²/Σ_ii against χ²(1); "vector": the step's
+/// eᵀΣ⁺e against χ²(rank Σ)), the rejected ones are skipped like NaN entries, and
+/// "rejected" is a dict of 1-d arrays "step", "channel" (int64), "value", "nis".
+#[pyfunction]
+#[pyo3(signature = (F, H, Q, R, x0, P0, zs, us = None, B = None, S = None, form = "joseph", gate = None, gate_rule = "entries"))]
+pub(crate) fn filter<'py>(
+    py: Python<'py>,
+    F: &Bound<'py, PyAny>,
+    H: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    us: Option<&Bound<'py, PyAny>>,
+    B: Option<&Bound<'py, PyAny>>,
+    S: Option<&Bound<'py, PyAny>>,
+    form: &str,
+    gate: Option<Bound<'py, PyAny>>,
+    gate_rule: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        run_discrete(
+            Output::Filtered,
+            py,
+            [F, H, Q, R, x0, P0, zs],
+            [us, B, S],
+            form,
+            gate,
+            gate_rule,
+        )
+    })
 }
 
-py_function! {
-    /// smooth(F, H, Q, R, x0, P0, zs, us=None, B=None, S=None, form="joseph", gate=None,
-    /// gate_rule="entries") → dict with the RTS-smoothed "x" (N, n) and "P" (N, n, n): the
-    /// engine's filter recorded step by step (gated as in `filter`, and then with
-    /// "rejected"), then `kalman::smoother::RtsSmoother`.
-    fn smooth(F, H, Q, R, x0, P0, zs; us = None, B = None, S = None;
-              form: &str = "joseph", gate: Option<Bound<'py, PyAny>> = None, gate_rule: &str = "entries")
-        => run_discrete(Output::Smoothed)
+/// smooth(F, H, Q, R, x0, P0, zs, us=None, B=None, S=None, form="joseph", gate=None,
+/// gate_rule="entries") → dict with the RTS-smoothed "x" (N, n) and "P" (N, n, n): the
+/// engine's filter recorded step by step (gated as in `filter`, and then with
+/// "rejected"), then `kalman::smoother::RtsSmoother`.
+#[pyfunction]
+#[pyo3(signature = (F, H, Q, R, x0, P0, zs, us = None, B = None, S = None, form = "joseph", gate = None, gate_rule = "entries"))]
+pub(crate) fn smooth<'py>(
+    py: Python<'py>,
+    F: &Bound<'py, PyAny>,
+    H: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    us: Option<&Bound<'py, PyAny>>,
+    B: Option<&Bound<'py, PyAny>>,
+    S: Option<&Bound<'py, PyAny>>,
+    form: &str,
+    gate: Option<Bound<'py, PyAny>>,
+    gate_rule: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        run_discrete(
+            Output::Smoothed,
+            py,
+            [F, H, Q, R, x0, P0, zs],
+            [us, B, S],
+            form,
+            gate,
+            gate_rule,
+        )
+    })
 }
 
 /// [`filter`]'s and [`smooth`]'s work: the discrete model of the Python signature
@@ -126,30 +177,78 @@ fn run_discrete<'py>(
     output.run(py, pass)
 }
 
-py_function! {
-    /// filter_continuous(A, C, W, R, x0, P0, t, zs, us=None, B=None, form="joseph",
-    /// gate=None, gate_rule="entries") → `filter`'s dict for a continuous model
-    /// ẋ = A x + B u + w (W the intensity of w as it enters the state, G Qc Gᵀ) measured at
-    /// the time stamps t (N,), non-decreasing: z(t_k) = C x(t_k) + v_k, cov(v_k) = R. Each
-    /// interval is sampled exactly (F = e^{AΔt}, the input by zero-order hold, Q by Van
-    /// Loan); (x0, P0) is the prior of the first row's measurement, step k updates with
-    /// zs[k] and predicts with us[k] over t[k+1] − t[k] (the last row over 0: its "x_pred"
-    /// is its "x"). Equal stamps are one instant. gate and gate_rule as in `filter`.
-    fn filter_continuous(A, C, W, R, x0, P0, t, zs; us = None, B = None;
-                         form: &str = "joseph", gate: Option<Bound<'py, PyAny>> = None,
-                         gate_rule: &str = "entries")
-        => run_continuous(Output::Filtered)
+/// filter_continuous(A, C, W, R, x0, P0, t, zs, us=None, B=None, form="joseph",
+/// gate=None, gate_rule="entries") → `filter`'s dict for a continuous model
+/// ẋ = A x + B u + w (W the intensity of w as it enters the state, G Qc Gᵀ) measured at
+/// the time stamps t (N,), non-decreasing: z(t_k) = C x(t_k) + v_k, cov(v_k) = R. Each
+/// interval is sampled exactly (F = e^{AΔt}, the input by zero-order hold, Q by Van
+/// Loan); (x0, P0) is the prior of the first row's measurement, step k updates with
+/// zs[k] and predicts with us[k] over t[k+1] − t[k] (the last row over 0: its "x_pred"
+/// is its "x"). Equal stamps are one instant. gate and gate_rule as in `filter`.
+#[pyfunction]
+#[pyo3(signature = (A, C, W, R, x0, P0, t, zs, us = None, B = None, form = "joseph", gate = None, gate_rule = "entries"))]
+pub(crate) fn filter_continuous<'py>(
+    py: Python<'py>,
+    A: &Bound<'py, PyAny>,
+    C: &Bound<'py, PyAny>,
+    W: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    t: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    us: Option<&Bound<'py, PyAny>>,
+    B: Option<&Bound<'py, PyAny>>,
+    form: &str,
+    gate: Option<Bound<'py, PyAny>>,
+    gate_rule: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        run_continuous(
+            Output::Filtered,
+            py,
+            [A, C, W, R, x0, P0, t, zs],
+            [us, B],
+            form,
+            gate,
+            gate_rule,
+        )
+    })
 }
 
-py_function! {
-    /// smooth_continuous(A, C, W, R, x0, P0, t, zs, us=None, B=None, form="joseph",
-    /// gate=None, gate_rule="entries") → `smooth`'s dict for the continuous model of
-    /// `filter_continuous`: the RTS smoother over its (gated) pass, each step recorded with
-    /// the model sampled for it.
-    fn smooth_continuous(A, C, W, R, x0, P0, t, zs; us = None, B = None;
-                         form: &str = "joseph", gate: Option<Bound<'py, PyAny>> = None,
-                         gate_rule: &str = "entries")
-        => run_continuous(Output::Smoothed)
+/// smooth_continuous(A, C, W, R, x0, P0, t, zs, us=None, B=None, form="joseph",
+/// gate=None, gate_rule="entries") → `smooth`'s dict for the continuous model of
+/// `filter_continuous`: the RTS smoother over its (gated) pass, each step recorded with
+/// the model sampled for it.
+#[pyfunction]
+#[pyo3(signature = (A, C, W, R, x0, P0, t, zs, us = None, B = None, form = "joseph", gate = None, gate_rule = "entries"))]
+pub(crate) fn smooth_continuous<'py>(
+    py: Python<'py>,
+    A: &Bound<'py, PyAny>,
+    C: &Bound<'py, PyAny>,
+    W: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    t: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    us: Option<&Bound<'py, PyAny>>,
+    B: Option<&Bound<'py, PyAny>>,
+    form: &str,
+    gate: Option<Bound<'py, PyAny>>,
+    gate_rule: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        run_continuous(
+            Output::Smoothed,
+            py,
+            [A, C, W, R, x0, P0, t, zs],
+            [us, B],
+            form,
+            gate,
+            gate_rule,
+        )
+    })
 }
 
 /// [`filter_continuous`]'s and [`smooth_continuous`]'s work: the continuous model of the
@@ -287,24 +386,50 @@ fn discrete_riccati<'py>(
     Ok(out)
 }
 
-py_function! {
-    /// dare(F, H, Q, R, S=None) → dict with the steady-state prior covariance "P", the
-    /// posterior "P_post", the filter gain "K", the predictor gain "K_pred" and the
-    /// innovation covariance "innovation_cov" (the filter's DARE; structured doubling with a
-    /// Newton polish).
-    fn dare(F, H, Q, R; S = None) => discrete_riccati(Discrete::Filter)
+/// dare(F, H, Q, R, S=None) → dict with the steady-state prior covariance "P", the
+/// posterior "P_post", the filter gain "K", the predictor gain "K_pred" and the
+/// innovation covariance "innovation_cov" (the filter's DARE; structured doubling with a
+/// Newton polish).
+#[pyfunction]
+#[pyo3(signature = (F, H, Q, R, S = None))]
+pub(crate) fn dare<'py>(
+    py: Python<'py>,
+    F: &Bound<'py, PyAny>,
+    H: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    S: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| discrete_riccati(Discrete::Filter, py, [F, H, Q, R], [S]))
 }
 
-py_function! {
-    /// dlqr(A, B, Q, R, N=None) → dict with the gain "K" (u = −K x) and the cost matrix "P"
-    /// of the discrete LQR (the dual DARE).
-    fn dlqr(A, B, Q, R; N = None) => discrete_riccati(Discrete::Lqr)
+/// dlqr(A, B, Q, R, N=None) → dict with the gain "K" (u = −K x) and the cost matrix "P"
+/// of the discrete LQR (the dual DARE).
+#[pyfunction]
+#[pyo3(signature = (A, B, Q, R, N = None))]
+pub(crate) fn dlqr<'py>(
+    py: Python<'py>,
+    A: &Bound<'py, PyAny>,
+    B: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    N: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| discrete_riccati(Discrete::Lqr, py, [A, B, Q, R], [N]))
 }
 
-py_function! {
-    /// care(A, H, Q, R) → dict with the steady-state covariance "P" and gain "K" of the
-    /// Kalman–Bucy filter (A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0).
-    fn care(A, H, Q, R) => run_care
+/// care(A, H, Q, R) → dict with the steady-state covariance "P" and gain "K" of the
+/// Kalman–Bucy filter (A P + P Aᵀ − P Hᵀ R⁻¹ H P + Q = 0).
+#[pyfunction]
+#[pyo3(signature = (A, H, Q, R))]
+pub(crate) fn care<'py>(
+    py: Python<'py>,
+    A: &Bound<'py, PyAny>,
+    H: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| run_care(py, [A, H, Q, R]))
 }
 
 /// [`care`]'s work.

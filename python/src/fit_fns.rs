@@ -18,6 +18,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use crate::convert::{faer_out, mat, read_vector, type_error, type_name, value_error};
+use crate::guard;
 
 fn structure(s: &str, name: &str) -> PyResult<Structure> {
     Ok(match s {
@@ -51,29 +52,56 @@ fn signalled() -> bool {
     Python::attach(|py| py.check_signals().is_err())
 }
 
-py_function! {
-    /// fit(F, H, Q, R, x0, P0, zs, method=None, q="diag", r="diag", free_x0=False,
-    /// free_p0_diag=False, max_iter=None, free=None, dt=None) → dict with the fitted "F",
-    /// "H", "Q", "R", "x0", "P0", "loglik", "iterations", "converged", "message", "boundary"
-    /// (parameters on a variance boundary), "theta", "std_errors" (observed information;
-    /// None when singular), "estimates" (each parameter's value by name), "correlation"
-    /// ({"names", "matrix"}; None when singular), "aic", "bic". Q and R are freed as
-    /// "scalar" (σ²·I), "diag", "full" (Cholesky with a log-diagonal) or kept "fixed"; F, H
-    /// are kept at the given values; the given Q, R, x0, P0 are the starting point.
-    /// free: a list of the command line's `--free` names instead of q, r, free_x0 and
-    /// free_p0_diag ("Q:scalar|diag|full", "R:…", "x0", "P0:diag", entries "F[i,j]",
-    /// "B[i,j]", "H[i,j]", "Q[i,j]", "R[i,j]", "P0[i,j]", "x0[i]", "Q:white-acceleration"
-    /// with dt the sampling interval); every entry not named keeps its value exactly, and
-    /// "std_errors" is then a dict as the command line's summary has it (the matrices freed
-    /// whole in their shapes, each named parameter by its name). method "em"
-    /// (Shumway–Stoffer; the default without free) or "mle" (L-BFGS with the exact score,
-    /// Nelder–Mead fallback; the default with free). zs: (N, m), NaN for missing entries.
-    fn fit(
-        F, H, Q, R, x0, P0, zs;
-        method: Option<&str> = None, q: &str = "diag", r: &str = "diag", free_x0: bool = false,
-        free_p0_diag: bool = false, max_iter: Option<usize> = None,
-        free: Option<Bound<'py, PyAny>> = None, dt: Option<f64> = None
-    ) => run_fit
+/// fit(F, H, Q, R, x0, P0, zs, method=None, q="diag", r="diag", free_x0=False,
+/// free_p0_diag=False, max_iter=None, free=None, dt=None) → dict with the fitted "F",
+/// "H", "Q", "R", "x0", "P0", "loglik", "iterations", "converged", "message", "boundary"
+/// (parameters on a variance boundary), "theta", "std_errors" (observed information;
+/// None when singular), "estimates" (each parameter's value by name), "correlation"
+/// ({"names", "matrix"}; None when singular), "aic", "bic". Q and R are freed as
+/// "scalar" (σ²·I), "diag", "full" (Cholesky with a log-diagonal) or kept "fixed"; F, H
+/// are kept at the given values; the given Q, R, x0, P0 are the starting point.
+/// free: a list of the command line's `--free` names instead of q, r, free_x0 and
+/// free_p0_diag ("Q:scalar|diag|full", "R:…", "x0", "P0:diag", entries "F[i,j]",
+/// "B[i,j]", "H[i,j]", "Q[i,j]", "R[i,j]", "P0[i,j]", "x0[i]", "Q:white-acceleration"
+/// with dt the sampling interval); every entry not named keeps its value exactly, and
+/// "std_errors" is then a dict as the command line's summary has it (the matrices freed
+/// whole in their shapes, each named parameter by its name). method "em"
+/// (Shumway–Stoffer; the default without free) or "mle" (L-BFGS with the exact score,
+/// Nelder–Mead fallback; the default with free). zs: (N, m), NaN for missing entries.
+#[pyfunction]
+#[pyo3(signature = (F, H, Q, R, x0, P0, zs, method = None, q = "diag", r = "diag", free_x0 = false, free_p0_diag = false, max_iter = None, free = None, dt = None))]
+pub(crate) fn fit<'py>(
+    py: Python<'py>,
+    F: &Bound<'py, PyAny>,
+    H: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    method: Option<&str>,
+    q: &str,
+    r: &str,
+    free_x0: bool,
+    free_p0_diag: bool,
+    max_iter: Option<usize>,
+    free: Option<Bound<'py, PyAny>>,
+    dt: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        run_fit(
+            py,
+            [F, H, Q, R, x0, P0, zs],
+            method,
+            q,
+            r,
+            free_x0,
+            free_p0_diag,
+            max_iter,
+            free,
+            dt,
+        )
+    })
 }
 
 /// The free items of `fit(free=...)`: a list (or tuple) of strings.
@@ -303,21 +331,41 @@ fn result_dict<'py>(
     Ok(o)
 }
 
-py_function! {
-    /// fit_callable(model, theta0, zs, F=None, H=None, Q=None, R=None, x0=None, P0=None,
-    /// max_iter=None, log_variances=None) → the dict of fit (with "estimates" and
-    /// "correlation" under the names "θ[i]"). model(theta) — theta a 1-d float array —
-    /// returns a dict with some of "F", "H", "Q", "R", "x0", "P0"; the others are fixed at
-    /// the keyword arguments (x0 defaults to zeros). θ is fitted by maximum likelihood from
-    /// theta0 (L-BFGS, the gradient by central differences of ln L, Nelder–Mead fallback);
-    /// log_variances lists the indices of θ that are logarithms of variances (for the
-    /// "boundary" flag). An exception raised by model, a return that is not a dict, an
-    /// unknown key or a matrix of the wrong shape is raised as a ValueError or TypeError
-    /// naming it.
-    fn fit_callable(
-        model, theta0, zs; F = None, H = None, Q = None, R = None, x0 = None, P0 = None;
-        max_iter: Option<usize> = None, log_variances: Option<Vec<usize>> = None
-    ) => run_fit_callable
+/// fit_callable(model, theta0, zs, F=None, H=None, Q=None, R=None, x0=None, P0=None,
+/// max_iter=None, log_variances=None) → the dict of fit (with "estimates" and
+/// "correlation" under the names "θ[i]"). model(theta) — theta a 1-d float array —
+/// returns a dict with some of "F", "H", "Q", "R", "x0", "P0"; the others are fixed at
+/// the keyword arguments (x0 defaults to zeros). θ is fitted by maximum likelihood from
+/// theta0 (L-BFGS, the gradient by central differences of ln L, Nelder–Mead fallback);
+/// log_variances lists the indices of θ that are logarithms of variances (for the
+/// "boundary" flag). An exception raised by model, a return that is not a dict, an
+/// unknown key or a matrix of the wrong shape is raised as a ValueError or TypeError
+/// naming it.
+#[pyfunction]
+#[pyo3(signature = (model, theta0, zs, F = None, H = None, Q = None, R = None, x0 = None, P0 = None, max_iter = None, log_variances = None))]
+pub(crate) fn fit_callable<'py>(
+    py: Python<'py>,
+    model: &Bound<'py, PyAny>,
+    theta0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    F: Option<&Bound<'py, PyAny>>,
+    H: Option<&Bound<'py, PyAny>>,
+    Q: Option<&Bound<'py, PyAny>>,
+    R: Option<&Bound<'py, PyAny>>,
+    x0: Option<&Bound<'py, PyAny>>,
+    P0: Option<&Bound<'py, PyAny>>,
+    max_iter: Option<usize>,
+    log_variances: Option<Vec<usize>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        run_fit_callable(
+            py,
+            [model, theta0, zs],
+            [F, H, Q, R, x0, P0],
+            max_iter,
+            log_variances,
+        )
+    })
 }
 
 const KEYS: [&str; 6] = ["F", "H", "Q", "R", "x0", "P0"];

@@ -14,22 +14,35 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{float_array, mat, np_zeros, shape_str, value_error};
+use crate::guard;
 use crate::pass::{covariance_form, engine};
 
 /// Entries of work per chunk of series (inputs plus outputs): about 8 MB.
 const CHUNK_ENTRIES: usize = 1 << 20;
 
-py_function! {
-    /// filter_batch(F, H, Q, R, x0, P0, zs, form="joseph", covariances=False) → dict with
-    /// "x" (series, steps, n): x_{k|k} of every series; "P_last" (series, n, n): each
-    /// series' last P_{k|k}; "log_likelihood" (series,); and with covariances=True "P"
-    /// (series, steps, n, n). zs is (series, steps, m), or (series, steps) for m = 1, NaN
-    /// for a missing entry. Every series starts from the prior (x0, P0) of its first
-    /// measurement and is filtered as `filter` filters one (update with zs[s, k], then
-    /// predict), equal to it to round-off. The model takes no control input and no S; the
-    /// form is "joseph" or "standard".
-    fn filter_batch(F, H, Q, R, x0, P0, zs; form: &str = "joseph", covariances: bool = false)
-        => run_batch
+/// filter_batch(F, H, Q, R, x0, P0, zs, form="joseph", covariances=False) → dict with
+/// "x" (series, steps, n): x_{k|k} of every series; "P_last" (series, n, n): each
+/// series' last P_{k|k}; "log_likelihood" (series,); and with covariances=True "P"
+/// (series, steps, n, n). zs is (series, steps, m), or (series, steps) for m = 1, NaN
+/// for a missing entry. Every series starts from the prior (x0, P0) of its first
+/// measurement and is filtered as `filter` filters one (update with zs[s, k], then
+/// predict), equal to it to round-off. The model takes no control input and no S; the
+/// form is "joseph" or "standard".
+#[pyfunction]
+#[pyo3(signature = (F, H, Q, R, x0, P0, zs, form = "joseph", covariances = false))]
+pub(crate) fn filter_batch<'py>(
+    py: Python<'py>,
+    F: &Bound<'py, PyAny>,
+    H: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    form: &str,
+    covariances: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| run_batch(py, [F, H, Q, R, x0, P0, zs], form, covariances))
 }
 
 /// [`filter_batch`]'s work.

@@ -13,52 +13,6 @@
 //! unwinding into the interpreter.
 #![deny(missing_docs)]
 
-/// Writes a module-level `#[pyfunction]` that returns a dict, from its Python signature:
-///
-/// `fn name(A, B; C = None; k: T = default) => body` takes the array arguments `A, B`
-/// (`&Bound<PyAny>`), then the optional array arguments `C` (`Option<&Bound<PyAny>>`,
-/// default `None`; this group may be left out), then the other arguments with their Rust
-/// types and defaults (this group too), and calls `body(py, [A, B], [C], k)` inside
-/// [`guard`]; `=> body(e)` calls `body(e, py, [A, B], [C], k)`. The argument plumbing is
-/// written once here; each function's own code takes the two groups as arrays.
-macro_rules! py_function {
-    (
-        $(#[$attr:meta])*
-        fn $name:ident(
-            $($arg:ident),+; $($opt:ident = None),+ $(; $($kw:ident: $ty:ty = $default:tt),+)?
-        ) => $body:ident $(($($pre:expr),+))?
-    ) => {
-        py_function!(@emit py [$(#[$attr])*] $name [$($arg),+] [$($opt),+]
-            [$($($kw: $ty = $default),+)?]
-            ($body($($($pre,)+)? py, [$($arg),+], [$($opt),+] $($(, $kw)+)?)));
-    };
-    (
-        $(#[$attr:meta])*
-        fn $name:ident($($arg:ident),+ $(; $($kw:ident: $ty:ty = $default:tt),+)?)
-        => $body:ident $(($($pre:expr),+))?
-    ) => {
-        py_function!(@emit py [$(#[$attr])*] $name [$($arg),+] []
-            [$($($kw: $ty = $default),+)?]
-            ($body($($($pre,)+)? py, [$($arg),+] $($(, $kw)+)?)));
-    };
-    (
-        @emit $py:ident [$($attr:tt)*] $name:ident [$($arg:ident),+] [$($opt:ident),*]
-        [$($kw:ident: $ty:ty = $default:tt),*] ($call:expr)
-    ) => {
-        $($attr)*
-        #[pyo3::pyfunction]
-        #[pyo3(signature = ($($arg,)+ $($opt = None,)* $($kw = $default,)*))]
-        pub(crate) fn $name<'py>(
-            $py: pyo3::Python<'py>,
-            $($arg: &pyo3::Bound<'py, pyo3::PyAny>,)+
-            $($opt: Option<&pyo3::Bound<'py, pyo3::PyAny>>,)*
-            $($kw: $ty,)*
-        ) -> pyo3::PyResult<pyo3::Bound<'py, pyo3::types::PyDict>> {
-            $crate::guard(|| $call)
-        }
-    };
-}
-
 mod batch;
 mod convert;
 mod ekf;

@@ -7,7 +7,11 @@
 use std::cell::RefCell;
 
 use kalman::DynDims;
-use kalman::nonlinear::{CentralDiff, Ekf, EkfUpdate, FnModel, SigmaPoints, SqrtUkf, Ukf};
+use kalman::StepInfo;
+use kalman::faer::MatRef;
+use kalman::nonlinear::{
+    CentralDiff, Ekf, EkfUpdate, FnModel, ForwardPass, SigmaPoints, SqrtUkf, Ukf,
+};
 use numpy::{PyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -15,6 +19,7 @@ use pyo3::types::PyDict;
 use crate::convert::{
     FilterRecord, ensure_callable, float_array, mat, read_vector, shape_str, value_error,
 };
+use crate::guard;
 
 /// Calls `func(*args)` and reads its result as a vector of length `len` into `out`; on any
 /// failure (a pending signal included) keeps the first error in `slot` and writes NaN
@@ -38,6 +43,55 @@ fn call_into<'py>(
     if let Err(e) = res {
         *slot.borrow_mut() = Some(e);
         out.fill(f64::NAN);
+    }
+}
+
+/// One filter's step: the measurement row and the optional input row in, the step's
+/// diagnostics out.
+type StepFn<F> = fn(&mut F, &[f64], Option<&[f64]>) -> Result<StepInfo, kalman::Error>;
+
+/// A series for the nonlinear filters: its measurement (and input) rows, the slot where a
+/// callable's first error is kept, and the record of the estimates.
+struct Series<'a> {
+    steps: usize,
+    z: &'a [f64],
+    u: Option<&'a [f64]>,
+    slot: &'a RefCell<Option<PyErr>>,
+    rec: FilterRecord,
+}
+
+impl Series<'_> {
+    /// The series through one filter: its `step` at every row of `z` (and `u`), the
+    /// estimates recorded. The first error a callable raised wins over the engine's own,
+    /// which `err` converts.
+    fn drive<F: ForwardPass>(
+        &mut self,
+        mut flt: F,
+        step: StepFn<F>,
+        err: impl Fn(kalman::Error) -> PyErr,
+    ) -> PyResult<()> {
+        let n = flt.filtered().0.len();
+        let m = self.z.len() / self.steps.max(1);
+        let p = self.u.map_or(0, |u| u.len() / self.steps.max(1));
+        for k in 0..self.steps {
+            let uk = self.u.map(|u| &u[k * p..(k + 1) * p]);
+            let stepped = step(&mut flt, &self.z[k * m..(k + 1) * m], uk);
+            if let Some(e) = self.slot.borrow_mut().take() {
+                return Err(e);
+            }
+            let info = stepped.map_err(&err)?;
+            let ((x, P), (xp, Pp)) = (flt.filtered(), flt.predicted());
+            self.rec.set(
+                k,
+                x,
+                MatRef::from_column_major_slice(P, n, n),
+                xp,
+                MatRef::from_column_major_slice(Pp, n, n),
+                info.log_likelihood,
+                info.nis,
+            );
+        }
+        Ok(())
     }
 }
 
@@ -103,52 +157,50 @@ fn run<'py>(
         });
     };
     let model = FnModel::new(dims, fcall, hcall, &Q, &R).map_err(err)?;
-    let mut rec = FilterRecord::new(steps, n)?;
-    macro_rules! drive {
-        ($filter:expr) => {{
-            let mut flt = $filter;
-            for k in 0..steps {
-                let uk = u.as_ref().map(|u| &u[k * p..(k + 1) * p]);
-                let info = match flt.step(&z[k * m..(k + 1) * m], uk) {
-                    Ok(info) => info,
-                    Err(e) => {
-                        return Err(slot.borrow_mut().take().unwrap_or_else(|| err(e)));
-                    }
-                };
-                if let Some(e) = slot.borrow_mut().take() {
-                    return Err(e);
-                }
-                rec.set(
-                    k,
-                    flt.state(),
-                    flt.covariance(),
-                    flt.predicted_state(),
-                    flt.predicted_covariance(),
-                    info.log_likelihood,
-                    info.nis,
-                );
-            }
-        }};
-    }
+    let mut series = Series {
+        steps,
+        z: &z,
+        u: u.as_deref(),
+        slot: &slot,
+        rec: FilterRecord::new(steps, n)?,
+    };
     match kind {
         Kind::Ekf(update) => {
-            drive!(Ekf::new(dims, CentralDiff::new(dims, model), &x0v, &P0, update).map_err(err)?)
+            let flt = Ekf::new(dims, CentralDiff::new(dims, model), &x0v, &P0, update);
+            series.drive(flt.map_err(err)?, Ekf::step, err)?;
         }
-        Kind::Ukf(points) => drive!(Ukf::new(dims, model, &x0v, &P0, points).map_err(err)?),
+        Kind::Ukf(points) => {
+            let flt = Ukf::new(dims, model, &x0v, &P0, points).map_err(err)?;
+            series.drive(flt, Ukf::step, err)?;
+        }
         Kind::SqrtUkf(points) => {
-            drive!(SqrtUkf::new(dims, model, &x0v, &P0, points).map_err(err)?)
+            let flt = SqrtUkf::new(dims, model, &x0v, &P0, points).map_err(err)?;
+            series.drive(flt, SqrtUkf::step, err)?;
         }
     }
-    rec.into_dict(py)
+    series.rec.into_dict(py)
 }
 
-py_function! {
-    /// ekf(f, h, Q, R, x0, P0, zs, us=None, iterations=0, tolerance=1e-9) → dict as `filter`:
-    /// the extended Kalman filter with Jacobians by central differences; f(x, u, k) returns
-    /// the next state (u is None without us), h(x, k) the predicted measurement. iterations
-    /// > 0 selects the iterated EKF (Gauss–Newton updates, at most that many).
-    fn ekf(f, h, Q, R, x0, P0, zs; us = None; iterations: usize = 0, tolerance: f64 = 1e-9)
-        => run_ekf
+/// ekf(f, h, Q, R, x0, P0, zs, us=None, iterations=0, tolerance=1e-9) → dict as `filter`:
+/// the extended Kalman filter with Jacobians by central differences; f(x, u, k) returns
+/// the next state (u is None without us), h(x, k) the predicted measurement. iterations
+/// > 0 selects the iterated EKF (Gauss–Newton updates, at most that many).
+#[pyfunction]
+#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, iterations = 0, tolerance = 1e-9))]
+pub(crate) fn ekf<'py>(
+    py: Python<'py>,
+    f: &Bound<'py, PyAny>,
+    h: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    us: Option<&Bound<'py, PyAny>>,
+    iterations: usize,
+    tolerance: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| run_ekf(py, [f, h, Q, R, x0, P0, zs], [us], iterations, tolerance))
 }
 
 /// [`ekf`]'s work.
@@ -170,17 +222,41 @@ fn run_ekf<'py>(
     run(Kind::Ekf(update), "ekf", py, args, us)
 }
 
-py_function! {
-    /// ukf(f, h, Q, R, x0, P0, zs, us=None, points="merwe", alpha=1e-3, beta=2.0, kappa=0.0,
-    /// form="plain") → dict as `filter`: the unscented Kalman filter with Merwe's scaled
-    /// sigma points or the cubature rule (points="cubature"); form="sqrt" runs the
-    /// square-root UKF (the same filter carrying Cholesky factors, for covariances too
-    /// ill-conditioned to form and factor).
-    fn ukf(
-        f, h, Q, R, x0, P0, zs; us = None;
-        points: &str = "merwe", alpha: f64 = 1e-3, beta: f64 = 2.0, kappa: f64 = 0.0,
-        form: &str = "plain"
-    ) => run_ukf
+/// ukf(f, h, Q, R, x0, P0, zs, us=None, points="merwe", alpha=1e-3, beta=2.0, kappa=0.0,
+/// form="plain") → dict as `filter`: the unscented Kalman filter with Merwe's scaled
+/// sigma points or the cubature rule (points="cubature"); form="sqrt" runs the
+/// square-root UKF (the same filter carrying Cholesky factors, for covariances too
+/// ill-conditioned to form and factor).
+#[pyfunction]
+#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, points = "merwe", alpha = 1e-3, beta = 2.0, kappa = 0.0, form = "plain"))]
+pub(crate) fn ukf<'py>(
+    py: Python<'py>,
+    f: &Bound<'py, PyAny>,
+    h: &Bound<'py, PyAny>,
+    Q: &Bound<'py, PyAny>,
+    R: &Bound<'py, PyAny>,
+    x0: &Bound<'py, PyAny>,
+    P0: &Bound<'py, PyAny>,
+    zs: &Bound<'py, PyAny>,
+    us: Option<&Bound<'py, PyAny>>,
+    points: &str,
+    alpha: f64,
+    beta: f64,
+    kappa: f64,
+    form: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        run_ukf(
+            py,
+            [f, h, Q, R, x0, P0, zs],
+            [us],
+            points,
+            alpha,
+            beta,
+            kappa,
+            form,
+        )
+    })
 }
 
 /// [`ukf`]'s work.

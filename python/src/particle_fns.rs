@@ -19,6 +19,7 @@ use crate::convert::{
     array3_out, ensure_callable, entries, float_array, matrix_out, memory_error, shape_str,
     type_name, value_error, vector_out, zeros,
 };
+use crate::guard;
 use crate::series::read_series;
 
 /// The Python callables as a [`PopulationModel`]. The first error a callable raises (or a
@@ -136,26 +137,43 @@ fn scheme(name: &str) -> PyResult<Resampling> {
     }
 }
 
-py_function! {
-    /// particle_filter(zs, initial, transition, log_likelihood, particles=1000,
-    /// resampling="systematic", ess_threshold=0.5, seed=0) → dict with "x" (steps, n): the
-    /// weighted mean after each step, "P" (steps, n, n) the weighted covariance, "ess"
-    /// (steps,), "resampled" (steps,) booleans, "log_likelihood": ln p̂(z_0..z_{N−1}) (its
-    /// exponential an unbiased estimate of the likelihood), and the last step's "particles"
-    /// (particles, n) and "log_weights" (particles,).
-    ///
-    /// The bootstrap filter: `initial(N, rng)` returns the N draws of the prior of the first
-    /// measurement as an (N, n) array; step k (after the first) resamples when the effective
-    /// sample size is below ess_threshold · N (1 resamples at every step), replaces the
-    /// particles by `transition(X, k − 1, rng)` (X the (N, n) particles of step k − 1, the value
-    /// their successors), and weights them by `log_likelihood(X, z, k)` (N values of
-    /// ln g_k(z | x), −inf where z is impossible). A row of zs that is all NaN only propagates.
-    /// rng is a numpy.random.Generator seeded from the filter's stream for the step.
-    fn particle_filter(
-        zs, initial, transition, log_likelihood;
-        particles: usize = 1000, resampling: &str = "systematic", ess_threshold: f64 = 0.5,
-        seed: u64 = 0
-    ) => run_particles
+/// particle_filter(zs, initial, transition, log_likelihood, particles=1000,
+/// resampling="systematic", ess_threshold=0.5, seed=0) → dict with "x" (steps, n): the
+/// weighted mean after each step, "P" (steps, n, n) the weighted covariance, "ess"
+/// (steps,), "resampled" (steps,) booleans, "log_likelihood": ln p̂(z_0..z_{N−1}) (its
+/// exponential an unbiased estimate of the likelihood), and the last step's "particles"
+/// (particles, n) and "log_weights" (particles,).
+///
+/// The bootstrap filter: `initial(N, rng)` returns the N draws of the prior of the first
+/// measurement as an (N, n) array; step k (after the first) resamples when the effective
+/// sample size is below ess_threshold · N (1 resamples at every step), replaces the
+/// particles by `transition(X, k − 1, rng)` (X the (N, n) particles of step k − 1, the value
+/// their successors), and weights them by `log_likelihood(X, z, k)` (N values of
+/// ln g_k(z | x), −inf where z is impossible). A row of zs that is all NaN only propagates.
+/// rng is a numpy.random.Generator seeded from the filter's stream for the step.
+#[pyfunction]
+#[pyo3(signature = (zs, initial, transition, log_likelihood, particles = 1000, resampling = "systematic", ess_threshold = 0.5, seed = 0))]
+pub(crate) fn particle_filter<'py>(
+    py: Python<'py>,
+    zs: &Bound<'py, PyAny>,
+    initial: &Bound<'py, PyAny>,
+    transition: &Bound<'py, PyAny>,
+    log_likelihood: &Bound<'py, PyAny>,
+    particles: usize,
+    resampling: &str,
+    ess_threshold: f64,
+    seed: u64,
+) -> PyResult<Bound<'py, PyDict>> {
+    guard(|| {
+        run_particles(
+            py,
+            [zs, initial, transition, log_likelihood],
+            particles,
+            resampling,
+            ess_threshold,
+            seed,
+        )
+    })
 }
 
 /// [`particle_filter`]'s work.

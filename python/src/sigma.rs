@@ -14,6 +14,7 @@ use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
+use pyo3::{PyClass, PyClassInitializer};
 
 use crate::convert::{read_matrix, read_vector, scalar, type_error, value_error, zeros};
 use crate::guard;
@@ -418,75 +419,122 @@ fn reduce_of<'py>(slf: &Bound<'py, PyAny>, args: &[&str]) -> PyResult<Bound<'py,
     (slf.get_type(), PyTuple::new(slf.py(), vals)?, state).into_pyobject(slf.py())
 }
 
-/// Writes one sigma-point class: its struct and one `#[pymethods]` block with the given
-/// `__init__`, then `num_sigmas`, `sigma_points`, `_compute_weights`, `__repr__` and
-/// `__reduce__`.
-macro_rules! points_class {
-    (
-        $(#[$doc:meta])* $name:ident, $rule:expr, $count:expr, [$($key:literal),*],
-        [$($arg:literal),*], #[$sig:meta] ($($param:tt)*) $body:block
-    ) => {
-        $(#[$doc])*
-        #[pyclass(module = "launch_estimation", dict, subclass)]
-        #[derive(Debug)]
-        pub struct $name {}
-
-        #[pymethods]
-        impl $name {
-            /// The object; `__init__` fills its dict.
-            #[new]
-            #[pyo3(signature = (*_args, **_kwargs))]
-            fn new(_args: &Bound<'_, PyTuple>, _kwargs: Option<&Bound<'_, PyDict>>) -> Self {
-                Self {}
-            }
-
-            #[$sig]
-            fn __init__($($param)*) -> PyResult<()> $body
-
-            /// The number of sigma points.
-            fn num_sigmas(slf: &Bound<'_, Self>) -> PyResult<usize> {
-                guard(|| {
-                    let n = dimension(&item(&dict_of(slf.as_any())?, "n")?)?;
-                    Ok(($count)(n))
-                })
-            }
-
-            /// sigma_points(x, P) → (N, n) array: the points of mean x and covariance P
-            /// (P a scalar means P·I), in FilterPy's order.
-            fn sigma_points<'py>(
-                slf: &Bound<'py, Self>,
-                x: &Bound<'py, PyAny>,
-                P: &Bound<'py, PyAny>,
-            ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-                guard(|| sigma_points_of(slf.as_any(), $rule, x, P))
-            }
-
-            /// Recomputes Wm and Wc from the parameters.
-            fn _compute_weights(slf: &Bound<'_, Self>) -> PyResult<()> {
-                guard(|| compute_weights(slf.py(), $rule, &dict_of(slf.as_any())?))
-            }
-
-            fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
-                repr_of(slf.as_any(), concat!(stringify!($name), " object"), &[$($key),*])
-            }
-
-            /// Pickle and copy support: the constructor's arguments, then the dict.
-            fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
-                guard(|| reduce_of(slf.as_any(), &[$($arg),*]))
-            }
+impl Rule {
+    /// FilterPy's name of the rule's class.
+    fn class(self) -> &'static str {
+        match self {
+            Rule::Merwe => "MerweScaledSigmaPoints",
+            Rule::Julier => "JulierSigmaPoints",
+            Rule::Simplex => "SimplexSigmaPoints",
         }
-    };
+    }
+
+    /// The number of sigma points for n states.
+    fn count(self, n: usize) -> usize {
+        match self {
+            Rule::Merwe | Rule::Julier => 2 * n + 1,
+            Rule::Simplex => n + 1,
+        }
+    }
+
+    /// The attributes `__repr__` shows, in FilterPy's order.
+    fn shown(self) -> &'static [&'static str] {
+        match self {
+            Rule::Merwe => &[
+                "n", "alpha", "beta", "kappa", "Wm", "Wc", "subtract", "sqrt",
+            ],
+            Rule::Julier => &["n", "kappa", "Wm", "Wc", "subtract", "sqrt"],
+            Rule::Simplex => &["n", "alpha", "Wm", "Wc", "subtract", "sqrt"],
+        }
+    }
+
+    /// The constructor's positional arguments, as `__reduce__` passes them back.
+    fn arguments(self) -> &'static [&'static str] {
+        match self {
+            Rule::Merwe => &["n", "alpha", "beta", "kappa"],
+            Rule::Julier => &["n", "kappa"],
+            Rule::Simplex => &["n", "alpha"],
+        }
+    }
 }
 
-points_class!(
-    /// FilterPy's `MerweScaledSigmaPoints(n, alpha, beta, kappa, sqrt_method=None,
-    /// subtract=None)`: 2n + 1 points, Van der Merwe's scaled rule. `sqrt` is None for the
-    /// built-in Cholesky factor (SciPy's `cholesky`, upper triangular).
-    MerweScaledSigmaPoints, Rule::Merwe, |n: usize| 2 * n + 1,
-    ["n", "alpha", "beta", "kappa", "Wm", "Wc", "subtract", "sqrt"],
-    ["n", "alpha", "beta", "kappa"],
+/// The base of the three sigma-point classes: the rule, and the methods they share
+/// (`num_sigmas`, `sigma_points`, `_compute_weights`, `__repr__`, `__reduce__`); each class
+/// adds its own `__init__`.
+#[pyclass(module = "launch_estimation", name = "_SigmaPoints", dict, subclass)]
+#[derive(Debug)]
+pub struct SigmaPointsBase {
+    rule: Rule,
+}
+
+impl SigmaPointsBase {
+    /// A new object of the class of `rule` (its dict is filled by `__init__`).
+    fn of<T: PyClass<BaseType = Self>>(rule: Rule, class: T) -> PyClassInitializer<T> {
+        PyClassInitializer::from(Self { rule }).add_subclass(class)
+    }
+}
+
+#[pymethods]
+impl SigmaPointsBase {
+    /// The number of sigma points.
+    fn num_sigmas(slf: &Bound<'_, Self>) -> PyResult<usize> {
+        guard(|| {
+            let n = dimension(&item(&dict_of(slf.as_any())?, "n")?)?;
+            Ok(slf.borrow().rule.count(n))
+        })
+    }
+
+    /// sigma_points(x, P) → (N, n) array: the points of mean x and covariance P (P a scalar
+    /// means P·I), in FilterPy's order.
+    fn sigma_points<'py>(
+        slf: &Bound<'py, Self>,
+        x: &Bound<'py, PyAny>,
+        P: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        guard(|| sigma_points_of(slf.as_any(), slf.borrow().rule, x, P))
+    }
+
+    /// Recomputes Wm and Wc from the parameters.
+    fn _compute_weights(slf: &Bound<'_, Self>) -> PyResult<()> {
+        guard(|| compute_weights(slf.py(), slf.borrow().rule, &dict_of(slf.as_any())?))
+    }
+
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        let rule = slf.borrow().rule;
+        repr_of(
+            slf.as_any(),
+            &format!("{} object", rule.class()),
+            rule.shown(),
+        )
+    }
+
+    /// Pickle and copy support: the constructor's arguments, then the dict.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+        guard(|| reduce_of(slf.as_any(), slf.borrow().rule.arguments()))
+    }
+}
+
+/// FilterPy's `MerweScaledSigmaPoints(n, alpha, beta, kappa, sqrt_method=None,
+/// subtract=None)`: 2n + 1 points, Van der Merwe's scaled rule. `sqrt` is None for the
+/// built-in Cholesky factor (SciPy's `cholesky`, upper triangular).
+#[pyclass(module = "launch_estimation", extends = SigmaPointsBase, subclass)]
+#[derive(Debug)]
+pub struct MerweScaledSigmaPoints {}
+
+#[pymethods]
+impl MerweScaledSigmaPoints {
+    /// The object; `__init__` fills its dict.
+    #[new]
+    #[pyo3(signature = (*_args, **_kwargs))]
+    fn new(
+        _args: &Bound<'_, PyTuple>,
+        _kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyClassInitializer<Self> {
+        SigmaPointsBase::of(Rule::Merwe, Self {})
+    }
+
     #[pyo3(signature = (n, alpha, beta, kappa, sqrt_method = None, subtract = None))]
-    (
+    fn __init__(
         slf: &Bound<'_, Self>,
         n: &Bound<'_, PyAny>,
         alpha: &Bound<'_, PyAny>,
@@ -494,58 +542,97 @@ points_class!(
         kappa: &Bound<'_, PyAny>,
         sqrt_method: Option<&Bound<'_, PyAny>>,
         subtract: Option<&Bound<'_, PyAny>>,
-    )
-    {
+    ) -> PyResult<()> {
         guard(|| {
             let d = dict_of(slf.as_any())?;
             let params = [("alpha", alpha), ("beta", beta), ("kappa", kappa)];
             init(slf.py(), Rule::Merwe, &d, n, &params, sqrt_method, subtract)
         })
     }
-);
-points_class!(
-    /// FilterPy's `JulierSigmaPoints(n, kappa=0.0, sqrt_method=None, subtract=None)`: 2n +
-    /// 1 points, Julier and Uhlmann's rule.
-    JulierSigmaPoints, Rule::Julier, |n: usize| 2 * n + 1,
-    ["n", "kappa", "Wm", "Wc", "subtract", "sqrt"],
-    ["n", "kappa"],
+}
+
+/// FilterPy's `JulierSigmaPoints(n, kappa=0.0, sqrt_method=None, subtract=None)`: 2n + 1
+/// points, Julier and Uhlmann's rule.
+#[pyclass(module = "launch_estimation", extends = SigmaPointsBase, subclass)]
+#[derive(Debug)]
+pub struct JulierSigmaPoints {}
+
+#[pymethods]
+impl JulierSigmaPoints {
+    /// The object; `__init__` fills its dict.
+    #[new]
+    #[pyo3(signature = (*_args, **_kwargs))]
+    fn new(
+        _args: &Bound<'_, PyTuple>,
+        _kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyClassInitializer<Self> {
+        SigmaPointsBase::of(Rule::Julier, Self {})
+    }
+
     #[pyo3(signature = (n, kappa = None, sqrt_method = None, subtract = None))]
-    (
+    fn __init__(
         slf: &Bound<'_, Self>,
         n: &Bound<'_, PyAny>,
         kappa: Option<&Bound<'_, PyAny>>,
         sqrt_method: Option<&Bound<'_, PyAny>>,
         subtract: Option<&Bound<'_, PyAny>>,
-    )
-    {
+    ) -> PyResult<()> {
         guard(|| {
             let d = dict_of(slf.as_any())?;
             let zero = pyo3::types::PyFloat::new(slf.py(), 0.0).into_any();
             let params = [("kappa", kappa.unwrap_or(&zero))];
-            init(slf.py(), Rule::Julier, &d, n, &params, sqrt_method, subtract)
+            init(
+                slf.py(),
+                Rule::Julier,
+                &d,
+                n,
+                &params,
+                sqrt_method,
+                subtract,
+            )
         })
     }
-);
-points_class!(
-    /// FilterPy's `SimplexSigmaPoints(n, alpha=1, sqrt_method=None, subtract=None)`: n + 1
-    /// points on a simplex (Moireau and Chapelle); alpha is kept but, as in FilterPy, unused.
-    SimplexSigmaPoints, Rule::Simplex, |n: usize| n + 1,
-    ["n", "alpha", "Wm", "Wc", "subtract", "sqrt"],
-    ["n", "alpha"],
+}
+
+/// FilterPy's `SimplexSigmaPoints(n, alpha=1, sqrt_method=None, subtract=None)`: n + 1
+/// points on a simplex (Moireau and Chapelle); alpha is kept but, as in FilterPy, unused.
+#[pyclass(module = "launch_estimation", extends = SigmaPointsBase, subclass)]
+#[derive(Debug)]
+pub struct SimplexSigmaPoints {}
+
+#[pymethods]
+impl SimplexSigmaPoints {
+    /// The object; `__init__` fills its dict.
+    #[new]
+    #[pyo3(signature = (*_args, **_kwargs))]
+    fn new(
+        _args: &Bound<'_, PyTuple>,
+        _kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyClassInitializer<Self> {
+        SigmaPointsBase::of(Rule::Simplex, Self {})
+    }
+
     #[pyo3(signature = (n, alpha = None, sqrt_method = None, subtract = None))]
-    (
+    fn __init__(
         slf: &Bound<'_, Self>,
         n: &Bound<'_, PyAny>,
         alpha: Option<&Bound<'_, PyAny>>,
         sqrt_method: Option<&Bound<'_, PyAny>>,
         subtract: Option<&Bound<'_, PyAny>>,
-    )
-    {
+    ) -> PyResult<()> {
         guard(|| {
             let d = dict_of(slf.as_any())?;
             let one = pyo3::types::PyInt::new(slf.py(), 1).into_any();
             let params = [("alpha", alpha.unwrap_or(&one))];
-            init(slf.py(), Rule::Simplex, &d, n, &params, sqrt_method, subtract)
+            init(
+                slf.py(),
+                Rule::Simplex,
+                &d,
+                n,
+                &params,
+                sqrt_method,
+                subtract,
+            )
         })
     }
-);
+}

@@ -87,6 +87,12 @@ pub(crate) fn check(root: &Path) -> Result<Vec<String>> {
                     "{rel}: {lines} lines, within the limit: remove it from OVER_LENGTH"
                 ));
             }
+            if rel.starts_with("python/src/") && text.contains(concat!("macro_rules", "!")) {
+                problems.push(format!(
+                    "{rel}: defines a macro: the Python crate is ordinary functions and \
+                     #[pymethods], so rustfmt formats every line"
+                ));
+            }
             if rel.starts_with("scenarios/") {
                 for (i, line) in text.lines().enumerate() {
                     if string_result(line) {
