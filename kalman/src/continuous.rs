@@ -316,7 +316,8 @@ impl KalmanBucy {
 
 /// Matrix exponential e^{A} by scaling and squaring with the Padé approximant of the degree
 /// (3, 5, 7, 9 or 13) that A's 1-norm needs (Higham 2005); the Padé quotient is a solve, not
-/// an inverse. The crate's one exponential, also behind the sampler of continuous models.
+/// an inverse: `numerics::Expm`, the workspace's one exponential, also behind the sampler of
+/// continuous models.
 ///
 /// # Errors
 /// [`Error::Shape`] if A is not square, [`Error::NonFinite`] for a non-finite entry, and
@@ -333,7 +334,7 @@ impl KalmanBucy {
 pub fn expm(A: impl MatrixInput) -> Result<Mat<f64>, Error> {
     let n = A.nrows();
     check("A", &A, n, n)?;
-    let mut work = crate::expm::Expm::new(n);
+    let mut work = numerics::Expm::new(n);
     let input = work.input(n);
     for j in 0..n {
         for i in 0..n {
@@ -342,21 +343,15 @@ pub fn expm(A: impl MatrixInput) -> Result<Mat<f64>, Error> {
     }
     let mut out = vec![0.0; n * n];
     if !work.run(n, &mut out) {
-        let bad = out.iter().position(|x| !x.is_finite()).unwrap_or(0);
-        return Err(Error::NonFinite {
-            name: "e^A",
-            rows: n,
-            cols: n,
-            row: bad % n.max(1),
-            col: bad / n.max(1),
-        });
+        return Err(overflow("e^A", n, &out));
     }
     Ok(Mat::from_fn(n, n, |i, j| out[i + j * n]))
 }
 
 /// Van Loan's sampling of ẋ = A x + w (w of intensity `Q`, n×n, as it enters the state) at
 /// interval `dt`: returns (F, Q_d) with F = e^{AΔt} and Q_d = ∫₀^Δt e^{Aτ} Q e^{Aᵀτ} dτ
-/// (symmetrised). Measurement noise of intensity R_c averaged over the interval has
+/// (symmetrised), computed by `numerics::van_loan`. Measurement noise of intensity R_c
+/// averaged over the interval has
 /// covariance R_c / Δt.
 ///
 /// # Errors
@@ -388,19 +383,28 @@ pub fn van_loan(
             rule: "the sampling interval must be positive and finite",
         });
     }
-    let mut M = Mat::<f64>::zeros(2 * n, 2 * n);
-    for j in 0..n {
-        for i in 0..n {
-            M[(i, j)] = -A[(i, j)] * dt;
-            M[(i, n + j)] = Q[(i, j)] * dt;
-            M[(n + i, n + j)] = A[(j, i)] * dt;
-        }
+    let a: Vec<f64> = A.col_iter().flat_map(|c| c.iter().copied()).collect();
+    let q: Vec<f64> = Q.col_iter().flat_map(|c| c.iter().copied()).collect();
+    let (mut f, mut qd) = (vec![0.0; n * n], vec![0.0; n * n]);
+    if !numerics::van_loan(&a, &q, n, dt, &mut f, &mut qd) {
+        f.extend_from_slice(&qd);
+        return Err(overflow("the Van Loan exponential (F, Q_d)", n, &f));
     }
-    let E = expm(M.as_ref())?;
-    let F = E.as_ref().submatrix(n, n, n, n).transpose().to_owned();
-    let mut Qd = &F * E.as_ref().submatrix(0, n, n, n);
-    symmetrise(&mut Qd);
-    Ok((F, Qd))
+    let at = |v: &[f64]| Mat::from_fn(n, n, |i, j| v[i + j * n]);
+    Ok((at(&f), at(&qd)))
+}
+
+/// [`Error::NonFinite`] naming `name` (n×n) at the first non-finite entry of `values`, one
+/// or more n×n column-major matrices (an exponential that overflowed).
+fn overflow(name: &'static str, n: usize, values: &[f64]) -> Error {
+    let bad = values.iter().position(|x| !x.is_finite()).unwrap_or(0) % (n * n).max(1);
+    Error::NonFinite {
+        name,
+        rows: n,
+        cols: n,
+        row: bad % n.max(1),
+        col: bad / n.max(1),
+    }
 }
 
 #[cfg(test)]
@@ -410,6 +414,21 @@ mod tests {
 
     /// A sampling interval that is zero, negative, infinite or NaN is named, not integrated
     /// (a negative one would run the model backwards, an infinite one overflow).
+    /// An exponential that overflows f64 is an error naming it, not a matrix of ∞/NaN.
+    #[test]
+    fn an_overflowing_van_loan_is_an_error_naming_it() {
+        let err = van_loan(mat![[1000.0]].as_ref(), mat![[1.0]].as_ref(), 1.0).expect_err("e^1000");
+        assert!(
+            matches!(err, Error::NonFinite { name, .. } if name.contains("Van Loan")),
+            "{err:?}"
+        );
+        let err = expm(mat![[1000.0]].as_ref()).expect_err("e^1000");
+        assert!(
+            matches!(err, Error::NonFinite { name: "e^A", .. }),
+            "{err:?}"
+        );
+    }
+
     #[test]
     fn van_loan_refuses_a_sampling_interval_that_is_not_positive_and_finite() {
         let (A, Q) = (mat![[-1.0]], mat![[1.0]]);

@@ -186,70 +186,9 @@ fn par_for(_work: usize) -> Par {
     Par::Seq
 }
 
-/// The scalars of [`symmetrise`] and [`cholesky`]: `f64`, and with the feature `autodiff`
-/// every dual number over it, so the fitting code differentiating through a filter pass
-/// (`fit::filter_error`) runs these same kernels.
-pub(crate) trait Real:
-    Copy
-    + std::ops::Add<Output = Self>
-    + std::ops::Sub<Output = Self>
-    + std::ops::Mul<Output = Self>
-    + std::ops::Div<Output = Self>
-    + std::ops::SubAssign
-    + std::ops::AddAssign
-    + std::ops::Mul<f64, Output = Self>
-{
-    /// The square root.
-    fn sqrt(self) -> Self;
-    /// The value (the real part of a dual number).
-    fn value(self) -> f64;
-    /// The constant `v` (no derivative part).
-    fn constant(v: f64) -> Self;
-}
-
-#[cfg(not(feature = "autodiff"))]
-impl Real for f64 {
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        f64::sqrt(self)
-    }
-    #[inline(always)]
-    fn value(self) -> f64 {
-        self
-    }
-    #[inline(always)]
-    fn constant(v: f64) -> Self {
-        v
-    }
-}
-
-#[cfg(feature = "autodiff")]
-impl<T: num_dual::DualNum<Primitive = f64> + Copy> Real for T {
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        num_dual::DualNum::sqrt(&self)
-    }
-    #[inline(always)]
-    fn value(self) -> f64 {
-        num_dual::DualStruct::re(&self)
-    }
-    #[inline(always)]
-    fn constant(v: f64) -> Self {
-        T::from(v)
-    }
-}
-
-/// Replaces the square `n`×`n` `a` by `(a + aᵀ)/2`.
-#[inline(always)]
-pub(crate) fn symmetrise<T: Real>(a: &mut [T], n: usize) {
-    for j in 0..n {
-        for i in 0..j {
-            let s = (a[i + j * n] + a[j + i * n]) * 0.5;
-            a[i + j * n] = s;
-            a[j + i * n] = s;
-        }
-    }
-}
+/// The scalar trait and the symmetrisation have their home in `numerics`, below the
+/// independent crates that share them.
+pub(crate) use numerics::{Real, symmetrise};
 
 /// Copies the lower triangle of the square `n`×`n` matrix to the upper one.
 #[inline(always)]

@@ -169,7 +169,6 @@ mod convert;
 pub mod dense;
 pub mod diagnostics;
 mod error;
-mod expm;
 mod filter;
 pub mod fit;
 pub mod gate;

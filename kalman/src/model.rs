@@ -6,15 +6,10 @@ use faer::{Mat, MatRef, Side};
 use crate::Error;
 use crate::storage::{Buf, Dims, DynDims, FIXED_MAX};
 
-/// Symmetry tolerance of covariance inputs: `|A_ij − A_ji| ≤ SYMMETRY_TOL·max|A|` (loose
-/// enough for matrices computed as products such as `D Q Dᵀ`, tight enough to catch a
-/// transposed or mistyped entry). Accepted matrices are stored symmetrised.
-pub const SYMMETRY_TOL: f64 = 1e-10;
-
-/// PSD tolerance of covariance inputs: the smallest eigenvalue must be at least
-/// `−PSD_TOL·max|λ|` (round-off of an exactly singular covariance such as the fuel
-/// model's `R = D Q Dᵀ` stays far inside it).
-pub const PSD_TOL: f64 = 1e-10;
+/// The workspace's covariance tolerances (their home is `numerics`): symmetry within
+/// `SYMMETRY_TOL·max|A|` (accepted matrices are stored symmetrised), PSD down to
+/// `−PSD_TOL·max|λ|`.
+pub use numerics::{PSD_TOL, SYMMETRY_TOL};
 
 /// Anything that can be read as a dense real matrix: faer `Mat`/`MatRef`, row-major nested
 /// arrays `[[f64; C]; R]` and vectors `Vec<Vec<f64>>`, nalgebra matrices (feature
@@ -253,7 +248,7 @@ pub(crate) fn load_vec(
 /// the crate's kernel ([`crate::kernels::symmetrise`]).
 pub(crate) fn check_symmetric(name: &'static str, a: &mut [f64], n: usize) -> Result<(), Error> {
     let scale = a[..n * n].iter().fold(0.0_f64, |s, x| s.max(x.abs()));
-    let tol = SYMMETRY_TOL * scale;
+    let tol = numerics::symmetry_tolerance(scale);
     let mut worst = (0.0, 0, 0);
     for j in 0..n {
         for i in j + 1..n {
@@ -323,7 +318,7 @@ pub(crate) fn psd_factor(
     let u = evd.U();
     let lmax = (0..n).fold(0.0_f64, |m, i| m.max(s[i].abs()));
     let lmin = (0..n).fold(f64::INFINITY, |m, i| m.min(s[i]));
-    let tol = PSD_TOL * lmax;
+    let tol = numerics::psd_tolerance(lmax);
     if lmin < -tol {
         return Err(Error::NotPositiveSemidefinite {
             name,

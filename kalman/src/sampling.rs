@@ -56,10 +56,10 @@ use faer::{Mat, MatRef};
 
 use std::collections::HashMap;
 
-use crate::expm::Expm;
 use crate::model::{check, owned};
 use crate::storage::DynDims;
 use crate::{Error, MatrixInput, Model, ModelSource};
+use numerics::Expm;
 
 /// A continuous-time linear model with a discrete measurement: `ẋ = A x + B u + w`,
 /// `E[w(t) w(s)ᵀ] = W δ(t − s)`, and `z_k = H x(t_k) + v_k` with `cov(v_k) = R`.

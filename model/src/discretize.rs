@@ -81,7 +81,9 @@ pub enum NoiseConvention {
     IntensityOverDt,
 }
 
-/// Matrix exponential `e^{M}` (nalgebra's scaling-and-squaring Padé), 0×0-safe.
+/// Matrix exponential `e^{M}`, 0×0-safe: `numerics::Expm`, the workspace's one exponential
+/// (scaling and squaring with the Padé approximant of the degree M's 1-norm needs, Higham
+/// 2005).
 ///
 /// # Errors
 /// [`Error::NotSquare`], [`Error::NonFiniteMatrix`] for a bad `M` or an overflowing result.
@@ -99,7 +101,13 @@ pub fn expm(m: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     if n == 0 {
         return Ok(DMatrix::zeros(0, 0));
     }
-    let e = m.exp();
+    validate::finite("M", m)?;
+    let mut work = numerics::Expm::new(n);
+    work.input(n).copy_from_slice(m.as_slice());
+    let mut e = DMatrix::zeros(n, n);
+    if !work.run(n, e.as_mut_slice()) {
+        e.fill(f64::NAN);
+    }
     validate::finite("exp(M)", &e)?;
     Ok(e)
 }
@@ -112,13 +120,11 @@ fn expm_step(
     dt: f64,
     what: &'static str,
 ) -> Result<DMatrix<f64>> {
-    if m.nrows() == 0 {
-        return Ok(DMatrix::zeros(0, 0));
-    }
-    let e = m.exp();
-    if e.iter().all(|v| v.is_finite()) {
-        return Ok(e);
-    }
+    expm(m).or_else(|_| step_too_large(a, dt, what))
+}
+
+/// [`Error::StepTooLarge`] for an exponential of `A·dt` (`what`) that overflows.
+fn step_too_large<T>(a: &DMatrix<f64>, dt: f64, what: &'static str) -> Result<T> {
     let norm1 = (0..a.ncols())
         .map(|j| a.column(j).iter().map(|v| v.abs()).sum::<f64>())
         .fold(0.0, f64::max);
@@ -192,24 +198,23 @@ pub fn van_loan(
     validate::shape("G", g, n, g.ncols(), "G must have as many rows as A")?;
     validate::covariance("W", w, g.ncols(), "W must be q×q with q = columns of G")?;
     let gwg = g * w * g.transpose();
-    if !gwg.iter().any(|v| v.abs() > 0.0) {
-        // No noise enters: Q_d = 0 exactly, and only e^{A·dt} is needed.
-        let phi = expm_step(&(a * dt), a, dt, "e^{A·dt}")?;
-        return Ok((phi, DMatrix::zeros(n, n)));
-    }
-    let mut m = DMatrix::zeros(2 * n, 2 * n);
-    m.view_mut((0, 0), (n, n)).copy_from(&(-a * dt));
-    m.view_mut((0, n), (n, n)).copy_from(&(gwg * dt));
-    m.view_mut((n, n), (n, n)).copy_from(&(a.transpose() * dt));
-    let e = expm_step(
-        &m,
-        a,
+    let (mut phi, mut qd) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n));
+    if !numerics::van_loan(
+        a.as_slice(),
+        gwg.as_slice(),
+        n,
         dt,
-        "the Van Loan exponential e^{[[−A, GWGᵀ], [0, Aᵀ]]·dt}",
-    )?;
-    let phi = e.view((n, n), (n, n)).transpose();
-    let q = &phi * e.view((0, n), (n, n));
-    Ok((phi, validate::symmetrize(&q)))
+        phi.as_mut_slice(),
+        qd.as_mut_slice(),
+    ) {
+        let what = if gwg.iter().any(|v| v.abs() > 0.0) {
+            "the Van Loan exponential e^{[[−A, GWGᵀ], [0, Aᵀ]]·dt}"
+        } else {
+            "e^{A·dt}"
+        };
+        return step_too_large(a, dt, what);
+    }
+    Ok((phi, qd))
 }
 
 /// The input part of a method: maps an input matrix `X` (n×k) to `(X_d, feed-through

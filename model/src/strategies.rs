@@ -60,8 +60,7 @@ pub fn spd_matrix(n: usize, cond: f64) -> impl Strategy<Value = DMatrix<f64>> {
             })
             .collect();
         let d = DMatrix::from_diagonal(&DVector::from_vec(lam));
-        let m = &u * d * u.transpose();
-        (&m + m.transpose()) * 0.5
+        crate::validate::symmetrize(&(&u * d * u.transpose()))
     })
 }
 

@@ -27,15 +27,12 @@ use nalgebra::DMatrix;
 
 use crate::error::{Error, Result};
 
-/// Symmetry tolerance of covariance and intensity inputs, relative to the matrix's own scale:
-/// accepted when `max|Mᵢⱼ − Mⱼᵢ| ≤ SYMMETRY_TOL · max|M|`, then symmetrised. The workspace's
-/// one tolerance policy (the same value and rule in `kalman` and `wls`): scaling a matrix by
-/// any positive factor — a change of units — never changes the verdict.
-pub const SYMMETRY_TOL: f64 = 1e-10;
-/// Positive-semidefiniteness tolerance, relative to the matrix's own scale: accepted when the
-/// smallest eigenvalue of the symmetric part is `≥ −PSD_TOL · max|λ|` (round-off of an exactly
-/// singular covariance, such as the fuel model's, lies far inside it).
-pub const PSD_TOL: f64 = 1e-10;
+/// The workspace's one tolerance policy (its home is `numerics`, shared with `kalman` and
+/// `wls`), relative to the matrix's own scale: symmetric when `max|Mᵢⱼ − Mⱼᵢ| ≤ SYMMETRY_TOL ·
+/// max|M|` (then symmetrised), PSD when the smallest eigenvalue of the symmetric part is
+/// `≥ −PSD_TOL · max|λ|`. Scaling a matrix by any positive factor — a change of units —
+/// never changes the verdict.
+pub use numerics::{PSD_TOL, SYMMETRY_TOL};
 
 pub(crate) fn finite(name: &'static str, m: &DMatrix<f64>) -> Result<()> {
     for c in 0..m.ncols() {
@@ -104,16 +101,16 @@ pub(crate) fn covariance(
             asym = asym.max((m[(i, j)] - m[(j, i)]).abs());
         }
     }
-    if asym > SYMMETRY_TOL * scale {
+    if asym > numerics::symmetry_tolerance(scale) {
         return Err(Error::NotSymmetric {
             name,
             asymmetry: asym,
         });
     }
-    let sym = (m + m.transpose()) * 0.5;
+    let sym = symmetrize(m);
     let eig = sym.symmetric_eigenvalues();
     let min_eig = eig.min();
-    if min_eig < -PSD_TOL * eig.amax() {
+    if min_eig < -numerics::psd_tolerance(eig.amax()) {
         return Err(Error::NotPositiveSemiDefinite {
             name,
             min_eigenvalue: min_eig,
@@ -161,9 +158,11 @@ pub(crate) fn finite_scalar(name: &'static str, v: f64) -> Result<f64> {
     }
 }
 
-/// Makes a matrix exactly symmetric: (M + Mᵀ)/2.
+/// Makes a square matrix exactly symmetric: (M + Mᵀ)/2, by `numerics::symmetrise`.
 pub(crate) fn symmetrize(m: &DMatrix<f64>) -> DMatrix<f64> {
-    (m + m.transpose()) * 0.5
+    let mut s = m.clone();
+    numerics::symmetrise(s.as_mut_slice(), m.nrows());
+    s
 }
 
 #[cfg(test)]

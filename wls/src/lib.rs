@@ -79,10 +79,11 @@ pub use error::{Error, Result};
 
 /// Symmetry tolerance of a full weight matrix `V`, relative to its own scale: accepted when
 /// `max|Vᵢⱼ − Vⱼᵢ| ≤ SYMMETRY_TOL · max|V|`, then symmetrised. The same value and rule as
-/// `model::SYMMETRY_TOL` and `kalman::SYMMETRY_TOL` (the workspace's one tolerance policy):
-/// scaling `V` by any positive factor — a change of units — never changes the verdict. `V`
-/// must moreover be positive definite (its Cholesky factor whitens the rows).
-pub const SYMMETRY_TOL: f64 = 1e-10;
+/// `model::SYMMETRY_TOL` and `kalman::SYMMETRY_TOL`: the workspace's one tolerance policy,
+/// whose home is `numerics`. Scaling `V` by any positive factor — a change of units — never
+/// changes the verdict. `V` must moreover be positive definite (its Cholesky factor whitens
+/// the rows).
+pub use numerics::SYMMETRY_TOL;
 
 /// Re-export of the linear-algebra crate whose types appear in this API.
 pub use nalgebra;

@@ -314,7 +314,7 @@ impl Whitener {
                 }
                 check_finite(name, V)?;
                 // The workspace's tolerance policy: asymmetry relative to V's own scale.
-                let tol = crate::SYMMETRY_TOL * V.amax();
+                let tol = numerics::symmetry_tolerance(V.amax());
                 let mut worst = (0, 0, 0.0_f64);
                 for i in 0..m {
                     for j in 0..i {
@@ -333,7 +333,7 @@ impl Whitener {
                         difference: worst.2,
                     });
                 }
-                let sym = (V + V.transpose()) * 0.5;
+                let sym = symmetric_part(V.clone());
                 let chol = sym
                     .cholesky()
                     .ok_or(Error::NotPositiveDefinite { name, n: m })?;
@@ -577,7 +577,7 @@ fn covariance_from_r(R: &DMatrix<f64>) -> Result<DMatrix<f64>> {
             detail: "zero on the diagonal",
         })?;
     let C = &Rinv * Rinv.transpose();
-    Ok((&C + C.transpose()) * 0.5)
+    Ok(symmetric_part(C))
 }
 
 /// Solves min ‖V^{1/2}(H x − z)‖² (+ regularisation and prior rows from `options`).
@@ -638,7 +638,7 @@ pub fn solve(
                 let C = lu.solve(&I).ok_or(singular)?;
                 (x, C)
             };
-            (x, (&C + C.transpose()) * 0.5)
+            (x, symmetric_part(C))
         }
     };
     let r_all = &sys.A * &x - &sys.b;
@@ -739,4 +739,12 @@ pub fn worst_case_bounds(
     }
     let S = sensitivity(H, weights, options)?;
     Ok(S.abs() * delta)
+}
+
+/// `(M + Mᵀ)/2` of a square `M`, by the workspace's one symmetrisation
+/// (`numerics::symmetrise`).
+fn symmetric_part(mut m: DMatrix<f64>) -> DMatrix<f64> {
+    let n = m.nrows();
+    numerics::symmetrise(m.as_mut_slice(), n);
+    m
 }

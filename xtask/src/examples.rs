@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 
 /// The library crates whose items are counted.
-pub(crate) const CRATES: &[&str] = &["model", "kalman", "wls", "sensors"];
+pub(crate) const CRATES: &[&str] = &["numerics", "model", "kalman", "wls", "sensors"];
 
 /// The share of counted items that must carry an example.
 pub(crate) const REQUIRED: f64 = 0.80;

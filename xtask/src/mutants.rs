@@ -18,7 +18,7 @@ use crate::{cargo, known, option, root};
 
 /// The folders of the crates whose sources are mutated: the libraries (not the program or
 /// the xtask).
-const LIBRARY_CRATES: &[&str] = &["model", "kalman", "wls", "sensors"];
+const LIBRARY_CRATES: &[&str] = &["numerics", "model", "kalman", "wls", "sensors"];
 
 /// Seconds a mutant's tests may run before it counts as a timeout. The unit and integration
 /// suite of one crate, unoptimised and without [`LONG_RUNS`], takes up to about 60 s on this

@@ -500,7 +500,7 @@ impl SampledMap {
                 m[i + (n + j) * k] = T::from(self.bc[i + j * n] * dt);
             }
         }
-        let Some(e) = crate::expm::expm_of(&m, k, n) else {
+        let Some(e) = numerics::expm_of(&m, k, n) else {
             out[..n].iter_mut().for_each(|o| *o = T::from(f64::NAN));
             return;
         };
@@ -543,7 +543,7 @@ impl SampledMap {
                 m[n + i + (n + j) * k] = a[j + i * n] * dt;
             }
         }
-        let Some(e) = crate::expm::expm_of(&m, k, n) else {
+        let Some(e) = numerics::expm_of(&m, k, n) else {
             out[..n * n].iter_mut().for_each(|o| *o = T::from(f64::NAN));
             return;
         };

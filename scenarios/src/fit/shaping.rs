@@ -106,7 +106,9 @@ fn to_faer(m: &DMatrix<f64>) -> Mat<f64> {
 }
 
 fn symmetric(m: &DMatrix<f64>) -> DMatrix<f64> {
-    (m + m.transpose()) * 0.5
+    let mut s = m.clone();
+    numerics::symmetrise(s.as_mut_slice(), m.nrows());
+    s
 }
 
 impl ShapingMap {

@@ -101,7 +101,8 @@ fn prior_covariance(m: &FuelModel, dir: &[f64; 7], level_std: f64) -> DMatrix<f6
     }
     let v = DVector::from_column_slice(dir);
     p += &v * v.transpose() * level_std.powi(2);
-    (&p + p.transpose()) * 0.5
+    numerics::symmetrise(p.as_mut_slice(), 7);
+    p
 }
 
 /// The filter engine's model of `m`: `F = A`, `H = C`, process noise `BQBᵀ`, `R = DQDᵀ`, the

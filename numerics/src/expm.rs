@@ -1,12 +1,13 @@
-//! The crate's one matrix exponential: scaling and squaring with a Padé approximant of the
+//! The workspace's one matrix exponential: scaling and squaring with a Padé approximant of the
 //! degree the matrix's 1-norm needs (Higham, "The scaling and squaring method for the matrix
 //! exponential revisited", SIAM J. Matrix Anal. Appl. 26, 2005: degrees 3, 5, 7, 9 and 13,
 //! each used up to its θ_m, where the approximant's backward error is below the unit
 //! round-off of f64), on column-major slices in a workspace sized once, so a call allocates
 //! nothing. The Padé quotient is an LU solve with partial pivoting, not an inverse.
-//! `continuous::expm` is its public face; `sampling` calls it per interval.
+//! `kalman::continuous::expm` and `model::expm` are its faces in their matrix types;
+//! [`van_loan`] samples a continuous model with it.
 
-use crate::kernels::Real;
+use crate::Real;
 
 /// Higham's θ_m for m = 3, 5, 7, 9, 13 (double precision).
 const THETA: [f64; 5] = [
@@ -60,10 +61,22 @@ const B13: [f64; 14] = [
     1.0,
 ];
 
-/// The workspace of [`Expm::run`] for matrices up to `cap`×`cap`; the input goes in
-/// [`Expm::input`].
+/// The workspace of [`Expm::run`] for matrices up to `cap`×`cap`, allocated once; the
+/// input goes in [`Expm::input`].
+///
+/// # Example
+/// ```
+/// use numerics::Expm;
+///
+/// // e^{diag(1, −2)} = diag(e, e^{−2}).
+/// let mut work = Expm::new(2);
+/// work.input(2).copy_from_slice(&[1.0, 0.0, 0.0, -2.0]);
+/// let mut e = [0.0; 4];
+/// assert!(work.run(2, &mut e));
+/// assert!((e[0] - 1f64.exp()).abs() < 1e-15 && (e[3] - (-2f64).exp()).abs() < 1e-16);
+/// ```
 #[derive(Debug, Clone)]
-pub(crate) struct Expm {
+pub struct Expm {
     cap: usize,
     b: Bufs<f64>,
     arch: pulp::Arch,
@@ -100,7 +113,7 @@ impl<T: Real> Bufs<T> {
 
 impl Expm {
     /// A workspace for matrices up to `cap`×`cap`.
-    pub(crate) fn new(cap: usize) -> Self {
+    pub fn new(cap: usize) -> Self {
         Expm {
             cap,
             b: Bufs::new(cap),
@@ -109,7 +122,7 @@ impl Expm {
     }
 
     /// The k×k input (column-major, `k ≤ cap`), to be filled before [`Expm::run`].
-    pub(crate) fn input(&mut self, k: usize) -> &mut [f64] {
+    pub fn input(&mut self, k: usize) -> &mut [f64] {
         debug_assert!(k <= self.cap);
         &mut self.b.a[..k * k]
     }
@@ -117,7 +130,7 @@ impl Expm {
     /// `out` (k×k, column-major) ← e^A of the k×k input. Returns `false` if the result is
     /// not finite (an exponential that overflows f64) or the Padé denominator is singular
     /// (only for a non-finite input).
-    pub(crate) fn run(&mut self, k: usize, out: &mut [f64]) -> bool {
+    pub fn run(&mut self, k: usize, out: &mut [f64]) -> bool {
         self.run_block(k, k, out)
     }
 
@@ -125,7 +138,7 @@ impl Expm {
     /// on and columns before `blk` (Van Loan's and the zero-order hold's block matrices): every
     /// product, the LU factors and the result keep that zero block, so the products skip it
     /// (half the work at `blk = k/2`). `blk = k` is a full matrix.
-    pub(crate) fn run_block(&mut self, k: usize, blk: usize, out: &mut [f64]) -> bool {
+    pub fn run_block(&mut self, k: usize, blk: usize, out: &mut [f64]) -> bool {
         // The sizes of the Van Loan blocks of models up to n = 8 (k = 2n, blk = n) and of
         // small full matrices are compile-time constants, so the kernels' loops unroll; each
         // runs with the widest vector instructions the processor has (mul and add stay
@@ -391,12 +404,80 @@ fn lu_solve<T: Real, const SKIP: bool>(
 /// approximant and squarings as `f64`), block upper triangular from `blk` as
 /// [`Expm::run_block`]; `None` where the result is not finite. Allocates its workspace: for
 /// fitting, not for the filter's step.
-#[cfg(all(feature = "autodiff", feature = "argmin"))]
-pub(crate) fn expm_of<T: Real>(a: &[T], k: usize, blk: usize) -> Option<Vec<T>> {
+#[cfg(feature = "autodiff")]
+pub fn expm_of<T: Real>(a: &[T], k: usize, blk: usize) -> Option<Vec<T>> {
     let mut bufs = Bufs::<T>::new(k);
     bufs.a[..k * k].copy_from_slice(&a[..k * k]);
     let mut out = vec![T::constant(0.0); k * k];
     pade::<T, false>(&mut bufs, k, blk, &mut out).then_some(out)
+}
+
+/// Van Loan's sampling of ẋ = A x + w (w white, of intensity `q`, n×n, as it enters the
+/// state) over `dt`: `f` ← F = e^{A·dt} and `qd` ← Q_d = ∫₀^dt e^{Aτ} Q e^{Aᵀτ} dτ
+/// (symmetrised), both n×n column-major, from one exponential of the block matrix
+/// `[[−A, Q], [0, Aᵀ]]·dt` (Van Loan, "Computing integrals involving the matrix
+/// exponential", IEEE Trans. Autom. Control 23, 1978): F = E₂₂ᵀ, Q_d = F·E₁₂. A zero `q`
+/// gives Q_d = 0 exactly from the n×n exponential of A·dt alone. Returns `false` (the
+/// outputs unspecified) when the exponential is not finite. Allocates its workspace; a
+/// caller sampling many intervals keeps an [`Expm`] instead.
+///
+/// # Example
+/// ```
+/// // White acceleration of intensity 0.5 on a double integrator over 0.2 s:
+/// // Q_d = q·[[Δt³/3, Δt²/2], [Δt²/2, Δt]].
+/// let (q, dt) = (0.5, 0.2);
+/// let a = [0.0, 0.0, 1.0, 0.0]; // [[0, 1], [0, 0]]
+/// let w = [0.0, 0.0, 0.0, q];
+/// let (mut f, mut qd) = ([0.0; 4], [0.0; 4]);
+/// assert!(numerics::van_loan(&a, &w, 2, dt, &mut f, &mut qd));
+/// let exact = [q * dt.powi(3) / 3.0, q * dt * dt / 2.0, q * dt * dt / 2.0, q * dt];
+/// assert!(qd.iter().zip(exact).all(|(x, e)| (x - e).abs() < 1e-15));
+/// assert!((f[2] - dt).abs() < 1e-15);
+/// ```
+pub fn van_loan(a: &[f64], q: &[f64], n: usize, dt: f64, f: &mut [f64], qd: &mut [f64]) -> bool {
+    let nn = n * n;
+    if n == 0 {
+        return true;
+    }
+    if !q[..nn].iter().any(|v| v.abs() > 0.0) {
+        let mut work = Expm::new(n);
+        for (m, &v) in work.input(n).iter_mut().zip(&a[..nn]) {
+            *m = v * dt;
+        }
+        qd[..nn].fill(0.0);
+        return work.run(n, &mut f[..nn]);
+    }
+    let k = 2 * n;
+    let mut work = Expm::new(k);
+    let m = work.input(k);
+    m.fill(0.0);
+    for j in 0..n {
+        for i in 0..n {
+            m[i + j * k] = -a[i + j * n] * dt;
+            m[i + (n + j) * k] = q[i + j * n] * dt;
+            m[n + i + (n + j) * k] = a[j + i * n] * dt;
+        }
+    }
+    let mut e = vec![0.0; k * k];
+    if !work.run_block(k, n, &mut e) {
+        return false;
+    }
+    for j in 0..n {
+        for i in 0..n {
+            f[i + j * n] = e[n + j + (n + i) * k];
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let mut s = 0.0;
+            for l in 0..n {
+                s += f[i + l * n] * e[l + (n + j) * k];
+            }
+            qd[i + j * n] = s;
+        }
+    }
+    crate::symmetrise(&mut qd[..nn], n);
+    qd[..nn].iter().all(|v| v.is_finite())
 }
 
 #[cfg(test)]
@@ -490,5 +571,22 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A first-order lag ẋ = −λx + w: F = e^{−λΔt}, Q_d = q(1 − e^{−2λΔt})/(2λ) (the closed
+    /// form of the integral); and with q = 0 the shortcut path gives F alone, Q_d = 0
+    /// exactly. Tolerance 1e-15 relative: a few ulps of one exponential and one product.
+    #[test]
+    fn van_loan_reproduces_the_first_order_lag() {
+        let (lam, q, dt) = (0.8_f64, 2.5, 0.3);
+        let (mut f, mut qd) = ([0.0], [0.0]);
+        assert!(van_loan(&[-lam], &[q], 1, dt, &mut f, &mut qd));
+        let want = q * (1.0 - (-2.0 * lam * dt).exp()) / (2.0 * lam);
+        assert!((f[0] - (-lam * dt).exp()).abs() < 1e-15);
+        assert!((qd[0] - want).abs() < 1e-15 * want);
+        assert!(van_loan(&[-lam], &[0.0], 1, dt, &mut f, &mut qd));
+        assert!((f[0] - (-lam * dt).exp()).abs() < 1e-15 && qd[0].abs() < f64::MIN_POSITIVE);
+        assert!(van_loan(&[], &[], 0, dt, &mut [], &mut []));
+        assert!(!van_loan(&[1000.0], &[1.0], 1, 1.0, &mut f, &mut qd));
     }
 }
