@@ -17,8 +17,12 @@
 //! The record and the backward pass are one type, [`Rts`], for both smoothers: the linear
 //! [`RtsSmoother`] (`Rts<Linear>`) and the nonlinear
 //! [`NonlinearRts`](crate::nonlinear::NonlinearRts) (`Rts<Nonlinear>`, C_k formed by the
-//! EKF or UKF) differ only in how a step is read from the filter.
+//! EKF or UKF) differ only in how a step is read from the filter. [`Rts::smooth_sqrt`] runs
+//! the same backward pass in square-root form (triangular factors of the smoothed
+//! covariances, PSD by construction).
 #![allow(non_snake_case)]
+
+mod sqrt;
 
 use std::marker::PhantomData;
 
@@ -29,6 +33,8 @@ use crate::filter::diverged;
 use crate::riccati::symmetrise;
 use crate::storage::Dims;
 use crate::{CovarianceForm, Error, Filter, MatrixInput, Model, RANK_TOL};
+
+pub use sqrt::SqrtSmoothed;
 
 /// Recorder and backward pass of a Rauch–Tung–Striebel smoother (offline: it stores every
 /// step), for the filter family `K`: [`RtsSmoother`] (`Rts<Linear>`) records a [`Filter`],

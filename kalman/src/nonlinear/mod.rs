@@ -146,7 +146,7 @@ mod continuous;
 mod ekf;
 mod fixed_lag;
 mod imm_mode;
-mod linalg;
+pub(crate) mod linalg;
 mod models;
 mod sigma;
 mod smoother;

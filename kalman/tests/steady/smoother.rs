@@ -274,3 +274,126 @@ fn an_exact_prior_of_a_deterministic_model_is_smoothed_to_itself() {
         }
     }
 }
+
+/// The backward pass of `pr` in square-root form, recorded from the same filter as
+/// [`smooth`].
+fn smooth_sqrt(pr: &Problem) -> kalman::smoother::SqrtSmoothed {
+    let n = pr.F.nrows();
+    let dims = DynDims::new(n, pr.H.nrows(), 0).expect("dims");
+    let model = Model::new(dims, &pr.F, &pr.H, &pr.Q, &pr.R).expect("model");
+    let mut f = Filter::new(model, &pr.x0, &pr.P0, CovarianceForm::Joseph).expect("filter");
+    let mut s = RtsSmoother::new();
+    for z in &pr.zs {
+        f.step(z, None).expect("step");
+        s.record(&f).expect("record");
+    }
+    s.smooth_sqrt().expect("square-root smooth")
+}
+
+/// The square-root backward pass gives the batch least-squares solution and its inverse
+/// information blocks, as the covariance form does; its factors are lower triangular with a
+/// nonnegative diagonal. Same problem and tolerance as
+/// `smoothed_means_equal_batch_least_squares_on_both_paths`.
+#[test]
+fn the_square_root_pass_equals_batch_least_squares() {
+    let mut g = rng(11);
+    let zs: Vec<Vec<f64>> = (0..12)
+        .map(|k| {
+            vec![if k == 5 {
+                f64::NAN
+            } else {
+                g.random_range(-2.0..2.0)
+            }]
+        })
+        .collect();
+    let pr = Problem {
+        F: mat![[1.0, 0.5], [0.0, 0.9]],
+        H: mat![[1.0, 0.0]],
+        Q: mat![[0.01, 0.002], [0.002, 0.05]],
+        R: mat![[0.3]],
+        x0: vec![0.5, -0.2],
+        P0: mat![[2.0, 0.1], [0.1, 1.0]],
+        zs,
+    };
+    let (lsx, lsP) = batch(&pr);
+    let s = smooth_sqrt(&pr);
+    for k in 0..pr.zs.len() {
+        let S = &s.factors[k];
+        assert!(S[(0, 1)].abs() <= 0.0 && S[(0, 0)] >= 0.0 && S[(1, 1)] >= 0.0);
+        let P = s.covariance(k).expect("a step");
+        for i in 0..2 {
+            assert!(
+                (s.means[(i, k)] - lsx[(i, k)]).abs() < 1e-10,
+                "mean {k},{i}"
+            );
+            for j in 0..2 {
+                assert!(
+                    (P[(i, j)] - lsP[k][(i, j)]).abs() < 1e-10,
+                    "cov {k},{i},{j}"
+                );
+            }
+        }
+    }
+    assert!(s.covariance(pr.zs.len()).is_none());
+}
+
+proptest! {
+    /// Random models with gaps: the square-root pass equals the covariance form to
+    /// round-off (1e-9 relative to ‖P_{k|k}‖: both are backward-stable passes over the same
+    /// record, differing in the order of their operations only).
+    #[test]
+    fn the_square_root_pass_equals_the_covariance_form(seed in any::<u64>(), n in 1usize..=5, m in 1usize..=3, r in 0.3f64..1.2) {
+        let mut g = rng(seed);
+        let F = with_radius(&mut g, n, r);
+        let H = randn(&mut g, m, n);
+        let Q = spd(&mut g, n, 0.05);
+        let R = spd(&mut g, m, 0.05);
+        let P0 = spd(&mut g, n, 0.5);
+        let zs: Vec<Vec<f64>> = (0..20)
+            .map(|k| (0..m).map(|i| if (k + i) % 7 == 3 { f64::NAN } else { g.random_range(-1.0..1.0) }).collect())
+            .collect();
+        let pr = Problem { F, H, Q, R, x0: vec![0.0; n], P0, zs };
+        let (plain, filtered) = smooth(DynDims::new(n, m, 0).expect("dims"), &pr);
+        let sq = smooth_sqrt(&pr);
+        for k in 0..pr.zs.len() {
+            let scale = filtered[k].norm_l2();
+            let P = sq.covariance(k).expect("a step");
+            prop_assert!((&P - &plain.covariances[k]).norm_l2() <= 1e-9 * scale, "P at {k}");
+            let dx = (0..n).map(|i| (sq.means[(i, k)] - plain.means[(i, k)]).abs()).fold(0.0, f64::max);
+            prop_assert!(dx <= 1e-9 * (1.0 + scale.sqrt()), "x at {k}");
+        }
+    }
+}
+
+/// An exact prior of a deterministic model: every joint covariance is zero, so every pivot
+/// is a zero pivot; the square-root pass gives the filtered path with zero factors, as the
+/// covariance form does (see `an_exact_prior_of_a_deterministic_model_is_smoothed_to_itself`).
+#[test]
+fn the_square_root_pass_takes_zero_pivots_for_an_exact_prior() {
+    let pr = Problem {
+        F: mat![[1.0, 0.1], [0.0, 1.0]],
+        H: mat![[1.0, 0.0]],
+        Q: Mat::<f64>::zeros(2, 2),
+        R: mat![[1.0]],
+        x0: vec![1.0, 0.5],
+        P0: Mat::<f64>::zeros(2, 2),
+        zs: (0..6).map(|k| vec![(k as f64).sin()]).collect(),
+    };
+    let s = smooth_sqrt(&pr);
+    for k in 0..6 {
+        let x = [1.0 + 0.05 * k as f64, 0.5];
+        for i in 0..2 {
+            assert!((s.means[(i, k)] - x[i]).abs() <= 1e-14, "x[{i}] at {k}");
+            for j in 0..2 {
+                assert!(s.factors[k][(i, j)].abs() <= 0.0, "S[{i},{j}] at {k}");
+            }
+        }
+    }
+    let empty = RtsSmoother::new()
+        .smooth_sqrt()
+        .expect_err("nothing recorded");
+    assert!(
+        matches!(empty, kalman::Error::Dimension { name: "steps", .. }),
+        "{empty:?}"
+    );
+}
