@@ -2,22 +2,7 @@
 //! triangular factor, so it is symmetric positive semidefinite by construction, never the
 //! difference `P_{k+1|N} − P_{k+1|k}` of two covariances.
 //!
-//! At step k the record holds the joint covariance of `(x_{k+1}, x_k)` given `z_0..z_k`,
-//! `[[P_{k+1|k}, C_kᵀ], [C_k, P_{k|k}]]`. Its lower Cholesky factor `[[L₁₁, 0], [L₂₁, L₂₂]]`
-//! holds the whole step: `J_k = L₂₁ L₁₁⁻¹` (since `C_k = L₂₁ L₁₁ᵀ` and `P_{k+1|k} = L₁₁
-//! L₁₁ᵀ`), and `L₂₂ L₂₂ᵀ = P_{k|k} − J_k P_{k+1|k} J_kᵀ`, the covariance of x_k given
-//! x_{k+1} (a Schur complement, PSD when the joint is). So
-//!
-//! `x_{k|N} = x_{k|k} + L₂₁ L₁₁⁻¹ (x_{k+1|N} − x_{k+1|k})`,
-//! `S_{k|N} = tria([L₂₂, L₂₁ L₁₁⁻¹ S_{k+1|N}])`,
-//!
-//! with `tria` the lower factor of a QR decomposition of the transpose (`A Aᵀ = S Sᵀ`,
-//! diagonal made nonnegative) and `S_{N−1|N} = chol(P_{N−1|N−1})`. This is the factor form of
-//! the fixed-interval smoother of Park and Kailath ("Square-root RTS smoothing algorithms",
-//! Int. J. Control 62, 1995), here over any recorded forward pass — the linear filter, the
-//! EKF or (square-root) UKF — so the unscented RTS smoother runs in square-root form too.
-//! A semidefinite joint (a noise-free component) takes zero pivots: their columns of the
-//! factor are zero and the solve gives those components zero weight, the minimum-norm choice.
+//! The equations are on [`Rts::smooth_sqrt`].
 #![allow(non_snake_case)]
 
 use faer::Mat;
@@ -46,10 +31,26 @@ impl SqrtSmoothed {
 }
 
 impl<K> Rts<K> {
-    /// The backward pass over all recorded steps in square-root form (see the
-    /// [module](self) for the equations): the same means and covariances as
-    /// [`Rts::smooth`] to round-off where both apply, with each covariance as a
-    /// triangular factor, PSD by construction.
+    /// The backward pass over all recorded steps in square-root form: the same means and
+    /// covariances as [`Rts::smooth`] to round-off where both apply, with each covariance as
+    /// a triangular factor, PSD by construction.
+    ///
+    /// At step k the record holds the joint covariance of `(x_{k+1}, x_k)` given `z_0..z_k`,
+    /// `[[P_{k+1|k}, C_kᵀ], [C_k, P_{k|k}]]`. Its lower Cholesky factor `[[L₁₁, 0], [L₂₁, L₂₂]]`
+    /// holds the whole step: `J_k = L₂₁ L₁₁⁻¹` (since `C_k = L₂₁ L₁₁ᵀ` and `P_{k+1|k} = L₁₁
+    /// L₁₁ᵀ`), and `L₂₂ L₂₂ᵀ = P_{k|k} − J_k P_{k+1|k} J_kᵀ`, the covariance of x_k given
+    /// x_{k+1} (a Schur complement, PSD when the joint is). So
+    ///
+    /// `x_{k|N} = x_{k|k} + L₂₁ L₁₁⁻¹ (x_{k+1|N} − x_{k+1|k})`,
+    /// `S_{k|N} = tria([L₂₂, L₂₁ L₁₁⁻¹ S_{k+1|N}])`,
+    ///
+    /// with `tria` the lower factor of a QR decomposition of the transpose (`A Aᵀ = S Sᵀ`,
+    /// diagonal made nonnegative) and `S_{N−1|N} = chol(P_{N−1|N−1})`: the covariance form's
+    /// recursion rewritten through the Schur-complement identity above, over any recorded
+    /// forward pass — the linear filter, the EKF or the (square-root) UKF — so the unscented
+    /// RTS smoother runs in square-root form too. A semidefinite joint (a noise-free
+    /// component) takes zero pivots: their columns of the factor are zero and the solve gives
+    /// those components zero weight, the minimum-norm choice.
     ///
     /// # Errors
     /// [`Error::Dimension`] if nothing was recorded; [`Error::NotPositiveSemidefinite`]
