@@ -400,7 +400,9 @@ def smooth(
     form: str = "joseph", gate: _Probability = None, gate_rule: str = "entries",
 ) -> SeriesResult:
     """Rauch-Tung-Striebel smoothing of the engine's filter: "x" (N, n), "P" (N, n, n).
-    The forward pass is ``filter``'s (form, gate); with a gate also "rejected"."""
+    The forward pass is ``filter``'s (form, gate); with a gate also "rejected". With
+    form="sqrt" the backward pass runs in square-root form too (each P formed from its
+    triangular factor: symmetric positive semidefinite by construction)."""
 
 def particle_filter(
     zs: Any, initial: Any, transition: Any, log_likelihood: Any, particles: int = 1000,

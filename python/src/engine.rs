@@ -107,7 +107,8 @@ pub(crate) fn filter<'py>(
 /// smooth(F, H, Q, R, x0, P0, zs, us=None, B=None, S=None, form="joseph", gate=None,
 /// gate_rule="entries") → dict with the RTS-smoothed "x" (N, n) and "P" (N, n, n): the
 /// engine's filter recorded step by step (gated as in `filter`, and then with
-/// "rejected"), then `kalman::smoother::RtsSmoother`.
+/// "rejected"), then `kalman::smoother::RtsSmoother` (its square-root backward pass when
+/// form = "sqrt").
 #[pyfunction]
 #[pyo3(signature = (F, H, Q, R, x0, P0, zs, us = None, B = None, S = None, form = "joseph", gate = None, gate_rule = "entries"))]
 pub(crate) fn smooth<'py>(

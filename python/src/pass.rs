@@ -257,16 +257,29 @@ impl Pass {
             }
             self.step(k, Some(&mut rts))?;
         }
-        let sm = rts.smooth().map_err(engine(self.context))?;
         let nn = n * n;
         let mut ps = zeros(
             entries(steps, nn, "the smoothed record")?,
             "the smoothed record",
         )?;
-        for (out, c) in ps.chunks_exact_mut(nn).zip(&sm.covariances) {
-            copy_mat(out, c.as_ref());
-        }
-        let xs = Array2::from_shape_fn((steps, n), |(k, i)| sm.means[(i, k)]);
+        // The square-root filter's pass is smoothed in square-root form too (its covariances
+        // formed from the smoothed factors at the end, PSD by construction).
+        let means = if self.filter.form() == CovarianceForm::SquareRoot {
+            let sm = rts.smooth_sqrt().map_err(engine(self.context))?;
+            for (k, out) in ps.chunks_exact_mut(nn).enumerate() {
+                if let Some(P) = sm.covariance(k) {
+                    copy_mat(out, P.as_ref());
+                }
+            }
+            sm.means
+        } else {
+            let sm = rts.smooth().map_err(engine(self.context))?;
+            for (out, c) in ps.chunks_exact_mut(nn).zip(&sm.covariances) {
+                copy_mat(out, c.as_ref());
+            }
+            sm.means
+        };
+        let xs = Array2::from_shape_fn((steps, n), |(k, i)| means[(i, k)]);
         let out = PyDict::new(py);
         out.set_item("x", PyArray2::from_owned_array(py, xs))?;
         out.set_item("P", array3_out(py, ps, steps, n, n))?;

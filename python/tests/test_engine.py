@@ -49,6 +49,23 @@ def test_smooth_matches_filterpy_rts():
     np.testing.assert_allclose(out["P"], ps, rtol=TOL, atol=TOL)
 
 
+def test_square_root_smooth_matches_filterpy_rts():
+    # form="sqrt": the square-root filter and the square-root backward pass (triangular
+    # factors of the smoothed covariances); the same numbers as FilterPy's covariance-form
+    # RTS smoother to round-off, and each P exactly symmetric.
+    pr = problem(500, 3, 2)
+    zs = np.array([z.ravel() for z in pr["zs"]])
+    out = le.smooth(pr["F"], pr["H"], pr["Q"], pr["R"], pr["x0"].ravel(), pr["P0"], zs,
+                    form="sqrt")
+    means, covs, _, _ = fp_update_first(pr)
+    kf = setup(FpKalmanFilter, pr)
+    xs, ps, _, _ = kf.rts_smoother(means, covs)
+    np.testing.assert_allclose(out["x"], xs[:, :, 0], rtol=TOL, atol=TOL)
+    np.testing.assert_allclose(out["P"], ps, rtol=TOL, atol=TOL)
+    assert np.array_equal(out["P"], np.transpose(out["P"], (0, 2, 1)))
+    assert min(np.linalg.eigvalsh(P).min() for P in out["P"]) > 0.0
+
+
 def test_dare_dlqr_care_match_scipy():
     pr = problem(600, 4, 2)
     F, H, Q, R = pr["F"], pr["H"], pr["Q"], pr["R"]

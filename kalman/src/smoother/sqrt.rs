@@ -24,9 +24,21 @@ pub struct SqrtSmoothed {
 }
 
 impl SqrtSmoothed {
-    /// The smoothed covariance `P_{k|N−1} = S Sᵀ` of step `k` (None past the last step).
+    /// The smoothed covariance `P_{k|N−1} = S Sᵀ` of step `k` (None past the last step),
+    /// exactly symmetric (each pair of entries is one sum).
     pub fn covariance(&self, k: usize) -> Option<Mat<f64>> {
-        self.factors.get(k).map(|s| s * s.transpose())
+        let S = self.factors.get(k)?;
+        let n = S.nrows();
+        let mut P = Mat::<f64>::zeros(n, n);
+        for j in 0..n {
+            for i in j..n {
+                // S is lower triangular: entries beyond column j of row j are zero.
+                let v: f64 = (0..=j).map(|l| S[(i, l)] * S[(j, l)]).sum();
+                P[(i, j)] = v;
+                P[(j, i)] = v;
+            }
+        }
+        Some(P)
     }
 }
 

@@ -321,6 +321,11 @@ fn the_square_root_pass_equals_batch_least_squares() {
         let S = &s.factors[k];
         assert!(S[(0, 1)].abs() <= 0.0 && S[(0, 0)] >= 0.0 && S[(1, 1)] >= 0.0);
         let P = s.covariance(k).expect("a step");
+        assert_eq!(
+            P[(0, 1)].to_bits(),
+            P[(1, 0)].to_bits(),
+            "S Sᵀ exactly symmetric"
+        );
         for i in 0..2 {
             assert!(
                 (s.means[(i, k)] - lsx[(i, k)]).abs() < 1e-10,
