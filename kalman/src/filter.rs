@@ -432,6 +432,7 @@ fn check_inputs<D: Dims>(
     Ok(mask.iter().filter(|&&o| o).count())
 }
 
+#[inline(always)]
 fn step_impl<D: Dims>(
     model: &Model<D>,
     st: &mut State<D>,
