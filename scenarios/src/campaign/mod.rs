@@ -165,9 +165,10 @@ pub trait Scenario {
 
     /// Computes every number the outputs show from the records and, for a whole campaign
     /// with a closing stage, its result (`None` in a shard). No Monte Carlo run and no fit
-    /// belongs here (they are `simulate`'s and `finish`'s); the uav scenario still replays
-    /// run 0 for its traces here, and the boom and flight-path scenarios compute their
-    /// deterministic nominal cases here.
+    /// belongs here (they are `simulate`'s and `finish`'s); the uav scenario replays run 0
+    /// for its traces here in a shard only (a whole run and a merge read them from its
+    /// closing stage), and the boom and flight-path scenarios compute their deterministic
+    /// nominal cases here.
     ///
     /// # Errors
     /// A library error on valid parameters.

@@ -35,6 +35,7 @@ use crate::error::Result;
 use crate::montecarlo::Shard;
 use parameters::UavParams;
 use records::RunRecord;
+use simulation::Trace;
 use summary::{Computed, UavSummary};
 
 /// The uav scenario, as the campaign runs it.
@@ -47,7 +48,7 @@ impl Scenario for Uav {
     type Records = Vec<RunRecord>;
     type Summary = Computed;
     type Json = UavSummary;
-    type Finish = ();
+    type Finish = Trace;
 
     fn simulate(
         params: &UavParams,
@@ -58,15 +59,29 @@ impl Scenario for Uav {
         simulation::simulate_runs(params, seed, shard, threads)
     }
 
+    fn has_finish(_params: &UavParams) -> bool {
+        true
+    }
+
+    /// Run 0's trace (one closed-loop simulation), so that a merge simulates nothing.
+    fn finish(
+        params: &UavParams,
+        seed: u64,
+        _records: &Vec<RunRecord>,
+        _threads: Option<usize>,
+    ) -> Result<Trace> {
+        summary::trace(params, seed)
+    }
+
     fn summarise(
         params: &UavParams,
         seed: u64,
         _shard: Shard,
         records: &Vec<RunRecord>,
-        _finish: Option<&()>,
+        finish: Option<&Trace>,
         _threads: Option<usize>,
     ) -> Result<Computed> {
-        summary::summarise(params, seed, records)
+        summary::summarise(params, seed, records, finish)
     }
 
     fn json(summary: &Computed) -> &UavSummary {
@@ -75,5 +90,62 @@ impl Scenario for Uav {
 
     fn write_outputs(summary: &Computed, dir: &Path) -> Result<()> {
         report::write_outputs(summary, dir)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::campaign::{self, Campaign};
+    use crate::montecarlo::simulations_started;
+
+    /// Two shards and the closing stage simulate; the merge of their directories starts no
+    /// simulation (run 0's trace is read from `finish.toml`) and writes the whole run's bytes.
+    #[test]
+    fn a_merge_reads_and_simulates_nothing() {
+        let dir = std::env::temp_dir().join(format!("uav-merge-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch");
+        let config = dir.join("small.toml");
+        std::fs::write(&config, "steps = 1024\nwelch_segment = 64\n").expect("config");
+        let campaign = |shard: Shard, out: &str| Campaign {
+            config: Some(config.clone()),
+            out: Some(dir.join(out)),
+            seed: 5,
+            runs: Some(4),
+            threads: Some(1),
+            shard,
+        };
+        let shards: Vec<_> = (1..=2).map(|k| dir.join(format!("s{k}"))).collect();
+        for index in 1..=2 {
+            let started = simulations_started();
+            campaign::run::<Uav>(&campaign(Shard { index, count: 2 }, &format!("s{index}")))
+                .expect("shard");
+            assert!(simulations_started() > started, "a shard simulates");
+        }
+        let started = simulations_started();
+        campaign::finish::<Uav>(&shards, &dir.join("fin"), Some(1)).expect("finish");
+        assert_eq!(
+            simulations_started(),
+            started + 1,
+            "the closing stage is run 0"
+        );
+        let mut inputs = shards.clone();
+        inputs.push(dir.join("fin"));
+        let started = simulations_started();
+        campaign::merge::<Uav>(&inputs, &dir.join("merged")).expect("merge");
+        assert_eq!(
+            simulations_started(),
+            started,
+            "the merge started a simulation"
+        );
+        campaign::run::<Uav>(&campaign(Shard::ALL, "whole")).expect("whole");
+        for entry in std::fs::read_dir(dir.join("whole")).expect("whole dir") {
+            let name = entry.expect("entry").file_name();
+            let whole = std::fs::read(dir.join("whole").join(&name)).expect("whole file");
+            let merged = std::fs::read(dir.join("merged").join(&name)).expect("merged file");
+            assert!(whole == merged, "{name:?} differs");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -8,6 +8,7 @@ use kalman::{CovarianceForm, FixedDims, FixedFilter, Model, ToNalgebra};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rand::RngExt;
 use rand_distr::StandardNormal;
+use serde::{Deserialize, Serialize};
 
 use super::parameters::UavParams;
 use super::records::RunRecord;
@@ -111,9 +112,10 @@ pub(super) fn design(p: &UavParams) -> Result<Design> {
     })
 }
 
-/// One closed-loop run's time series.
-#[derive(Debug, Clone, Default)]
-pub(super) struct Trace {
+/// One closed-loop run's time series: run 0's are the report's signals and spectra, and the
+/// scenario's closing stage (`finish.toml`), so that a merge replays nothing.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Trace {
     pub(super) t: Vec<f64>,
     pub(super) reference: Vec<f64>,
     pub(super) x: Vec<[f64; 2]>,
@@ -128,6 +130,7 @@ pub(super) struct Trace {
 
 /// Simulates one closed-loop run from the stream of run `run`.
 pub(super) fn simulate(p: &UavParams, d: &Design, seed: u64, run: usize) -> Result<Trace> {
+    crate::montecarlo::count_simulation();
     let mut rng = run_rng(seed, run as u64);
     let mut normal = || -> f64 { rng.sample(StandardNormal) };
     let model = Model::new(

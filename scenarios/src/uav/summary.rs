@@ -286,12 +286,26 @@ pub struct Computed {
     pub spectra: Vec<(PsdNode, Vec<&'static str>, Vec<spectrum::Psd>)>,
 }
 
-/// Computes every number of the outputs from the parameters and the run records (this
-/// shard's, or all of them); run 0 is simulated again for its signals and spectra.
+/// Run 0's closed-loop trace: the scenario's closing stage (its signals and spectra).
 ///
 /// # Errors
 /// A library error on valid parameters.
-pub fn summarise(p: &UavParams, seed: u64, run_records: &[RunRecord]) -> Result<Computed> {
+pub fn trace(p: &UavParams, seed: u64) -> Result<Trace> {
+    simulate(p, &design(p)?, seed, 0)
+}
+
+/// Computes every number of the outputs from the parameters, the run records (this
+/// shard's, or all of them) and run 0's trace (the closing stage's; a shard, which has no
+/// closing stage, simulates run 0 itself).
+///
+/// # Errors
+/// A library error on valid parameters.
+pub fn summarise(
+    p: &UavParams,
+    seed: u64,
+    run_records: &[RunRecord],
+    run0: Option<&Trace>,
+) -> Result<Computed> {
     let d = design(p)?;
     // Closed loop with the predictor: [x; e], e = x − x̂_{k|k−1}.
     let bl = &d.b * &d.l;
@@ -303,7 +317,10 @@ pub fn summarise(p: &UavParams, seed: u64, run_records: &[RunRecord]) -> Result<
     acl.view_mut((2, 2), (2, 2)).copy_from(&fkh);
 
     let (kb, transient) = kalman_bucy(p)?;
-    let trace = simulate(p, &d, seed, 0)?;
+    let trace = match run0 {
+        Some(t) => t.clone(),
+        None => simulate(p, &d, seed, 0)?,
+    };
     let agg = aggregate(p, run_records);
 
     let fs = 1.0 / p.dt_s;

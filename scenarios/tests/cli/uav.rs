@@ -73,7 +73,19 @@ fn threads_and_shards_give_the_same_files() {
     go(&argv("--threads 2 --out t2"));
     go(&argv("--shard 1/2 --out s1"));
     go(&argv("--shard 2/2 --out s2"));
-    ok(&dir, &argv("merge s1 s2 --out merged"));
+    // Run 0's trace is the closing stage: a merge without it is refused by name and writes
+    // nothing; with it, the merge only reads.
+    let err = fails(&dir, &argv("merge s1 s2 --out merged"));
+    assert!(
+        err.contains("finish.toml") && err.contains("scenarios finish"),
+        "{err}"
+    );
+    assert!(
+        !dir.join("merged").exists(),
+        "a failed merge writes nothing"
+    );
+    ok(&dir, &argv("finish s1 s2 --out fin"));
+    ok(&dir, &argv("merge s1 s2 fin --out merged"));
     let one = read(&dir.join("t1/summary.json"));
     assert_same_files(&dir.join("t1"), &dir.join("t2"));
     // Every file of the merge equals the single run's, `runs.csv` with all six runs included.
@@ -82,13 +94,13 @@ fn threads_and_shards_give_the_same_files() {
     // A shard alone is not the whole campaign.
     assert_ne!(one, read(&dir.join("s1/summary.json")));
     // Merging one shard twice is refused (run duplicated).
-    let err = fails(&dir, &argv("merge s1 s1 --out bad"));
+    let err = fails(&dir, &argv("merge s1 s1 fin --out bad"));
     assert!(
         err.contains("run 0") && err.contains("more than one shard"),
         "{err}"
     );
     // A missing shard: the directories given and the runs none of them holds.
-    let err = fails(&dir, &argv("merge s1 --out bad"));
+    let err = fails(&dir, &argv("merge s1 fin --out bad"));
     assert!(
         err.contains("s1") && err.contains("runs 3–5 of the 6") && err.contains("runs.csv"),
         "{err}"
