@@ -694,3 +694,61 @@ mod tests {
         assert_eq!(ranges(&[]), "");
     }
 }
+
+/// The check shared by the scenarios' merge tests: two shards, `finish` and `merge` of `S`
+/// with the configuration `config` (TOML), the simulations each step starts counted on this
+/// thread, and a whole run to compare the merge with.
+#[cfg(test)]
+pub(crate) mod merge_check {
+    use std::path::PathBuf;
+
+    use super::{Campaign, Scenario, finish, merge, run};
+    use crate::montecarlo::{Shard, simulations_started};
+
+    /// Runs the three steps and the whole campaign in a scratch directory named after `tag`;
+    /// asserts that each shard simulates and that the merged directory equals the whole
+    /// run's file for file, and returns the simulations `finish` and `merge` started.
+    pub(crate) fn shards_finish_merge<S: Scenario>(
+        tag: &str,
+        config: &str,
+        seed: u64,
+        runs: usize,
+    ) -> (usize, usize) {
+        let dir = std::env::temp_dir().join(format!("{tag}-merge-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch");
+        let file = dir.join("small.toml");
+        std::fs::write(&file, config).expect("config");
+        let campaign = |shard: Shard, out: &str| Campaign {
+            config: Some(file.clone()),
+            out: Some(dir.join(out)),
+            seed,
+            runs: Some(runs),
+            threads: Some(1),
+            shard,
+        };
+        let shards: Vec<PathBuf> = (1..=2).map(|k| dir.join(format!("s{k}"))).collect();
+        for index in 1..=2 {
+            let started = simulations_started();
+            run::<S>(&campaign(Shard { index, count: 2 }, &format!("s{index}"))).expect("shard");
+            assert!(simulations_started() > started, "a shard simulates");
+        }
+        let started = simulations_started();
+        finish::<S>(&shards, &dir.join("fin"), Some(1)).expect("finish");
+        let in_finish = simulations_started() - started;
+        let mut inputs = shards.clone();
+        inputs.push(dir.join("fin"));
+        let started = simulations_started();
+        merge::<S>(&inputs, &dir.join("merged")).expect("merge");
+        let in_merge = simulations_started() - started;
+        run::<S>(&campaign(Shard::ALL, "whole")).expect("whole");
+        for entry in std::fs::read_dir(dir.join("whole")).expect("whole dir") {
+            let name = entry.expect("entry").file_name();
+            let whole = std::fs::read(dir.join("whole").join(&name)).expect("whole file");
+            let merged = std::fs::read(dir.join("merged").join(&name)).expect("merged file");
+            assert!(whole == merged, "{name:?} differs");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+        (in_finish, in_merge)
+    }
+}

@@ -96,56 +96,15 @@ impl Scenario for Uav {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::campaign::{self, Campaign};
-    use crate::montecarlo::simulations_started;
+    use crate::campaign::merge_check::shards_finish_merge;
 
-    /// Two shards and the closing stage simulate; the merge of their directories starts no
-    /// simulation (run 0's trace is read from `finish.toml`) and writes the whole run's bytes.
+    /// The closing stage is run 0's one simulation; the merge starts none (run 0's trace is
+    /// read from `finish.toml`) and writes the whole run's bytes.
     #[test]
     fn a_merge_reads_and_simulates_nothing() {
-        let dir = std::env::temp_dir().join(format!("uav-merge-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("scratch");
-        let config = dir.join("small.toml");
-        std::fs::write(&config, "steps = 1024\nwelch_segment = 64\n").expect("config");
-        let campaign = |shard: Shard, out: &str| Campaign {
-            config: Some(config.clone()),
-            out: Some(dir.join(out)),
-            seed: 5,
-            runs: Some(4),
-            threads: Some(1),
-            shard,
-        };
-        let shards: Vec<_> = (1..=2).map(|k| dir.join(format!("s{k}"))).collect();
-        for index in 1..=2 {
-            let started = simulations_started();
-            campaign::run::<Uav>(&campaign(Shard { index, count: 2 }, &format!("s{index}")))
-                .expect("shard");
-            assert!(simulations_started() > started, "a shard simulates");
-        }
-        let started = simulations_started();
-        campaign::finish::<Uav>(&shards, &dir.join("fin"), Some(1)).expect("finish");
-        assert_eq!(
-            simulations_started(),
-            started + 1,
-            "the closing stage is run 0"
-        );
-        let mut inputs = shards.clone();
-        inputs.push(dir.join("fin"));
-        let started = simulations_started();
-        campaign::merge::<Uav>(&inputs, &dir.join("merged")).expect("merge");
-        assert_eq!(
-            simulations_started(),
-            started,
-            "the merge started a simulation"
-        );
-        campaign::run::<Uav>(&campaign(Shard::ALL, "whole")).expect("whole");
-        for entry in std::fs::read_dir(dir.join("whole")).expect("whole dir") {
-            let name = entry.expect("entry").file_name();
-            let whole = std::fs::read(dir.join("whole").join(&name)).expect("whole file");
-            let merged = std::fs::read(dir.join("merged").join(&name)).expect("merged file");
-            assert!(whole == merged, "{name:?} differs");
-        }
-        let _ = std::fs::remove_dir_all(&dir);
+        let config = "steps = 1024\nwelch_segment = 64\n";
+        let (in_finish, in_merge) = shards_finish_merge::<Uav>("uav", config, 5, 4);
+        assert_eq!(in_finish, 1, "the closing stage is run 0");
+        assert_eq!(in_merge, 0, "the merge started a simulation");
     }
 }
