@@ -344,16 +344,11 @@ impl Rts<Linear> {
     pub fn smooth(&self) -> Result<Smoothed, Error> {
         let n = self.n;
         self.backward(|k, means, P| {
-            let x_bad = diverged((0..n).map(|i| means[(i, k)])).map(|v| ("x_{k|N}", v));
-            let p_bad = diverged((0..n).map(|i| P[(i, i)])).map(|v| ("P_{k|N}", v));
-            match x_bad.or(p_bad) {
-                Some((what, value)) => Err(Error::Diverged {
-                    step: k,
-                    what,
-                    value,
-                }),
-                None => Ok(()),
-            }
+            smoothed_finite(
+                k,
+                (0..n).map(|i| means[(i, k)]),
+                ("P_{k|N}", (0..n).map(|i| P[(i, i)])),
+            )
         })
     }
 }
@@ -442,6 +437,25 @@ impl<D: Dims> Model<D> {
         }
         let rows = (0..z.nrows()).map(|k| (0..m).map(|j| z.at(k, j)).collect::<Vec<_>>());
         Filter::new(self.clone(), x0, P0, CovarianceForm::Joseph)?.run_smoothed(rows)
+    }
+}
+
+/// [`Error::Diverged`] naming step `k` if an entry of its smoothed mean `x`, or of `p`
+/// (the diagonal of P_{k|N}, or the entries of its factor, as `p.0` names them), is not
+/// finite.
+fn smoothed_finite(
+    k: usize,
+    x: impl IntoIterator<Item = f64>,
+    p: (&'static str, impl IntoIterator<Item = f64>),
+) -> Result<(), Error> {
+    let x_bad = diverged(x).map(|v| ("x_{k|N}", v));
+    match x_bad.or_else(|| diverged(p.1).map(|v| (p.0, v))) {
+        Some((what, value)) => Err(Error::Diverged {
+            step: k,
+            what,
+            value,
+        }),
+        None => Ok(()),
     }
 }
 

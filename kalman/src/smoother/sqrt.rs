@@ -7,8 +7,7 @@
 
 use faer::Mat;
 
-use super::Rts;
-use crate::filter::diverged;
+use super::{Rts, smoothed_finite};
 use crate::nonlinear::linalg::{forward, psd_cholesky};
 use crate::{Error, PSD_TOL, RANK_TOL};
 
@@ -202,14 +201,9 @@ fn not_psd(name: &'static str, n: usize, pivot: f64) -> Error {
 /// [`Error::Diverged`] naming step `k` if its smoothed mean or factor is not finite.
 fn check(k: usize, means: &Mat<f64>, S: &Mat<f64>) -> Result<(), Error> {
     let n = S.nrows();
-    let x_bad = diverged((0..n).map(|i| means[(i, k)])).map(|v| ("x_{k|N}", v));
-    let s_bad = diverged(S.col_iter().flat_map(|c| c.iter().copied())).map(|v| ("S_{k|N}", v));
-    match x_bad.or(s_bad) {
-        Some((what, value)) => Err(Error::Diverged {
-            step: k,
-            what,
-            value,
-        }),
-        None => Ok(()),
-    }
+    smoothed_finite(
+        k,
+        (0..n).map(|i| means[(i, k)]),
+        ("S_{k|N}", S.col_iter().flat_map(|c| c.iter().copied())),
+    )
 }

@@ -16,6 +16,18 @@ fn flat(m: faer::MatRef<'_, f64>) -> Vec<f64> {
         .collect()
 }
 
+/// Measurement k of the 60-step range–bearing track (the target moves by (−1, 1.5) a step
+/// from (60, −40); deterministic errors; every fifth bearing missing).
+fn radar(k: usize) -> [f64; 2] {
+    let (px, py) = (59.0 - k as f64, -38.5 + 1.5 * k as f64);
+    let bearing = if k % 5 == 3 {
+        f64::NAN
+    } else {
+        py.atan2(px) + 0.004 * ((k * 7 % 5) as f64 - 2.0)
+    };
+    [px.hypot(py) + 0.3 * ((k * 3 % 7) as f64 - 3.0), bearing]
+}
+
 /// Both filters over the same 60 range–bearing measurements (every fifth bearing missing):
 /// x, P and NIS at every step. The two forms do the same statistical linearisation by
 /// different arithmetic (a Joseph form through G = L⁻¹C against one Householder
@@ -25,16 +37,8 @@ fn agree<D: NlDims>(d: D, set: SigmaPoints) {
     let (x0, p0) = (RangeBearing::x0(), RangeBearing::p0());
     let mut plain = Ukf::new(d, RangeBearingHand::default(), &x0, &p0, set).expect("ukf");
     let mut sqrt = SqrtUkf::new(d, RangeBearingHand::default(), &x0, &p0, set).expect("sqrt");
-    let (mut px, mut py) = (60.0_f64, -40.0_f64);
     for k in 0..60 {
-        px -= 1.0;
-        py += 1.5;
-        let bearing = if k % 5 == 3 {
-            f64::NAN
-        } else {
-            py.atan2(px) + 0.004 * ((k * 7 % 5) as f64 - 2.0)
-        };
-        let z = [px.hypot(py) + 0.3 * ((k * 3 % 7) as f64 - 3.0), bearing];
+        let z = radar(k);
         let a = plain.step(&z, None).expect("plain step");
         let b = sqrt.step(&z, None).expect("square-root step");
         for (got, want, what) in [
@@ -285,16 +289,8 @@ fn the_unscented_smoother_in_square_root_form_equals_the_covariance_form() {
     let mut plain = Ukf::new(d, RangeBearingHand::default(), &x0, &p0, set).expect("ukf");
     let mut sqrt = SqrtUkf::new(d, RangeBearingHand::default(), &x0, &p0, set).expect("sqrt");
     let (mut rp, mut rs) = (NonlinearRts::new(), NonlinearRts::new());
-    let (mut px, mut py) = (60.0_f64, -40.0_f64);
     for k in 0..60 {
-        px -= 1.0;
-        py += 1.5;
-        let bearing = if k % 5 == 3 {
-            f64::NAN
-        } else {
-            py.atan2(px) + 0.004 * ((k * 7 % 5) as f64 - 2.0)
-        };
-        let z = [px.hypot(py) + 0.3 * ((k * 3 % 7) as f64 - 3.0), bearing];
+        let z = radar(k);
         plain.step(&z, None).expect("plain step");
         sqrt.step(&z, None).expect("square-root step");
         rp.record(&plain).expect("record");

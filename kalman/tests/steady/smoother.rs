@@ -103,8 +103,8 @@ fn batch(pr: &Problem) -> (Mat<f64>, Vec<Mat<f64>>) {
     (means, covs)
 }
 
-#[test]
-fn smoothed_means_equal_batch_least_squares_on_both_paths() {
+/// A tracked 2-state model over 12 random measurements, the sixth missing.
+fn gapped() -> Problem {
     let mut g = rng(11);
     let zs: Vec<Vec<f64>> = (0..12)
         .map(|k| {
@@ -115,7 +115,7 @@ fn smoothed_means_equal_batch_least_squares_on_both_paths() {
             }]
         })
         .collect();
-    let pr = Problem {
+    Problem {
         F: mat![[1.0, 0.5], [0.0, 0.9]],
         H: mat![[1.0, 0.0]],
         Q: mat![[0.01, 0.002], [0.002, 0.05]],
@@ -123,7 +123,12 @@ fn smoothed_means_equal_batch_least_squares_on_both_paths() {
         x0: vec![0.5, -0.2],
         P0: mat![[2.0, 0.1], [0.1, 1.0]],
         zs,
-    };
+    }
+}
+
+#[test]
+fn smoothed_means_equal_batch_least_squares_on_both_paths() {
+    let pr = gapped();
     let zs = &pr.zs;
     let (lsx, lsP) = batch(&pr);
     let (dyn_s, filtered) = smooth(DynDims::new(2, 1, 0).expect("dims"), &pr);
@@ -296,25 +301,7 @@ fn smooth_sqrt(pr: &Problem) -> kalman::smoother::SqrtSmoothed {
 /// `smoothed_means_equal_batch_least_squares_on_both_paths`.
 #[test]
 fn the_square_root_pass_equals_batch_least_squares() {
-    let mut g = rng(11);
-    let zs: Vec<Vec<f64>> = (0..12)
-        .map(|k| {
-            vec![if k == 5 {
-                f64::NAN
-            } else {
-                g.random_range(-2.0..2.0)
-            }]
-        })
-        .collect();
-    let pr = Problem {
-        F: mat![[1.0, 0.5], [0.0, 0.9]],
-        H: mat![[1.0, 0.0]],
-        Q: mat![[0.01, 0.002], [0.002, 0.05]],
-        R: mat![[0.3]],
-        x0: vec![0.5, -0.2],
-        P0: mat![[2.0, 0.1], [0.1, 1.0]],
-        zs,
-    };
+    let pr = gapped();
     let (lsx, lsP) = batch(&pr);
     let s = smooth_sqrt(&pr);
     for k in 0..pr.zs.len() {

@@ -110,6 +110,26 @@ pub fn fails(dir: &Path, args: &[&str]) -> String {
     err
 }
 
+/// The closing stage between the shards `s1`, `s2` in `dir` and their merge: a merge without
+/// it is refused naming `finish.toml` and the command to run, and writes nothing; then
+/// `finish s1 s2 … --out fin` (with `finish_args`) and `merge s1 s2 fin --out merged`.
+pub fn finish_then_merge(dir: &Path, finish_args: &[&str]) {
+    let err = fails(dir, &argv("merge s1 s2 --out merged"));
+    assert!(
+        err.contains("finish.toml") && err.contains("scenarios finish"),
+        "{err}"
+    );
+    assert!(
+        !dir.join("merged").exists(),
+        "a failed merge writes nothing"
+    );
+    let mut finish = argv("finish s1 s2");
+    finish.extend_from_slice(finish_args);
+    finish.extend(["--out", "fin"]);
+    ok(dir, &finish);
+    ok(dir, &argv("merge s1 s2 fin --out merged"));
+}
+
 pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).expect("write input");

@@ -4,7 +4,9 @@
 
 use std::path::Path;
 
-use crate::common::{argv, argv_with, assert_same_files, fails, ok, read, run, scratch, summary};
+use crate::common::{
+    argv, argv_with, assert_same_files, fails, finish_then_merge, ok, read, run, scratch, summary,
+};
 
 /// One amplitude sweep of three points and one point for each other sweep, no calibration
 /// search: the smallest campaign that exercises every output but the calibration's.
@@ -165,17 +167,7 @@ fn threads_and_shards_give_the_same_files() {
         "a shard evaluates its design sets and leaves the refinement to the closing stage"
     );
     // Without the closing stage the merge says what to run.
-    let err = fails(&dir, &argv("merge s1 s2 --out merged"));
-    assert!(
-        err.contains("finish.toml") && err.contains("scenarios finish"),
-        "{err}"
-    );
-    assert!(
-        !dir.join("merged").exists(),
-        "a failed merge writes nothing"
-    );
-    ok(&dir, &argv("finish s1 s2 --threads 1 --out fin"));
-    ok(&dir, &argv("merge s1 s2 fin --out merged"));
+    finish_then_merge(&dir, &["--threads", "1"]);
     // Every file of the merge, not only the summary, equals the single run's.
     assert_same_files(&dir.join("t1"), &dir.join("merged"));
     // A damaged stage file is refused by name before anything is written.

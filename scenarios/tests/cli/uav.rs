@@ -4,7 +4,9 @@
 //! `--shard` + `merge`, duplicated or missing shards refused by name, and configuration
 //! errors that name the key.
 
-use crate::common::{argv, assert_same_files, fails, ok, read, run, scratch, summary};
+use crate::common::{
+    argv, assert_same_files, fails, finish_then_merge, ok, read, run, scratch, summary,
+};
 
 /// 1024 steps per run (256 s: 25 Welch segments of 64), the SPEC's plant, noise and gains.
 const SMALL: &str = "steps = 1024\nwelch_segment = 64\n";
@@ -75,17 +77,7 @@ fn threads_and_shards_give_the_same_files() {
     go(&argv("--shard 2/2 --out s2"));
     // Run 0's trace is the closing stage: a merge without it is refused by name and writes
     // nothing; with it, the merge only reads.
-    let err = fails(&dir, &argv("merge s1 s2 --out merged"));
-    assert!(
-        err.contains("finish.toml") && err.contains("scenarios finish"),
-        "{err}"
-    );
-    assert!(
-        !dir.join("merged").exists(),
-        "a failed merge writes nothing"
-    );
-    ok(&dir, &argv("finish s1 s2 --out fin"));
-    ok(&dir, &argv("merge s1 s2 fin --out merged"));
+    finish_then_merge(&dir, &[]);
     let one = read(&dir.join("t1/summary.json"));
     assert_same_files(&dir.join("t1"), &dir.join("t2"));
     // Every file of the merge equals the single run's, `runs.csv` with all six runs included.
