@@ -260,13 +260,7 @@ impl<K> Rts<K> {
         mut visit: impl FnMut(usize, &Mat<f64>, &Mat<f64>) -> Result<(), Error>,
     ) -> Result<Mat<f64>, Error> {
         let (n, N) = (self.n, self.steps);
-        if N == 0 {
-            return Err(Error::Dimension {
-                name: "steps",
-                value: 0,
-                rule: "record at least one filter step",
-            });
-        }
+        self.require_steps()?;
         fn mat(v: &[f64], k: usize, n: usize) -> MatRef<'_, f64> {
             MatRef::from_column_major_slice(&v[k * n * n..(k + 1) * n * n], n, n)
         }
@@ -437,6 +431,21 @@ impl<D: Dims> Model<D> {
         }
         let rows = (0..z.nrows()).map(|k| (0..m).map(|j| z.at(k, j)).collect::<Vec<_>>());
         Filter::new(self.clone(), x0, P0, CovarianceForm::Joseph)?.run_smoothed(rows)
+    }
+}
+
+impl<K> Rts<K> {
+    /// [`Error::Dimension`] naming `steps` when nothing is recorded (a backward pass needs a
+    /// step).
+    pub(crate) fn require_steps(&self) -> Result<(), Error> {
+        if self.steps == 0 {
+            return Err(Error::Dimension {
+                name: "steps",
+                value: 0,
+                rule: "record at least one filter step",
+            });
+        }
+        Ok(())
     }
 }
 

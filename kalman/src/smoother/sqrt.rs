@@ -90,13 +90,7 @@ impl<K> Rts<K> {
     /// ```
     pub fn smooth_sqrt(&self) -> Result<SqrtSmoothed, Error> {
         let (n, N) = (self.n, self.steps);
-        if N == 0 {
-            return Err(Error::Dimension {
-                name: "steps",
-                value: 0,
-                rule: "record at least one filter step",
-            });
-        }
+        self.require_steps()?;
         let (nn, w) = (n * n, 2 * n);
         let mut means = Mat::<f64>::zeros(n, N);
         let mut factors = vec![Mat::<f64>::zeros(n, n); N];

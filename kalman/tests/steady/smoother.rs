@@ -159,20 +159,46 @@ fn smoothed_means_equal_batch_least_squares_on_both_paths() {
     }
 }
 
+/// A random stable model (spectral radius `r`) with 20 random measurements, every seventh
+/// entry missing when `gaps`.
+fn random_problem(seed: u64, n: usize, m: usize, r: f64, gaps: bool) -> Problem {
+    let mut g = rng(seed);
+    let F = with_radius(&mut g, n, r);
+    let H = randn(&mut g, m, n);
+    let Q = spd(&mut g, n, 0.05);
+    let R = spd(&mut g, m, 0.05);
+    let P0 = spd(&mut g, n, 0.5);
+    let zs: Vec<Vec<f64>> = (0..20)
+        .map(|k| {
+            (0..m)
+                .map(|i| {
+                    if gaps && (k + i) % 7 == 3 {
+                        f64::NAN
+                    } else {
+                        g.random_range(-1.0..1.0)
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    Problem {
+        F,
+        H,
+        Q,
+        R,
+        x0: vec![0.0; n],
+        P0,
+        zs,
+    }
+}
+
 proptest! {
 
     /// Random models: P_{k|k} − P_{k|N} is PSD (to round-off 1e-10·‖P_{k|k}‖) and the
     /// smoothed covariance is symmetric PSD.
     #[test]
     fn smoothed_covariance_below_filtered(seed in any::<u64>(), n in 1usize..=5, m in 1usize..=3, r in 0.3f64..1.2) {
-        let mut g = rng(seed);
-        let F = with_radius(&mut g, n, r);
-        let H = randn(&mut g, m, n);
-        let Q = spd(&mut g, n, 0.05);
-        let R = spd(&mut g, m, 0.05);
-        let P0 = spd(&mut g, n, 0.5);
-        let zs: Vec<Vec<f64>> = (0..20).map(|_| (0..m).map(|_| g.random_range(-1.0..1.0)).collect()).collect();
-        let pr = Problem { F, H, Q, R, x0: vec![0.0; n], P0, zs };
+        let pr = random_problem(seed, n, m, r, false);
         let (s, filtered) = smooth(DynDims::new(n, m, 0).expect("dims"), &pr);
         for k in 0..pr.zs.len() {
             let d = &filtered[k] - &s.covariances[k];
@@ -335,16 +361,7 @@ proptest! {
     /// record, differing in the order of their operations only).
     #[test]
     fn the_square_root_pass_equals_the_covariance_form(seed in any::<u64>(), n in 1usize..=5, m in 1usize..=3, r in 0.3f64..1.2) {
-        let mut g = rng(seed);
-        let F = with_radius(&mut g, n, r);
-        let H = randn(&mut g, m, n);
-        let Q = spd(&mut g, n, 0.05);
-        let R = spd(&mut g, m, 0.05);
-        let P0 = spd(&mut g, n, 0.5);
-        let zs: Vec<Vec<f64>> = (0..20)
-            .map(|k| (0..m).map(|i| if (k + i) % 7 == 3 { f64::NAN } else { g.random_range(-1.0..1.0) }).collect())
-            .collect();
-        let pr = Problem { F, H, Q, R, x0: vec![0.0; n], P0, zs };
+        let pr = random_problem(seed, n, m, r, true);
         let (plain, filtered) = smooth(DynDims::new(n, m, 0).expect("dims"), &pr);
         let sq = smooth_sqrt(&pr);
         for k in 0..pr.zs.len() {
