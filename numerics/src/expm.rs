@@ -122,6 +122,9 @@ impl Expm {
     }
 
     /// The k×k input (column-major, `k ≤ cap`), to be filled before [`Expm::run`].
+    ///
+    /// # Panics
+    /// If `k` exceeds the workspace's `cap`.
     pub fn input(&mut self, k: usize) -> &mut [f64] {
         debug_assert!(k <= self.cap);
         &mut self.b.a[..k * k]
@@ -130,6 +133,9 @@ impl Expm {
     /// `out` (k×k, column-major) ← e^A of the k×k input. Returns `false` if the result is
     /// not finite (an exponential that overflows f64) or the Padé denominator is singular
     /// (only for a non-finite input).
+    ///
+    /// # Panics
+    /// If `k` exceeds the workspace's `cap` or `out` holds fewer than k² entries.
     pub fn run(&mut self, k: usize, out: &mut [f64]) -> bool {
         self.run_block(k, k, out)
     }
@@ -137,8 +143,16 @@ impl Expm {
     /// [`Expm::run`] for an input that is block upper triangular, zero in its rows from `blk`
     /// on and columns before `blk` (Van Loan's and the zero-order hold's block matrices): every
     /// product, the LU factors and the result keep that zero block, so the products skip it
-    /// (half the work at `blk = k/2`). `blk = k` is a full matrix.
+    /// (half the work at `blk = k/2`). `blk = k` (or more) is a full matrix.
+    ///
+    /// # Panics
+    /// As [`Expm::run`].
     pub fn run_block(&mut self, k: usize, blk: usize, out: &mut [f64]) -> bool {
+        assert!(
+            k <= self.cap && out.len() >= k * k,
+            "Expm::run_block: k > cap or out too short"
+        );
+        let blk = blk.min(k);
         // The sizes of the Van Loan blocks of models up to n = 8 (k = 2n, blk = n) and of
         // small full matrices are compile-time constants, so the kernels' loops unroll; each
         // runs with the widest vector instructions the processor has (mul and add stay
@@ -420,6 +434,9 @@ pub fn expm_of<T: Real>(a: &[T], k: usize, blk: usize) -> Option<Vec<T>> {
 /// gives Q_d = 0 exactly from the n×n exponential of A·dt alone. Returns `false` (the
 /// outputs unspecified) when the exponential is not finite. Allocates its workspace; a
 /// caller sampling many intervals keeps an [`Expm`] instead.
+///
+/// # Panics
+/// If `a`, `q`, `f` or `qd` holds fewer than n² entries.
 ///
 /// # Example
 /// ```

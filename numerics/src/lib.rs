@@ -121,6 +121,9 @@ impl<T: num_dual::DualNum<Primitive = f64> + Copy> Real for T {
 /// Replaces the square `n`×`n` column-major `a` by `(a + aᵀ)/2` (each pair of entries by
 /// their mean, the diagonal unchanged).
 ///
+/// # Panics
+/// If `a` holds fewer than n² entries.
+///
 /// # Example
 /// ```
 /// let mut a = [1.0, 2.0, 4.0, 3.0]; // [[1, 4], [2, 3]]
