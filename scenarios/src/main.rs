@@ -95,7 +95,8 @@ enum Command {
     /// All the scenarios (the three papers and flightpath), plus reports/README.md linking them.
     All(CampaignArgs),
     /// Run a sharded campaign's closing stage (the fueling calibration's refinement and
-    /// learned-back fit) over its shard directories; give its output to `merge`.
+    /// learned-back fit, the uav run-0 trace) over its shard directories; give its output
+    /// to `merge`.
     Finish {
         /// Shard output directories of one scenario.
         #[arg(required = true)]
