@@ -112,6 +112,8 @@ impl<K> Rts<K> {
         check(last, &means, &factors[last])?;
         let mut joint = vec![0.0; w * w];
         let (mut l11, mut dx, mut col) = (vec![0.0; nn], vec![0.0; n], vec![0.0; n]);
+        // Aᵀ for A = [L₂₂, L₂₁ L₁₁⁻¹ S_{k+1|N}] (n × 2n): every entry is written each step.
+        let mut At = Mat::<f64>::zeros(w, n);
         for k in (0..last).rev() {
             let (pp, ct, pf) = (
                 &self.pp[k * nn..(k + 1) * nn],
@@ -144,8 +146,7 @@ impl<K> Rts<K> {
                 let s: f64 = (0..n).map(|j| L21(i, j) * dx[j]).sum();
                 means[(i, k)] = self.xf[k * n + i] + s;
             }
-            // Aᵀ for A = [L₂₂, L₂₁ L₁₁⁻¹ S_{k+1|N}] (n × 2n), then S = tria(A).
-            let mut At = Mat::<f64>::zeros(w, n);
+            // Aᵀ, then S = tria(A).
             for i in 0..n {
                 for j in 0..n {
                     At[(j, i)] = L[n + i + (n + j) * w];
