@@ -106,8 +106,8 @@ impl ContinuousModel {
             &this.R,
         )
         .map_err(as_intensity)?;
-        this.W = symmetric(&this.W);
-        this.R = symmetric(&this.R);
+        this.W = crate::riccati::symmetrised(this.W.as_ref());
+        this.R = crate::riccati::symmetrised(this.R.as_ref());
         Ok(this)
     }
 
@@ -178,11 +178,6 @@ fn checked(
 ) -> Result<Mat<f64>, Error> {
     check(name, a, rows, cols)?;
     Ok(owned(a))
-}
-
-/// `(M + Mᵀ)/2` of a square matrix already checked to be symmetric.
-fn symmetric(a: &Mat<f64>) -> Mat<f64> {
-    Mat::from_fn(a.nrows(), a.ncols(), |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
 }
 
 /// The engine's error about `Q` of the Δt = 0 model is about `W`.

@@ -113,8 +113,9 @@ pub(crate) fn check(root: &Path, files: &[PathBuf]) -> Vec<String> {
         let Ok(text) = std::fs::read_to_string(path) else {
             continue;
         };
-        // The library code only: a file's unit tests may define helpers of their own.
-        let code = text.split("#[cfg(test)]").next().unwrap_or("");
+        // The library code only: a file's inline unit tests may define helpers of their own
+        // (a `#[cfg(test)] mod tests;` line pointing at another file does not end the code).
+        let code = text.split("#[cfg(test)]\nmod tests {").next().unwrap_or("");
         for (i, line) in code.lines().enumerate() {
             for name in defined(line) {
                 let (what, _, home) = HOMES

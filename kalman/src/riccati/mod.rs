@@ -256,13 +256,15 @@ pub(crate) fn all_finite(M: MatRef<'_, f64>) -> bool {
     (0..M.ncols()).all(|j| (0..M.nrows()).all(|i| M[(i, j)].is_finite()))
 }
 
+/// `M ← (M + Mᵀ)/2` for a square faer matrix, by the workspace's one symmetrisation
+/// (`numerics::symmetrise`, on a column-major copy: a faer matrix's columns may be padded).
 pub(crate) fn symmetrise(M: &mut Mat<f64>) {
     let n = M.nrows();
+    let mut a: Vec<f64> = M.col_iter().flat_map(|c| c.iter().copied()).collect();
+    numerics::symmetrise(&mut a, n);
     for j in 0..n {
-        for i in j + 1..n {
-            let v = 0.5 * (M[(i, j)] + M[(j, i)]);
-            M[(i, j)] = v;
-            M[(j, i)] = v;
+        for i in 0..n {
+            M[(i, j)] = a[i + j * n];
         }
     }
 }
