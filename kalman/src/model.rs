@@ -679,6 +679,13 @@ fn check_dims<D: Dims>(dims: &D) -> Result<(), Error> {
             });
         }
     }
+    if dims.stored() != dims.n() {
+        return Err(Error::Dimension {
+            name: "stored",
+            value: dims.stored(),
+            rule: "a linear model's state is a vector: stored length = n",
+        });
+    }
     if dims.is_fixed() {
         for (name, v) in [("n", dims.n()), ("m", dims.m()), ("p", dims.p())] {
             if v > FIXED_MAX {

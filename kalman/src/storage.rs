@@ -12,6 +12,13 @@ pub trait Dims: Copy + Debug + Send + Sync + sealed::Storage + 'static {
     fn m(&self) -> usize;
     /// Number of control inputs.
     fn p(&self) -> usize;
+    /// Length of a stored state: n for a vector state; more than n for a state on a
+    /// manifold stored redundantly (a unit quaternion: 4 stored, 3 in its tangent space),
+    /// where n is the tangent dimension (of P, Q and the Jacobians). Only the nonlinear
+    /// filters hold such states.
+    fn stored(&self) -> usize {
+        self.n()
+    }
     /// Whether this is the fixed-size path (dimensions limited to [`FIXED_MAX`]; products
     /// always in the crate's own loops).
     fn is_fixed(&self) -> bool {
@@ -121,7 +128,9 @@ pub(crate) mod sealed {
         }
     }
 
-    impl<const N: usize, const M: usize, const P: usize> Storage for super::FixedDims<N, M, P> {
+    impl<const N: usize, const M: usize, const P: usize, const S: usize> Storage
+        for super::FixedDims<N, M, P, S>
+    {
         type Nn = Arr<f64, N, N>;
         type Nm = Arr<f64, N, M>;
         type Mn = Arr<f64, M, N>;
@@ -155,6 +164,8 @@ pub struct DynDims {
     n: usize,
     m: usize,
     p: usize,
+    /// Stored length of a state (n unless set by [`DynDims::with_stored`]).
+    s: usize,
 }
 
 impl DynDims {
@@ -177,7 +188,33 @@ impl DynDims {
                 rule: "at least one measurement",
             });
         }
-        Ok(DynDims { n, m, p })
+        Ok(DynDims { n, m, p, s: n })
+    }
+
+    /// The same dimensions for a state on a manifold stored in `stored` ≥ n numbers, n
+    /// being its tangent dimension (a unit quaternion and a gyro bias: n = 6, stored = 7).
+    /// For the nonlinear filters with a model that declares its
+    /// [`crate::nonlinear::Manifold`].
+    ///
+    /// ```
+    /// use kalman::{Dims, DynDims};
+    /// let d = DynDims::new(6, 3, 3)?.with_stored(7)?;
+    /// assert_eq!((d.n(), d.stored()), (6, 7));
+    /// assert!(DynDims::new(6, 3, 3)?.with_stored(5).is_err());
+    /// # Ok::<(), kalman::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`crate::Error::Dimension`] if `stored` < n.
+    pub fn with_stored(self, stored: usize) -> Result<Self, crate::Error> {
+        if stored < self.n {
+            return Err(crate::Error::Dimension {
+                name: "stored",
+                value: stored,
+                rule: "a stored state holds at least its n tangent dimensions",
+            });
+        }
+        Ok(DynDims { s: stored, ..self })
     }
 }
 
@@ -194,10 +231,15 @@ impl Dims for DynDims {
     fn p(&self) -> usize {
         self.p
     }
+    #[inline(always)]
+    fn stored(&self) -> usize {
+        self.s
+    }
 }
 
 /// Fixed dimensions known at compile time (n = `N` ≤ 16, m = `M` ≤ 16, p = `P` ≤ 16
-/// control inputs): every buffer is an inline array of exactly its size (a
+/// control inputs, and `S` numbers per stored state, `N` ≤ `S` ≤ 32: `S` = `N` unless the
+/// state lives on a manifold, see [`Dims::stored`]): every buffer is an inline array of exactly its size (a
 /// `FixedFilter<2, 1>` is a few hundred bytes), loops are unrolled by the compiler. Same
 /// API and results as [`DynDims`]. The one heap buffer is the square-root form's
 /// (m + 2n)² pre-array, allocated when such a filter is built (stable Rust cannot size an
@@ -215,24 +257,30 @@ impl Dims for DynDims {
 /// # Ok::<(), kalman::Error>(())
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct FixedDims<const N: usize, const M: usize, const P: usize = 0>(());
+pub struct FixedDims<const N: usize, const M: usize, const P: usize = 0, const S: usize = N>(());
 
 /// Largest n and m of the fixed-size path.
 pub const FIXED_MAX: usize = 16;
 
-impl<const N: usize, const M: usize, const P: usize> FixedDims<N, M, P> {
-    /// The fixed dimensions (checked at compile time: 1 ≤ N, M ≤ 16, P ≤ 16).
+impl<const N: usize, const M: usize, const P: usize, const S: usize> FixedDims<N, M, P, S> {
+    /// The fixed dimensions (checked at compile time: 1 ≤ N, M ≤ 16, P ≤ 16, N ≤ S ≤ 32).
     pub const fn new() -> Self {
         const {
             assert!(N >= 1 && N <= FIXED_MAX, "FixedDims: N must be in 1..=16");
             assert!(M >= 1 && M <= FIXED_MAX, "FixedDims: M must be in 1..=16");
             assert!(P <= FIXED_MAX, "FixedDims: P must be at most 16");
+            assert!(
+                S >= N && S <= 2 * FIXED_MAX,
+                "FixedDims: S must be in N..=32"
+            );
         }
         FixedDims(())
     }
 }
 
-impl<const N: usize, const M: usize, const P: usize> Dims for FixedDims<N, M, P> {
+impl<const N: usize, const M: usize, const P: usize, const S: usize> Dims
+    for FixedDims<N, M, P, S>
+{
     #[inline(always)]
     fn n(&self) -> usize {
         N
@@ -244,6 +292,10 @@ impl<const N: usize, const M: usize, const P: usize> Dims for FixedDims<N, M, P>
     #[inline(always)]
     fn p(&self) -> usize {
         P
+    }
+    #[inline(always)]
+    fn stored(&self) -> usize {
+        S
     }
     #[inline(always)]
     fn is_fixed(&self) -> bool {

@@ -30,6 +30,7 @@ mod engine {
 
 mod nonlinear {
     pub mod alloc;
+    pub mod attitude;
     pub mod common;
     pub mod continuous;
     pub mod errors;

@@ -70,8 +70,8 @@ pub struct Ekf<D: NlDims, M> {
     hc: D::Mn,
     zh: D::Mv,
     ef: D::Mv,
-    xi: D::Nv,
-    xn: D::Nv,
+    xi: D::Sv,
+    xn: D::Sv,
     w: UpdateWork<D>,
 }
 
@@ -110,8 +110,8 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
                 });
             }
         }
-        let c = Core::new(dims, x0, P0)?;
-        let (n, m) = (dims.n(), dims.m());
+        let c = Core::new(dims, &model, x0, P0)?;
+        let (n, m, ns) = (dims.n(), dims.m(), dims.stored());
         Ok(Self {
             w: UpdateWork::new(n, m),
             model,
@@ -122,8 +122,8 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
             hc: D::Mn::zeros(m * n),
             zh: D::Mv::zeros(m),
             ef: D::Mv::zeros(m),
-            xi: D::Nv::zeros(n),
-            xn: D::Nv::zeros(n),
+            xi: D::Sv::zeros(ns),
+            xn: D::Sv::zeros(ns),
         })
     }
 
@@ -146,12 +146,13 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
 
     fn update_stage(&mut self, z: &[f64]) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
+        let ns = self.c.dims.stored();
         let mut info = self.c.open_update(&mut self.model, z)?;
         let mo = info.observed;
         if mo == 0 {
             return Ok(info);
         }
-        let xp = &self.c.xp.as_slice()[..n];
+        let xp = &self.c.xp.as_slice()[..ns];
         let pp = &self.c.pp.as_slice()[..n * n];
         let (max_it, tol, name) = match self.update {
             EkfUpdate::Extended => (1, 0.0, "EKF"),
@@ -161,10 +162,10 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
             } => (max_iterations, tolerance, "iterated EKF"),
         };
         compact_square(self.c.r.as_slice(), m, z, mo, self.w.rc.as_mut_slice());
-        self.xi.as_mut_slice()[..n].copy_from_slice(xp);
+        self.xi.as_mut_slice()[..ns].copy_from_slice(xp);
         let mut nis = (0.0, 0.0);
         for it in 1..=max_it {
-            let xi = &self.xi.as_slice()[..n];
+            let xi = &self.xi.as_slice()[..ns];
             let zh = &mut self.zh.as_mut_slice()[..m];
             self.model.h(xi, k, zh);
             finite("h", k, zh)?;
@@ -211,24 +212,24 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
             self.model.state_add(
                 xp,
                 &self.w.dx.as_slice()[..n],
-                &mut self.xn.as_mut_slice()[..n],
+                &mut self.xn.as_mut_slice()[..ns],
             );
             nis = nis_logdet(sig, sinv, mo, e, &mut self.w.tmpm.as_mut_slice()[..mo]);
             info.iterations = it;
             if it == max_it {
                 break;
             }
-            let (xi, xn) = (&self.xi.as_slice()[..n], &self.xn.as_slice()[..n]);
+            let (xi, xn) = (&self.xi.as_slice()[..ns], &self.xn.as_slice()[..ns]);
             let dx = &mut self.w.dx.as_mut_slice()[..n];
             self.model.state_residual(xn, xi, dx);
             let step = dx.iter().map(|v| v * v).sum::<f64>().sqrt();
             let size = xi.iter().map(|v| v * v).sum::<f64>().sqrt();
-            self.xi.as_mut_slice()[..n].copy_from_slice(&self.xn.as_slice()[..n]);
+            self.xi.as_mut_slice()[..ns].copy_from_slice(&self.xn.as_slice()[..ns]);
             if step <= tol * (1.0 + size) {
                 break;
             }
         }
-        self.c.xf.as_mut_slice()[..n].copy_from_slice(&self.xn.as_slice()[..n]);
+        self.c.xf.as_mut_slice()[..ns].copy_from_slice(&self.xn.as_slice()[..ns]);
         joseph(
             pp,
             &self.w.gain.as_slice()[..n * mo],
@@ -245,12 +246,22 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
     }
 
     fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
-        let (n, k) = (self.c.dims.n(), self.c.k);
+        let (n, k, ns) = (self.c.dims.n(), self.c.k, self.c.dims.stored());
         self.c.load_q(&mut self.model)?;
-        let xf = &self.c.xf.as_slice()[..n];
-        let xp = &mut self.c.xp.as_mut_slice()[..n];
+        let xf = &self.c.xf.as_slice()[..ns];
+        let xp = &mut self.c.xp.as_mut_slice()[..ns];
         self.model.f(xf, u, k, xp);
         finite("f", k, xp)?;
+        if ns != n {
+            // f's image of a stored point, projected onto the manifold (x ⊞ 0: a
+            // quaternion renormalised), through the scratch point of the update.
+            let x = &mut self.xi.as_mut_slice()[..ns];
+            x.copy_from_slice(xp);
+            let zero = &mut self.w.dx.as_mut_slice()[..n];
+            zero.fill(0.0);
+            self.model.state_add(x, zero, xp);
+            finite("f", k, xp)?;
+        }
         let F = &mut self.fj.as_mut_slice()[..n * n];
         self.model.f_jacobian(xf, u, k, F);
         finite("f_jacobian", k, F)?;
@@ -273,14 +284,17 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
     }
 }
 
-impl<D: NlDims, M> Ekf<D, M> {
+impl<D: NlDims, M: super::NonlinearModel> Ekf<D, M> {
     /// Restarts from the prior `(x0, P0)` at step 0, keeping the model and workspaces.
     ///
     /// # Errors
     /// As [`Ekf::new`] for `x0` and `P0`.
     pub fn reset(&mut self, x0: &[f64], P0: &impl MatrixInput) -> Result<(), Error> {
-        self.c.reset(x0, P0)
+        self.c.reset(&self.model, x0, P0)
     }
+}
+
+impl<D: NlDims, M> Ekf<D, M> {
     filter_accessors!();
     /// `F_k = ∂f/∂x` at `x_{k|k}` used by the last prediction.
     pub fn transition_jacobian(&self) -> MatRef<'_, f64> {

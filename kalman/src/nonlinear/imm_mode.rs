@@ -16,6 +16,15 @@ macro_rules! nonlinear_mode {
             (d.n(), d.m())
         }
         fn mode_check(&self) -> Result<(), Error> {
+            let (x, p) = self.filtered();
+            if x.len() * x.len() != p.len() {
+                // The IMM mixes means and covariances as vectors and matrices.
+                return Err(Error::Dimension {
+                    name: "modes",
+                    value: x.len(),
+                    rule: "an IMM mode's state is a vector: stored length = n (no manifold)",
+                });
+            }
             Ok(())
         }
         fn mode_update(&mut self, z: &[f64]) -> Result<StepInfo, Error> {

@@ -103,18 +103,19 @@ macro_rules! filter_accessors {
         pub fn last_step(&self) -> StepInfo {
             self.c.info
         }
-        /// `x_{k|k}` after step k (before the first step: `x0`).
+        /// `x_{k|k}` after step k (before the first step: `x0`); a stored point for a
+        /// state on a manifold.
         pub fn state(&self) -> &[f64] {
-            &self.c.xf.as_slice()[..self.c.dims.n()]
+            &self.c.xf.as_slice()[..self.c.dims.stored()]
         }
-        /// `P_{k|k}`.
+        /// `P_{k|k}` (n×n; in the tangent space at the state for a state on a manifold).
         pub fn covariance(&self) -> MatRef<'_, f64> {
             let n = self.c.dims.n();
             MatRef::from_column_major_slice(&self.c.pf.as_slice()[..n * n], n, n)
         }
         /// `x_{k+1|k}`.
         pub fn predicted_state(&self) -> &[f64] {
-            &self.c.xp.as_slice()[..self.c.dims.n()]
+            &self.c.xp.as_slice()[..self.c.dims.stored()]
         }
         /// `P_{k+1|k}`.
         pub fn predicted_covariance(&self) -> MatRef<'_, f64> {
@@ -129,12 +130,12 @@ macro_rules! filter_accessors {
 macro_rules! forward_pass_moments {
     () => {
         fn filtered(&self) -> (&[f64], &[f64]) {
-            let n = self.c.dims.n();
-            (&self.c.xf.as_slice()[..n], &self.c.pf.as_slice()[..n * n])
+            let (n, s) = (self.c.dims.n(), self.c.dims.stored());
+            (&self.c.xf.as_slice()[..s], &self.c.pf.as_slice()[..n * n])
         }
         fn predicted(&self) -> (&[f64], &[f64]) {
-            let n = self.c.dims.n();
-            (&self.c.xp.as_slice()[..n], &self.c.pp.as_slice()[..n * n])
+            let (n, s) = (self.c.dims.n(), self.c.dims.stored());
+            (&self.c.xp.as_slice()[..s], &self.c.pp.as_slice()[..n * n])
         }
     };
 }
@@ -147,6 +148,7 @@ mod ekf;
 mod fixed_lag;
 mod imm_mode;
 pub(crate) mod linalg;
+mod manifold;
 mod models;
 mod sigma;
 mod smoother;
@@ -162,6 +164,7 @@ pub use continuous::{
 };
 pub use ekf::{Ekf, EkfUpdate};
 pub use fixed_lag::{FixedLag, FixedLagState};
+pub use manifold::{Manifold, Part, Product, quaternion};
 pub use models::{CentralDiff, FnModel, Hook, Jacobians, NonlinearModel};
 pub use sigma::SigmaPoints;
 pub use smoother::{ForwardPass, NonlinearRts};
@@ -187,18 +190,28 @@ pub trait NlDims: Dims {
     type ZSig: Buf<f64>;
     /// (2n+1)-vectors (weights).
     type W: Buf<f64>;
+    /// Stored states ([`Dims::stored`] entries; n for a vector state).
+    type Sv: Buf<f64>;
+    /// stored×(2n+1) buffers (sigma points as stored states).
+    type SSig: Buf<f64>;
 }
 
 impl NlDims for DynDims {
     type Sig = Vec<f64>;
     type ZSig = Vec<f64>;
     type W = Vec<f64>;
+    type Sv = Vec<f64>;
+    type SSig = Vec<f64>;
 }
 
-impl<const N: usize, const M: usize, const P: usize> NlDims for FixedDims<N, M, P> {
+impl<const N: usize, const M: usize, const P: usize, const S: usize> NlDims
+    for FixedDims<N, M, P, S>
+{
     type Sig = Arr<f64, N, 33>;
     type ZSig = Arr<f64, M, 33>;
     type W = Arr<f64, 33, 1>;
+    type Sv = Arr<f64, S, 1>;
+    type SSig = Arr<f64, S, 33>;
 }
 
 /// [`crate::Error::ModelNonFinite`] for the first non-finite entry of `v`.
@@ -219,11 +232,12 @@ fn finite(function: &'static str, step: usize, v: &[f64]) -> Result<(), crate::E
 struct Core<D: NlDims> {
     dims: D,
     k: usize,
-    /// `x_{k+1|k}`, `P_{k+1|k}` (before the first step: `x0`, `P0`).
-    xp: D::Nv,
+    /// `x_{k+1|k}`, `P_{k+1|k}` (before the first step: `x0`, `P0`); the means are
+    /// stored states ([`Dims::stored`] entries), the covariances tangent (n×n).
+    xp: D::Sv,
     pp: D::Nn,
     /// `x_{k|k}`, `P_{k|k}`.
-    xf: D::Nv,
+    xf: D::Sv,
     pf: D::Nn,
     q: D::Nn,
     r: D::Mm,
@@ -321,8 +335,15 @@ impl<D: NlDims> UpdateWork<D> {
 }
 
 impl<D: NlDims> Core<D> {
-    fn new(dims: D, x0: &[f64], P0: &impl crate::MatrixInput) -> Result<Self, crate::Error> {
-        let (n, m) = (dims.n(), dims.m());
+    /// The prior `(x0, P0)` for `model`. For a state on a manifold `x0` is a stored point,
+    /// projected onto the manifold (`x0 ⊞ 0`: a quaternion normalised).
+    fn new<M: NonlinearModel + ?Sized>(
+        dims: D,
+        model: &M,
+        x0: &[f64],
+        P0: &impl crate::MatrixInput,
+    ) -> Result<Self, crate::Error> {
+        let (n, m, ns) = (dims.n(), dims.m(), dims.stored());
         if dims.is_fixed() && (n > crate::FIXED_MAX || m > crate::FIXED_MAX) {
             return Err(crate::Error::Dimension {
                 name: "n",
@@ -330,9 +351,32 @@ impl<D: NlDims> Core<D> {
                 rule: "the fixed-size path holds n, m <= 16",
             });
         }
-        let mut xp = D::Nv::zeros(n);
+        match model.manifold_dims() {
+            Some((tangent, stored)) if (tangent, stored) != (n, ns) => {
+                return Err(crate::Error::Dimension {
+                    name: if tangent != n { "n" } else { "stored" },
+                    value: if tangent != n { n } else { ns },
+                    rule: "the filter's n and stored length must be the model's manifold's \
+                           tangent dimension and stored length",
+                });
+            }
+            None if ns != n => {
+                return Err(crate::Error::Dimension {
+                    name: "stored",
+                    value: ns,
+                    rule: "a model without a manifold has a vector state: stored length = n",
+                });
+            }
+            _ => {}
+        }
+        let mut xp = D::Sv::zeros(ns);
         let mut pp = D::Nn::zeros(n * n);
-        crate::model::load_vec("x0", x0, n, xp.as_mut_slice())?;
+        crate::model::load_vec("x0", x0, ns, xp.as_mut_slice())?;
+        if model.manifold_dims().is_some() {
+            let x = xp.as_slice()[..ns].to_vec();
+            model.state_add(&x, &vec![0.0; n], &mut xp.as_mut_slice()[..ns]);
+            finite("x0 ⊞ 0", 0, &xp.as_slice()[..ns])?;
+        }
         crate::model::load("P0", P0, n, n, pp.as_mut_slice())?;
         let mut factor = vec![0.0; n * n];
         crate::model::checked_factor("P0", pp.as_mut_slice(), n, &mut factor)?;
@@ -386,10 +430,10 @@ impl<D: NlDims> Core<D> {
         model: &mut M,
         z: &[f64],
     ) -> Result<StepInfo, crate::Error> {
-        let n = self.dims.n();
+        let (n, ns) = (self.dims.n(), self.dims.stored());
         let mo = self.load_r(model, z)?;
         if mo == 0 {
-            self.xf.as_mut_slice()[..n].copy_from_slice(&self.xp.as_slice()[..n]);
+            self.xf.as_mut_slice()[..ns].copy_from_slice(&self.xp.as_slice()[..ns]);
             self.pf.as_mut_slice()[..n * n].copy_from_slice(&self.pp.as_slice()[..n * n]);
         }
         Ok(StepInfo {
@@ -422,8 +466,13 @@ impl<D: NlDims> Core<D> {
         Ok(())
     }
 
-    fn reset(&mut self, x0: &[f64], P0: &impl crate::MatrixInput) -> Result<(), crate::Error> {
-        let fresh = Self::new(self.dims, x0, P0)?;
+    fn reset<M: NonlinearModel + ?Sized>(
+        &mut self,
+        model: &M,
+        x0: &[f64],
+        P0: &impl crate::MatrixInput,
+    ) -> Result<(), crate::Error> {
+        let fresh = Self::new(self.dims, model, x0, P0)?;
         *self = fresh;
         Ok(())
     }

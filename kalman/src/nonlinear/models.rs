@@ -2,6 +2,9 @@
 //! differences.
 #![allow(non_snake_case)]
 
+use std::sync::Arc;
+
+use super::Manifold;
 use crate::Error;
 use crate::model::{MatrixInput, checked_factor, load};
 use crate::storage::Dims;
@@ -96,6 +99,15 @@ pub trait NonlinearModel {
     /// `R_k` (m×m, symmetric PSD); as for `Q_k`, its symmetric part is used.
     fn r(&mut self, k: usize, out: &mut [f64]);
     default_hooks!();
+    /// `Some((n, stored))` for a state on a manifold whose stored points are longer than
+    /// its tangent dimension n (see [`super::Manifold`]): then `x` in f, h and the hooks is
+    /// a stored point, `δ` and `a ⊖ b` are tangent vectors, Q and the Jacobians are
+    /// tangent-space matrices (`∂(f(x ⊞ δ) ⊟ f(x))/∂δ`, `∂h(x ⊞ δ)/∂δ` at δ = 0), and the
+    /// filter's dimensions must say the same ([`crate::Dims::stored`]). `None` (the
+    /// default): a vector state of n entries.
+    fn manifold_dims(&self) -> Option<(usize, usize)> {
+        None
+    }
 }
 
 /// The Jacobians of a [`NonlinearModel`], needed by the extended filters: written by hand,
@@ -154,6 +166,7 @@ pub struct FnModel<F, H> {
     q: Vec<f64>,
     r: Vec<f64>,
     hooks: Hooks,
+    manifold: Option<Arc<dyn Manifold + Send + Sync>>,
 }
 
 /// A residual, state difference or state addition: `(a, b, out)`.
@@ -217,6 +230,7 @@ where
             q,
             r,
             hooks: Hooks::default(),
+            manifold: None,
         })
     }
 
@@ -258,6 +272,52 @@ where
         self.hooks.state_add = state_add;
         self
     }
+
+    /// The model with its state on the manifold `space`: f and h take stored points, Q
+    /// (given to [`FnModel::new`]) is a tangent-space covariance, and the state addition
+    /// and difference are `space`'s `⊞` and `⊟`. The filter's dimensions are then
+    /// n = `space.dim()` with [`crate::Dims::stored`] = `space.stored()`.
+    ///
+    /// ```
+    /// use kalman::{Dims, DynDims};
+    /// use kalman::nonlinear::{FnModel, NonlinearModel, Part, Product};
+    /// # fn main() -> Result<(), kalman::Error> {
+    /// // An attitude held still, seen through its rotation of the vertical.
+    /// let d = DynDims::new(3, 3, 0)?.with_stored(4)?;
+    /// let model = FnModel::new(
+    ///     d,
+    ///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out.copy_from_slice(x),
+    ///     |x: &[f64], _k: usize, out: &mut [f64]| {
+    ///         use kalman::nonlinear::quaternion;
+    ///         let g = quaternion::rotate_inverse([x[0], x[1], x[2], x[3]], [0.0, 0.0, 1.0]);
+    ///         out.copy_from_slice(&g);
+    ///     },
+    ///     &[[1e-6, 0.0, 0.0], [0.0, 1e-6, 0.0], [0.0, 0.0, 1e-6]],
+    ///     &[[1e-4, 0.0, 0.0], [0.0, 1e-4, 0.0], [0.0, 0.0, 1e-4]],
+    /// )?
+    /// .with_manifold(Product::new([Part::Quaternion]))?;
+    /// assert_eq!(model.manifold_dims(), Some((d.n(), d.stored())));
+    /// # Ok(())
+    /// # }
+    /// ```
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] naming `manifold` if `space.dim()` is not the n of Q.
+    pub fn with_manifold(
+        mut self,
+        space: impl Manifold + Send + Sync + 'static,
+    ) -> Result<Self, Error> {
+        let n = self.q.len().isqrt();
+        if space.dim() != n {
+            return Err(Error::Dimension {
+                name: "manifold",
+                value: space.dim(),
+                rule: "a manifold's tangent dimension must be the model's n (Q is n×n)",
+            });
+        }
+        self.manifold = Some(Arc::new(space));
+        Ok(self)
+    }
 }
 
 /// Loads a d×d covariance, checks it symmetric PSD and symmetrises it.
@@ -293,10 +353,19 @@ where
         (self.hooks.residual)(a, b, out);
     }
     fn state_add(&self, x: &[f64], dx: &[f64], out: &mut [f64]) {
-        (self.hooks.state_add)(x, dx, out);
+        match &self.manifold {
+            Some(space) => space.boxplus(x, dx, out),
+            None => (self.hooks.state_add)(x, dx, out),
+        }
     }
     fn state_residual(&self, a: &[f64], b: &[f64], out: &mut [f64]) {
-        (self.hooks.state_residual)(a, b, out);
+        match &self.manifold {
+            Some(space) => space.boxminus(a, b, out),
+            None => (self.hooks.state_residual)(a, b, out),
+        }
+    }
+    fn manifold_dims(&self) -> Option<(usize, usize)> {
+        self.manifold.as_ref().map(|s| (s.dim(), s.stored()))
     }
 }
 
@@ -337,6 +406,11 @@ pub struct CentralDiff<M> {
     plus: Vec<f64>,
     minus: Vec<f64>,
     diff: Vec<f64>,
+    /// Manifold states: f(x), the tangent perturbation, and the two images' differences
+    /// from f(x).
+    centre: Vec<f64>,
+    delta: Vec<f64>,
+    up: Vec<f64>,
 }
 
 /// The default relative step of [`CentralDiff`], `f64::EPSILON^{1/3}`.
@@ -346,14 +420,17 @@ impl<M: NonlinearModel> CentralDiff<M> {
     /// Wraps `model` for the dimensions `dims` (workspaces are allocated here, not per
     /// step), with the default relative step ε^{1/3}.
     pub fn new(dims: impl Dims, model: M) -> Self {
-        let k = dims.n().max(dims.m());
+        let k = dims.stored().max(dims.m());
         Self {
             model,
             step: CENTRAL_DIFF_STEP,
-            xs: vec![0.0; dims.n()],
+            xs: vec![0.0; dims.stored()],
             plus: vec![0.0; k],
             minus: vec![0.0; k],
             diff: vec![0.0; k],
+            centre: vec![0.0; dims.stored()],
+            delta: vec![0.0; dims.n()],
+            up: vec![0.0; dims.n()],
         }
     }
 
@@ -425,7 +502,7 @@ impl<M: NonlinearModel> CentralDiff<M> {
 /// Implements [`NonlinearModel`] for a Jacobian wrapper by forwarding every method to its
 /// `model` field: the wrappers add derivatives, never change the dynamics.
 macro_rules! forward_model {
-    (impl<$p:ident: $bound:path> for $wrapper:ty) => {
+    (impl<$p:ident: $bound:path> for $wrapper:ty $(, $manifold:ident)?) => {
         impl<$p: $bound> $crate::nonlinear::NonlinearModel for $wrapper {
             fn f(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]) {
                 self.model.f(x, u, k, out);
@@ -440,20 +517,87 @@ macro_rules! forward_model {
                 self.model.r(k, out);
             }
             $crate::nonlinear::models::forward_hooks!(model);
+            $(
+                fn $manifold(&self) -> Option<(usize, usize)> {
+                    self.model.$manifold()
+                }
+            )?
         }
     };
 }
 #[cfg(feature = "autodiff")]
 pub(crate) use forward_model;
 
-forward_model!(impl<M: NonlinearModel> for CentralDiff<M>);
+forward_model!(impl<M: NonlinearModel> for CentralDiff<M>, manifold_dims);
+
+impl<M: NonlinearModel> CentralDiff<M> {
+    /// The tangent-space Jacobian of a manifold state (n tangent, s stored): column j is
+    /// `(g(x ⊞ δ e_j) ⊖ g(x ⊞ −δ e_j)) / 2δ` with `δ` the relative step itself (tangent
+    /// coordinates have no scale of their own to multiply it by), the difference of f's
+    /// images taken as `(y⁺ ⊟ f(x)) − (y⁻ ⊟ f(x))` in the tangent space at f(x), that of
+    /// h's by the measurement residual.
+    fn tangent_difference(
+        &mut self,
+        x: &[f64],
+        (n, s): (usize, usize),
+        rows: usize,
+        jac: &mut [f64],
+        mut eval: impl FnMut(&mut M, &[f64], &mut [f64]),
+        state: bool,
+    ) {
+        let d = self.step;
+        if state {
+            eval(&mut self.model, x, &mut self.centre[..s]);
+        }
+        let out = if state { s } else { rows };
+        for j in 0..n {
+            self.delta[..n].fill(0.0);
+            for (sign, image) in [(1.0, 0), (-1.0, 1)] {
+                self.delta[j] = sign * d;
+                self.model.state_add(x, &self.delta[..n], &mut self.xs[..s]);
+                let y = if image == 0 {
+                    &mut self.plus[..out]
+                } else {
+                    &mut self.minus[..out]
+                };
+                eval(&mut self.model, &self.xs[..s], y);
+            }
+            if state {
+                self.model
+                    .state_residual(&self.plus[..s], &self.centre[..s], &mut self.up[..n]);
+                self.model
+                    .state_residual(&self.minus[..s], &self.centre[..s], &mut self.diff[..n]);
+                for i in 0..n {
+                    jac[i + j * n] = (self.up[i] - self.diff[i]) / (2.0 * d);
+                }
+            } else {
+                self.model.residual(
+                    &self.plus[..rows],
+                    &self.minus[..rows],
+                    &mut self.diff[..rows],
+                );
+                for i in 0..rows {
+                    jac[i + j * rows] = self.diff[i] / (2.0 * d);
+                }
+            }
+        }
+    }
+}
 
 impl<M: NonlinearModel> Jacobians for CentralDiff<M> {
     fn f_jacobian(&mut self, x: &[f64], u: Option<&[f64]>, k: usize, jac: &mut [f64]) {
+        if let Some(dims) = self.model.manifold_dims() {
+            let n = dims.0;
+            return self.tangent_difference(x, dims, n, jac, |m, x, out| m.f(x, u, k, out), true);
+        }
         let n = x.len();
         self.difference(x, n, jac, |m, x, out| m.f(x, u, k, out), true);
     }
     fn h_jacobian(&mut self, x: &[f64], k: usize, jac: &mut [f64]) {
+        if let Some(dims) = self.model.manifold_dims() {
+            let rows = jac.len() / dims.0;
+            return self.tangent_difference(x, dims, rows, jac, |m, x, out| m.h(x, k, out), false);
+        }
         let rows = jac.len() / x.len();
         self.difference(x, rows, jac, |m, x, out| m.h(x, k, out), false);
     }

@@ -289,8 +289,9 @@ impl<D: NlDims> SigmaSet<D> {
         }
     }
 
-    /// The points `χ_i = x ⊕ L ξ_i` into `chi` (n × s), through the model's state addition
-    /// (the symmetric sets' centre is `x` itself). `dx` is an n-vector workspace.
+    /// The points `χ_i = x ⊕ L ξ_i` into `chi` (stored × s, the stored length being
+    /// `x.len()`, n for a vector state), through the model's state addition (the
+    /// symmetric sets' centre is `x` itself). `dx` is an n-vector workspace.
     #[inline(always)]
     pub(super) fn draw<M: NonlinearModel + ?Sized>(
         &self,
@@ -301,14 +302,15 @@ impl<D: NlDims> SigmaSet<D> {
         dx: &mut [f64],
         chi: &mut [f64],
     ) {
+        let ns = x.len();
         if self.simplex {
             for i in 0..self.count {
                 self.offset(L, n, i, dx);
-                model.state_add(x, &dx[..n], &mut chi[i * n..(i + 1) * n]);
+                model.state_add(x, &dx[..n], &mut chi[i * ns..(i + 1) * ns]);
             }
             return;
         }
-        chi[..n].copy_from_slice(x);
+        chi[..ns].copy_from_slice(x);
         let dx = &mut dx[..n];
         for j in 0..n {
             for (sign, col) in [(1.0, 1 + j), (-1.0, 1 + n + j)] {
@@ -316,7 +318,7 @@ impl<D: NlDims> SigmaSet<D> {
                 for i in 0..n {
                     dx[i] = f * L[i + j * n];
                 }
-                model.state_add(x, dx, &mut chi[col * n..(col + 1) * n]);
+                model.state_add(x, dx, &mut chi[col * ns..(col + 1) * ns]);
             }
         }
     }

@@ -126,9 +126,9 @@ impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
         P0: &impl MatrixInput,
         points: SigmaPoints,
     ) -> Result<Self, Error> {
-        let c = Core::new(dims, x0, P0)?;
+        let c = Core::new(dims, &model, x0, P0)?;
         let (n, m) = (dims.n(), dims.m());
-        let pts = Unscented::new(points, n, m)?;
+        let pts = Unscented::new(points, n, m, dims.stored())?;
         let s = pts.set.count;
         let ld = (m + s + n).max(s + n);
         let mut f = Self {
@@ -173,13 +173,14 @@ impl<D: NlDims, M: NonlinearModel> ObservedUpdate<D> for SqrtUkf<D, M> {
     #[inline(always)]
     fn update_observed(&mut self, z: &[f64], mo: usize, info: StepInfo) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
+        let ns = self.c.dims.stored();
         let s = self.pts.set.count;
-        let xp = &self.c.xp.as_slice()[..n];
+        let xp = &self.c.xp.as_slice()[..ns];
         let Sp = &self.sp.as_slice()[..n * n];
         self.pts
             .draw(&self.model, xp, Sp, n, self.dx.as_mut_slice());
         // ẑ and the deviations dz (mo × s), as in the plain filter.
-        self.pts.measure(&mut self.model, z, n, m, mo, k)?;
+        self.pts.measure(&mut self.model, z, ns, m, mo, k)?;
         let set = &self.pts.set;
         let wc = &set.wc.as_slice()[..s];
         let dz = &mut self.pts.dz.as_mut_slice()[..mo * s];
@@ -299,7 +300,7 @@ impl<D: NlDims, M: NonlinearModel> ObservedUpdate<D> for SqrtUkf<D, M> {
             dx[r] = row.iter().zip(e.iter()).map(|(p, q)| p * q).sum();
         }
         self.model
-            .state_add(xp, dx, &mut self.c.xf.as_mut_slice()[..n]);
+            .state_add(xp, dx, &mut self.c.xf.as_mut_slice()[..ns]);
         let Sf = &mut self.sf.as_mut_slice()[..n * n];
         for r in 0..n {
             for j in 0..n {
@@ -349,13 +350,15 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for SqrtUkf<D, M> {
             pivot,
             tol: PSD_TOL,
         })?;
-        let xf = &self.c.xf.as_slice()[..n];
+        let ns = self.c.dims.stored();
+        let xf = &self.c.xf.as_slice()[..ns];
         let dx = self.dx.as_mut_slice();
         self.pts
             .draw(&self.model, xf, &self.sf.as_slice()[..n * n], n, dx);
         // x⁺ and the deviations, as in the plain filter.
-        let xp = &mut self.c.xp.as_mut_slice()[..n];
-        self.pts.propagate(&mut self.model, u, n, k, xf, xp, dx)?;
+        let xp = &mut self.c.xp.as_mut_slice()[..ns];
+        self.pts
+            .propagate(&mut self.model, u, (n, ns), k, xf, xp, dx)?;
         let wc = &self.pts.set.wc.as_slice()[..s];
         let dy = &self.pts.dy.as_slice()[..n * s];
         // [√Wc_i dy_i …, Q^{1/2}] (n rows of length s + n), triangularised.
@@ -402,16 +405,18 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for SqrtUkf<D, M> {
     }
 }
 
-impl<D: NlDims, M> SqrtUkf<D, M> {
+impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
     /// Restarts from the prior `(x0, P0)` at step 0, keeping the model and workspaces.
     ///
     /// # Errors
     /// As [`SqrtUkf::new`] for `x0` and `P0`.
     pub fn reset(&mut self, x0: &[f64], P0: &impl MatrixInput) -> Result<(), Error> {
-        self.c.reset(x0, P0)?;
+        self.c.reset(&self.model, x0, P0)?;
         self.factor_prior()
     }
+}
 
+impl<D: NlDims, M> SqrtUkf<D, M> {
     /// The factor of the prior `P0` (held in `c.pp`) into `sp` and `sf`.
     fn factor_prior(&mut self) -> Result<(), Error> {
         let n = self.c.dims.n();

@@ -79,12 +79,12 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
         P0: &impl MatrixInput,
         points: SigmaPoints,
     ) -> Result<Self, Error> {
-        let c = Core::new(dims, x0, P0)?;
+        let c = Core::new(dims, &model, x0, P0)?;
         let (n, m) = (dims.n(), dims.m());
         Ok(Self {
             w: UpdateWork::new(n, m),
             model,
-            pts: Unscented::new(points, n, m)?,
+            pts: Unscented::new(points, n, m, dims.stored())?,
             c,
             l: D::Nn::zeros(n * n),
             linv: D::Nv::zeros(n),
@@ -107,13 +107,13 @@ impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
 
     /// Sigma points of `(x, P)` into `chi` (and the factor of P into `l`).
     fn draw(&mut self, predicted: bool) -> Result<(), Error> {
-        let (n, k) = (self.c.dims.n(), self.c.k);
+        let (n, k, ns) = (self.c.dims.n(), self.c.k, self.c.dims.stored());
         let (x, P, name) = if predicted {
             (&self.c.xp, &self.c.pp, "P_{k|k-1}")
         } else {
             (&self.c.xf, &self.c.pf, "P_{k|k}")
         };
-        let (x, P) = (&x.as_slice()[..n], &P.as_slice()[..n * n]);
+        let (x, P) = (&x.as_slice()[..ns], &P.as_slice()[..n * n]);
         let L = &mut self.l.as_mut_slice()[..n * n];
         let inv = &mut self.linv.as_mut_slice()[..n];
         psd_cholesky(P, n, L, inv, RANK_TOL, PSD_TOL).map_err(|pivot| Error::SigmaCovariance {
@@ -133,18 +133,22 @@ impl<D: NlDims, M: NonlinearModel> ObservedUpdate<D> for Ukf<D, M> {
     #[inline(always)]
     fn update_observed(&mut self, z: &[f64], mo: usize, info: StepInfo) -> Result<StepInfo, Error> {
         let (n, m, k) = (self.c.dims.n(), self.c.dims.m(), self.c.k);
+        let ns = self.c.dims.stored();
         let s = self.pts.set.count;
         self.draw(true)?;
         // ẑ and the deviations dz (mo × s, observed rows), dchi = χ_i ⊖ x⁻ (n × s).
-        self.pts.measure(&mut self.model, z, n, m, mo, k)?;
+        self.pts.measure(&mut self.model, z, ns, m, mo, k)?;
         let wc = &self.pts.set.wc.as_slice()[..s];
-        let chi = &self.pts.chi.as_slice()[..n * s];
-        let xp = &self.c.xp.as_slice()[..n];
+        let chi = &self.pts.chi.as_slice()[..ns * s];
+        let xp = &self.c.xp.as_slice()[..ns];
         let dz = &self.pts.dz.as_slice()[..mo * s];
         let dchi = &mut self.pts.dchi.as_mut_slice()[..n * s];
         for i in 0..s {
-            self.model
-                .state_residual(&chi[i * n..(i + 1) * n], xp, &mut dchi[i * n..(i + 1) * n]);
+            self.model.state_residual(
+                &chi[i * ns..(i + 1) * ns],
+                xp,
+                &mut dchi[i * n..(i + 1) * n],
+            );
         }
         let sig = &mut self.w.sig.as_mut_slice()[..mo * mo];
         self.c.observed_r(z, mo, sig);
@@ -193,7 +197,7 @@ impl<D: NlDims, M: NonlinearModel> ObservedUpdate<D> for Ukf<D, M> {
         let dx = &mut self.w.dx.as_mut_slice()[..n];
         mul(dx, K, e, n, mo, 1, false);
         self.model
-            .state_add(xp, dx, &mut self.c.xf.as_mut_slice()[..n]);
+            .state_add(xp, dx, &mut self.c.xf.as_mut_slice()[..ns]);
         // The Joseph form (I − K H̃) P (I − K H̃)ᵀ + K R̃ Kᵀ through the factor of P:
         // (I − K H̃) L = L − K Gᵀ.
         factored_joseph(
@@ -223,17 +227,17 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
     }
 
     fn predict_stage(&mut self, u: Option<&[f64]>) -> Result<(), Error> {
-        let (n, k) = (self.c.dims.n(), self.c.k);
+        let (n, k, ns) = (self.c.dims.n(), self.c.k, self.c.dims.stored());
         let s = self.pts.set.count;
         self.c.load_q(&mut self.model)?;
         self.draw(false)?;
         self.pts.propagate(
             &mut self.model,
             u,
-            n,
+            (n, ns),
             k,
-            &self.c.xf.as_slice()[..n],
-            &mut self.c.xp.as_mut_slice()[..n],
+            &self.c.xf.as_slice()[..ns],
+            &mut self.c.xp.as_mut_slice()[..ns],
             self.w.dx.as_mut_slice(),
         )?;
         let wc = &self.pts.set.wc.as_slice()[..s];
@@ -251,14 +255,17 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for Ukf<D, M> {
     }
 }
 
-impl<D: NlDims, M> Ukf<D, M> {
+impl<D: NlDims, M: NonlinearModel> Ukf<D, M> {
     /// Restarts from the prior `(x0, P0)` at step 0, keeping the model and workspaces.
     ///
     /// # Errors
     /// As [`Ukf::new`] for `x0` and `P0`.
     pub fn reset(&mut self, x0: &[f64], P0: &impl MatrixInput) -> Result<(), Error> {
-        self.c.reset(x0, P0)
+        self.c.reset(&self.model, x0, P0)
     }
+}
+
+impl<D: NlDims, M> Ukf<D, M> {
     /// The sigma-point set.
     pub fn sigma_points(&self) -> SigmaPoints {
         self.pts.set.points

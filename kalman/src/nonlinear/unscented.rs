@@ -8,15 +8,16 @@ use super::{NlDims, NonlinearModel, compact_vec, finite};
 use crate::Error;
 use crate::storage::Buf;
 
-/// A sigma-point set with the workspaces of its points: `chi` (n × s), their images under f
-/// (`y`) and h (`zs`, m × s), the deviations from the means (`dchi`, `dy`, `dz`), `ẑ` and an
+/// A sigma-point set with the workspaces of its points: `chi` (stored × s: points of a
+/// state on a manifold are stored points, see [`crate::Dims::stored`]), their images under f
+/// (`y`, stored × s) and h (`zs`, m × s), the deviations from the means (`dchi`, `dy`, `dz`), `ẑ` and an
 /// m-vector of scratch. The deviations `dchi` and `dy` of the last prediction are kept until
 /// the next one for [`Unscented::cross_covariance`].
 #[derive(Clone, Debug)]
 pub(super) struct Unscented<D: NlDims> {
     pub(super) set: SigmaSet<D>,
-    pub(super) chi: D::Sig,
-    y: D::Sig,
+    pub(super) chi: D::SSig,
+    y: D::SSig,
     pub(super) dchi: D::Sig,
     pub(super) dy: D::Sig,
     zs: D::ZSig,
@@ -26,17 +27,18 @@ pub(super) struct Unscented<D: NlDims> {
 }
 
 impl<D: NlDims> Unscented<D> {
-    /// The set `points` for n states and m measurements, with its workspaces.
+    /// The set `points` for n (tangent) states stored in `ns` numbers and m measurements,
+    /// with its workspaces.
     ///
     /// # Errors
     /// [`Error::InvalidOption`] from [`SigmaPoints::weights`].
-    pub(super) fn new(points: SigmaPoints, n: usize, m: usize) -> Result<Self, Error> {
+    pub(super) fn new(points: SigmaPoints, n: usize, m: usize, ns: usize) -> Result<Self, Error> {
         let set = SigmaSet::new(points, n)?;
         let s = set.count;
         Ok(Self {
             set,
-            chi: D::Sig::zeros(n * s),
-            y: D::Sig::zeros(n * s),
+            chi: D::SSig::zeros(ns * s),
+            y: D::SSig::zeros(ns * s),
             dchi: D::Sig::zeros(n * s),
             dy: D::Sig::zeros(n * s),
             zs: D::ZSig::zeros(m * s),
@@ -46,7 +48,8 @@ impl<D: NlDims> Unscented<D> {
         })
     }
 
-    /// The points `χ_i = x ⊕ L ξ_i` into `chi` (`L` lower n×n; `dx` an n-vector workspace).
+    /// The points `χ_i = x ⊕ L ξ_i` into `chi` (`x` stored in `x.len()` numbers, `L` lower
+    /// n×n; `dx` an n-vector workspace).
     #[inline(always)]
     pub(super) fn draw<M: NonlinearModel + ?Sized>(
         &mut self,
@@ -56,11 +59,11 @@ impl<D: NlDims> Unscented<D> {
         n: usize,
         dx: &mut [f64],
     ) {
-        let chi = &mut self.chi.as_mut_slice()[..n * self.set.count];
+        let chi = &mut self.chi.as_mut_slice()[..x.len() * self.set.count];
         self.set.draw(model, x, L, n, dx, chi);
     }
 
-    /// `Z_i = h(χ_i)` (checked finite), `ẑ = Z_0 + Σ_{i≥1} Wm_i (Z_i ⊖ Z_0)` and the
+    /// `Z_i = h(χ_i)` (checked finite; `n` is the points' stored length), `ẑ = Z_0 + Σ_{i≥1} Wm_i (Z_i ⊖ Z_0)` and the
     /// deviations `dz_i = Z_i ⊖ ẑ` on the `mo` observed rows of z (mo × s). Centring the
     /// mean on `Z_0` leaves no cancellation between a large negative `Wm_0` and the other
     /// weights, and averages wrapped components around `Z_0`.
@@ -140,13 +143,15 @@ impl<D: NlDims> Unscented<D> {
     /// `y_i = f(χ_i)` (checked finite) of the points of `(x_{k|k}, ·)` drawn into `chi`,
     /// `x⁺ = y_0 ⊕ Σ_{i≥1} Wm_i (y_i ⊖ y_0)` into `xp` (centred on `y_0` as ẑ in
     /// [`Unscented::measure`]), and the deviations `dy_i = y_i ⊖ x⁺`,
-    /// `dchi_i = χ_i ⊖ x_{k|k}` (`xf`). `dx` is an n-vector workspace.
+    /// `dchi_i = χ_i ⊖ x_{k|k}` (`xf`), for n tangent dimensions stored in `ns` numbers.
+    /// `dx` is an n-vector workspace. On a manifold the mean is one Gauss–Newton step of
+    /// the weighted (Karcher) mean from `y_0`, exact for a vector state.
     #[inline(always)]
     pub(super) fn propagate<M: NonlinearModel + ?Sized>(
         &mut self,
         model: &mut M,
         u: Option<&[f64]>,
-        n: usize,
+        (n, ns): (usize, usize),
         k: usize,
         xf: &[f64],
         xp: &mut [f64],
@@ -154,25 +159,33 @@ impl<D: NlDims> Unscented<D> {
     ) -> Result<(), Error> {
         let s = self.set.count;
         let wm = &self.set.wm.as_slice()[..s];
-        let chi = &self.chi.as_slice()[..n * s];
-        let y = &mut self.y.as_mut_slice()[..n * s];
+        let chi = &self.chi.as_slice()[..ns * s];
+        let y = &mut self.y.as_mut_slice()[..ns * s];
         for i in 0..s {
-            let yi = &mut y[i * n..(i + 1) * n];
-            model.f(&chi[i * n..(i + 1) * n], u, k, yi);
+            let yi = &mut y[i * ns..(i + 1) * ns];
+            model.f(&chi[i * ns..(i + 1) * ns], u, k, yi);
             finite("f", k, yi)?;
         }
         let dy = &mut self.dy.as_mut_slice()[..n * s];
         let dx = &mut dx[..n];
         for i in 1..s {
-            model.state_residual(&y[i * n..(i + 1) * n], &y[..n], &mut dy[i * n..(i + 1) * n]);
+            model.state_residual(
+                &y[i * ns..(i + 1) * ns],
+                &y[..ns],
+                &mut dy[i * n..(i + 1) * n],
+            );
         }
         mul(dx, &dy[n..], &wm[1..], n, s - 1, 1, false);
-        let xp = &mut xp[..n];
-        model.state_add(&y[..n], dx, xp);
+        let xp = &mut xp[..ns];
+        model.state_add(&y[..ns], dx, xp);
         let dchi = &mut self.dchi.as_mut_slice()[..n * s];
         for i in 0..s {
-            model.state_residual(&y[i * n..(i + 1) * n], xp, &mut dy[i * n..(i + 1) * n]);
-            model.state_residual(&chi[i * n..(i + 1) * n], xf, &mut dchi[i * n..(i + 1) * n]);
+            model.state_residual(&y[i * ns..(i + 1) * ns], xp, &mut dy[i * n..(i + 1) * n]);
+            model.state_residual(
+                &chi[i * ns..(i + 1) * ns],
+                xf,
+                &mut dchi[i * n..(i + 1) * n],
+            );
         }
         Ok(())
     }
