@@ -66,6 +66,9 @@ pub use sqrt::SqrtSmoothed;
 pub struct Rts<K> {
     /// States per step, fixed by the first recorded step.
     n: usize,
+    /// Numbers per stored mean: n, or more for a state on a manifold
+    /// ([`crate::Dims::stored`]).
+    stored: usize,
     steps: usize,
     xf: Vec<f64>,
     pf: Vec<f64>,
@@ -161,6 +164,7 @@ impl<K> Default for Rts<K> {
     fn default() -> Self {
         Self {
             n: 0,
+            stored: 0,
             steps: 0,
             xf: Vec::new(),
             pf: Vec::new(),
@@ -205,14 +209,38 @@ impl<K> Rts<K> {
     /// # Errors
     /// [`Error::Dimension`] naming n if it differs from that of the steps recorded before.
     pub(crate) fn admit(&mut self, n: usize) -> Result<(), Error> {
+        self.admit_stored(n, n)
+    }
+
+    /// [`Self::admit`] for a state of `n` tangent dimensions stored in `stored` numbers.
+    pub(crate) fn admit_stored(&mut self, n: usize, stored: usize) -> Result<(), Error> {
         if self.steps == 0 {
-            self.n = n;
+            (self.n, self.stored) = (n, stored);
         }
-        if n == self.n {
-            Ok(())
-        } else {
+        if n != self.n {
             Err(mismatch(n))
+        } else if stored != self.stored {
+            Err(Error::Dimension {
+                name: "stored",
+                value: stored,
+                rule: "the smoother's stored length must match the filter's",
+            })
+        } else {
+            Ok(())
         }
+    }
+
+    /// Entries of a recorded mean and of a recorded covariance.
+    pub(crate) fn mean_len(&self) -> usize {
+        self.stored
+    }
+    pub(crate) fn covariance_len(&self) -> usize {
+        self.n * self.n
+    }
+
+    /// Whether the recorded means are stored points of a manifold longer than n.
+    pub(crate) fn is_stored(&self) -> bool {
+        self.stored != self.n
     }
 
     /// Appends an admitted step: x_{k|k}, x_{k+1|k} (n each) and P_{k|k}, P_{k+1|k}, C_k
@@ -257,9 +285,21 @@ impl<K> Rts<K> {
     /// the smoothed means.
     pub(crate) fn backward_each(
         &self,
+        visit: impl FnMut(usize, &Mat<f64>, &Mat<f64>) -> Result<(), Error>,
+    ) -> Result<Mat<f64>, Error> {
+        self.backward_on(None, visit)
+    }
+
+    /// The backward pass of [`Self::backward_each`], on the manifold `space` if given: the
+    /// means are stored points (stored × N) and
+    /// `x_{k|N} = x_{k|k} ⊞ J_k (x_{k+1|N} ⊟ x_{k+1|k})`, the covariances tangent.
+    pub(crate) fn backward_on(
+        &self,
+        space: Option<&dyn crate::nonlinear::Manifold>,
         mut visit: impl FnMut(usize, &Mat<f64>, &Mat<f64>) -> Result<(), Error>,
     ) -> Result<Mat<f64>, Error> {
         let (n, N) = (self.n, self.steps);
+        let ns = self.stored;
         self.require_steps()?;
         fn mat(v: &[f64], k: usize, n: usize) -> MatRef<'_, f64> {
             MatRef::from_column_major_slice(&v[k * n * n..(k + 1) * n * n], n, n)
@@ -267,20 +307,41 @@ impl<K> Rts<K> {
         fn vec(v: &[f64], k: usize, n: usize) -> MatRef<'_, f64> {
             MatRef::from_column_major_slice(&v[k * n..(k + 1) * n], n, 1)
         }
-        let mut means = Mat::<f64>::zeros(n, N);
+        let mut means = Mat::<f64>::zeros(ns, N);
         means
             .as_mut()
             .col_mut(N - 1)
-            .copy_from(vec(&self.xf, N - 1, n).col(0));
+            .copy_from(vec(&self.xf, N - 1, ns).col(0));
         let mut next = mat(&self.pf, N - 1, n).to_owned();
         visit(N - 1, &means, &next)?;
+        // The manifold branch's workspaces: x_{k+1|N} ⊟ x_{k+1|k}, J_k times it, and the
+        // stored points x_{k+1|N} and x_{k|N}.
+        let (mut d, mut dv) = (vec![0.0; n], vec![0.0; n]);
+        let (mut after, mut point) = (vec![0.0; ns], vec![0.0; ns]);
         for k in (0..N - 1).rev() {
             let Pp = mat(&self.pp, k, n);
             let Jt = solve_psd(Pp, mat(&self.ct, k, n).transpose())?;
             let J = Jt.transpose();
-            let dx = means.as_ref().col(k + 1).as_mat() - vec(&self.xp, k, n);
-            let x = vec(&self.xf, k, n) + J * dx;
-            means.as_mut().col_mut(k).copy_from(x.col(0));
+            match space {
+                None => {
+                    let dx = means.as_ref().col(k + 1).as_mat() - vec(&self.xp, k, n);
+                    let x = vec(&self.xf, k, n) + J * dx;
+                    means.as_mut().col_mut(k).copy_from(x.col(0));
+                }
+                Some(space) => {
+                    for (i, a) in after.iter_mut().enumerate() {
+                        *a = means[(i, k + 1)];
+                    }
+                    space.boxminus(&after, &self.xp[k * ns..(k + 1) * ns], &mut d);
+                    for (i, v) in dv.iter_mut().enumerate() {
+                        *v = (0..n).map(|j| J[(i, j)] * d[j]).sum();
+                    }
+                    space.boxplus(&self.xf[k * ns..(k + 1) * ns], &dv, &mut point);
+                    for (i, v) in point.iter().enumerate() {
+                        means[(i, k)] = *v;
+                    }
+                }
+            }
             let mut P = mat(&self.pf, k, n) + J * (&next - Pp) * J.transpose();
             symmetrise(&mut P);
             visit(k, &means, &P)?;

@@ -193,8 +193,8 @@ impl DynDims {
 
     /// The same dimensions for a state on a manifold stored in `stored` ≥ n numbers, n
     /// being its tangent dimension (a unit quaternion and a gyro bias: n = 6, stored = 7).
-    /// For the nonlinear filters with a model that declares its
-    /// [`crate::nonlinear::Manifold`].
+    /// For the nonlinear filters with a model that declares its manifold (a
+    /// `NonlinearModel` whose `manifold_dims` is not `None`).
     ///
     /// ```
     /// use kalman::{Dims, DynDims};

@@ -465,8 +465,10 @@ impl FixedLagSmoother {
                         type_error(format!("FixedLagSmoother state: window {k} must be an int"))
                     })
                 };
+                let n = count("n")?;
                 let st = kalman::nonlinear::FixedLagState {
-                    n: count("n")?,
+                    n,
+                    stored: n,
                     lag: count("lag")?,
                     steps: count("steps")?,
                     xf: list("xf")?,

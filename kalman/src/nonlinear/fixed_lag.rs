@@ -4,8 +4,10 @@
 
 use faer::MatRef;
 
-use super::ForwardPass;
+use std::sync::Arc;
+
 use super::linalg::{mul, mul_nt, psd_cholesky, right_solve, symmetrise};
+use super::{ForwardPass, Manifold};
 use crate::storage::Dims;
 use crate::{Error, Filter, PSD_TOL, RANK_TOL};
 
@@ -52,9 +54,13 @@ use crate::{Error, Filter, PSD_TOL, RANK_TOL};
 /// assert!((x[0] - s.means[(0, 2)]).abs() < 1e-12);
 /// # Ok::<(), kalman::Error>(())
 /// ```
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct FixedLag {
     n: usize,
+    /// Numbers per stored mean (n, or more on a manifold).
+    stored: usize,
+    /// The state's manifold, if any ([`FixedLag::with_manifold`]).
+    space: Option<Arc<dyn Manifold + Send + Sync>>,
     lag: usize,
     steps: usize,
     /// The ring of records (slot = step mod (L + 1)).
@@ -75,6 +81,18 @@ pub struct FixedLag {
     t: Vec<f64>,
 }
 
+impl core::fmt::Debug for FixedLag {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("FixedLag")
+            .field("n", &self.n)
+            .field("stored", &self.stored)
+            .field("manifold", &self.space.is_some())
+            .field("lag", &self.lag)
+            .field("steps", &self.steps)
+            .finish_non_exhaustive()
+    }
+}
+
 /// What a [`FixedLag`] carries from step to step, to save and restore it
 /// ([`FixedLag::state`], [`FixedLag::from_state`]): the ring of the last L + 1 records and
 /// the smoothed window, each buffer in the smoother's layout (step slot `j mod (L + 1)`,
@@ -83,21 +101,24 @@ pub struct FixedLag {
 pub struct FixedLagState {
     /// States n.
     pub n: usize,
+    /// Numbers per stored mean: n for a vector state, more on a manifold (the means'
+    /// buffers hold (L + 1)·stored).
+    pub stored: usize,
     /// The lag L.
     pub lag: usize,
     /// Steps recorded.
     pub steps: usize,
-    /// x_{j|j}, (L + 1)·n.
+    /// x_{j|j}, (L + 1)·stored.
     pub xf: Vec<f64>,
     /// P_{j|j}, (L + 1)·n².
     pub pf: Vec<f64>,
-    /// x_{j+1|j}, (L + 1)·n.
+    /// x_{j+1|j}, (L + 1)·stored.
     pub xp: Vec<f64>,
     /// P_{j+1|j}, (L + 1)·n².
     pub pp: Vec<f64>,
     /// C_j, (L + 1)·n².
     pub ct: Vec<f64>,
-    /// The smoothed means, entry b the step k − b, (L + 1)·n.
+    /// The smoothed means, entry b the step k − b, (L + 1)·stored.
     pub xs: Vec<f64>,
     /// The smoothed covariances, (L + 1)·n².
     pub ps: Vec<f64>,
@@ -108,6 +129,7 @@ impl FixedLag {
     pub fn state(&self) -> FixedLagState {
         FixedLagState {
             n: self.n,
+            stored: self.stored,
             lag: self.lag,
             steps: self.steps,
             xf: self.xf.clone(),
@@ -120,7 +142,8 @@ impl FixedLag {
         }
     }
 
-    /// The smoother [`FixedLag::state`] saved.
+    /// The smoother [`FixedLag::state`] saved (for a state on a manifold, follow with
+    /// [`FixedLag::with_manifold`]).
     ///
     /// ```
     /// use kalman::nonlinear::FixedLag;
@@ -133,11 +156,18 @@ impl FixedLag {
     /// ```
     ///
     /// # Errors
-    /// [`Error::Dimension`] naming `n` (zero); [`Error::Shape`] naming the buffer whose
-    /// length does not match n and the lag; [`Error::NonFinite`] naming a buffer with a
+    /// [`Error::Dimension`] naming `n` (zero) or `stored` (below n); [`Error::Shape`]
+    /// naming the buffer whose length does not match n, the stored length and the lag; [`Error::NonFinite`] naming a buffer with a
     /// NaN or infinite entry.
     pub fn from_state(state: FixedLagState) -> Result<Self, Error> {
-        let (n, lag) = (state.n, state.lag);
+        let (n, lag, ns) = (state.n, state.lag, state.stored);
+        if ns < n {
+            return Err(Error::Dimension {
+                name: "stored",
+                value: ns,
+                rule: "a stored mean holds at least n numbers",
+            });
+        }
         let FixedLagState {
             xf,
             pf,
@@ -151,8 +181,8 @@ impl FixedLag {
         // The lengths are checked before anything is allocated: the buffers given bound
         // what the smoother allocates, whatever n and the lag say.
         let w = lag.checked_add(1);
-        let vec_len = w.and_then(|w| w.checked_mul(n));
-        let mat_len = vec_len.and_then(|v| v.checked_mul(n));
+        let vec_len = w.and_then(|w| w.checked_mul(ns));
+        let mat_len = w.and_then(|w| w.checked_mul(n)?.checked_mul(n));
         let bufs = [
             ("xf", xf, vec_len),
             ("pf", pf, mat_len),
@@ -183,6 +213,7 @@ impl FixedLag {
             }
         }
         let mut out = Self::new(n, lag)?;
+        out.stored = ns;
         let [xf, pf, xp, pp, ct, xs, ps] = bufs.map(|(_, buf, _)| buf);
         (out.xf, out.pf, out.xp, out.pp, out.ct, out.xs, out.ps) = (xf, pf, xp, pp, ct, xs, ps);
         out.steps = state.steps;
@@ -204,6 +235,8 @@ impl FixedLag {
         let w = lag + 1;
         Ok(Self {
             n,
+            stored: n,
+            space: None,
             lag,
             steps: 0,
             xf: vec![0.0; w * n],
@@ -220,6 +253,37 @@ impl FixedLag {
             dp: vec![0.0; n * n],
             t: vec![0.0; n * n],
         })
+    }
+
+    /// The smoother for a state on the manifold `space` (the model's, see
+    /// [`super::FnModel::with_manifold`]): the window's means are stored points and
+    /// `x_{j|k} = x_{j|j} ⊞ J_j (x_{j+1|k} ⊟ x_{j+1|j})`, the covariances tangent, as in
+    /// [`super::NonlinearRts::smooth_on`]. Before any step is recorded, or on a smoother
+    /// restored from the state of one on `space`.
+    ///
+    /// # Errors
+    /// [`Error::Dimension`] naming `manifold` if `space`'s tangent dimension is not n, or
+    /// its stored length is neither n (a fresh smoother) nor the restored state's.
+    pub fn with_manifold(
+        mut self,
+        space: impl Manifold + Send + Sync + 'static,
+    ) -> Result<Self, Error> {
+        let fresh = self.steps == 0 && self.stored == self.n;
+        if space.dim() != self.n || !(fresh || space.stored() == self.stored) {
+            return Err(Error::Dimension {
+                name: "manifold",
+                value: space.stored(),
+                rule: "the manifold must have the smoother's n and stored length",
+            });
+        }
+        let ns = space.stored();
+        if ns != self.stored {
+            let w = self.lag + 1;
+            (self.xf, self.xp, self.xs) = (vec![0.0; w * ns], vec![0.0; w * ns], vec![0.0; w * ns]);
+            self.stored = ns;
+        }
+        self.space = Some(Arc::new(space));
+        Ok(self)
     }
 
     /// The lag L.
@@ -244,15 +308,23 @@ impl FixedLag {
     /// [`Error::Dimension`] if the filter's n is not the smoother's (nothing is recorded);
     /// [`Error::Factorisation`] naming `P_{k+1|k}` if a recorded prediction is not PSD.
     pub fn record(&mut self, filter: &impl ForwardPass) -> Result<(), Error> {
-        let n = self.n;
+        let (n, ns) = (self.n, self.stored);
         let (xf, pf) = filter.filtered();
         let (xp, pp) = filter.predicted();
-        if xf.len() != n || pf.len() != n * n || xp.len() != n || pp.len() != n * n {
-            return Err(mismatch(xf.len()));
+        if pf.len() != n * n || pp.len() != n * n {
+            return Err(mismatch(pf.len().isqrt()));
+        }
+        if xf.len() != ns || xp.len() != ns {
+            return Err(Error::Dimension {
+                name: "stored",
+                value: xf.len(),
+                rule: "the filter's stored mean must have the smoother's length \
+                       (a state on a manifold: FixedLag::with_manifold)",
+            });
         }
         let s = self.steps % (self.lag + 1);
-        self.xf[s * n..(s + 1) * n].copy_from_slice(xf);
-        self.xp[s * n..(s + 1) * n].copy_from_slice(xp);
+        self.xf[s * ns..(s + 1) * ns].copy_from_slice(xf);
+        self.xp[s * ns..(s + 1) * ns].copy_from_slice(xp);
         self.pf[s * n * n..(s + 1) * n * n].copy_from_slice(pf);
         self.pp[s * n * n..(s + 1) * n * n].copy_from_slice(pp);
         filter.cross_covariance(&mut self.ct[s * n * n..(s + 1) * n * n]);
@@ -268,7 +340,7 @@ impl FixedLag {
     /// As [`FixedLag::record`].
     pub fn record_linear<D: Dims>(&mut self, filter: &Filter<D>) -> Result<(), Error> {
         let n = self.n;
-        if filter.state().len() != n {
+        if filter.state().len() != n || self.stored != n {
             return Err(mismatch(filter.state().len()));
         }
         let s = self.steps % (self.lag + 1);
@@ -304,10 +376,10 @@ impl FixedLag {
         if back >= self.window() {
             return None;
         }
-        let n = self.n;
+        let (n, ns) = (self.n, self.stored);
         Some((
             self.steps - 1 - back,
-            &self.xs[back * n..(back + 1) * n],
+            &self.xs[back * ns..(back + 1) * ns],
             MatRef::from_column_major_slice(&self.ps[back * n * n..(back + 1) * n * n], n, n),
         ))
     }
@@ -324,11 +396,11 @@ impl FixedLag {
 
     /// The backward pass over the window, from the newest record.
     fn smooth_window(&mut self) -> Result<(), Error> {
-        let (n, w) = (self.n, self.lag + 1);
+        let (n, w, ns) = (self.n, self.lag + 1, self.stored);
         let k = self.steps - 1;
         let slot = |j: usize| j % w;
         let s = slot(k);
-        self.xs[..n].copy_from_slice(&self.xf[s * n..(s + 1) * n]);
+        self.xs[..ns].copy_from_slice(&self.xf[s * ns..(s + 1) * ns]);
         self.ps[..n * n].copy_from_slice(&self.pf[s * n * n..(s + 1) * n * n]);
         for back in 1..self.window() {
             let s = slot(k - back);
@@ -344,13 +416,28 @@ impl FixedLag {
             self.j.copy_from_slice(&self.ct[s * nn..(s + 1) * nn]);
             right_solve(&self.l, &self.inv, n, &mut self.j, n);
             let (done, todo) = (back - 1, back);
-            // x_{j|k} = x_{j|j} + J (x_{j+1|k} − x_{j+1|j}).
-            for i in 0..n {
-                self.dx[i] = self.xs[done * n + i] - self.xp[s * n + i];
+            // x_{j|k} = x_{j|j} ⊞ J (x_{j+1|k} ⊟ x_{j+1|j}) (+ and − for a vector state).
+            let (before, after) = self.xs.split_at_mut(todo * ns);
+            let (next, x) = (&before[done * ns..], &mut after[..ns]);
+            let (xf, xp) = (
+                &self.xf[s * ns..(s + 1) * ns],
+                &self.xp[s * ns..(s + 1) * ns],
+            );
+            match &self.space {
+                None => {
+                    for i in 0..n {
+                        self.dx[i] = next[i] - xp[i];
+                    }
+                    x.copy_from_slice(xf);
+                    mul(x, &self.j, &self.dx, n, n, 1, true);
+                }
+                Some(space) => {
+                    space.boxminus(next, xp, &mut self.dx);
+                    self.t[..n].fill(0.0);
+                    mul(&mut self.t[..n], &self.j, &self.dx, n, n, 1, true);
+                    space.boxplus(xf, &self.t[..n], x);
+                }
             }
-            let x = &mut self.xs[todo * n..(todo + 1) * n];
-            x.copy_from_slice(&self.xf[s * n..(s + 1) * n]);
-            mul(x, &self.j, &self.dx, n, n, 1, true);
             // P_{j|k} = P_{j|j} + J (P_{j+1|k} − P_{j+1|j}) Jᵀ.
             for i in 0..nn {
                 self.dp[i] = self.ps[done * nn + i] - Pp[i];

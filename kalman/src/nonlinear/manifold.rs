@@ -39,6 +39,15 @@ pub trait Manifold {
 }
 
 /// One factor of a [`Product`] manifold.
+///
+/// ```
+/// use kalman::nonlinear::{Manifold, Part, Product};
+/// // A heading wraps: 3 rad plus 0.5 rad is 3.5 − 2π.
+/// let heading = Product::new([Part::Angle]);
+/// let mut out = [0.0];
+/// heading.boxplus(&[3.0], &[0.5], &mut out);
+/// assert!((out[0] - (3.5 - 2.0 * std::f64::consts::PI)).abs() < 1e-15);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Part {
     /// `k` entries of ℝᵏ: `⊞` is `+`, `⊟` is `−`.
@@ -65,6 +74,18 @@ impl Part {
 
 /// A product of [`Part`]s, stored one after the other (its tangent likewise): a state
 /// `(q, b)` of attitude and gyro bias is `Product::new([Part::Quaternion, Part::Vector(3)])`.
+///
+/// ```
+/// use kalman::nonlinear::{Manifold, Part, Product, quaternion};
+/// let s = Product::new([Part::Quaternion, Part::Vector(3)]);
+/// assert!(s.is_curved() && s.parts().len() == 2);
+/// // Turning the identity by a quarter turn about z in the tangent space, and back.
+/// let x = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+/// let mut y = [0.0; 7];
+/// s.boxplus(&x, &[0.0, 0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0], &mut y);
+/// let v = quaternion::rotate([y[0], y[1], y[2], y[3]], [1.0, 0.0, 0.0]);
+/// assert!(v[0].abs() < 1e-15 && (v[1] - 1.0).abs() < 1e-15);
+/// ```
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Product {
     parts: Vec<Part>,

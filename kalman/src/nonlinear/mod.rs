@@ -14,6 +14,21 @@
 //! [`NonlinearModel::state_add`] (x ⊕ δ) and [`NonlinearModel::state_residual`] (x ⊖ y),
 //! as FilterPy's `residual_z`, `x_add` and `residual_x` do.
 //!
+//! # States on manifolds
+//! A state that is not a vector — a unit quaternion of attitude, an angle, products of them
+//! with vectors — is a [`Manifold`] ([`Product`] of [`Part`]s, or a type of one's own) given
+//! to the model ([`FnModel::with_manifold`], or [`NonlinearModel::manifold_dims`] with the
+//! two state hooks). The mean is then a stored point (4 numbers for a quaternion) and P, Q
+//! and the Jacobians live in the tangent space at it (3 dimensions), the error-state form:
+//! sigma points are drawn as `x ⊞ L ξ_i`, means and corrections go through `⊞`/`⊟`, and
+//! every estimate stays on the manifold (a quaternion of unit norm to round-off after every
+//! step). The dimensions say both sizes: `FixedDims::<6, M, P, 7>` or
+//! `DynDims::new(6, m, p)?.with_stored(7)?` for a quaternion and a gyro bias. The EKF
+//! takes tangent Jacobians (by hand, or [`CentralDiff`], which perturbs through `⊞`;
+//! `AutoDiff` differentiates vector states only), the smoothers run on the manifold with
+//! [`NonlinearRts::smooth_on`] and [`FixedLag::with_manifold`], and the IMM mixes vector
+//! states only (a manifold mode is refused).
+//!
 //! Dynamics in continuous time over a record's own time stamps, `ẋ = a(x, u, t)`, are a
 //! `ContinuousDynamics` wrapped in `TimeStamped` (feature `autodiff`): each step integrates
 //! its interval by RK4, and `AutoDiff` differentiates the integrated map.

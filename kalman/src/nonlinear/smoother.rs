@@ -28,8 +28,10 @@ pub trait ForwardPass {
 /// `P_{k|N} = P_{k|k} + J_k (P_{k+1|N} − P_{k+1|k}) J_kᵀ`
 ///
 /// with `J_k` from a Cholesky solve (the minimum-norm solution when `P_{k+1|k}` is
-/// singular), and differ only in how the filter formed `C_k` ([`ForwardPass`]). Differences
-/// are plain subtractions (the smoother does not hold the model's angle wrapping).
+/// singular), and differ only in how the filter formed `C_k` ([`ForwardPass`]). In
+/// [`Self::smooth`] differences are plain subtractions (the smoother does not hold the
+/// model); [`Self::smooth_on`] runs the pass on the model's manifold (wrapped angles, unit
+/// quaternions), and is the only pass for steps whose means are stored points longer than n.
 ///
 /// ```
 /// use kalman::DynDims;
@@ -65,14 +67,19 @@ impl Rts<Nonlinear> {
     /// or a vector or matrix it hands over is not of size n or n×n.
     pub fn record(&mut self, filter: &impl ForwardPass) -> Result<(), Error> {
         let (xf, pf) = filter.filtered();
-        let n = xf.len();
-        self.admit(n)?;
+        // n from P (n×n); the mean may be a longer stored point of a manifold.
+        let n = pf.len().isqrt();
+        let ns = xf.len();
+        if n * n != pf.len() || ns < n {
+            return Err(Error::Dimension {
+                name: "P_{k|k}",
+                value: pf.len(),
+                rule: "a recorded step must hold an n-by-n P_{k|k} and a mean of at least n",
+            });
+        }
+        self.admit_stored(n, ns)?;
         let (xp, pp) = filter.predicted();
-        for (name, value, len) in [
-            ("P_{k|k}", pf.len(), n * n),
-            ("x_{k+1|k}", xp.len(), n),
-            ("P_{k+1|k}", pp.len(), n * n),
-        ] {
+        for (name, value, len) in [("x_{k+1|k}", xp.len(), ns), ("P_{k+1|k}", pp.len(), n * n)] {
             if value != len {
                 return Err(Error::Dimension {
                     name,
@@ -88,12 +95,46 @@ impl Rts<Nonlinear> {
         Ok(())
     }
 
+    /// The backward pass on the manifold `space` (the model's, see
+    /// [`super::FnModel::with_manifold`]): `x_{k|N} = x_{k|k} ⊞ J_k (x_{k+1|N} ⊟ x_{k+1|k})`
+    /// with J_k and the tangent covariances as in [`Self::smooth`]; the means are stored
+    /// points (stored × N, a quaternion of unit norm in every column). The smoothed
+    /// covariance adds tangent-space matrices taken at x_{k+1|N} and x_{k+1|k} without
+    /// transporting one to the other, an error of second order in their distance (the
+    /// convention of the error-state smoothers). With a [`super::Part::Angle`] the
+    /// differences wrap, which [`Self::smooth`]'s do not.
+    ///
+    /// # Errors
+    /// As [`Self::smooth`]; [`Error::Dimension`] naming `manifold` if `space` does not have
+    /// the recorded n and stored length.
+    pub fn smooth_on(&self, space: &impl super::Manifold) -> Result<Smoothed, Error> {
+        if !self.is_empty() && !self.fits(space) {
+            return Err(Error::Dimension {
+                name: "manifold",
+                value: space.stored(),
+                rule: "the manifold must have the recorded steps' n and stored length",
+            });
+        }
+        let mut covs = Vec::with_capacity(self.len());
+        let means = self.backward_on(Some(space), |_, _, p| {
+            covs.push(p.clone());
+            Ok(())
+        })?;
+        covs.reverse();
+        Ok(Smoothed {
+            means,
+            covariances: covs,
+        })
+    }
+
     /// The backward pass over all recorded steps.
     ///
     /// # Errors
-    /// [`Error::Dimension`] if nothing was recorded; [`Error::Factorisation`] if the eigen
+    /// [`Error::Dimension`] if nothing was recorded, or naming `stored` if the steps'
+    /// means are stored points of a manifold ([`Self::smooth_on`]); [`Error::Factorisation`] if the eigen
     /// fallback for a singular `P_{k+1|k}` fails.
     pub fn smooth(&self) -> Result<Smoothed, Error> {
+        self.vector_states()?;
         self.backward(|_, _, _| Ok(()))
     }
 
@@ -135,10 +176,31 @@ impl Rts<Nonlinear> {
         &self,
         mut visit: impl FnMut(usize, MatRef<'_, f64>),
     ) -> Result<Mat<f64>, Error> {
+        self.vector_states()?;
         self.backward_each(|k, _, p| {
             visit(k, p.as_ref());
             Ok(())
         })
+    }
+}
+
+impl Rts<Nonlinear> {
+    /// Whether `space` has the recorded n and stored length.
+    fn fits(&self, space: &impl super::Manifold) -> bool {
+        space.dim() * space.dim() == self.covariance_len() && space.stored() == self.mean_len()
+    }
+
+    /// [`Error::Dimension`] naming `stored` for steps whose means are stored points longer
+    /// than n, which a vector pass would add and subtract as vectors.
+    fn vector_states(&self) -> Result<(), Error> {
+        if self.is_stored() {
+            return Err(Error::Dimension {
+                name: "stored",
+                value: self.mean_len(),
+                rule: "the steps' states are on a manifold: smooth them with smooth_on",
+            });
+        }
+        Ok(())
     }
 }
 

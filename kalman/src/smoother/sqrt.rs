@@ -64,7 +64,8 @@ impl<K> Rts<K> {
     /// those components zero weight, the minimum-norm choice.
     ///
     /// # Errors
-    /// [`Error::Dimension`] if nothing was recorded; [`Error::NotPositiveSemidefinite`]
+    /// [`Error::Dimension`] if nothing was recorded or the steps' states are stored
+    /// points of a manifold; [`Error::NotPositiveSemidefinite`]
     /// naming `P_{N|N}` or the joint covariance of a step whose record is not positive
     /// semidefinite (a forward pass whose P_{k+1|k} and C_k are inconsistent);
     /// [`Error::Diverged`] naming the step if a smoothed mean or factor is not finite.
@@ -91,6 +92,13 @@ impl<K> Rts<K> {
     pub fn smooth_sqrt(&self) -> Result<SqrtSmoothed, Error> {
         let (n, N) = (self.n, self.steps);
         self.require_steps()?;
+        if self.is_stored() {
+            return Err(Error::Dimension {
+                name: "stored",
+                value: self.stored,
+                rule: "the square-root pass smooths vector states; a manifold's: smooth_on",
+            });
+        }
         let (nn, w) = (n * n, 2 * n);
         let mut means = Mat::<f64>::zeros(n, N);
         let mut factors = vec![Mat::<f64>::zeros(n, n); N];

@@ -198,3 +198,50 @@ fn no_allocation_per_fixed_lag_step() {
     }
     assert_eq!(allocations() - before, 0, "fixed-lag steps");
 }
+
+/// States on a manifold (the attitude model: a unit quaternion and a gyro bias, 7 stored,
+/// 6 tangent): the EKF with tangent central differences, the plain and the square-root
+/// UKF on both storage paths, and the manifold fixed-lag smoother allocate nothing per
+/// step either.
+#[test]
+fn no_allocation_per_manifold_step() {
+    use super::attitude::{flight, model, p0, space};
+    let f = flight(21);
+    let zs: Vec<Vec<f64>> = f.z[..20].iter().map(|z| z.to_vec()).collect();
+    let us: Vec<Vec<f64>> = f.gyro[..20].iter().map(|u| u.to_vec()).collect();
+    let fixed = FixedDims::<6, 6, 3, 7>::new();
+    let dynd = DynDims::new(6, 6, 3)
+        .and_then(|d| d.with_stored(7))
+        .expect("dims");
+    let set = SigmaPoints::merwe(0.5, 2.0, 0.0);
+    let mut a = Ukf::new(fixed, model(fixed), &f.x0, &p0(), set).expect("ukf");
+    assert_eq!(count(&mut a, &zs, &us), 0, "manifold UKF fixed");
+    let mut b = Ukf::new(dynd, model(dynd), &f.x0, &p0(), set).expect("ukf");
+    assert_eq!(count(&mut b, &zs, &us), 0, "manifold UKF dyn");
+    let mut c = SqrtUkf::new(fixed, model(fixed), &f.x0, &p0(), set).expect("sqrt");
+    assert_eq!(count(&mut c, &zs, &us), 0, "manifold square-root UKF fixed");
+    for d in [
+        EkfUpdate::Extended,
+        EkfUpdate::Iterated {
+            max_iterations: 3,
+            tolerance: 0.0,
+        },
+    ] {
+        let cd = CentralDiff::new(fixed, model(fixed));
+        let mut e = Ekf::new(fixed, cd, &f.x0, &p0(), d).expect("ekf");
+        assert_eq!(count(&mut e, &zs, &us), 0, "manifold EKF {d:?}");
+    }
+    let mut ukf = Ukf::new(fixed, model(fixed), &f.x0, &p0(), set).expect("ukf");
+    let mut lag = FixedLag::new(6, 4)
+        .and_then(|l| l.with_manifold(space()))
+        .expect("lag");
+    let mut before = 0;
+    for k in 0..20 {
+        if k == 1 {
+            before = allocations();
+        }
+        ukf.step(&zs[k], Some(&us[k])).expect("ukf step");
+        lag.record(&ukf).expect("record");
+    }
+    assert_eq!(allocations() - before, 0, "manifold fixed-lag steps");
+}

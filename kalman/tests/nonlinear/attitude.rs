@@ -379,3 +379,184 @@ fn manifold_mismatches_are_typed_errors() {
         "{lin}"
     );
 }
+
+/// The unscented RTS smoother on the manifold over 100 flights: the smoothed states are
+/// consistent (per-step mean NEES in the χ² band as for the filter), every smoothed
+/// quaternion has unit norm, and the smoothed attitude error is smaller than the
+/// filtered one on average (the smoother sees the fixes after each step too).
+#[test]
+fn the_manifold_smoother_is_consistent_and_beats_the_filter() {
+    let runs = 100;
+    let dof = 6 * runs;
+    let lo = kalman::chi2_quantile(0.025, dof) / runs as f64;
+    let hi = kalman::chi2_quantile(0.975, dof) / runs as f64;
+    let s = space();
+    let d = FixedDims::<6, 6, 3, 7>::new();
+    let points = SigmaPoints::merwe(0.5, 2.0, 0.0);
+    let mut mean = vec![0.0; STEPS];
+    let (mut filtered_err, mut smoothed_err) = (0.0, 0.0);
+    let mut e = [0.0; 6];
+    for seed in 0..runs as u64 {
+        let f = flight(500 + seed);
+        let mut ukf = Ukf::new(d, model(d), &f.x0, &p0(), points).expect("ukf");
+        let mut rts = kalman::nonlinear::NonlinearRts::new();
+        for k in 0..STEPS {
+            ukf.go(&f.z[k], &f.gyro[k]);
+            rts.record(&ukf).expect("record");
+            s.boxminus(&f.truth[k], &ukf.x(), &mut e);
+            filtered_err += e[..3].iter().map(|v| v * v).sum::<f64>();
+        }
+        let out = rts.smooth_on(&s).expect("smooth");
+        for k in 0..STEPS {
+            let x: Vec<f64> = (0..7).map(|i| out.means[(i, k)]).collect();
+            let norm = x[..4].iter().map(|v| v * v).sum::<f64>().sqrt();
+            assert!((norm - 1.0).abs() < 1e-12, "step {k}: |q| = {norm}");
+            s.boxminus(&f.truth[k], &x, &mut e);
+            smoothed_err += e[..3].iter().map(|v| v * v).sum::<f64>();
+            let p: Vec<f64> = (0..36)
+                .map(|i| out.covariances[k][(i % 6, i / 6)])
+                .collect();
+            mean[k] += nees(&p, &e) / runs as f64;
+        }
+    }
+    let inside = mean.iter().filter(|m| (lo..=hi).contains(*m)).count();
+    let grand = mean.iter().sum::<f64>() / STEPS as f64;
+    assert!(
+        inside as f64 >= 0.85 * STEPS as f64 && (lo..=hi).contains(&grand),
+        "{inside}/{STEPS} steps in [{lo:.3}, {hi:.3}], grand mean {grand:.3}"
+    );
+    // Between fixes (every 5 steps) the smoother interpolates with the data on both sides:
+    // its mean-square attitude error is well below the filter's.
+    assert!(
+        smoothed_err < 0.7 * filtered_err,
+        "smoothed {smoothed_err:e} vs filtered {filtered_err:e}"
+    );
+}
+
+/// On a vector "manifold" (a product of one vector part) the manifold pass is the vector
+/// pass: the same means and covariances to round-off; and the vector pass refuses stored
+/// points it would add as vectors.
+#[test]
+fn the_manifold_pass_reduces_to_the_vector_pass() {
+    let f = flight(9);
+    let d = FixedDims::<6, 6, 3, 7>::new();
+    let points = SigmaPoints::merwe(0.5, 2.0, 0.0);
+    let mut ukf = Ukf::new(d, model(d), &f.x0, &p0(), points).expect("ukf");
+    let mut rts = kalman::nonlinear::NonlinearRts::new();
+    for k in 0..50 {
+        ukf.go(&f.z[k], &f.gyro[k]);
+        rts.record(&ukf).expect("record");
+    }
+    let e = rts.smooth().expect_err("stored points");
+    assert!(
+        matches!(e, kalman::Error::Dimension { name: "stored", .. }),
+        "{e}"
+    );
+    let e = rts
+        .smooth_on(&Product::new([Part::Quaternion]))
+        .expect_err("wrong manifold");
+    assert!(
+        matches!(
+            e,
+            kalman::Error::Dimension {
+                name: "manifold",
+                ..
+            }
+        ),
+        "{e}"
+    );
+
+    // A vector state: the range–bearing-free random walk of the pendulum tests.
+    let dv = DynDims::new(2, 1, 0).expect("dims");
+    let walk = FnModel::new(
+        dv,
+        |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| {
+            out[0] = x[0] + 0.1 * x[1];
+            out[1] = x[1] - 0.1 * x[0].sin();
+        },
+        |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0].sin(),
+        &[[1e-4, 0.0], [0.0, 1e-3]],
+        &[[1e-2]],
+    )
+    .expect("model");
+    let mut plain =
+        Ukf::new(dv, walk, &[0.3, 0.0], &[[0.1, 0.0], [0.0, 0.1]], points).expect("ukf");
+    let mut rts = kalman::nonlinear::NonlinearRts::new();
+    for k in 0..60 {
+        let z = (0.3 * (0.2 * k as f64).cos()).sin();
+        plain.step(&[z], None).expect("step");
+        rts.record(&plain).expect("record");
+    }
+    let a = rts.smooth().expect("vector pass");
+    let b = rts
+        .smooth_on(&Product::new([Part::Vector(2)]))
+        .expect("manifold pass");
+    for k in 0..60 {
+        for i in 0..2 {
+            // x + J d against x ⊞ (J d): one rounding of the product apart.
+            assert!(
+                (a.means[(i, k)] - b.means[(i, k)]).abs() < 1e-15,
+                "mean {k}"
+            );
+            for j in 0..2 {
+                let (p, q) = (a.covariances[k][(i, j)], b.covariances[k][(i, j)]);
+                assert_eq!(p.to_bits(), q.to_bits(), "P {k}");
+            }
+        }
+    }
+}
+
+/// The fixed-lag smoother on the manifold: at a lag covering the record its window after
+/// the last step is the manifold RTS smoother's output (the same backward recursion over
+/// the same records), and its state survives a save and restore.
+#[test]
+fn the_manifold_fixed_lag_smoother_equals_rts_at_full_lag() {
+    let f = flight(11);
+    let steps = 40;
+    let d = FixedDims::<6, 6, 3, 7>::new();
+    let points = SigmaPoints::merwe(0.5, 2.0, 0.0);
+    let mut ukf = Ukf::new(d, model(d), &f.x0, &p0(), points).expect("ukf");
+    let mut rts = kalman::nonlinear::NonlinearRts::new();
+    let mut lag = kalman::nonlinear::FixedLag::new(6, steps)
+        .and_then(|l| l.with_manifold(space()))
+        .expect("lag");
+    let mut plain = kalman::nonlinear::FixedLag::new(6, 3).expect("lag");
+    for k in 0..steps {
+        ukf.go(&f.z[k], &f.gyro[k]);
+        rts.record(&ukf).expect("record");
+        lag.record(&ukf).expect("record");
+        let e = plain
+            .record(&ukf)
+            .expect_err("a vector smoother refuses stored points");
+        assert!(
+            matches!(e, kalman::Error::Dimension { name: "stored", .. }),
+            "{e}"
+        );
+    }
+    let all = rts.smooth_on(&space()).expect("smooth");
+    // Both solve for J by a Cholesky factorisation of P_{j+1|j}, in two implementations
+    // (the window's own kernels, faer in the RTS pass), so they agree to round-off: sums
+    // of a few dozen products of O(1) numbers over 40 steps, 1e-12 absolute (as the
+    // vector fixed-lag tests).
+    for back in 0..steps {
+        let (j, x, p) = lag.smoothed(back).expect("in window");
+        for i in 0..7 {
+            assert!(
+                (x[i] - all.means[(i, j)]).abs() <= 1e-12,
+                "mean of step {j}"
+            );
+        }
+        for c in 0..6 {
+            for r in 0..6 {
+                assert!(
+                    (p[(r, c)] - all.covariances[j][(r, c)]).abs() <= 1e-12,
+                    "P {j}"
+                );
+            }
+        }
+    }
+    let restored = kalman::nonlinear::FixedLag::from_state(lag.state())
+        .and_then(|l| l.with_manifold(space()))
+        .expect("restore");
+    assert_eq!(restored.state(), lag.state());
+}
