@@ -513,19 +513,28 @@ def wls(
 def ekf(
     f: Any, h: Any, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
     us: Optional[_Series] = None, iterations: int = 0, tolerance: float = 1e-9,
+    manifold: Optional[Sequence[Union[str, int]]] = None,
 ) -> FilterResult:
     """Extended Kalman filter over callables f(x, u, k) -> (n,) and h(x, k) -> (m,), with
     Jacobians by central differences; iterations > 0 for the iterated EKF. Returns the same
-    keys as ``filter``. An exception raised by f or h propagates unchanged."""
+    keys as ``filter``. An exception raised by f or h propagates unchanged.
+
+    ``manifold`` puts the state on a product of unit quaternions ``"quaternion"`` (w, x, y,
+    z; 4 stored, 3 tangent), wrapped angles ``"angle"`` and vectors of length k (an int),
+    e.g. ``["quaternion", 3]`` for an attitude and a gyro bias: x0, f's argument and value
+    and the returned "x" are stored points (7 numbers), Q, P0 and the returned "P" live in
+    the tangent space (6×6), and every quaternion estimate has unit norm."""
 
 def ukf(
     f: Any, h: Any, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,
     us: Optional[_Series] = None, points: str = "merwe", alpha: float = 1e-3,
     beta: float = 2.0, kappa: float = 0.0, form: str = "plain",
+    manifold: Optional[Sequence[Union[str, int]]] = None,
 ) -> FilterResult:
     """Unscented Kalman filter (Merwe's scaled sigma points or "cubature") over callables
     f(x, u, k) and h(x, k); form="sqrt" runs the square-root UKF (Cholesky factors carried
-    instead of covariances). Returns the same keys as ``filter``."""
+    instead of covariances). ``manifold`` as in ``ekf`` (sigma points drawn in the tangent
+    space). Returns the same keys as ``filter``."""
 
 def fit(
     F: Array, H: Array, Q: Array, R: Array, x0: Array, P0: Array, zs: _Series,

@@ -423,6 +423,8 @@ pub(crate) fn copy_mat(out: &mut [f64], m: kalman::faer::MatRef<'_, f64>) {
 pub(crate) struct FilterRecord {
     steps: usize,
     n: usize,
+    /// Numbers per mean (n, or more for a state on a manifold).
+    stored: usize,
     xs: Vec<f64>,
     ps: Vec<f64>,
     xp: Vec<f64>,
@@ -435,14 +437,21 @@ impl FilterRecord {
     /// An empty record of `steps` steps of an n-state filter (a `MemoryError` if it does not
     /// fit in memory).
     pub(crate) fn new(steps: usize, n: usize) -> PyResult<Self> {
+        Self::stored(steps, n, n)
+    }
+
+    /// [`FilterRecord::new`] for means stored in `stored` numbers (a state on a manifold;
+    /// the covariances stay n×n).
+    pub(crate) fn stored(steps: usize, n: usize, stored: usize) -> PyResult<Self> {
         let what = "the filtered record";
         let (sn, snn) = (
-            entries(steps, n, what)?,
+            entries(steps, stored, what)?,
             entries(steps, entries(n, n, what)?, what)?,
         );
         Ok(Self {
             steps,
             n,
+            stored,
             xs: zeros(sn, what)?,
             ps: zeros(snn, what)?,
             xp: zeros(sn, what)?,
@@ -465,24 +474,24 @@ impl FilterRecord {
         log_likelihood: f64,
         nis: Option<f64>,
     ) {
-        let (n, nn) = (self.n, self.n * self.n);
-        self.xs[k * n..(k + 1) * n].copy_from_slice(x);
-        self.xp[k * n..(k + 1) * n].copy_from_slice(x_pred);
+        let (s, nn) = (self.stored, self.n * self.n);
+        self.xs[k * s..(k + 1) * s].copy_from_slice(x);
+        self.xp[k * s..(k + 1) * s].copy_from_slice(x_pred);
         copy_mat(&mut self.ps[k * nn..(k + 1) * nn], p);
         copy_mat(&mut self.pp[k * nn..(k + 1) * nn], p_pred);
         self.ll[k] = log_likelihood;
         self.nis[k] = nis.unwrap_or(f64::NAN);
     }
 
-    /// The dict "x" (N, n), "P" (N, n, n), "x_pred", "P_pred", "log_likelihood" (N,),
+    /// The dict "x" (N, stored), "P" (N, n, n), "x_pred", "P_pred", "log_likelihood" (N,),
     /// "nis" (N,).
     pub(crate) fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-        let (steps, n) = (self.steps, self.n);
+        let (steps, n, s) = (self.steps, self.n, self.stored);
         let out = PyDict::new(py);
         let v2 = |v: Vec<f64>| {
             PyArray2::from_owned_array(
                 py,
-                Array2::from_shape_vec((steps, n), v).unwrap_or_else(|_| Array2::zeros((0, n))),
+                Array2::from_shape_vec((steps, s), v).unwrap_or_else(|_| Array2::zeros((0, s))),
             )
         };
         out.set_item("x", v2(self.xs))?;

@@ -465,10 +465,10 @@ impl FixedLagSmoother {
                         type_error(format!("FixedLagSmoother state: window {k} must be an int"))
                     })
                 };
-                let n = count("n")?;
+                let states = count("n")?;
                 let st = kalman::nonlinear::FixedLagState {
-                    n,
-                    stored: n,
+                    n: states,
+                    stored: states,
                     lag: count("lag")?,
                     steps: count("steps")?,
                     xf: list("xf")?,

@@ -10,7 +10,8 @@ use kalman::DynDims;
 use kalman::StepInfo;
 use kalman::faer::MatRef;
 use kalman::nonlinear::{
-    CentralDiff, Ekf, EkfUpdate, FnModel, ForwardPass, SigmaPoints, SqrtUkf, Ukf,
+    CentralDiff, Ekf, EkfUpdate, FnModel, ForwardPass, Manifold, Part, Product, SigmaPoints,
+    SqrtUkf, Ukf,
 };
 use numpy::{PyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -70,7 +71,8 @@ impl Series<'_> {
         step: StepFn<F>,
         err: impl Fn(kalman::Error) -> PyErr,
     ) -> PyResult<()> {
-        let n = flt.filtered().0.len();
+        // n from P (n×n): a mean on a manifold is a longer stored point.
+        let n = flt.filtered().1.len().isqrt();
         let m = self.z.len() / self.steps.max(1);
         let p = self.u.map_or(0, |u| u.len() / self.steps.max(1));
         for k in 0..self.steps {
@@ -102,22 +104,72 @@ enum Kind {
     SqrtUkf(SigmaPoints),
 }
 
-/// The work of [`ekf`] and [`ukf`]: the arguments `(f, h, Q, R, x0, P0, zs)` and `us` as the
-/// Python signature lists them.
+/// The `manifold` argument: a sequence of "quaternion", "angle" and vector lengths k ≥ 1
+/// (`None`: a vector state).
+fn read_manifold(arg: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Product>> {
+    let Some(arg) = arg.filter(|a| !a.is_none()) else {
+        return Ok(None);
+    };
+    let bad = || {
+        value_error(
+            "manifold must be a sequence of \"quaternion\", \"angle\" and vector lengths \
+             (ints >= 1), e.g. [\"quaternion\", 3]",
+        )
+    };
+    if arg.is_instance_of::<pyo3::types::PyString>() {
+        return Err(bad());
+    }
+    let mut parts = Vec::new();
+    for item in arg.try_iter().map_err(|_| bad())? {
+        let item = item?;
+        let part = if let Ok(s) = item.extract::<String>() {
+            match s.as_str() {
+                "quaternion" => Part::Quaternion,
+                "angle" => Part::Angle,
+                _ => return Err(bad()),
+            }
+        } else if item.is_instance_of::<pyo3::types::PyBool>() {
+            return Err(bad());
+        } else {
+            match item.extract::<usize>() {
+                Ok(k) if k >= 1 => Part::Vector(k),
+                _ => return Err(bad()),
+            }
+        };
+        parts.push(part);
+    }
+    if parts.is_empty() {
+        return Err(bad());
+    }
+    Ok(Some(Product::new(parts)))
+}
+
+/// The work of [`ekf`] and [`ukf`]: the arguments `(f, h, Q, R, x0, P0, zs)`, `us` and
+/// `manifold` as the Python signature lists them.
 fn run<'py>(
     kind: Kind,
     context: &str,
     py: Python<'py>,
     [f, h, Q, R, x0, P0, zs]: [&Bound<'py, PyAny>; 7],
-    us: Option<&Bound<'py, PyAny>>,
+    [us, manifold]: [Option<&Bound<'py, PyAny>>; 2],
 ) -> PyResult<Bound<'py, PyDict>> {
     for (name, c) in [("f", f), ("h", h)] {
         ensure_callable(c, name)?;
     }
     let (Q, R) = (mat(Q, "Q")?, mat(R, "R")?);
     let (n, m) = (Q.nrows(), R.nrows());
-    let mut x0v = vec![0.0; n];
-    read_vector(x0, "x0", n, false, false, &mut x0v)?;
+    let space = read_manifold(manifold)?;
+    if let Some(s) = &space {
+        if s.dim() != n {
+            return Err(value_error(format!(
+                "manifold has {} tangent dimensions but Q is {n}×{n}",
+                s.dim()
+            )));
+        }
+    }
+    let ns = space.as_ref().map_or(n, Manifold::stored);
+    let mut x0v = vec![0.0; ns];
+    read_vector(x0, "x0", ns, false, false, &mut x0v)?;
     let P0 = mat(P0, "P0")?;
     let (steps, z) = crate::series::read_series(zs, "zs", m, true)?;
     let (p, u) = match us {
@@ -142,10 +194,12 @@ fn run<'py>(
         _ => (0, None),
     };
     let err = |e: kalman::Error| value_error(format!("{context}: {e}"));
-    let dims = DynDims::new(n, m, p).map_err(err)?;
+    let dims = DynDims::new(n, m, p)
+        .and_then(|d| d.with_stored(ns))
+        .map_err(err)?;
     let slot: RefCell<Option<PyErr>> = RefCell::new(None);
     let fcall = |x: &[f64], u: Option<&[f64]>, k: usize, out: &mut [f64]| {
-        call_into(&slot, "the value of f(x, u, k)", n, out, || {
+        call_into(&slot, "the value of f(x, u, k)", ns, out, || {
             let xa = PyArray1::from_slice(py, x);
             let ua = u.map(|u| PyArray1::from_slice(py, u));
             f.call1((xa, ua, k))
@@ -156,13 +210,16 @@ fn run<'py>(
             h.call1((PyArray1::from_slice(py, x), k))
         });
     };
-    let model = FnModel::new(dims, fcall, hcall, &Q, &R).map_err(err)?;
+    let mut model = FnModel::new(dims, fcall, hcall, &Q, &R).map_err(err)?;
+    if let Some(space) = space {
+        model = model.with_manifold(space).map_err(err)?;
+    }
     let mut series = Series {
         steps,
         z: &z,
         u: u.as_deref(),
         slot: &slot,
-        rec: FilterRecord::new(steps, n)?,
+        rec: FilterRecord::stored(steps, n, ns)?,
     };
     match kind {
         Kind::Ekf(update) => {
@@ -181,12 +238,15 @@ fn run<'py>(
     series.rec.into_dict(py)
 }
 
-/// ekf(f, h, Q, R, x0, P0, zs, us=None, iterations=0, tolerance=1e-9) → dict as `filter`:
-/// the extended Kalman filter with Jacobians by central differences; f(x, u, k) returns
-/// the next state (u is None without us), h(x, k) the predicted measurement. iterations
-/// > 0 selects the iterated EKF (Gauss–Newton updates, at most that many).
+/// ekf(f, h, Q, R, x0, P0, zs, us=None, iterations=0, tolerance=1e-9, manifold=None) →
+/// dict as `filter`: the extended Kalman filter with Jacobians by central differences;
+/// f(x, u, k) returns the next state (u is None without us), h(x, k) the predicted
+/// measurement. iterations > 0 selects the iterated EKF (Gauss–Newton updates, at most that
+/// many). manifold (e.g. ["quaternion", 3]) puts the state on a product of unit quaternions
+/// (w, x, y, z), angles and vectors: x0, f's argument and value and the returned means are
+/// stored points, Q, P0 and the returned covariances tangent.
 #[pyfunction]
-#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, iterations = 0, tolerance = 1e-9))]
+#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, iterations = 0, tolerance = 1e-9, manifold = None))]
 pub(crate) fn ekf<'py>(
     py: Python<'py>,
     f: &Bound<'py, PyAny>,
@@ -199,15 +259,24 @@ pub(crate) fn ekf<'py>(
     us: Option<&Bound<'py, PyAny>>,
     iterations: usize,
     tolerance: f64,
+    manifold: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    guard(|| run_ekf(py, [f, h, Q, R, x0, P0, zs], [us], iterations, tolerance))
+    guard(|| {
+        run_ekf(
+            py,
+            [f, h, Q, R, x0, P0, zs],
+            [us, manifold],
+            iterations,
+            tolerance,
+        )
+    })
 }
 
 /// [`ekf`]'s work.
 fn run_ekf<'py>(
     py: Python<'py>,
     args: [&Bound<'py, PyAny>; 7],
-    [us]: [Option<&Bound<'py, PyAny>>; 1],
+    options: [Option<&Bound<'py, PyAny>>; 2],
     iterations: usize,
     tolerance: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -219,16 +288,17 @@ fn run_ekf<'py>(
             tolerance,
         }
     };
-    run(Kind::Ekf(update), "ekf", py, args, us)
+    run(Kind::Ekf(update), "ekf", py, args, options)
 }
 
 /// ukf(f, h, Q, R, x0, P0, zs, us=None, points="merwe", alpha=1e-3, beta=2.0, kappa=0.0,
-/// form="plain") → dict as `filter`: the unscented Kalman filter with Merwe's scaled
-/// sigma points or the cubature rule (points="cubature"); form="sqrt" runs the
-/// square-root UKF (the same filter carrying Cholesky factors, for covariances too
-/// ill-conditioned to form and factor).
+/// form="plain", manifold=None) → dict as `filter`: the unscented Kalman filter with
+/// Merwe's scaled sigma points or the cubature rule (points="cubature"); form="sqrt" runs
+/// the square-root UKF (the same filter carrying Cholesky factors, for covariances too
+/// ill-conditioned to form and factor); manifold as in `ekf` (sigma points drawn in the
+/// tangent space).
 #[pyfunction]
-#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, points = "merwe", alpha = 1e-3, beta = 2.0, kappa = 0.0, form = "plain"))]
+#[pyo3(signature = (f, h, Q, R, x0, P0, zs, us = None, points = "merwe", alpha = 1e-3, beta = 2.0, kappa = 0.0, form = "plain", manifold = None))]
 pub(crate) fn ukf<'py>(
     py: Python<'py>,
     f: &Bound<'py, PyAny>,
@@ -244,12 +314,13 @@ pub(crate) fn ukf<'py>(
     beta: f64,
     kappa: f64,
     form: &str,
+    manifold: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     guard(|| {
         run_ukf(
             py,
             [f, h, Q, R, x0, P0, zs],
-            [us],
+            [us, manifold],
             points,
             alpha,
             beta,
@@ -263,7 +334,7 @@ pub(crate) fn ukf<'py>(
 fn run_ukf<'py>(
     py: Python<'py>,
     args: [&Bound<'py, PyAny>; 7],
-    [us]: [Option<&Bound<'py, PyAny>>; 1],
+    options: [Option<&Bound<'py, PyAny>>; 2],
     points: &str,
     alpha: f64,
     beta: f64,
@@ -288,5 +359,5 @@ fn run_ukf<'py>(
             )));
         }
     };
-    run(kind, "ukf", py, args, us)
+    run(kind, "ukf", py, args, options)
 }

@@ -86,3 +86,103 @@ def test_callable_errors():
         le.ukf(3, lambda x, k: x[:1], *args)
     with pytest.raises(ValueError, match="points"):
         le.ukf(lambda x, u, k: x, lambda x, k: x[:1], *args, points="julier")
+
+
+def _qmul(a, b):
+    """Hamilton product, scalar first (written here, independently of the module)."""
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return np.array([
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+    ])
+
+
+def _qexp(v):
+    t = np.linalg.norm(v)
+    if t < 1e-12:
+        return np.array([1.0, *(0.5 * v)])
+    return np.array([np.cos(t / 2), *(np.sin(t / 2) * v / t)])
+
+
+def _to_body(q, v):
+    qc = q * np.array([1, -1, -1, -1])
+    return _qmul(_qmul(qc, np.array([0.0, *v])), q)[1:]
+
+
+def _attitude_flight(seed=3, steps=500, dt=0.02):
+    """A constant tumble at 1.2 rad/s (past 180° several times), gyro with a bias, the
+    vertical and an inclined field seen in the body frame every fifth step."""
+    rng = np.random.default_rng(seed)
+    w = np.array([0.4, -0.7, 0.9]) * 1.2 / np.linalg.norm([0.4, -0.7, 0.9])
+    bias = np.array([0.01, -0.02, 0.005])
+    refs = [np.array([0.0, 0.0, 1.0]), np.array([0.5, 0.0, np.sqrt(0.75)])]
+    q = np.array([1.0, 0.0, 0.0, 0.0])
+    truth, gyro, zs = [], [], []
+    for k in range(steps):
+        truth.append(q)
+        if k % 5 == 0:
+            z = np.concatenate([_to_body(q, r) for r in refs]) + 0.02 * rng.standard_normal(6)
+        else:
+            z = np.full(6, np.nan)
+        zs.append(z)
+        gyro.append(w + bias + 0.01 * rng.standard_normal(3))
+        q = _qmul(q, _qexp(w * dt))
+        q /= np.linalg.norm(q)
+
+    def f(x, u, k):
+        qn = _qmul(x[:4], _qexp((u - x[4:]) * dt))
+        return np.concatenate([qn, x[4:]])
+
+    def h(x, k):
+        return np.concatenate([_to_body(x[:4], r) for r in refs])
+
+    Q = np.diag([(0.01 * dt) ** 2] * 3 + [1e-10] * 3)
+    R = 0.02 ** 2 * np.eye(6)
+    x0 = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    P0 = np.diag([0.1 ** 2] * 3 + [0.03 ** 2] * 3)
+    return np.array(truth), np.array(gyro), np.array(zs), f, h, Q, R, x0, P0, bias
+
+
+@pytest.mark.parametrize("run", ["ukf", "sqrt", "ekf"])
+def test_a_quaternion_state_stays_unit_and_tracks_a_tumble(run):
+    truth, gyro, zs, f, h, Q, R, x0, P0, bias = _attitude_flight()
+    args = (f, h, Q, R, x0, P0, zs)
+    if run == "ekf":
+        out = le.ekf(*args, us=gyro, manifold=["quaternion", 3])
+    else:
+        form = "sqrt" if run == "sqrt" else "plain"
+        out = le.ukf(*args, us=gyro, points="merwe", alpha=0.5, form=form,
+                     manifold=["quaternion", 3])
+    x, P = out["x"], out["P"]
+    assert x.shape == (len(zs), 7) and P.shape == (len(zs), 6, 6)
+    # Every estimate is a unit quaternion (renormalised by ⊞ at each step).
+    np.testing.assert_allclose(np.linalg.norm(x[:, :4], axis=1), 1.0, atol=1e-12)
+    # Attitude error in the last second: the angle of q_true* ⊗ q̂, below 0.02 rad (the
+    # fixes are 0.02 noisy unit vectors, two of them every 0.1 s).
+    for k in range(len(zs) - 50, len(zs)):
+        d = _qmul(truth[k] * np.array([1, -1, -1, -1]), x[k, :4])
+        angle = 2 * np.arctan2(np.linalg.norm(d[1:]), abs(d[0]))
+        assert angle < 0.02, (k, angle)
+    # The bias is found within four of its posterior standard deviations.
+    sd = np.sqrt(np.diag(P[-1])[3:])
+    assert np.all(np.abs(x[-1, 4:] - bias) < 4 * sd), (x[-1, 4:], bias, sd)
+
+
+def test_a_bad_manifold_is_a_value_error():
+    truth, gyro, zs, f, h, Q, R, x0, P0, bias = _attitude_flight(steps=10)
+    args = (f, h, Q, R, x0, P0, zs)
+    for bad, what in [
+        ("quaternion", "sequence"),
+        (["quaternion", 0], "sequence"),
+        (["quaternion", True], "sequence"),
+        (["sphere", 3], "sequence"),
+        ([], "sequence"),
+        (["quaternion"], "tangent"),
+    ]:
+        with pytest.raises(ValueError, match=what):
+            le.ukf(*args, us=gyro, manifold=bad)
+    with pytest.raises(ValueError, match="x0"):
+        le.ekf(f, h, Q, R, x0[:6], P0, zs, us=gyro, manifold=["quaternion", 3])
