@@ -159,13 +159,11 @@ fn run<'py>(
     let (Q, R) = (mat(Q, "Q")?, mat(R, "R")?);
     let (n, m) = (Q.nrows(), R.nrows());
     let space = read_manifold(manifold)?;
-    if let Some(s) = &space {
-        if s.dim() != n {
-            return Err(value_error(format!(
-                "manifold has {} tangent dimensions but Q is {n}×{n}",
-                s.dim()
-            )));
-        }
+    if let Some(s) = space.as_ref().filter(|s| s.dim() != n) {
+        return Err(value_error(format!(
+            "manifold has {} tangent dimensions but Q is {n}×{n}",
+            s.dim()
+        )));
     }
     let ns = space.as_ref().map_or(n, Manifold::stored);
     let mut x0v = vec![0.0; ns];
