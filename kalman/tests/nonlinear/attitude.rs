@@ -380,12 +380,12 @@ fn manifold_mismatches_are_typed_errors() {
     );
 }
 
-/// The unscented RTS smoother on the manifold over 100 flights: the smoothed states are
-/// consistent (per-step mean NEES in the χ² band as for the filter), every smoothed
-/// quaternion has unit norm, and the smoothed attitude error is smaller than the
-/// filtered one on average (the smoother sees the fixes after each step too).
+/// The extended and the unscented RTS smoothers on the manifold over 100 flights: the
+/// smoothed states are consistent (per-step mean NEES in the χ² band as for the filters),
+/// every smoothed quaternion has unit norm, and the smoothed attitude error is smaller
+/// than the filtered one on average (the smoother sees the fixes after each step too).
 #[test]
-fn the_manifold_smoother_is_consistent_and_beats_the_filter() {
+fn the_manifold_smoothers_are_consistent_and_beat_the_filters() {
     let runs = 100;
     let dof = 6 * runs;
     let lo = kalman::chi2_quantile(0.025, dof) / runs as f64;
@@ -393,44 +393,58 @@ fn the_manifold_smoother_is_consistent_and_beats_the_filter() {
     let s = space();
     let d = FixedDims::<6, 6, 3, 7>::new();
     let points = SigmaPoints::merwe(0.5, 2.0, 0.0);
-    let mut mean = vec![0.0; STEPS];
-    let (mut filtered_err, mut smoothed_err) = (0.0, 0.0);
-    let mut e = [0.0; 6];
-    for seed in 0..runs as u64 {
-        let f = flight(500 + seed);
-        let mut ukf = Ukf::new(d, model(d), &f.x0, &p0(), points).expect("ukf");
-        let mut rts = kalman::nonlinear::NonlinearRts::new();
-        for k in 0..STEPS {
-            ukf.go(&f.z[k], &f.gyro[k]);
-            rts.record(&ukf).expect("record");
-            s.boxminus(&f.truth[k], &ukf.x(), &mut e);
-            filtered_err += e[..3].iter().map(|v| v * v).sum::<f64>();
+    for name in ["UKF", "EKF"] {
+        let mut mean = vec![0.0; STEPS];
+        let (mut filtered_err, mut smoothed_err) = (0.0, 0.0);
+        let mut e = [0.0; 6];
+        for seed in 0..runs as u64 {
+            let f = flight(500 + seed);
+            let mut rts = kalman::nonlinear::NonlinearRts::new();
+            let mut filtered = Vec::with_capacity(STEPS);
+            if name == "UKF" {
+                let mut ukf = Ukf::new(d, model(d), &f.x0, &p0(), points).expect("ukf");
+                for k in 0..STEPS {
+                    ukf.go(&f.z[k], &f.gyro[k]);
+                    rts.record(&ukf).expect("record");
+                    filtered.push(ukf.x());
+                }
+            } else {
+                let cd = CentralDiff::new(d, model(d));
+                let mut ekf = Ekf::new(d, cd, &f.x0, &p0(), EkfUpdate::Extended).expect("ekf");
+                for k in 0..STEPS {
+                    ekf.go(&f.z[k], &f.gyro[k]);
+                    rts.record(&ekf).expect("record");
+                    filtered.push(ekf.x());
+                }
+            }
+            let out = rts.smooth_on(&s).expect("smooth");
+            for k in 0..STEPS {
+                s.boxminus(&f.truth[k], &filtered[k], &mut e);
+                filtered_err += e[..3].iter().map(|v| v * v).sum::<f64>();
+                let x: Vec<f64> = (0..7).map(|i| out.means[(i, k)]).collect();
+                let norm = x[..4].iter().map(|v| v * v).sum::<f64>().sqrt();
+                assert!((norm - 1.0).abs() < 1e-12, "{name} step {k}: |q| = {norm}");
+                s.boxminus(&f.truth[k], &x, &mut e);
+                smoothed_err += e[..3].iter().map(|v| v * v).sum::<f64>();
+                let p: Vec<f64> = (0..36)
+                    .map(|i| out.covariances[k][(i % 6, i / 6)])
+                    .collect();
+                mean[k] += nees(&p, &e) / runs as f64;
+            }
         }
-        let out = rts.smooth_on(&s).expect("smooth");
-        for k in 0..STEPS {
-            let x: Vec<f64> = (0..7).map(|i| out.means[(i, k)]).collect();
-            let norm = x[..4].iter().map(|v| v * v).sum::<f64>().sqrt();
-            assert!((norm - 1.0).abs() < 1e-12, "step {k}: |q| = {norm}");
-            s.boxminus(&f.truth[k], &x, &mut e);
-            smoothed_err += e[..3].iter().map(|v| v * v).sum::<f64>();
-            let p: Vec<f64> = (0..36)
-                .map(|i| out.covariances[k][(i % 6, i / 6)])
-                .collect();
-            mean[k] += nees(&p, &e) / runs as f64;
-        }
+        let inside = mean.iter().filter(|m| (lo..=hi).contains(*m)).count();
+        let grand = mean.iter().sum::<f64>() / STEPS as f64;
+        assert!(
+            inside as f64 >= 0.85 * STEPS as f64 && (lo..=hi).contains(&grand),
+            "{name}: {inside}/{STEPS} steps in [{lo:.3}, {hi:.3}], grand mean {grand:.3}"
+        );
+        // Between fixes (every 5 steps) the smoother interpolates with the data on both
+        // sides: its mean-square attitude error is well below the filter's.
+        assert!(
+            smoothed_err < 0.7 * filtered_err,
+            "{name}: smoothed {smoothed_err:e} vs filtered {filtered_err:e}"
+        );
     }
-    let inside = mean.iter().filter(|m| (lo..=hi).contains(*m)).count();
-    let grand = mean.iter().sum::<f64>() / STEPS as f64;
-    assert!(
-        inside as f64 >= 0.85 * STEPS as f64 && (lo..=hi).contains(&grand),
-        "{inside}/{STEPS} steps in [{lo:.3}, {hi:.3}], grand mean {grand:.3}"
-    );
-    // Between fixes (every 5 steps) the smoother interpolates with the data on both sides:
-    // its mean-square attitude error is well below the filter's.
-    assert!(
-        smoothed_err < 0.7 * filtered_err,
-        "smoothed {smoothed_err:e} vs filtered {filtered_err:e}"
-    );
 }
 
 /// On a vector "manifold" (a product of one vector part) the manifold pass is the vector
