@@ -173,6 +173,7 @@ mod filter;
 pub mod fit;
 pub mod gate;
 pub mod imm;
+mod input;
 mod kernels;
 mod model;
 pub mod nonlinear;
@@ -193,7 +194,7 @@ pub use convert::ToNalgebra;
 pub use error::Error;
 pub use filter::{CovarianceForm, Filter, StepInfo};
 pub use kernels::{FAER_THRESHOLD, PARALLEL_THRESHOLD, RANK_TOL};
-pub use model::{MatrixInput, Model, ModelSource, PSD_TOL, SYMMETRY_TOL};
+pub use model::{Diagonal, MatrixInput, Model, ModelSource, PSD_TOL, SYMMETRY_TOL};
 pub use storage::{Dims, DynDims, FIXED_MAX, FixedDims};
 
 /// Re-export of the faer version whose matrix types this API returns.

@@ -4,10 +4,10 @@
 
 use std::sync::Arc;
 
-use super::Manifold;
+use super::{Ekf, EkfUpdate, Manifold, NlDims, SigmaPoints, SqrtUkf, Ukf};
 use crate::Error;
 use crate::model::{MatrixInput, checked_factor, load};
-use crate::storage::Dims;
+use crate::storage::{Dims, DynDims};
 
 /// `out = a − b` entry by entry: the default residual and state difference.
 #[inline]
@@ -160,7 +160,8 @@ pub trait Jacobians: NonlinearModel {
 /// # }
 /// ```
 #[derive(Clone)]
-pub struct FnModel<F, H> {
+pub struct FnModel<F, H, D = DynDims> {
+    dims: D,
     f: F,
     h: H,
     q: Vec<f64>,
@@ -191,16 +192,17 @@ impl Default for Hooks {
     }
 }
 
-impl<F, H> core::fmt::Debug for FnModel<F, H> {
+impl<F, H, D: core::fmt::Debug> core::fmt::Debug for FnModel<F, H, D> {
     fn fmt(&self, fmt: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         fmt.debug_struct("FnModel")
+            .field("dims", &self.dims)
             .field("q", &self.q)
             .field("r", &self.r)
             .finish_non_exhaustive()
     }
 }
 
-impl<F, H> FnModel<F, H>
+impl<F, H, D: Dims> FnModel<F, H, D>
 where
     F: FnMut(&[f64], Option<&[f64]>, usize, &mut [f64]),
     H: FnMut(&[f64], usize, &mut [f64]),
@@ -212,7 +214,7 @@ where
     /// [`Error::Shape`], [`Error::NonFinite`], [`Error::NotSymmetric`] or
     /// [`Error::NotPositiveSemidefinite`] naming `Q` or `R`.
     pub fn new(
-        dims: impl Dims,
+        dims: D,
         f: F,
         h: H,
         Q: &impl MatrixInput,
@@ -225,6 +227,7 @@ where
         load_cov("Q", Q, n, &mut q, &mut work)?;
         load_cov("R", R, m, &mut r, &mut work)?;
         Ok(Self {
+            dims,
             f,
             h,
             q,
@@ -320,6 +323,78 @@ where
     }
 }
 
+impl<F, H, D: NlDims> FnModel<F, H, D>
+where
+    F: FnMut(&[f64], Option<&[f64]>, usize, &mut [f64]),
+    H: FnMut(&[f64], usize, &mut [f64]),
+{
+    /// The dimensions the model was built for.
+    pub fn dims(&self) -> D {
+        self.dims
+    }
+
+    /// The unscented filter of this model on its own dimensions, from the prior `(x0, P0)`
+    /// with the sigma points `points`: [`Ukf::new`] without repeating the dimensions.
+    ///
+    /// ```
+    /// use kalman::FixedDims;
+    /// use kalman::nonlinear::{FnModel, SigmaPoints};
+    /// # fn main() -> Result<(), kalman::Error> {
+    /// let model = FnModel::new(
+    ///     FixedDims::<1, 1>::new(),
+    ///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = x[0],
+    ///     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0],
+    ///     &[[1.0]],
+    ///     &[[1.0]],
+    /// )?;
+    /// let mut ukf = model.ukf(&[0.0], &[[1.0]], SigmaPoints::Cubature)?;
+    /// ukf.step(&[2.0], None)?;
+    /// assert!((ukf.state()[0] - 1.0).abs() < 1e-12);
+    /// # Ok(())
+    /// # }
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Ukf::new`].
+    pub fn ukf(
+        self,
+        x0: &[f64],
+        P0: &impl MatrixInput,
+        points: SigmaPoints,
+    ) -> Result<Ukf<D, Self>, Error> {
+        Ukf::new(self.dims, self, x0, P0, points)
+    }
+
+    /// The square-root unscented filter of this model on its own dimensions
+    /// ([`SqrtUkf::new`]).
+    ///
+    /// # Errors
+    /// As [`SqrtUkf::new`].
+    pub fn sqrt_ukf(
+        self,
+        x0: &[f64],
+        P0: &impl MatrixInput,
+        points: SigmaPoints,
+    ) -> Result<SqrtUkf<D, Self>, Error> {
+        SqrtUkf::new(self.dims, self, x0, P0, points)
+    }
+
+    /// The extended filter of this model on its own dimensions, with Jacobians by
+    /// [`CentralDiff`] ([`Ekf::new`]).
+    ///
+    /// # Errors
+    /// As [`Ekf::new`].
+    pub fn ekf(
+        self,
+        x0: &[f64],
+        P0: &impl MatrixInput,
+        update: EkfUpdate,
+    ) -> Result<Ekf<D, CentralDiff<Self>>, Error> {
+        let d = self.dims;
+        Ekf::new(d, CentralDiff::new(d, self), x0, P0, update)
+    }
+}
+
 /// Loads a d×d covariance, checks it symmetric PSD and symmetrises it.
 fn load_cov(
     name: &'static str,
@@ -332,7 +407,7 @@ fn load_cov(
     checked_factor(name, dst, d, work)
 }
 
-impl<F, H> NonlinearModel for FnModel<F, H>
+impl<F, H, D> NonlinearModel for FnModel<F, H, D>
 where
     F: FnMut(&[f64], Option<&[f64]>, usize, &mut [f64]),
     H: FnMut(&[f64], usize, &mut [f64]),

@@ -79,7 +79,7 @@ pub fn vectors(x: &[f64], _k: usize, out: &mut [f64]) {
 type Kin = fn(&[f64], Option<&[f64]>, usize, &mut [f64]);
 type Obs = fn(&[f64], usize, &mut [f64]);
 
-pub fn model(d: impl Dims) -> FnModel<Kin, Obs> {
+pub fn model<D: Dims>(d: D) -> FnModel<Kin, Obs, D> {
     FnModel::new(d, kinematics as Kin, vectors as Obs, &q(), &r())
         .expect("model")
         .with_manifold(space())

@@ -10,7 +10,7 @@ use super::common::assert_f_non_finite_at;
 /// The transition and measurement closures of the scalar test model.
 type Transition = Box<dyn FnMut(&[f64], Option<&[f64]>, usize, &mut [f64])>;
 type Measurement = Box<dyn FnMut(&[f64], usize, &mut [f64])>;
-type Scalar = FnModel<Transition, Measurement>;
+type Scalar = FnModel<Transition, Measurement, FixedDims<1, 1>>;
 
 fn scalar_model(h_nan_at: usize, f_nan_at: usize) -> Scalar {
     let f: Transition = Box::new(move |x, _u, k, out| {
