@@ -8,6 +8,7 @@
 
 use std::f64::consts::PI;
 
+use kalman::faer::Mat;
 use kalman::nonlinear::{FnModel, NonlinearRts, SigmaPoints};
 use kalman::{Diagonal, FixedDims};
 use rand::{RngExt, SeedableRng};
@@ -24,12 +25,8 @@ type Track = (Vec<[f64; 2]>, Vec<[f64; 2]>);
 
 fn track(zs: &[[f64; 2]]) -> Result<Track, kalman::Error> {
     let (qa, qb, qc) = (Q * DT.powi(3) / 3.0, Q * DT * DT / 2.0, Q * DT);
-    let q = [
-        [qa, qb, 0., 0.],
-        [qb, qc, 0., 0.],
-        [0., 0., qa, qb],
-        [0., 0., qb, qc],
-    ];
+    #[rustfmt::skip]
+    let q = [[qa, qb, 0., 0.], [qb, qc, 0., 0.], [0., 0., qa, qb], [0., 0., qb, qc]];
     // The state is (x, vx, y, vy); z = (range, bearing), the bearing's residual wrapped.
     let f = |x: &[f64], _: Option<&[f64]>, _: usize, y: &mut [f64]| {
         y.copy_from_slice(&[x[0] + DT * x[1], x[1], x[2] + DT * x[3], x[3]])
@@ -44,15 +41,9 @@ fn track(zs: &[[f64; 2]]) -> Result<Track, kalman::Error> {
     });
     let (x0, p0) = ([-290.0, 0.0, 590.0, -9.0], Diagonal([100.0; 4]));
     let mut ukf = model.ukf(&x0, &p0, SigmaPoints::merwe(1e-3, 2.0, 0.0))?;
-    let (mut rts, mut filtered) = (NonlinearRts::new(), Vec::new());
-    for z in zs {
-        ukf.step(z, None)?;
-        rts.record(&ukf)?;
-        filtered.push([ukf.state()[0], ukf.state()[2]]);
-    }
-    let s = rts.smooth()?.means;
-    let smoothed = (0..zs.len()).map(|k| [s[(0, k)], s[(2, k)]]).collect();
-    Ok((filtered, smoothed))
+    let (filtered, rts) = NonlinearRts::run(&mut ukf, zs)?;
+    let positions = |m: Mat<f64>| (0..zs.len()).map(|k| [m[(0, k)], m[(2, k)]]).collect();
+    Ok((positions(filtered), positions(rts.smooth()?.means)))
 }
 
 fn main() -> Result<(), kalman::Error> {

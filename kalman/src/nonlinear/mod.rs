@@ -182,7 +182,7 @@ pub use fixed_lag::{FixedLag, FixedLagState};
 pub use manifold::{Manifold, Part, Product, quaternion};
 pub use models::{CentralDiff, FnModel, Hook, Jacobians, NonlinearModel};
 pub use sigma::SigmaPoints;
-pub use smoother::{ForwardPass, NonlinearRts};
+pub use smoother::{ForwardPass, NonlinearRts, NonlinearStep};
 pub use sqrt_ukf::SqrtUkf;
 pub use ukf::Ukf;
 

@@ -3,8 +3,37 @@
 
 use faer::{Mat, MatRef};
 
+use super::{Ekf, Jacobians, NlDims, NonlinearModel, SqrtUkf, StepInfo, Ukf};
 use crate::Error;
 use crate::smoother::{Nonlinear, Rts, Smoothed};
+
+/// A nonlinear filter's step, for code generic over the [`Ekf`], the [`Ukf`] and the
+/// [`SqrtUkf`] ([`NonlinearRts::run`]): each filter's own `step`.
+pub trait NonlinearStep: ForwardPass {
+    /// Step k: update with `z_k` (NaN entries missing), then predict with `u_k`.
+    ///
+    /// # Errors
+    /// The filter's `step` errors.
+    fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error>;
+}
+
+impl<D: NlDims, M: Jacobians> NonlinearStep for Ekf<D, M> {
+    fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
+        Ekf::step(self, z, u)
+    }
+}
+
+impl<D: NlDims, M: NonlinearModel> NonlinearStep for Ukf<D, M> {
+    fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
+        Ukf::step(self, z, u)
+    }
+}
+
+impl<D: NlDims, M: NonlinearModel> NonlinearStep for SqrtUkf<D, M> {
+    fn step(&mut self, z: &[f64], u: Option<&[f64]>) -> Result<StepInfo, Error> {
+        SqrtUkf::step(self, z, u)
+    }
+}
 
 /// A filter whose steps a [`NonlinearRts`] can record: after step k it holds
 /// `(x_{k|k}, P_{k|k})`, `(x_{k+1|k}, P_{k+1|k})` and the cross-covariance
@@ -60,6 +89,51 @@ pub trait ForwardPass {
 pub type NonlinearRts = Rts<Nonlinear>;
 
 impl Rts<Nonlinear> {
+    /// Runs `filter` over `measurements` (one z per step, NaN entries missing, no control
+    /// input; FilterPy's `batch_filter`), recording every step: returns the filtered means
+    /// (column k is x_{k|k}, stored × N) and the record, for [`Self::smooth`] or
+    /// [`Self::smooth_on`]. The filter is left after the last step.
+    ///
+    /// ```
+    /// use kalman::DynDims;
+    /// use kalman::nonlinear::{FnModel, NonlinearRts, SigmaPoints};
+    /// # fn main() -> Result<(), kalman::Error> {
+    /// let model = FnModel::new(
+    ///     DynDims::new(1, 1, 0)?,
+    ///     |x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]| out[0] = x[0],
+    ///     |x: &[f64], _k: usize, out: &mut [f64]| out[0] = x[0],
+    ///     &[[1.0]],
+    ///     &[[1.0]],
+    /// )?;
+    /// let mut ukf = model.ukf(&[0.0], &[[1.0]], SigmaPoints::Cubature)?;
+    /// let (filtered, rts) = NonlinearRts::run(&mut ukf, [[1.0], [3.0]])?;
+    /// // The random walk of `smooth`'s example: filtered 1/2 and 2 (gains 1/2, 3/5),
+    /// // smoothed 1 and 2.
+    /// assert!((filtered[(0, 0)] - 0.5).abs() < 1e-14 && (filtered[(0, 1)] - 2.0).abs() < 1e-14);
+    /// assert!((rts.smooth()?.means[(0, 0)] - 1.0).abs() < 1e-14);
+    /// # Ok(())
+    /// # }
+    /// ```
+    ///
+    /// # Errors
+    /// The filter's step errors (naming the step); [`Self::record`]'s.
+    pub fn run<Z: AsRef<[f64]>>(
+        filter: &mut impl NonlinearStep,
+        measurements: impl IntoIterator<Item = Z>,
+    ) -> Result<(Mat<f64>, Self), Error> {
+        let mut rts = Self::new();
+        let mut means = Vec::new();
+        for z in measurements {
+            filter.step(z.as_ref(), None)?;
+            rts.record(filter)?;
+            means.extend_from_slice(filter.filtered().0);
+        }
+        let stored = filter.filtered().0.len();
+        let steps = rts.len();
+        let filtered = MatRef::from_column_major_slice(&means, stored, steps).to_owned();
+        Ok((filtered, rts))
+    }
+
     /// Records the step the filter has just taken.
     ///
     /// # Errors
