@@ -333,6 +333,25 @@ fn rotate(x: &mut [f64], n: usize, at: impl Fn(usize) -> (usize, usize), c: f64,
     }
 }
 
+/// `Σ aᵢ bᵢ` over the shorter of the two, in two interleaved partial sums: the short
+/// rows of the triangularisations are latency-bound in one running sum.
+#[inline(always)]
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let len = a.len().min(b.len());
+    let (a, b) = (&a[..len], &b[..len]);
+    let (mut s0, mut s1) = (0.0, 0.0);
+    let mut t = 1;
+    while t < len {
+        s0 += a[t - 1] * b[t - 1];
+        s1 += a[t] * b[t];
+        t += 2;
+    }
+    if t == len {
+        s0 += a[t - 1] * b[t - 1];
+    }
+    s0 + s1
+}
+
 /// Row-wise Householder LQ on a row-major array (`ld` entries per row): triangularises rows
 /// `rows` over columns `col0..ncols`, applying each reflection to rows `rows.start..apply_end`.
 /// A row whose remaining squared norm is at most `tol2` or at most `f64::MIN_POSITIVE` (where
@@ -356,8 +375,8 @@ pub(crate) fn lq_rows(
             piv[i - first] = None;
             continue;
         }
-        let row = &a[i * ld..i * ld + ncols];
-        let rem: f64 = row[c..].iter().map(|x| x * x).sum();
+        let row = &a[i * ld + c..i * ld + ncols];
+        let rem = dot(row, row);
         if rem <= tol2 || rem <= f64::MIN_POSITIVE {
             a[i * ld + c..i * ld + ncols].fill(0.0);
             piv[i - first] = None;
@@ -368,13 +387,14 @@ pub(crate) fn lq_rows(
         let alpha = if x0 >= 0.0 { -norm } else { norm };
         // v = x - alpha·e1, stored in place in row i (columns c..); vᵀv = 2(norm² - alpha·x0).
         a[i * ld + c] = x0 - alpha;
-        let vtv = 2.0 * (rem - alpha * x0);
-        for r in i + 1..apply_end {
-            let (head, tail) = a.split_at_mut(r * ld);
-            let v = &head[i * ld + c..i * ld + ncols];
-            let rr = &mut tail[c..ncols];
-            let s: f64 = v.iter().zip(rr.iter()).map(|(p, q)| p * q).sum();
-            let f = 2.0 * s / vtv;
+        // 2 / vᵀv with vᵀv = 2(norm² - alpha·x0).
+        let scale = 1.0 / (rem - alpha * x0);
+        let (head, tail) = a.split_at_mut((i + 1) * ld);
+        let v = &head[i * ld + c..i * ld + ncols];
+        let below = apply_end.saturating_sub(i + 1) * ld;
+        for row in tail[..below].chunks_exact_mut(ld) {
+            let rr = &mut row[c..ncols];
+            let f = dot(v, rr) * scale;
             for (q, p) in rr.iter_mut().zip(v) {
                 *q -= f * p;
             }

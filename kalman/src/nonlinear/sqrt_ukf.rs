@@ -8,7 +8,7 @@ use super::linalg::{downdate_rows, gram_lower, positive_pivots, psd_cholesky, ra
 use super::sigma::SigmaPoints;
 use super::unscented::Unscented;
 use super::{Core, NlDims, NonlinearModel, ObservedUpdate, Stages, StepInfo, observed_info};
-use crate::kernels::lq_rows;
+use crate::kernels::{dot, lq_rows};
 use crate::storage::Buf;
 use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
 
@@ -33,8 +33,10 @@ use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
 /// ```
 ///
 /// gives `Σ^{1/2}`, `K̄ = K Σ^{1/2}` and the factor S⁺ of `P_{k|k}`, and
-/// `x = x⁻ ⊕ K̄ Σ^{-1/2}(z ⊖ ẑ)`. The pre-array's Gram matrix is exactly the plain filter's
-/// `[[Σ, Cᵀ], [C, P⁻]]`. Prediction: `x⁺` as in the plain filter, and `S⁺` from the
+/// `x = x⁻ ⊕ K̄ Σ^{-1/2}(z ⊖ ẑ)`. The first two blocks, zero in the state rows, are
+/// triangularised first on their own (to `L₀`, m × m), so the joint triangularisation runs
+/// on `[[L₀, Gᵀ], [0, S⁻]]`, (m + n) × (m + n), whatever the number of points. The
+/// pre-array's Gram matrix is exactly the plain filter's `[[Σ, Cᵀ], [C, P⁻]]`. Prediction: `x⁺` as in the plain filter, and `S⁺` from the
 /// triangularisation of `[√Wc_i (f(χ_i) ⊖ x⁺) …, Q^{1/2}]`. Every pivot is made positive,
 /// so where P is positive definite S is its Cholesky factor and the sigma points are the
 /// plain filter's.
@@ -103,8 +105,18 @@ pub struct SqrtUkf<D: NlDims, M> {
     dx: D::Nv,
     xi: D::Nv,
     e: D::Mv,
+    /// The Q and R last factored into `qs` and `rs`, and their orders (`None`: none yet,
+    /// or the last factorisation failed).
+    q_of: D::Nn,
+    q_at: Option<usize>,
+    r_of: D::Mm,
+    r_at: Option<usize>,
     /// The pre-array (row-major), its pivots and the rows' squared norms.
     arr: Vec<f64>,
+    /// The measurement rows' noise blocks before the joint array (row-major, m × (m + s)).
+    pre: Vec<f64>,
+    /// `√Wc_i` for the positive weights, 0 for a negative centre weight (s entries).
+    swc: Vec<f64>,
     piv: Vec<Option<usize>>,
     rn: Vec<f64>,
     /// The downdate's vector (m + n).
@@ -128,9 +140,14 @@ impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
     ) -> Result<Self, Error> {
         let c = Core::new(dims, &model, x0, P0)?;
         let (n, m) = (dims.n(), dims.m());
-        let pts = Unscented::new(points, n, m, dims.stored())?;
+        let pts = Unscented::<D>::new(points, n, m, dims.stored())?;
         let s = pts.set.count;
-        let ld = (m + s + n).max(s + n);
+        let swc: Vec<f64> = pts.set.wc.as_slice()[..s]
+            .iter()
+            .map(|&w| if w > 0.0 { w.sqrt() } else { 0.0 })
+            .collect();
+        // The joint (m + n)² update array, or the prediction's n × (s + n).
+        let ld = ((m + n) * (m + n)).max(n * (s + n));
         let mut f = Self {
             model,
             pts,
@@ -142,10 +159,16 @@ impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {
             rc: D::Mm::zeros(m * m),
             rs: D::Mm::zeros(m * m),
             rinv: D::Mv::zeros(m),
+            q_of: D::Nn::zeros(n * n),
+            q_at: None,
+            r_of: D::Mm::zeros(m * m),
+            r_at: None,
             dx: D::Nv::zeros(n),
             xi: D::Nv::zeros(n),
             e: D::Mv::zeros(m),
-            arr: vec![0.0; (m + n) * ld],
+            arr: vec![0.0; ld],
+            pre: vec![0.0; m * (m + s)],
+            swc,
             piv: vec![None; m + n],
             rn: vec![0.0; m],
             v: vec![0.0; m + n],
@@ -204,45 +227,42 @@ impl<D: NlDims, M: NonlinearModel> ObservedUpdate<D> for SqrtUkf<D, M> {
         let rc = &mut self.rc.as_mut_slice()[..mo * mo];
         self.c.observed_r(z, mo, rc);
         let Rs = &mut self.rs.as_mut_slice()[..mo * mo];
-        psd_cholesky(
-            rc,
-            mo,
-            Rs,
-            &mut self.rinv.as_mut_slice()[..mo],
-            0.0,
-            PSD_TOL,
-        )
-        .map_err(|pivot| Error::SigmaCovariance {
-            name: "R_k",
-            step: k,
-            n: mo,
-            pivot,
-            tol: PSD_TOL,
-        })?;
-        // The pre-array, rows of length ld = mo + s + n.
-        let ld = mo + s + n;
+        let (last, rinv) = (self.r_of.as_mut_slice(), self.rinv.as_mut_slice());
+        cached_factor(rc, mo, Rs, rinv, (last, &mut self.r_at), ("R_k", k))?;
+        // The measurement rows' first two blocks, [R^{1/2}, √Wc ε] (mo rows of length
+        // mo + s), triangularised alone to L₀ with L₀L₀ᵀ = R + Σ Wc εεᵀ: the state rows are
+        // zero in those columns, so the joint pre-array needs only L₀ in their place.
+        let lp = mo + s;
+        let pre = &mut self.pre[..mo * lp];
+        pre.fill(0.0);
+        for a in 0..mo {
+            let row = &mut pre[a * lp..(a + 1) * lp];
+            for b in 0..=a {
+                row[b] = Rs[a + b * mo];
+            }
+            for (i, w) in self.swc.iter().enumerate() {
+                row[mo + i] = w * dz[a + i * mo];
+            }
+            let g = &G[a * n..(a + 1) * n];
+            self.rn[a] = dot(row, row) + dot(g, g);
+        }
+        lq_rows(pre, lp, 0..mo, mo, 0, lp, 0.0, &mut self.piv[..mo]);
+        // The joint pre-array [[L₀, Gᵀ], [0, S⁻]], rows of length ld = mo + n.
+        let ld = mo + n;
         let rows = mo + n;
         let arr = &mut self.arr[..rows * ld];
         arr.fill(0.0);
         for a in 0..mo {
             let row = &mut arr[a * ld..(a + 1) * ld];
-            for b in 0..=a {
-                row[b] = Rs[a + b * mo];
-            }
-            for i in 0..s {
-                if wc[i] > 0.0 {
-                    row[mo + i] = wc[i].sqrt() * dz[a + i * mo];
-                }
-            }
+            row[..mo].copy_from_slice(&pre[a * lp..a * lp + mo]);
             for j in 0..n {
-                row[mo + s + j] = G[j + a * n];
+                row[mo + j] = G[j + a * n];
             }
-            self.rn[a] = row.iter().map(|v| v * v).sum();
         }
         for r in 0..n {
             let row = &mut arr[(mo + r) * ld..(mo + r + 1) * ld];
             for j in 0..=r {
-                row[mo + s + j] = Sp[r + j * n];
+                row[mo + j] = Sp[r + j * n];
             }
         }
         let piv = &mut self.piv[..rows];
@@ -335,21 +355,9 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for SqrtUkf<D, M> {
         let s = self.pts.set.count;
         self.c.load_q(&mut self.model)?;
         let Qs = &mut self.qs.as_mut_slice()[..n * n];
-        psd_cholesky(
-            &self.c.q.as_slice()[..n * n],
-            n,
-            Qs,
-            &mut self.qinv.as_mut_slice()[..n],
-            0.0,
-            PSD_TOL,
-        )
-        .map_err(|pivot| Error::SigmaCovariance {
-            name: "Q_k",
-            step: k,
-            n,
-            pivot,
-            tol: PSD_TOL,
-        })?;
+        let q = &self.c.q.as_slice()[..n * n];
+        let (last, qinv) = (self.q_of.as_mut_slice(), self.qinv.as_mut_slice());
+        cached_factor(q, n, Qs, qinv, (last, &mut self.q_at), ("Q_k", k))?;
         let ns = self.c.dims.stored();
         let xf = &self.c.xf.as_slice()[..ns];
         let dx = self.dx.as_mut_slice();
@@ -366,12 +374,8 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for SqrtUkf<D, M> {
         let arr = &mut self.arr[..n * ld];
         for r in 0..n {
             let row = &mut arr[r * ld..(r + 1) * ld];
-            for i in 0..s {
-                row[i] = if wc[i] > 0.0 {
-                    wc[i].sqrt() * dy[r + i * n]
-                } else {
-                    0.0
-                };
+            for (i, w) in self.swc.iter().enumerate() {
+                row[i] = w * dy[r + i * n];
             }
             for j in 0..n {
                 row[s + j] = Qs[r + j * n];
@@ -403,6 +407,35 @@ impl<D: NlDims, M: NonlinearModel> Stages<D> for SqrtUkf<D, M> {
         gram_lower(Sp, n, &mut self.c.pp.as_mut_slice()[..n * n]);
         Ok(())
     }
+}
+
+/// The lower factor of the PSD `a` (n×n) into `L` (reciprocal pivots in `inv`), unless `a`
+/// equals, entry for entry, the matrix `last.0` of the previous call (of order `last.1`),
+/// whose factor `L` still holds: a constant Q or R is factored once.
+fn cached_factor(
+    a: &[f64],
+    n: usize,
+    L: &mut [f64],
+    inv: &mut [f64],
+    last: (&mut [f64], &mut Option<usize>),
+    (name, step): (&'static str, usize),
+) -> Result<(), Error> {
+    let (of, at) = last;
+    let (a, of) = (&a[..n * n], &mut of[..n * n]);
+    if *at == Some(n) && a == &of[..] {
+        return Ok(());
+    }
+    *at = None;
+    psd_cholesky(a, n, L, &mut inv[..n], 0.0, PSD_TOL).map_err(|pivot| Error::SigmaCovariance {
+        name,
+        step,
+        n,
+        pivot,
+        tol: PSD_TOL,
+    })?;
+    of.copy_from_slice(a);
+    *at = Some(n);
+    Ok(())
 }
 
 impl<D: NlDims, M: NonlinearModel> SqrtUkf<D, M> {

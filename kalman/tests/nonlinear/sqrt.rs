@@ -330,3 +330,62 @@ fn the_unscented_smoother_in_square_root_form_equals_the_covariance_form() {
         }
     }
 }
+
+/// A model whose Q and R change from step to step (and whose observed block of R changes
+/// with a missing entry): the square-root filter factors each Q and R it has not factored
+/// before, so it still equals the plain UKF to round-off, step by step. A factor kept from
+/// an earlier step would be off by the noise change itself (a factor of 2 to 10).
+#[derive(Clone, Debug)]
+struct VaryingNoise;
+
+impl kalman::nonlinear::NonlinearModel for VaryingNoise {
+    fn f(&mut self, x: &[f64], _u: Option<&[f64]>, _k: usize, out: &mut [f64]) {
+        out[0] = x[0] + 0.1 * x[1];
+        out[1] = 0.95 * x[1];
+    }
+    fn h(&mut self, x: &[f64], _k: usize, out: &mut [f64]) {
+        out[0] = (x[0] * x[0] + 1.0).sqrt();
+        out[1] = x[1];
+    }
+    fn q(&mut self, k: usize, out: &mut [f64]) {
+        let s = 1.0 + (k % 3) as f64;
+        out.copy_from_slice(&[1e-4 * s, 1e-5, 1e-5, 1e-3 * s]);
+    }
+    fn r(&mut self, k: usize, out: &mut [f64]) {
+        let s = if k % 4 == 0 { 10.0 } else { 1.0 };
+        out.copy_from_slice(&[1e-2 * s, 0.0, 0.0, 1e-3 * (2.0 - s / 10.0)]);
+    }
+}
+
+#[test]
+fn step_varying_noise_is_factored_at_every_step() {
+    let d = DynDims::new(2, 2, 0).expect("dims");
+    let (x0, p0) = ([1.0, 0.5], [[0.1, 0.0], [0.0, 0.1]]);
+    let set = SigmaPoints::merwe(0.5, 2.0, 0.0);
+    let mut plain = Ukf::new(d, VaryingNoise, &x0, &p0, set).expect("ukf");
+    let mut sqrt = SqrtUkf::new(d, VaryingNoise, &x0, &p0, set).expect("sqrt");
+    for k in 0..40 {
+        let x = 1.0 + 0.05 * k as f64;
+        let v = 0.5 * 0.95_f64.powi(k);
+        let second = if k % 5 == 2 { f64::NAN } else { v + 0.01 };
+        let z = [
+            (x * x + 1.0f64).sqrt() + 0.02 * ((k % 3) as f64 - 1.0),
+            second,
+        ];
+        plain.step(&z, None).expect("plain step");
+        sqrt.step(&z, None).expect("square-root step");
+        for (got, want) in [
+            (sqrt.state().to_vec(), plain.state().to_vec()),
+            (flat(sqrt.covariance()), flat(plain.covariance())),
+            (
+                flat(sqrt.predicted_covariance()),
+                flat(plain.predicted_covariance()),
+            ),
+        ] {
+            let scale = want.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
+            for (g, w) in got.iter().zip(&want) {
+                assert!((g - w).abs() <= 1e-11 * scale, "step {k}: {g} vs plain {w}");
+            }
+        }
+    }
+}
