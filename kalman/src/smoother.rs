@@ -26,13 +26,18 @@ mod sqrt;
 
 use std::marker::PhantomData;
 
-use faer::linalg::solvers::Solve;
-use faer::{Mat, MatMut, MatRef, Side};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
 
 use crate::filter::diverged;
 use crate::riccati::symmetrise;
 use crate::storage::Dims;
-use crate::{CovarianceForm, Error, Filter, MatrixInput, Model, RANK_TOL};
+use crate::{CovarianceForm, Error, Filter, MatrixInput, Model};
+
+mod psd;
+use psd::PsdSolve;
+#[cfg(test)]
+use psd::solve_psd;
 
 pub use sqrt::SqrtSmoothed;
 
@@ -318,15 +323,26 @@ impl<K> Rts<K> {
         // stored points x_{k+1|N} and x_{k|N}.
         let (mut d, mut dv) = (vec![0.0; n], vec![0.0; n]);
         let (mut after, mut point) = (vec![0.0; ns], vec![0.0; ns]);
+        // Jᵀ, the products and P_{k|N}: every step works in these.
+        let mut solver = PsdSolve::new(n);
+        let (mut Jt, mut diff) = (Mat::<f64>::zeros(n, n), Mat::<f64>::zeros(n, n));
+        let (mut JD, mut P) = (Mat::<f64>::zeros(n, n), Mat::<f64>::zeros(n, n));
+        let (mut dx, mut Jdx) = (Mat::<f64>::zeros(n, 1), Mat::<f64>::zeros(n, 1));
         for k in (0..N - 1).rev() {
             let Pp = mat(&self.pp, k, n);
-            let Jt = solve_psd(Pp, mat(&self.ct, k, n).transpose())?;
+            solver.solve(Pp, mat(&self.ct, k, n).transpose(), Jt.as_mut())?;
             let J = Jt.transpose();
             match space {
                 None => {
-                    let dx = means.as_ref().col(k + 1).as_mat() - vec(&self.xp, k, n);
-                    let x = vec(&self.xf, k, n) + J * dx;
-                    means.as_mut().col_mut(k).copy_from(x.col(0));
+                    let xp = vec(&self.xp, k, n);
+                    for i in 0..n {
+                        dx[(i, 0)] = means[(i, k + 1)] - xp[(i, 0)];
+                    }
+                    matmul(Jdx.as_mut(), Accum::Replace, J, dx.as_ref(), 1.0, Par::Seq);
+                    let xf = vec(&self.xf, k, n);
+                    for i in 0..n {
+                        means[(i, k)] = xf[(i, 0)] + Jdx[(i, 0)];
+                    }
                 }
                 Some(space) => {
                     for (i, a) in after.iter_mut().enumerate() {
@@ -342,10 +358,30 @@ impl<K> Rts<K> {
                     }
                 }
             }
-            let mut P = mat(&self.pf, k, n) + J * (&next - Pp) * J.transpose();
+            // P_{k|N} = P_{k|k} + J (P_{k+1|N} − P_{k+1|k}) Jᵀ.
+            for j in 0..n {
+                for i in 0..n {
+                    diff[(i, j)] = next[(i, j)] - Pp[(i, j)];
+                }
+            }
+            matmul(JD.as_mut(), Accum::Replace, J, diff.as_ref(), 1.0, Par::Seq);
+            matmul(
+                P.as_mut(),
+                Accum::Replace,
+                JD.as_ref(),
+                Jt.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+            let Pf = mat(&self.pf, k, n);
+            for j in 0..n {
+                for i in 0..n {
+                    P[(i, j)] += Pf[(i, j)];
+                }
+            }
             symmetrise(&mut P);
             visit(k, &means, &P)?;
-            next = P;
+            std::mem::swap(&mut next, &mut P);
         }
         Ok(means)
     }
@@ -544,76 +580,6 @@ fn push(v: &mut Vec<f64>, M: MatRef<'_, f64>) {
             v.push(M[(i, j)]);
         }
     }
-}
-
-/// Solves A X = B for symmetric PSD A. The solve runs on the Jacobi-scaled system
-/// `(D⁻¹ A D⁻¹)(D X) = D⁻¹ B`, `D = diag(√A_ii)` (1 where `A_ii = 0`), so that its rank test
-/// reads correlations, not units: a state known to 1e-6 rad/s beside one known to 10 m is
-/// not a linear dependence. Cholesky of the scaled matrix, or, when it is (numerically)
-/// singular, its pseudo-inverse through the eigen-decomposition, which gives a generalised
-/// inverse of A (the same X as A⁺B whenever B's columns lie in A's range, as the RTS
-/// smoother's `C_kᵀ` do).
-pub(crate) fn solve_psd(A: MatRef<'_, f64>, B: MatRef<'_, f64>) -> Result<Mat<f64>, Error> {
-    let n = A.nrows();
-    let d: Vec<f64> = (0..n)
-        .map(|i| {
-            if A[(i, i)] > 0.0 {
-                A[(i, i)].sqrt()
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let S = Mat::from_fn(n, n, |i, j| A[(i, j)] / (d[i] * d[j]));
-    let mut Y = Mat::from_fn(n, B.ncols(), |i, j| B[(i, j)] / d[i]);
-    solve_psd_scaled(S.as_ref(), Y.as_mut())?;
-    for j in 0..Y.ncols() {
-        for i in 0..n {
-            Y[(i, j)] /= d[i];
-        }
-    }
-    Ok(Y)
-}
-
-/// Overwrites B with the solution of S X = B for a Jacobi-scaled PSD S (unit or zero
-/// diagonal): Cholesky when every pivot² exceeds `RANK_TOL` (the eigen route gives the same
-/// solution to round-off, only slower), else the pseudo-inverse with eigenvalues at or
-/// below `RANK_TOL·λ_max` treated as zero.
-fn solve_psd_scaled(S: MatRef<'_, f64>, mut B: MatMut<'_, f64>) -> Result<(), Error> {
-    let n = S.nrows();
-    let smax = (0..n).map(|i| S[(i, i)].abs()).fold(0.0, f64::max);
-    if let Ok(llt) = S.llt(Side::Lower) {
-        let L = llt.L();
-        let dmin = (0..n)
-            .map(|i| L[(i, i)] * L[(i, i)])
-            .fold(f64::INFINITY, f64::min);
-        if dmin > RANK_TOL * smax {
-            llt.solve_in_place(B);
-            return Ok(());
-        }
-    }
-    let evd = S
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|_| Error::Factorisation {
-            name: "P_{k+1|k}",
-            reason: "symmetric eigen-decomposition failed in the smoother's singular fallback",
-        })?;
-    let U = evd.U();
-    let s = evd.S().column_vector();
-    let lmax = (0..n).map(|i| s[i].abs()).fold(0.0, f64::max);
-    let mut UtB = U.transpose() * B.as_ref();
-    for i in 0..n {
-        let inv = if s[i] > RANK_TOL * lmax {
-            1.0 / s[i]
-        } else {
-            0.0
-        };
-        for j in 0..UtB.ncols() {
-            UtB[(i, j)] *= inv;
-        }
-    }
-    B.copy_from(U * UtB);
-    Ok(())
 }
 
 #[cfg(test)]

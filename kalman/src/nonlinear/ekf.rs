@@ -4,7 +4,7 @@
 use faer::MatRef;
 
 use super::linalg::{
-    joseph, mirror_lower, mul, mul_nt, nis_logdet, pd_cholesky, right_solve, symmetrise,
+    RowPattern, joseph, mirror_lower, mul, mul_nt, nis_logdet, pd_cholesky, right_solve, symmetrise,
 };
 use super::{
     Core, Jacobians, NlDims, Stages, StepInfo, UpdateWork, compact_rows, compact_square,
@@ -66,6 +66,8 @@ pub struct Ekf<D: NlDims, M> {
     c: Core<D>,
     /// ∂f/∂x at x_{k|k} of the last prediction.
     fj: D::Nn,
+    /// The nonzero pattern of `fj`.
+    fpat: RowPattern,
     hj: D::Mn,
     hc: D::Mn,
     zh: D::Mv,
@@ -118,6 +120,7 @@ impl<D: NlDims, M: Jacobians> Ekf<D, M> {
             update,
             c,
             fj: D::Nn::zeros(n * n),
+            fpat: RowPattern::new(n),
             hj: D::Mn::zeros(m * n),
             hc: D::Mn::zeros(m * n),
             zh: D::Mv::zeros(m),
@@ -266,9 +269,16 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
         self.model.f_jacobian(xf, u, k, F);
         finite("f_jacobian", k, F)?;
         let t = &mut self.w.t.as_mut_slice()[..n * n];
-        mul(t, F, &self.c.pf.as_slice()[..n * n], n, n, n, false);
         let pp = &mut self.c.pp.as_mut_slice()[..n * n];
         pp.copy_from_slice(&self.c.q.as_slice()[..n * n]);
+        self.fpat.find(F, n);
+        if self.fpat.sparse {
+            self.fpat.mul(t, F, &self.c.pf.as_slice()[..n * n], n);
+            self.fpat.add_mul_nt_lower(pp, t, F, n);
+            mirror_lower(pp, n);
+            return Ok(());
+        }
+        mul(t, F, &self.c.pf.as_slice()[..n * n], n, n, n, false);
         // Q + (F P) Fᵀ on the lower triangle, mirrored.
         for j in 0..n {
             for i in j..n {
@@ -308,6 +318,10 @@ impl<D: NlDims, M: super::NonlinearModel> super::ForwardPass for Ekf<D, M> {
     /// `C_k = P_{k|k} F_kᵀ`.
     fn cross_covariance(&self, out: &mut [f64]) {
         let n = self.c.dims.n();
+        if self.fpat.sparse {
+            let (pf, F) = (&self.c.pf.as_slice()[..n * n], &self.fj.as_slice()[..n * n]);
+            return self.fpat.mul_nt(&mut out[..n * n], pf, F, n);
+        }
         mul_nt(
             out,
             &self.c.pf.as_slice()[..n * n],

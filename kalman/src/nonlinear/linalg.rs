@@ -366,6 +366,95 @@ fn symmetric_sum(
     mirror_lower(out, n);
 }
 
+/// The nonzero pattern of a square column-major matrix by rows, for Jacobians that are
+/// mostly zero (a model augmented with constant states: their rows are unit rows). The
+/// sparse products below sum the same nonzero terms in the same order as the dense loops
+/// of [`mul`] and [`mul_nt`], so they give the same bits.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RowPattern {
+    /// Row i's nonzero columns are `cols[ptr[i]..ptr[i + 1]]`, ascending.
+    ptr: Vec<usize>,
+    cols: Vec<usize>,
+    /// The pattern describes the matrix last passed to [`RowPattern::find`], and it is
+    /// sparse enough to pay.
+    pub(crate) sparse: bool,
+}
+
+impl RowPattern {
+    /// Workspaces for n×n matrices (allocated here, never in [`RowPattern::find`]).
+    pub(crate) fn new(n: usize) -> Self {
+        Self {
+            ptr: vec![0; n + 1],
+            cols: vec![0; n * n],
+            sparse: false,
+        }
+    }
+
+    /// Reads the pattern of `a` (n×n); sets `sparse` when n ≥ 8 and at most a third of the
+    /// entries are nonzero (below that the dense loops, which vectorise, are as fast).
+    pub(crate) fn find(&mut self, a: &[f64], n: usize) {
+        let mut nnz = 0;
+        for i in 0..n {
+            self.ptr[i] = nnz;
+            for j in 0..n {
+                if a[i + j * n] != 0.0 {
+                    self.cols[nnz] = j;
+                    nnz += 1;
+                }
+            }
+        }
+        self.ptr[n] = nnz;
+        self.sparse = n >= 8 && 3 * nnz <= n * n;
+    }
+
+    fn row(&self, i: usize) -> &[usize] {
+        &self.cols[self.ptr[i]..self.ptr[i + 1]]
+    }
+
+    /// `T = A·B` for this pattern's `A` (n×n) and an n×n `B`, as [`mul`] computes it.
+    pub(crate) fn mul(&self, T: &mut [f64], A: &[f64], B: &[f64], n: usize) {
+        for j in 0..n {
+            let b = &B[j * n..(j + 1) * n];
+            for i in 0..n {
+                let mut s = 0.0;
+                for &p in self.row(i) {
+                    s += b[p] * A[i + p * n];
+                }
+                T[i + j * n] = s;
+            }
+        }
+    }
+
+    /// `C = B·Aᵀ` for this pattern's `A` and an n×n `B`, as [`mul_nt`] computes it.
+    pub(crate) fn mul_nt(&self, C: &mut [f64], B: &[f64], A: &[f64], n: usize) {
+        for j in 0..n {
+            let cols = self.row(j);
+            for i in 0..n {
+                let mut s = 0.0;
+                for &p in cols {
+                    s += A[j + p * n] * B[i + p * n];
+                }
+                C[i + j * n] = s;
+            }
+        }
+    }
+
+    /// The lower triangle of `C += B·Aᵀ` for this pattern's `A`, summed as the EKF's dense
+    /// prediction sums it (C's entry first, then the terms in column order).
+    pub(crate) fn add_mul_nt_lower(&self, C: &mut [f64], B: &[f64], A: &[f64], n: usize) {
+        for j in 0..n {
+            let cols = self.row(j);
+            for i in j..n {
+                let mut s = C[i + j * n];
+                for &p in cols {
+                    s += B[i + p * n] * A[j + p * n];
+                }
+                C[i + j * n] = s;
+            }
+        }
+    }
+}
+
 /// Copies the lower triangle of the square `n`×`n` `a` to its upper triangle.
 #[inline(always)]
 pub(crate) fn mirror_lower(a: &mut [f64], n: usize) {
@@ -461,6 +550,51 @@ pub(crate) fn gram_lower(S: &[f64], n: usize, P: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sparse products equal the dense loops bit for bit on a Jacobian shaped like an
+    /// augmented model's (dense kinematic rows with zeros, unit rows for constant states),
+    /// and the pattern declines a dense matrix.
+    #[test]
+    fn row_pattern_products_equal_the_dense_loops_bit_for_bit() {
+        let n = 12;
+        // Irrational-looking entries so that every summation order would round differently.
+        let val = |k: usize| ((k * 37 % 101) as f64 - 50.0).sin() * 1.7;
+        let mut F = vec![0.0; n * n];
+        for j in 0..n {
+            F[j + j * n] = 1.0;
+            for i in 0..4 {
+                if (i + 2 * j) % 3 != 0 {
+                    F[i + j * n] = val(i + j * n);
+                }
+            }
+        }
+        let P: Vec<f64> = (0..n * n).map(|k| val(k + 7)).collect();
+        let mut pat = RowPattern::new(n);
+        pat.find(&F, n);
+        assert!(pat.sparse);
+        let (mut dense, mut sparse) = (vec![0.0; n * n], vec![0.0; n * n]);
+        mul(&mut dense, &F, &P, n, n, n, false);
+        pat.mul(&mut sparse, &F, &P, n);
+        assert_eq!(dense, sparse, "F·P");
+        mul_nt(&mut dense, &P, &F, n, n, n, false);
+        pat.mul_nt(&mut sparse, &P, &F, n);
+        assert_eq!(dense, sparse, "P·Fᵀ");
+        let Q: Vec<f64> = (0..n * n).map(|k| val(k + 3)).collect();
+        let (mut dense, mut sparse) = (Q.clone(), Q.clone());
+        for j in 0..n {
+            for i in j..n {
+                let mut s = dense[i + j * n];
+                for k in 0..n {
+                    s += P[i + k * n] * F[j + k * n];
+                }
+                dense[i + j * n] = s;
+            }
+        }
+        pat.add_mul_nt_lower(&mut sparse, &P, &F, n);
+        assert_eq!(dense, sparse, "Q + P·Fᵀ, lower triangle");
+        pat.find(&P, n);
+        assert!(!pat.sparse, "a dense matrix keeps the dense loops");
+    }
 
     /// States of very different units are not a dependence: diag(100, 1e-14) with a
     /// correlation of 0.5 factors in full (both pivots kept, L Lᵀ = a to round-off), where a
