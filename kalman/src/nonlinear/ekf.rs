@@ -274,21 +274,11 @@ impl<D: NlDims, M: Jacobians> Stages<D> for Ekf<D, M> {
         self.fpat.find(F, n);
         if self.fpat.sparse {
             self.fpat.mul(t, F, &self.c.pf.as_slice()[..n * n], n);
-            self.fpat.add_mul_nt_lower(pp, t, F, n);
-            mirror_lower(pp, n);
-            return Ok(());
+        } else {
+            mul(t, F, &self.c.pf.as_slice()[..n * n], n, n, n, false);
         }
-        mul(t, F, &self.c.pf.as_slice()[..n * n], n, n, n, false);
-        // Q + (F P) Fᵀ on the lower triangle, mirrored.
-        for j in 0..n {
-            for i in j..n {
-                let mut s = pp[i + j * n];
-                for k in 0..n {
-                    s += t[i + k * n] * F[j + k * n];
-                }
-                pp[i + j * n] = s;
-            }
-        }
+        // Q + (F P) Fᵀ on the lower triangle (over F's nonzeros), mirrored.
+        self.fpat.add_mul_nt_lower(pp, t, F, n);
         mirror_lower(pp, n);
         Ok(())
     }

@@ -439,8 +439,9 @@ impl RowPattern {
         }
     }
 
-    /// The lower triangle of `C += B·Aᵀ` for this pattern's `A`, summed as the EKF's dense
-    /// prediction sums it (C's entry first, then the terms in column order).
+    /// The lower triangle of `C += B·Aᵀ` for this pattern's `A`: C's entry first, then the
+    /// nonzero terms in column order (the dense sum's bits, its zero terms left out). The
+    /// pattern is read whatever `sparse` says, so a dense `A` takes this path too.
     pub(crate) fn add_mul_nt_lower(&self, C: &mut [f64], B: &[f64], A: &[f64], n: usize) {
         for j in 0..n {
             let cols = self.row(j);

@@ -36,10 +36,10 @@ use crate::{Error, MatrixInput, PSD_TOL, RANK_TOL};
 /// `x = x⁻ ⊕ K̄ Σ^{-1/2}(z ⊖ ẑ)`. The first two blocks, zero in the state rows, are
 /// triangularised first on their own (to `L₀`, m × m), so the joint triangularisation runs
 /// on `[[L₀, Gᵀ], [0, S⁻]]`, (m + n) × (m + n), whatever the number of points. The
-/// pre-array's Gram matrix is exactly the plain filter's `[[Σ, Cᵀ], [C, P⁻]]`. Prediction: `x⁺` as in the plain filter, and `S⁺` from the
-/// triangularisation of `[√Wc_i (f(χ_i) ⊖ x⁺) …, Q^{1/2}]`. Every pivot is made positive,
-/// so where P is positive definite S is its Cholesky factor and the sigma points are the
-/// plain filter's.
+/// pre-array's Gram matrix is exactly the plain filter's `[[Σ, Cᵀ], [C, P⁻]]`.
+/// Prediction: `x⁺` as in the plain filter, and `S⁺` from the triangularisation of
+/// `[√Wc_i (f(χ_i) ⊖ x⁺) …, Q^{1/2}]`. Every pivot is made positive, so where P is positive
+/// definite S is its Cholesky factor and the sigma points are the plain filter's.
 ///
 /// Only a negative centre weight `Wc_0` (Merwe's set with small α, Julier's with κ < 0)
 /// needs a subtraction, a rank-one Cholesky downdate by `√|Wc_0|` times the centre
